@@ -1,0 +1,127 @@
+"""Pictures of the arena: an RGB frame (PIL) and an ANSI text grid.
+
+The frame spans the whole cell grid (n_x · cell_width by n_y · cell_height metres, a little more
+than the arena since the last cell starts at the arena's edge), y pointing up. It shows slip
+regions tinted by their loss scale η (white: none, orange: η at the wheel speed), walls, the goal,
+the start, the trail and the robot with its heading.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+from skidnav.robot.slip import SlipField
+from skidnav.world.discretization import Discretization
+from skidnav.world.grid import GridMap
+
+PIXELS_PER_METRE = 1000.0
+WALL = (60, 60, 70)
+GOAL = (40, 170, 70)
+START = (70, 110, 220)
+TRAIL = (200, 30, 30)
+ROBOT = (20, 20, 20)
+HEADING_ARROWS = "→↗↑↖←↙↓↘"
+
+
+class _Canvas:
+    """Maps arena metres to image pixels (y up)."""
+
+    def __init__(self, disc: Discretization, scale: float = PIXELS_PER_METRE) -> None:
+        self.disc = disc
+        self.scale = scale
+        self.width = round(disc.n_x * disc.cell_width * scale)
+        self.height = round(disc.n_y * disc.cell_height * scale)
+
+    def point(self, x: float, y: float) -> tuple[float, float]:
+        return x * self.scale, self.height - y * self.scale
+
+    def box(self, x0: float, y0: float, x1: float, y1: float) -> tuple[float, float, float, float]:
+        left, bottom = self.point(x0, y0)
+        right, top = self.point(x1, y1)
+        return left, top, right, bottom
+
+    def cell_box(self, i: int, j: int) -> tuple[float, float, float, float]:
+        w, h = self.disc.cell_width, self.disc.cell_height
+        return self.box(i * w, j * h, (i + 1) * w, (j + 1) * h)
+
+
+def _draw_slip(draw: ImageDraw.ImageDraw, canvas: _Canvas, slip: SlipField, top: float) -> None:
+    disc = canvas.disc
+    region_w = disc.arena_width / (disc.regions_x - 1)
+    region_h = disc.arena_height / (disc.regions_y - 1)
+    eta = slip.eta_at(0.0)
+    for ri in range(disc.regions_x):
+        for rj in range(disc.regions_y):
+            level = min(float(eta[ri, rj]) / top, 1.0) if top > 0 else 0.0
+            colour = (255, round(255 - 90 * level), round(255 - 200 * level))
+            draw.rectangle(
+                canvas.box(ri * region_w, rj * region_h, (ri + 1) * region_w, (rj + 1) * region_h),
+                fill=colour,
+            )
+
+
+def _draw_robot(
+    draw: ImageDraw.ImageDraw, canvas: _Canvas, pose: np.ndarray, body_length: float
+) -> None:
+    x, y, heading = (float(v) for v in pose)
+    half = body_length / 2.0
+    corners = [(half, 0.0), (-half, 0.6 * half), (-half, -0.6 * half)]
+    points = [
+        canvas.point(
+            x + cx * math.cos(heading) - cy * math.sin(heading),
+            y + cx * math.sin(heading) + cy * math.cos(heading),
+        )
+        for cx, cy in corners
+    ]
+    draw.polygon(points, outline=ROBOT, width=3)
+
+
+def rgb_frame(
+    grid_map: GridMap,
+    disc: Discretization,
+    slip: SlipField,
+    pose: np.ndarray,
+    trail: Sequence[tuple[float, float]],
+    body_length: float = 0.10,
+    wheel_speed: float = 1.7,
+) -> np.ndarray:
+    """The arena as an RGB image, uint8 array of shape (height, width, 3)."""
+    canvas = _Canvas(disc)
+    image = Image.new("RGB", (canvas.width, canvas.height), (255, 255, 255))
+    draw = ImageDraw.Draw(image)
+    _draw_slip(draw, canvas, slip, wheel_speed)
+    for i, j in np.argwhere(grid_map.occupancy):
+        draw.rectangle(canvas.cell_box(int(i), int(j)), fill=WALL)
+    draw.rectangle(canvas.cell_box(*grid_map.start), outline=START, width=3)
+    draw.rectangle(canvas.cell_box(*grid_map.goal), fill=GOAL)
+    if len(trail) > 1:
+        draw.line([canvas.point(x, y) for x, y in trail], fill=TRAIL, width=2)
+    _draw_robot(draw, canvas, pose, body_length)
+    return np.asarray(image, dtype=np.uint8).copy()
+
+
+def ansi_frame(grid_map: GridMap, disc: Discretization, pose: np.ndarray) -> str:
+    """The map as text, top row first: ``#`` wall, ``S`` start, ``G`` goal, an arrow for the
+    robot pointing along its heading (8 directions)."""
+    robot_i, robot_j = disc.cell(float(pose[0]), float(pose[1]))
+    sector = round(math.atan2(math.sin(pose[2]), math.cos(pose[2])) / (math.pi / 4)) % 8
+    rows = []
+    for j in range(disc.n_y - 1, -1, -1):
+        chars = []
+        for i in range(disc.n_x):
+            if (i, j) == (robot_i, robot_j):
+                chars.append(HEADING_ARROWS[sector])
+            elif grid_map.occupancy[i, j]:
+                chars.append("#")
+            elif (i, j) == grid_map.goal:
+                chars.append("G")
+            elif (i, j) == grid_map.start:
+                chars.append("S")
+            else:
+                chars.append(".")
+        rows.append("".join(chars))
+    return "\n".join(rows) + "\n"

@@ -1,0 +1,297 @@
+"""The navigation MDP as compiled kernels: one action of the skid-steer robot, with slip,
+collisions and reward (SPEC §1–3). The Gymnasium env, the batch simulator and the fused trainers
+all call :func:`transition`, so there is one implementation of the dynamics.
+
+One action = ``substeps`` sub-steps of ``dt`` seconds. In each sub-step, with the robot in coarse
+region ρ at simulated time t:
+
+1. η = η₀[ρ] · max(0, 1 + A sin(2π t / P + φ[ρ])) (the slip field, possibly drifting);
+2. each wheel's commanded speed loses u·η in magnitude, u from the ``noise`` array of uniforms in
+   [0, 1) (two per sub-step: left, right). Callers fill ``noise`` with ``rng.random(2·substeps)``
+   (the env) or the same draws one by one inside a compiled loop (the trainers): same stream,
+   same numbers, and no Generator crosses the Python/numba boundary on every step;
+3. the ICR model with x_ICR[ρ] gives (v_x, v_y, yaw_rate); explicit Euler or the exact
+   constant-twist step advances the pose, which is clipped to the arena;
+4. if the new position lies in a wall cell the motion stops: the position stays at the last free
+   sub-step, the heading of the colliding sub-step is kept, and the action is a collision;
+   otherwise the sub-step is logged as (ρ, ω_L_cmd, ω_R_cmd, v_x, v_y, yaw_rate).
+
+Reward (thesis): +10 and termination if the robot ends the action in the goal cell; −10 after a
+collision; otherwise −1 − 10·var, var being the wheel-speed variance of the region where the action
+ends: the slip field's true η²/12 (default) or, with ``observed_variance``, the running sample
+variance of wheel speeds measured during forward actions in that region (the thesis's choice).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from skidnav._jit import jit
+from skidnav.robot.kinematics import (
+    apply_slip,
+    body_velocities,
+    commanded_wheel_speeds,
+    euler_step,
+    exact_step,
+)
+from skidnav.robot.params import KinematicConstants, RobotParams
+from skidnav.robot.slip import SlipField
+from skidnav.world.discretization import (
+    Discretization,
+    GridShape,
+    cell_of,
+    region_of,
+    state_of,
+)
+from skidnav.world.grid import GridMap
+
+LOG_COLUMNS = ("region", "omega_left_cmd", "omega_right_cmd", "v_x", "v_y", "yaw_rate")
+"""Columns of the kinematic log: one row per free sub-step."""
+
+
+class RewardScheme(NamedTuple):
+    """Reward constants (thesis values by default)."""
+
+    goal: float = 10.0
+    collision: float = -10.0
+    step: float = -1.0
+    variance_weight: float = 10.0
+    observed_variance: bool = False
+
+
+class NavigationTask(NamedTuple):
+    """Everything the kernels need to simulate the navigation MDP (numba-friendly).
+
+    Attributes:
+        robot: kinematic constants (SI units).
+        grid: discretization levels and arena size.
+        occupancy: uint8 (n_x, n_y), 1 = wall.
+        goal_i, goal_j: goal cell.
+        eta: base wheel-speed loss scale per flat region, shape (n_regions,) [rad/s].
+        x_icr: ICR offset per flat region, shape (n_regions,) [m].
+        drift_phase: drift phase per flat region, shape (n_regions,) [rad].
+        drift_amplitude: relative drift amplitude A (0 = stationary slip).
+        drift_period: drift period P [s].
+        rewards: the reward scheme.
+        variance_stats: float64 (n_regions, 3) running (count, mean, M2) of wheel speeds measured
+            in forward actions; updated in place by :func:`transition` when the reward uses the
+            observed variance.
+    """
+
+    robot: KinematicConstants
+    grid: GridShape
+    occupancy: np.ndarray
+    goal_i: int
+    goal_j: int
+    eta: np.ndarray
+    x_icr: np.ndarray
+    drift_phase: np.ndarray
+    drift_amplitude: float
+    drift_period: float
+    rewards: RewardScheme
+    variance_stats: np.ndarray
+
+
+class Outcome(NamedTuple):
+    """Result of one action: reward, termination, collision, logged rows, last wheel speeds
+    [rad/s], and the flat state and slip region where the action ended."""
+
+    reward: float
+    terminated: bool
+    collided: bool
+    n_logged: int
+    omega_left: float
+    omega_right: float
+    state: int
+    region: int
+
+
+@jit
+def slip_scale(task: NavigationTask, region: int, time: float) -> float:
+    """η of ``region`` at simulated time ``time`` [s] (rad/s)."""
+    eta = task.eta[region]
+    if task.drift_amplitude > 0.0:
+        phase = 2.0 * math.pi * time / task.drift_period + task.drift_phase[region]
+        eta *= max(0.0, 1.0 + task.drift_amplitude * math.sin(phase))
+    return eta
+
+
+@jit
+def _record_wheel_speed(stats: np.ndarray, region: int, value: float) -> None:
+    """Welford update of the running wheel-speed statistics of one region."""
+    stats[region, 0] += 1.0
+    delta = value - stats[region, 1]
+    stats[region, 1] += delta / stats[region, 0]
+    stats[region, 2] += delta * (value - stats[region, 1])
+
+
+@jit
+def region_variance(task: NavigationTask, region: int, time: float) -> float:
+    """Wheel-speed variance of a region [rad²/s²]: observed or true η²/12 (see module doc)."""
+    if task.rewards.observed_variance:
+        count = task.variance_stats[region, 0]
+        return task.variance_stats[region, 2] / (count - 1.0) if count > 1.0 else 0.0
+    eta = slip_scale(task, region, time)
+    return eta * eta / 12.0
+
+
+@jit
+def simulate_action(
+    task: NavigationTask,
+    pose: np.ndarray,
+    action: int,
+    time: float,
+    noise: np.ndarray,
+    log: np.ndarray,
+) -> tuple[bool, int, float, float]:
+    """Move the robot through one action, updating ``pose`` (x, y, heading) in place.
+
+    Args:
+        task: the MDP. pose: float64 (3,) [m, m, rad]. action: 0–3. time: simulated time at the
+            start of the action [s]. noise: float64 (2·substeps,) uniforms in [0, 1). log: float64
+            (≥ substeps, 6) receiving one row per free sub-step (see :data:`LOG_COLUMNS`).
+
+    Returns:
+        (collided, rows logged, ω_L and ω_R of the last sub-step [rad/s]).
+    """
+    robot = task.robot
+    command_left, command_right = commanded_wheel_speeds(action, robot.wheel_speed)
+    omega_left = omega_right = 0.0
+    n_logged = 0
+    for substep in range(robot.substeps):
+        x, y, heading = pose[0], pose[1], pose[2]
+        region = region_of(x, y, task.grid)
+        eta = slip_scale(task, region, time + substep * robot.dt)
+        omega_left = apply_slip(command_left, noise[2 * substep] * eta)
+        omega_right = apply_slip(command_right, noise[2 * substep + 1] * eta)
+        v_x, v_y, yaw_rate = body_velocities(
+            omega_left, omega_right, task.x_icr[region], robot.wheel_radius, robot.half_track
+        )
+        if robot.exact_integration:
+            new_x, new_y, new_heading = exact_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
+        else:
+            new_x, new_y, new_heading = euler_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
+        new_x = min(max(new_x, 0.0), robot.arena_width)
+        new_y = min(max(new_y, 0.0), robot.arena_height)
+        i, j = cell_of(new_x, new_y, task.grid)
+        pose[2] = new_heading
+        if task.occupancy[i, j] != 0:
+            return True, n_logged, omega_left, omega_right
+        pose[0] = new_x
+        pose[1] = new_y
+        row = log[n_logged]
+        row[0] = region
+        row[1] = command_left
+        row[2] = command_right
+        row[3] = v_x
+        row[4] = v_y
+        row[5] = yaw_rate
+        n_logged += 1
+        if action == 0 and task.rewards.observed_variance:
+            _record_wheel_speed(task.variance_stats, region, omega_left)
+            _record_wheel_speed(task.variance_stats, region, omega_right)
+    return False, n_logged, omega_left, omega_right
+
+
+@jit
+def transition(
+    task: NavigationTask,
+    pose: np.ndarray,
+    action: int,
+    time: float,
+    noise: np.ndarray,
+    log: np.ndarray,
+) -> Outcome:
+    """One step of the MDP: simulate the action, then score it (see module doc)."""
+    collided, n_logged, omega_left, omega_right = simulate_action(
+        task, pose, action, time, noise, log
+    )
+    i, j = cell_of(pose[0], pose[1], task.grid)
+    state = state_of(pose[0], pose[1], pose[2], task.grid)
+    region = region_of(pose[0], pose[1], task.grid)
+    terminated = i == task.goal_i and j == task.goal_j
+    if terminated:
+        reward = task.rewards.goal
+    elif collided:
+        reward = task.rewards.collision
+    else:
+        end_time = time + task.robot.dt * task.robot.substeps
+        variance = region_variance(task, region, end_time)
+        reward = task.rewards.step - task.rewards.variance_weight * variance
+    return Outcome(reward, terminated, collided, n_logged, omega_left, omega_right, state, region)
+
+
+@jit
+def draw_noise(rng: np.random.Generator, noise: np.ndarray) -> None:
+    """Fill ``noise`` with ``rng.random()`` draws, in order (identical to ``rng.random(n)``)."""
+    for k in range(noise.shape[0]):
+        noise[k] = rng.random()
+
+
+@jit
+def pose_state(task: NavigationTask, pose: np.ndarray) -> int:
+    """Flat state index of a pose."""
+    return state_of(pose[0], pose[1], pose[2], task.grid)
+
+
+@jit
+def simulate_batch(
+    task: NavigationTask,
+    poses: np.ndarray,
+    actions: np.ndarray,
+    time: float,
+    rng: np.random.Generator,
+    rewards: np.ndarray,
+    states: np.ndarray,
+) -> int:
+    """Apply ``actions[k]`` to robot ``poses[k]`` for every k (independent robots, one shared
+    floor); writes rewards (float64 (n,)) and next states (int64 (n,)); returns collisions."""
+    log = np.empty((task.robot.substeps, 6))
+    noise = np.empty(2 * task.robot.substeps)
+    collisions = 0
+    for k in range(poses.shape[0]):
+        draw_noise(rng, noise)
+        outcome = transition(task, poses[k], actions[k], time, noise, log)
+        rewards[k] = outcome.reward
+        states[k] = outcome.state
+        if outcome.collided:
+            collisions += 1
+    return collisions
+
+
+def build_task(
+    grid_map: GridMap,
+    slip: SlipField,
+    robot: RobotParams,
+    discretization: Discretization,
+    rewards: RewardScheme | None = None,
+) -> NavigationTask:
+    """Assemble a :class:`NavigationTask` from the Python-side objects, checking they agree."""
+    if grid_map.shape != (discretization.n_x, discretization.n_y):
+        raise ValueError(
+            f"expected a map of {discretization.n_x} × {discretization.n_y} cells, "
+            f"got {grid_map.shape[0]} × {grid_map.shape[1]}"
+        )
+    if slip.shape != (discretization.regions_x, discretization.regions_y):
+        raise ValueError(
+            f"expected a slip field of {discretization.regions_x} × {discretization.regions_y} "
+            f"regions, got {slip.shape[0]} × {slip.shape[1]}"
+        )
+    eta, x_icr, phase = slip.kernel_arrays()
+    return NavigationTask(
+        robot=robot.kernel_constants(),
+        grid=discretization.grid_shape(),
+        occupancy=grid_map.as_uint8(),
+        goal_i=int(grid_map.goal[0]),
+        goal_j=int(grid_map.goal[1]),
+        eta=eta,
+        x_icr=x_icr,
+        drift_phase=phase,
+        drift_amplitude=float(slip.drift_amplitude),
+        drift_period=float(slip.drift_period),
+        rewards=rewards or RewardScheme(),
+        variance_stats=np.zeros((discretization.n_regions, 3)),
+    )

@@ -1,0 +1,1 @@
+"""Running agents in real time on a robot or its hardware-in-the-loop stand-in."""

@@ -1,0 +1,144 @@
+"""Slip fields: how much each coarse floor region slows the wheels, and where its ICR lies.
+
+The thesis (SPEC §2) slows each wheel by U(0, η) rad/s towards zero, where η depends on the
+robot's coarse region (a 7 × 7 partition of the arena). A :class:`SlipField` holds, per region,
+η [rad/s] and x_ICR [m], and may drift over time (non-stationary slip):
+
+    η(region, t) = η₀(region) · max(0, 1 + A · sin(2π t / P + φ(region)))
+
+with relative amplitude A, period P [s] and a seeded phase φ per region. x_ICR does not drift.
+The true variance of a wheel's speed in a region is η²/12 (variance of U(0, η)).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from skidnav.robot.params import RobotParams
+
+SLIP_PRESETS = ("thesis", "slippery", "rough")
+
+
+@dataclass(frozen=True, eq=False)
+class SlipField:
+    """Per-region slip, validated on construction.
+
+    Attributes:
+        eta: wheel-speed loss scale η₀, shape (regions_x, regions_y) [rad/s], ≥ 0.
+        x_icr: ICR offset per region, shape (regions_x, regions_y) [m].
+        drift_amplitude: relative drift amplitude A ≥ 0 (0: stationary).
+        drift_period: drift period P [s] > 0.
+        drift_phase: phase φ per region, shape (regions_x, regions_y) [rad].
+    """
+
+    eta: np.ndarray
+    x_icr: np.ndarray
+    drift_amplitude: float = 0.0
+    drift_period: float = 600.0
+    drift_phase: np.ndarray = field(default_factory=lambda: np.zeros((7, 7)))
+
+    def __post_init__(self) -> None:
+        eta = np.asarray(self.eta, dtype=np.float64)
+        if eta.ndim != 2 or min(eta.shape) < 1:
+            raise ValueError(f"expected eta of shape (regions_x, regions_y), got {eta.shape}")
+        if not np.all(np.isfinite(eta)) or np.any(eta < 0):
+            raise ValueError("expected eta finite and >= 0 in every region")
+        for name in ("x_icr", "drift_phase"):
+            value = np.asarray(getattr(self, name), dtype=np.float64)
+            if value.shape != eta.shape:
+                raise ValueError(f"expected {name} of shape {eta.shape}, got {value.shape}")
+            if not np.all(np.isfinite(value)):
+                raise ValueError(f"expected {name} finite in every region")
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "eta", eta)
+        if not self.drift_amplitude >= 0:
+            raise ValueError(f"expected drift_amplitude >= 0, got {self.drift_amplitude}")
+        if not self.drift_period > 0:
+            raise ValueError(f"expected drift_period > 0 s, got {self.drift_period}")
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(regions_x, regions_y)."""
+        return (int(self.eta.shape[0]), int(self.eta.shape[1]))
+
+    @property
+    def drifting(self) -> bool:
+        """True when η changes with time."""
+        return self.drift_amplitude > 0
+
+    def eta_at(self, time: float) -> np.ndarray:
+        """η of every region at simulated time ``time`` [s], shape (regions_x, regions_y)."""
+        if not self.drifting:
+            return self.eta.copy()
+        factor = 1.0 + self.drift_amplitude * np.sin(
+            2.0 * math.pi * time / self.drift_period + self.drift_phase
+        )
+        return self.eta * np.maximum(factor, 0.0)
+
+    def wheel_speed_variance(self, time: float = 0.0) -> np.ndarray:
+        """True variance of a wheel's speed per region, η²/12 [rad²/s²]."""
+        return self.eta_at(time) ** 2 / 12.0
+
+    def kernel_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(eta, x_icr, drift_phase) flattened to shape (regions_x·regions_y,), region-major in x,
+        for the compiled kernels."""
+        return (
+            np.ascontiguousarray(self.eta.ravel()),
+            np.ascontiguousarray(self.x_icr.ravel()),
+            np.ascontiguousarray(self.drift_phase.ravel()),
+        )
+
+
+def make_slip_field(
+    preset: str,
+    rng: np.random.Generator,
+    *,
+    regions: tuple[int, int] = (7, 7),
+    drift_amplitude: float = 0.0,
+    drift_period: float = 600.0,
+    robot: RobotParams | None = None,
+) -> SlipField:
+    """Build a slip field from a named preset.
+
+    Presets:
+        ``thesis``: η = (i + j)/1000 rad/s in region (i, j) (under 1 % of the 1.7 rad/s wheel speed:
+        almost no slip) and the nominal x_ICR everywhere, as the thesis's simulation.
+        ``slippery``: η = 0.3 rad/s everywhere and 3–5 seeded patches of one region with
+        η = 1.7 rad/s (up to 100 %, on average 50 % of wheel speed lost there); x_ICR drawn
+        per region in [0, b] (shifted towards the centre).
+        ``rough``: high friction, η = 0.05 rad/s (at most 3 % loss), nominal x_ICR.
+
+    Args:
+        preset: one of :data:`SLIP_PRESETS`.
+        rng: draws the patches, x_ICR and drift phases.
+        regions: (regions_x, regions_y).
+        drift_amplitude, drift_period: see :class:`SlipField`.
+        robot: for the nominal x_ICR and its bounds (defaults to the thesis robot).
+    """
+    robot = robot or RobotParams()
+    shape = regions
+    ii, jj = np.meshgrid(np.arange(shape[0]), np.arange(shape[1]), indexing="ij")
+    x_icr = np.full(shape, robot.x_icr)
+    if preset == "thesis":
+        eta = (ii + jj) / 1000.0
+    elif preset == "slippery":
+        eta = np.full(shape, 0.3)
+        n_patches = int(rng.integers(3, 6))
+        flat = rng.choice(shape[0] * shape[1], size=n_patches, replace=False)
+        eta.ravel()[flat] = robot.wheel_speed
+        x_icr = rng.uniform(0.0, robot.rear_axle, size=shape)
+    elif preset == "rough":
+        eta = np.full(shape, 0.05)
+    else:
+        raise ValueError(f"expected slip preset one of {', '.join(SLIP_PRESETS)}, got {preset!r}")
+    phase = rng.uniform(0.0, 2.0 * math.pi, size=shape)
+    return SlipField(
+        eta=eta,
+        x_icr=x_icr,
+        drift_amplitude=drift_amplitude,
+        drift_period=drift_period,
+        drift_phase=phase,
+    )

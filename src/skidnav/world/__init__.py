@@ -1,0 +1,17 @@
+"""The arena: occupancy maps, the map file format, and pose discretization."""
+
+from skidnav.world.discretization import Discretization
+from skidnav.world.grid import MAP_KINDS, GridMap, generate_map
+from skidnav.world.mapfile import MapFileError, format_map, load_map, parse_map, save_map
+
+__all__ = [
+    "MAP_KINDS",
+    "Discretization",
+    "GridMap",
+    "MapFileError",
+    "format_map",
+    "generate_map",
+    "load_map",
+    "parse_map",
+    "save_map",
+]

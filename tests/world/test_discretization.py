@@ -1,0 +1,45 @@
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from skidnav.world.discretization import Discretization
+
+DISC = Discretization()
+
+
+def test_thesis_indices():
+    # i = floor(x/0.62·24), j = floor(y/0.505·24), k = floor(atan2/2π·20) + 10
+    x, y, heading = 0.3, 0.2, 2.0
+    i, j, k = DISC.unflatten(DISC.state(x, y, heading))
+    assert (i, j) == (math.floor(x / 0.62 * 24), math.floor(y / 0.505 * 24))
+    assert k == math.floor(heading / (2 * math.pi) * 20) + 10
+    assert DISC.region(x, y) == math.floor(x / 0.62 * 6) * 7 + math.floor(y / 0.505 * 6)
+
+
+def test_heading_pi_wraps_to_the_first_bin():
+    assert DISC.unflatten(DISC.state(0.3, 0.2, math.pi))[2] == 0
+    assert DISC.unflatten(DISC.state(0.3, 0.2, -math.pi))[2] == 0
+    assert DISC.unflatten(DISC.state(0.3, 0.2, 3 * math.pi - 1e-9))[2] == 19
+
+
+@given(x=st.floats(0, 0.62), y=st.floats(0, 0.505), heading=st.floats(-20, 20, allow_nan=False))
+def test_flat_index_round_trips(x, y, heading):
+    state = DISC.state(x, y, heading)
+    assert 0 <= state < DISC.n_states
+    i, j, k = DISC.unflatten(state)
+    assert (i, j) == DISC.cell(x, y)
+    assert (i * DISC.n_y + j) * DISC.n_headings + k == state
+
+
+def test_levels_are_configurable():
+    disc = Discretization(n_x=11, n_y=9, n_headings=8, regions_x=3, regions_y=3)
+    assert disc.n_states == 11 * 9 * 8
+    cells = disc.state_cells()
+    assert cells.shape == (disc.n_states, 2) and cells.max(axis=0).tolist() == [10, 8]
+    assert disc.cell(0.62, 0.505) == (10, 8)
+    with pytest.raises(ValueError, match="n_x"):
+        Discretization(n_x=1)
+    assert np.isclose(disc.heading_centre(0), -math.pi + math.pi / 8)
