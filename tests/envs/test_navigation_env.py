@@ -41,6 +41,7 @@ def make_env(**kwargs) -> SkidSteerNavEnv:
     return SkidSteerNavEnv(**kwargs)
 
 
+@pytest.mark.filterwarnings("ignore:.*different from the unwrapped")
 def test_check_env_passes_on_the_registered_env():
     env = gymnasium.make("skidnav/SkidSteerNav-v0", render_mode="rgb_array")
     check_env(env.unwrapped)

@@ -1,0 +1,126 @@
+"""Hyperparameters of the tabular agents: frozen dataclasses validated on construction.
+
+Each agent class names its config class in ``config_class``; configs extend each other, so an agent
+that adds a hyperparameter subclasses the config of the agent it extends:
+:class:`QLearningConfig` ⊂ :class:`DynaQConfig` ⊂ :class:`DynaQPlusConfig` and
+:class:`PrioritizedSweepingConfig`.
+
+>>> DynaQConfig(planning_steps=50).planning_steps
+50
+>>> DynaQConfig(alpha=1.5)
+Traceback (most recent call last):
+...
+ValueError: expected alpha in (0, 1], got 1.5
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+from skidnav.kernels.multinomial import PLANNING_MODES
+
+C = TypeVar("C", bound="QLearningConfig")
+
+
+def _check(condition: bool, expected: str, value: object) -> None:
+    if not condition:
+        raise ValueError(f"expected {expected}, got {value!r}")
+
+
+@dataclass(frozen=True)
+class QLearningConfig:
+    """One-step Q-learning with a decaying ε-greedy behaviour (Sutton & Barto (2018) §6.5)."""
+
+    alpha: float = 0.1
+    """Step size α of every value update, in (0, 1]."""
+    gamma: float = 0.95
+    """Discount factor γ per action, in [0, 1]."""
+    epsilon: float = 0.1
+    """Initial exploration rate ε₀ (probability of a uniformly random action), in [0, 1]."""
+    epsilon_decay: float = 1.0
+    """Per-episode factor: ε_k = max(epsilon_min, ε₀ · decay^k) after k episodes; 1 = constant."""
+    epsilon_min: float = 0.0
+    """Floor of the decaying ε, in [0, epsilon]."""
+    initial_q: float = 0.0
+    """Initial value of every entry of the Q table (optimistic if above the true values)."""
+
+    def __post_init__(self) -> None:
+        _check(0.0 < self.alpha <= 1.0, "alpha in (0, 1]", self.alpha)
+        _check(0.0 <= self.gamma <= 1.0, "gamma in [0, 1]", self.gamma)
+        _check(0.0 <= self.epsilon <= 1.0, "epsilon in [0, 1]", self.epsilon)
+        _check(0.0 < self.epsilon_decay <= 1.0, "epsilon_decay in (0, 1]", self.epsilon_decay)
+        _check(
+            0.0 <= self.epsilon_min <= self.epsilon, "epsilon_min in [0, epsilon]", self.epsilon_min
+        )
+        _check(math.isfinite(self.initial_q), "a finite initial_q", self.initial_q)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-able dict of every field."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_mapping(cls: type[C], values: Mapping[str, Any]) -> C:
+        """Build from a mapping (e.g. a TOML table); unknown keys raise ValueError."""
+        known = {field.name for field in dataclasses.fields(cls)}
+        unknown = sorted(set(values) - known)
+        if unknown:
+            raise ValueError(f"expected options among {sorted(known)}, got unknown {unknown}")
+        return cls(**dict(values))
+
+
+@dataclass(frozen=True)
+class DynaQConfig(QLearningConfig):
+    """Dyna-Q with the multinomial model (Sutton & Barto (2018) §8.2; thesis)."""
+
+    planning_steps: int = 5
+    """Planning updates n after each real step (0 = plain Q-learning)."""
+    planning_mode: str = "most-probable"
+    """How the model answers: "most-probable" (thesis), "sample" or "expected"."""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check(
+            isinstance(self.planning_steps, int) and self.planning_steps >= 0,
+            "an integer planning_steps >= 0",
+            self.planning_steps,
+        )
+        _check(
+            self.planning_mode in PLANNING_MODES,
+            f"planning_mode in {sorted(PLANNING_MODES)}",
+            self.planning_mode,
+        )
+
+    @property
+    def planning_mode_code(self) -> int:
+        """The integer code of :attr:`planning_mode` for the kernels."""
+        return PLANNING_MODES[self.planning_mode]
+
+
+@dataclass(frozen=True)
+class DynaQPlusConfig(DynaQConfig):
+    """Dyna-Q+ (Sutton & Barto (2018) §8.3)."""
+
+    kappa: float = 1e-3
+    """Exploration-bonus weight κ: planning rewards get + κ·√τ, τ = real steps since the pair was
+    last tried (reward units per √step), ≥ 0."""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check(self.kappa >= 0.0 and math.isfinite(self.kappa), "kappa >= 0", self.kappa)
+
+
+@dataclass(frozen=True)
+class PrioritizedSweepingConfig(DynaQConfig):
+    """Prioritized sweeping (Sutton & Barto (2018) §8.4). ``planning_steps`` bounds the queue
+    updates per real step."""
+
+    theta: float = 1e-4
+    """Priority threshold θ ≥ 0: a pair is queued only if its |TD error| exceeds θ (reward)."""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check(self.theta >= 0.0 and math.isfinite(self.theta), "theta >= 0", self.theta)

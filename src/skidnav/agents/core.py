@@ -1,0 +1,185 @@
+"""The shared tabular core every agent builds on (one TD update, one ε-greedy, one save format).
+
+An agent owns a Q table ``q`` (float64, shape (n_states, n_actions)), a ``numpy.random.Generator``
+(every random draw of the agent comes from it) and a frozen config. Subclasses implement only
+:meth:`TabularAgent._learn` (what happens after one real transition) and, if they keep more state,
+:meth:`TabularAgent._state_arrays` / :meth:`TabularAgent._restore_state_arrays`.
+
+Contract (docs/architecture.md): ``act(state)`` ε-greedy with random tie-breaking;
+``greedy_action(state)`` the lowest-index greedy action (draws nothing, so evaluation never changes
+training); ``observe(state, action, reward, next_state, terminated, truncated, info)`` learns from
+one real step (bootstrap on truncation, never on termination); ``end_episode()`` decays ε;
+``planning_updates`` counts model-based value updates; ``save(path)`` writes ``path.npz`` and
+``path.json`` (never pickle), read back by :func:`skidnav.agents.registry.load_agent`.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from skidnav.agents.config import QLearningConfig
+from skidnav.errors import CorruptFileError
+from skidnav.kernels.tabular import epsilon_at, epsilon_greedy, greedy_first
+
+logger = logging.getLogger(__name__)
+
+SAVE_FORMAT = "skidnav-agent"
+SAVE_VERSION = 1
+
+
+def save_paths(path: str | Path) -> tuple[Path, Path]:
+    """The ``.npz`` and ``.json`` files of a saved agent; a ``.npz``/``.json`` suffix is dropped."""
+    base = Path(path)
+    if base.suffix in (".npz", ".json"):
+        base = base.with_suffix("")
+    return base.with_name(base.name + ".npz"), base.with_name(base.name + ".json")
+
+
+def generator_state(rng: np.random.Generator) -> dict[str, Any]:
+    """The generator's bit-generator state as a JSON-able dict."""
+    return dict(rng.bit_generator.state)
+
+
+def generator_from_state(state: Mapping[str, Any]) -> np.random.Generator:
+    """A generator restored from :func:`generator_state`; ValueError if unusable."""
+    name = state.get("bit_generator")
+    bit_generator_class = getattr(np.random, str(name), None)
+    if not isinstance(bit_generator_class, type) or not issubclass(
+        bit_generator_class, np.random.BitGenerator
+    ):
+        raise ValueError(f"unknown bit generator {name!r}")
+    bit_generator = bit_generator_class()
+    bit_generator.state = dict(state)
+    return np.random.Generator(bit_generator)
+
+
+class TabularAgent:
+    """Base of every tabular agent: Q table, ε-greedy behaviour, counters, save/load."""
+
+    name: ClassVar[str] = "tabular"
+    """Registry name of the agent (e.g. ``"dyna-q"``)."""
+    config_class: ClassVar[type[QLearningConfig]] = QLearningConfig
+    """The frozen config dataclass this agent takes."""
+
+    def __init__(
+        self,
+        n_states: int,
+        n_actions: int,
+        config: QLearningConfig | None = None,
+        rng: np.random.Generator | None = None,
+    ) -> None:
+        if n_states < 1 or n_actions < 1:
+            raise ValueError(f"expected n_states, n_actions >= 1, got {n_states}, {n_actions}")
+        config = self.config_class() if config is None else config
+        if not isinstance(config, self.config_class):
+            raise TypeError(f"expected a {self.config_class.__name__}, got {type(config).__name__}")
+        self.config = config
+        self.n_states = int(n_states)
+        self.n_actions = int(n_actions)
+        self.rng = np.random.default_rng() if rng is None else rng
+        self.q = np.full((n_states, n_actions), config.initial_q, dtype=np.float64)
+        self.steps = 0
+        """Real transitions observed so far."""
+        self.episodes = 0
+        """Episodes completed (calls to :meth:`end_episode`)."""
+        self.planning_updates = 0
+        """Value updates made from a model (not from real experience) so far."""
+
+    @property
+    def epsilon(self) -> float:
+        """Current exploration rate ``max(ε_min, ε₀ · decay^episodes)``."""
+        config = self.config
+        return epsilon_at(self.episodes, config.epsilon, config.epsilon_decay, config.epsilon_min)
+
+    def act(self, state: int) -> int:
+        """ε-greedy action in ``state`` (ties among the greedy actions broken uniformly)."""
+        return int(epsilon_greedy(self.q, int(state), self.epsilon, self.rng))
+
+    def greedy_action(self, state: int) -> int:
+        """Greedy action in ``state``: the lowest index among the maxima; draws no random number."""
+        return int(greedy_first(self.q, int(state)))
+
+    def observe(
+        self,
+        state: int,
+        action: int,
+        reward: float,
+        next_state: int,
+        terminated: bool,
+        truncated: bool = False,
+        info: Mapping[str, Any] | None = None,
+    ) -> None:
+        """Learn from one real step. ``terminated`` stops the bootstrap; ``truncated`` does not
+        (the time limit is not part of the MDP). ``info`` is the env's info dict (may be None)."""
+        self.steps += 1
+        self._learn(
+            int(state), int(action), float(reward), int(next_state), bool(terminated), info or {}
+        )
+
+    def _learn(
+        self,
+        state: int,
+        action: int,
+        reward: float,
+        next_state: int,
+        terminated: bool,
+        info: Mapping[str, Any],
+    ) -> None:
+        """Update from one real step (direct RL, model learning, planning). Subclasses override."""
+        raise NotImplementedError
+
+    def end_episode(self) -> None:
+        """Mark the end of an episode (decays ε)."""
+        self.episodes += 1
+
+    # --- saving -----------------------------------------------------------------------------
+
+    def _state_arrays(self) -> dict[str, np.ndarray]:
+        """Arrays beyond ``q`` to save (names without ``/``); subclasses extend."""
+        return {}
+
+    def _restore_state_arrays(self, arrays: Mapping[str, np.ndarray]) -> None:
+        """Inverse of :meth:`_state_arrays`; raise KeyError/ValueError if something is missing."""
+
+    def save(self, path: str | Path) -> tuple[Path, Path]:
+        """Write ``path.npz`` (Q and model arrays) and ``path.json`` (name, config, counters,
+        generator state); returns both paths."""
+        npz_path, json_path = save_paths(path)
+        npz_path.parent.mkdir(parents=True, exist_ok=True)
+        np.savez_compressed(npz_path, q=self.q, **self._state_arrays())  # type: ignore[arg-type]
+        meta = {
+            "format": SAVE_FORMAT,
+            "version": SAVE_VERSION,
+            "agent": self.name,
+            "n_states": self.n_states,
+            "n_actions": self.n_actions,
+            "config": self.config.to_dict(),
+            "counters": {
+                "steps": self.steps,
+                "episodes": self.episodes,
+                "planning_updates": self.planning_updates,
+            },
+            "rng": generator_state(self.rng),
+        }
+        json_path.write_text(json.dumps(meta, indent=1))
+        logger.info("saved agent %s to %s", self.name, npz_path)
+        return npz_path, json_path
+
+    def _restore(self, meta: Mapping[str, Any], arrays: Mapping[str, np.ndarray]) -> None:
+        """Fill a freshly built agent from saved data; CorruptFileError when inconsistent."""
+        q = arrays["q"]
+        if q.shape != self.q.shape or q.dtype != np.float64:
+            raise CorruptFileError(f"saved Q table has shape {q.shape}, expected {self.q.shape}")
+        self.q[:] = q
+        counters = meta["counters"]
+        self.steps = int(counters["steps"])
+        self.episodes = int(counters["episodes"])
+        self.planning_updates = int(counters["planning_updates"])
+        self.rng = generator_from_state(meta["rng"])
+        self._restore_state_arrays(arrays)

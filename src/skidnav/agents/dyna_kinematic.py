@@ -1,0 +1,392 @@
+"""Dyna-Q with the multinomial model plus a learned kinematic model (thesis; SPEC §4 item 3).
+
+After each real step (s, a, r, s′) with the env's ``info``:
+
+1. direct RL: one TD update of ``q[s, a]``;
+2. model learning: count the transition in the multinomial model; feed the free sub-steps of
+   ``info["kinematic_log"]`` to the per-region Bayesian ridge kinematic model; record the reward
+   in the reward statistics; guess the wall cell of a collision and mark the goal cell of a
+   termination (the kinematic table around them is recomputed at the end of the episode);
+3. planning: ``planning_steps`` updates. With probability ``kinematic_share`` an update goes to the
+   *frontier*: a visited pair drawn uniformly, a random action predicted from its state, and a
+   random action at the predicted state; otherwise to a uniformly drawn visited pair (Dyna-Q).
+   Pairs visited are answered by the multinomial model, pairs never visited by the kinematic
+   table (see :mod:`skidnav.kernels.kinematic_planning`).
+
+At the end of each episode the kinematic model refits on its schedule and, if it did, the whole
+prediction table ``pred_next[s, a]`` is recomputed. See docs/agents/dyna-kinematic.md.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from skidnav.agents.config import DynaQConfig, QLearningConfig, _check
+from skidnav.agents.dyna_q import DynaQAgent
+from skidnav.kernels import kinematic_planning as kp
+from skidnav.kernels.navigation import NavigationTask
+from skidnav.kernels.tabular import td_update
+from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+from skidnav.robot.params import KinematicConstants, RobotParams
+from skidnav.world.discretization import Discretization, GridShape
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class DynaKinematicConfig(DynaQConfig):
+    """Dyna-Q with kinematic-model planning (fields of :class:`KinematicModelConfig` prefixed
+    ``kinematic_``)."""
+
+    planning_steps: int = 10
+    """Planning updates n after each real step."""
+    kinematic_share: float = 0.5
+    """Share of planning updates sent to the frontier of the visited set, in [0, 1]."""
+    kinematic_min_samples: int = 20
+    """Samples a region needs before its own regression is used."""
+    kinematic_refit_every: int = 500
+    """Minimum new sub-step samples between refits (checked at episode ends)."""
+    kinematic_refit_growth: float = 1.0
+    """Refits also wait for this fraction of the samples already fitted (0 for drifting slip)."""
+    kinematic_window: int = 500
+    """Samples kept per region (sliding window)."""
+    kinematic_forgetting: float = 1.0
+    """Per-sample weight decay of older samples, in (0, 1]."""
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        _check(
+            0.0 <= self.kinematic_share <= 1.0, "kinematic_share in [0, 1]", self.kinematic_share
+        )
+        self.kinematic_config()  # validates the kinematic fields
+
+    def kinematic_config(self) -> KinematicModelConfig:
+        """The kinematic model's config."""
+        return KinematicModelConfig(
+            min_samples=self.kinematic_min_samples,
+            refit_every=self.kinematic_refit_every,
+            refit_growth=self.kinematic_refit_growth,
+            window=self.kinematic_window,
+            forgetting=self.kinematic_forgetting,
+        )
+
+
+def geometry_from_task(task: NavigationTask) -> tuple[RobotParams, Discretization]:
+    """Robot and discretization of a navigation task. The robot keeps the *nominal* x_ICR of
+    :class:`RobotParams` (the agent's prior), never the slip field's true values."""
+    kc, grid = task.robot, task.grid
+    robot = RobotParams(
+        wheel_radius=kc.wheel_radius, half_track=kc.half_track, wheel_speed=kc.wheel_speed,
+        dt=kc.dt, substeps=kc.substeps, arena_width=kc.arena_width,
+        arena_height=kc.arena_height, integrator="exact" if kc.exact_integration else "euler",
+    )  # fmt: skip
+    discretization = Discretization(
+        n_x=grid.n_x, n_y=grid.n_y, n_headings=grid.n_headings, regions_x=grid.regions_x,
+        regions_y=grid.regions_y, arena_width=grid.arena_width, arena_height=grid.arena_height,
+    )  # fmt: skip
+    return robot, discretization
+
+
+_NO_GRID = GridShape(2, 2, 1, 2, 2, 1.0, 1.0)
+_NO_ROBOT = RobotParams().kernel_constants()
+
+
+class ModelBasedAgent(DynaQAgent):
+    """Shared machinery of ``dyna-kinematic``, ``trajectory-prioritized`` and ``dyna-full``:
+    multinomial model, optional kinematic model, optional best-trajectory sweeps.
+
+    Context keyword arguments (from :func:`~skidnav.agents.registry.make_agent`): ``task`` (a
+    :class:`NavigationTask`, e.g. ``env.unwrapped.task``) or ``robot`` and ``discretization``.
+    Without them the thesis robot and grid are assumed when ``n_states`` is 12,500; otherwise
+    (a non-navigation env) the agent has no geometry: no kinematic model, no spatial neighbours.
+    """
+
+    uses_kinematic: ClassVar[bool] = False
+    uses_trajectories: ClassVar[bool] = False
+
+    def __init__(
+        self,
+        n_states: int,
+        n_actions: int,
+        config: QLearningConfig | None = None,
+        rng: np.random.Generator | None = None,
+        *,
+        task: NavigationTask | None = None,
+        robot: RobotParams | None = None,
+        discretization: Discretization | None = None,
+    ) -> None:
+        super().__init__(n_states, n_actions, config, rng)
+        if task is not None:
+            robot, discretization = geometry_from_task(task)
+        elif discretization is None and n_states == Discretization().n_states:
+            discretization = Discretization()
+        self._set_geometry(robot or RobotParams(), discretization)
+
+    def _set_geometry(self, robot: RobotParams, grid: Discretization | None) -> None:
+        """Build the kinematic model and the planner for this geometry (None: no geometry)."""
+        if grid is not None and (grid.n_states != self.n_states or self.n_actions != 4):
+            raise ValueError(
+                f"expected {grid.n_states} states and 4 actions for this discretization, "
+                f"got {self.n_states} and {self.n_actions}"
+            )
+        self.robot = robot
+        self.discretization = grid
+        self.kernel_robot: KinematicConstants = robot.kernel_constants() if grid else _NO_ROBOT
+        self.kernel_grid: GridShape = grid.grid_shape() if grid else _NO_GRID
+        self.kinematic: KinematicModel | None = None
+        if self.uses_kinematic and grid is not None:
+            self.kinematic = KinematicModel(robot, grid, self.config.kinematic_config())  # type: ignore[attr-defined]
+        self.trajectories: list[np.ndarray] = []
+        """The best loop-erased start→goal trajectories (pair keys), shortest first."""
+        self.planner = self._new_planner()
+        self._refresh_table()
+
+    def _new_planner(self) -> kp.PlannerArrays:
+        n_table = self.n_states if self.kinematic else 1
+        shape = (self.kernel_grid.n_x, self.kernel_grid.n_y)
+        n_regions = self.kernel_grid.regions_x * self.kernel_grid.regions_y
+        velocities = self.kinematic.velocities if self.kinematic else np.zeros((1, 4, 3))
+        counters = np.zeros(kp.N_COUNTERS, dtype=np.int64)
+        counters[kp.USE_KINEMATIC] = int(self.kinematic is not None)
+        return kp.PlannerArrays(
+            pred_next=np.zeros((n_table, self.n_actions), dtype=np.int32),
+            pred_outcome=np.zeros((n_table, self.n_actions), dtype=np.int8),
+            velocities=velocities,
+            walls=np.zeros(shape, dtype=np.bool_),
+            goals=np.zeros(shape, dtype=np.bool_),
+            stale=np.zeros(shape, dtype=np.bool_),
+            reward_stats=np.zeros((n_regions + 2, 2)),
+            trajectory_keys=np.zeros(1, dtype=np.int64),
+            neighbour_keys=np.zeros(1, dtype=np.int64),
+            episode_keys=np.zeros(256, dtype=np.int64),
+            counters=counters,
+        )
+
+    @property
+    def shares(self) -> kp.PlanningShares:
+        """The planning hyperparameters as the kernels take them."""
+        config = self.config
+        return kp.PlanningShares(
+            n_steps=config.planning_steps, alpha=config.alpha, gamma=config.gamma,
+            mode=config.planning_mode_code,
+            trajectory_share=float(getattr(config, "trajectory_share", 0.0)),
+            kinematic_share=float(getattr(config, "kinematic_share", 0.0)),
+        )  # fmt: skip
+
+    def reserve_episode(self, n_steps: int) -> None:
+        """Make room for ``n_steps`` more pairs in the current episode's buffer."""
+        needed = int(self.planner.counters[kp.EPISODE_LENGTH]) + n_steps
+        keys = self.planner.episode_keys
+        if needed > keys.shape[0]:
+            grown = np.zeros(max(needed, 2 * keys.shape[0]), dtype=np.int64)
+            grown[: keys.shape[0]] = keys
+            self.planner = self.planner._replace(episode_keys=grown)
+
+    def _learn(
+        self,
+        state: int,
+        action: int,
+        reward: float,
+        next_state: int,
+        terminated: bool,
+        info: Mapping[str, Any],
+    ) -> None:
+        config = self.config
+        td_update(self.q, state, action, reward, next_state, terminated, config.alpha, config.gamma)
+        self.model.observe(state, action, reward, next_state, terminated)
+        self.reserve_episode(1)
+        pose = np.array(info["pose"], dtype=np.float64) if "pose" in info else np.full(3, -1.0)
+        if self.discretization is None:
+            pose[0] = -1.0
+        collided = bool(info.get("collision", False))
+        kp.planner_observe(
+            self.planner, state, action, reward, next_state, terminated, collided, pose,
+            self.kernel_robot, self.kernel_grid,
+        )  # fmt: skip
+        if self.kinematic is not None and "kinematic_log" in info:
+            self.kinematic.feed(info["kinematic_log"])
+        self._plan()
+
+    def _plan(self) -> None:
+        if self.config.planning_steps == 0:
+            return
+        self.planning_updates += int(
+            kp.combined_planning(
+                self.q, self.model.arrays, self.planner, self.shares, self.kernel_grid, self.rng
+            )
+        )
+
+    def end_episode(self) -> None:
+        """Update the best trajectories, refit the kinematic model on its schedule, decay ε."""
+        counters = self.planner.counters
+        if self.uses_trajectories and counters[kp.EPISODE_TERMINATED]:
+            keys = self.planner.episode_keys[: counters[kp.EPISODE_LENGTH]]
+            self._offer_trajectory(kp.loop_erase(keys, self.n_actions, self.n_states))
+        counters[kp.EPISODE_LENGTH] = 0
+        counters[kp.EPISODE_TERMINATED] = 0
+        if self.kinematic is not None and self.kinematic.maybe_refit():
+            self._refresh_table()
+        elif self.kinematic is not None and self.planner.stale.any():
+            kp.refresh_stale(self.planner, self.kernel_robot, self.kernel_grid)
+        self.planner.stale[:] = False
+        super().end_episode()
+
+    def _offer_trajectory(self, trajectory: np.ndarray) -> None:
+        """Keep ``trajectory`` if it is among the K shortest distinct ones; rebuild the sweeps."""
+        limit = int(self.config.n_trajectories)  # type: ignore[attr-defined]
+        if any(np.array_equal(trajectory, kept) for kept in self.trajectories):
+            return
+        if len(self.trajectories) >= limit and trajectory.size >= self.trajectories[-1].size:
+            return
+        self.trajectories.append(trajectory)
+        self.trajectories.sort(key=len)  # stable: older first among equal lengths
+        del self.trajectories[limit:]
+        self._rebuild_sweeps()
+
+    def _rebuild_sweeps(self) -> None:
+        """Sweep lists: trajectory pairs backward from the goal, shortest trajectory first; then
+        their neighbourhoods (see docs/agents/trajectory-prioritized.md)."""
+        if not self.trajectories:
+            return
+        backward = _first_occurrences(np.concatenate([t[::-1] for t in self.trajectories]))
+        spatial = self.discretization is not None
+        around = np.concatenate([
+            kp.neighbourhood_keys(t, self.planner.walls, self.kernel_grid, self.n_actions, spatial)
+            for t in self.trajectories
+        ])  # fmt: skip
+        around = _first_occurrences(around)
+        around = around[~np.isin(around, backward)]
+        if self.kinematic is None:
+            around = around[np.isin(around, self.model.visited_pairs())]
+        counters = self.planner.counters
+        counters[[kp.N_TRAJECTORY, kp.TRAJECTORY_CURSOR]] = (backward.size, 0)
+        counters[[kp.N_NEIGHBOURS, kp.NEIGHBOUR_CURSOR]] = (around.size, 0)
+        self.planner = self.planner._replace(
+            trajectory_keys=backward,
+            neighbour_keys=around if around.size else np.zeros(1, np.int64),
+        )
+
+    def _refresh_table(self) -> None:
+        """Recompute the whole kinematic table and the local-refresh radius."""
+        if self.kinematic is None or self.discretization is None:
+            return
+        velocities = self.kinematic.velocities
+        reach = float(np.hypot(velocities[..., 0], velocities[..., 1]).max()) * (
+            self.robot.action_duration
+        )
+        cell = min(self.discretization.cell_width, self.discretization.cell_height)
+        self.planner.counters[kp.REFRESH_RADIUS] = math.ceil(reach / cell) + 1
+        self.kinematic.fill_table(
+            self.planner.pred_next, self.planner.pred_outcome, self.planner.walls,
+            self.planner.goals,
+        )  # fmt: skip
+
+    # --- saving -----------------------------------------------------------------------------
+
+    def _state_arrays(self) -> dict[str, np.ndarray]:
+        planner = self.planner
+        counters = planner.counters
+        trajectories = self.trajectories or [np.zeros(0, dtype=np.int64)]
+        arrays = {
+            **super()._state_arrays(),
+            "planner_walls": planner.walls,
+            "planner_goals": planner.goals,
+            "planner_stale": planner.stale,
+            "planner_reward_stats": planner.reward_stats,
+            "planner_counters": counters,
+            "planner_trajectory_keys": planner.trajectory_keys[: counters[kp.N_TRAJECTORY]],
+            "planner_neighbour_keys": planner.neighbour_keys[: counters[kp.N_NEIGHBOURS]],
+            "planner_episode_keys": planner.episode_keys[: counters[kp.EPISODE_LENGTH]],
+            "trajectory_keys": np.concatenate(trajectories),
+            "trajectory_lengths": np.array([t.size for t in self.trajectories], dtype=np.int64),
+            "geometry": _geometry_array(self.robot, self.discretization),
+        }
+        if self.kinematic is not None:
+            arrays.update(self.kinematic.state_arrays())
+        return arrays
+
+    def _restore_state_arrays(self, arrays: Mapping[str, np.ndarray]) -> None:
+        super()._restore_state_arrays(arrays)
+        self._set_geometry(*_geometry_from_array(arrays["geometry"]))
+        planner = self.planner
+        for name in ("walls", "goals", "stale", "reward_stats", "counters"):
+            saved = np.asarray(arrays[f"planner_{name}"])
+            if saved.shape != getattr(planner, name).shape:
+                raise ValueError(f"saved planner {name} has shape {saved.shape}")
+            getattr(planner, name)[...] = saved
+        self.planner = planner._replace(
+            trajectory_keys=_at_least_one(arrays["planner_trajectory_keys"]),
+            neighbour_keys=_at_least_one(arrays["planner_neighbour_keys"]),
+        )
+        self.reserve_episode(0)
+        episode = np.asarray(arrays["planner_episode_keys"], dtype=np.int64)
+        self.reserve_episode(episode.size)
+        self.planner.episode_keys[: episode.size] = episode
+        splits = np.cumsum(arrays["trajectory_lengths"])[:-1]
+        keys = np.asarray(arrays["trajectory_keys"], dtype=np.int64)
+        self.trajectories = np.split(keys, splits) if arrays["trajectory_lengths"].size else []
+        if self.kinematic is not None:
+            self.kinematic.load_arrays(dict(arrays))
+            self._refresh_table()
+
+
+def _first_occurrences(keys: np.ndarray) -> np.ndarray:
+    """``keys`` without repeats, each kept at its first position."""
+    _, first = np.unique(keys, return_index=True)
+    return keys[np.sort(first)]
+
+
+def _at_least_one(keys: np.ndarray) -> np.ndarray:
+    keys = np.asarray(keys, dtype=np.int64)
+    return keys.copy() if keys.size else np.zeros(1, dtype=np.int64)
+
+
+_ROBOT_FIELDS = ("wheel_radius", "half_track", "front_axle", "rear_axle", "x_icr",
+                 "body_length", "wheel_speed", "dt", "arena_width", "arena_height")  # fmt: skip
+_GRID_FIELDS = ("n_x", "n_y", "n_headings", "regions_x", "regions_y")
+
+
+def _geometry_array(robot: RobotParams, grid: Discretization | None) -> np.ndarray:
+    """Robot and discretization as float64 (19,) (the last 7 are NaN without geometry)."""
+    values = [float(getattr(robot, name)) for name in _ROBOT_FIELDS]
+    values += [float(robot.substeps), float(robot.integrator == "exact")]
+    if grid is None:
+        return np.array([*values, *([math.nan] * 7)])
+    values += [float(getattr(grid, name)) for name in _GRID_FIELDS]
+    return np.array([*values, grid.arena_width, grid.arena_height])
+
+
+def _geometry_from_array(values: np.ndarray) -> tuple[RobotParams, Discretization | None]:
+    values = np.asarray(values, dtype=np.float64)
+    if values.shape != (19,):
+        raise ValueError(f"expected a geometry of 19 values, got shape {values.shape}")
+    robot = RobotParams(
+        **{name: float(v) for name, v in zip(_ROBOT_FIELDS, values[:10], strict=True)},
+        substeps=int(values[10]), integrator="exact" if values[11] else "euler",
+    )  # fmt: skip
+    if math.isnan(values[12]):
+        return robot, None
+    grid = Discretization(
+        **{name: int(v) for name, v in zip(_GRID_FIELDS, values[12:17], strict=True)},
+        arena_width=float(values[17]), arena_height=float(values[18]),
+    )  # fmt: skip
+    return robot, grid
+
+
+class DynaKinematicAgent(ModelBasedAgent):
+    """Dyna-Q whose planning also reaches never-visited pairs through the kinematic model."""
+
+    name: ClassVar[str] = "dyna-kinematic"
+    config_class: ClassVar[type[QLearningConfig]] = DynaKinematicConfig
+    uses_kinematic: ClassVar[bool] = True
+    uses_trajectories: ClassVar[bool] = False
+
+
+AGENT_NAME = "dyna-kinematic"
+AGENT_CLASS = DynaKinematicAgent

@@ -1,0 +1,102 @@
+"""Prioritized sweeping (Moore & Atkeson 1993; Sutton & Barto (2018) §8.4).
+
+After each real step (s, a, r, s′):
+
+1. model learning: count the transition in the :class:`MultinomialModel`;
+2. priority: P = |model target of (s, a) − q[s, a]|; queue (s, a) if P > θ (a queued pair keeps
+   the larger of its priorities);
+3. planning: up to ``planning_steps`` times while the queue is not empty, pop the top pair, update
+   it toward its model target, and queue every predecessor (s̄, ā) of s whose |TD error| > θ.
+
+As in the book's algorithm, real experience changes ``q`` only through the queue, so every value
+update is counted in ``planning_updates``. The priority is computed from the model (the book uses
+the sampled reward; both are equal on a deterministic MDP).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import numpy as np
+
+from skidnav.agents.config import PrioritizedSweepingConfig, QLearningConfig
+from skidnav.agents.dyna_q import DynaQAgent
+from skidnav.kernels.multinomial import MOST_PROBABLE
+from skidnav.kernels.planning import prioritized_sweeping, queue_pair
+from skidnav.kernels.priority_queue import heap_push, make_heap
+
+
+class PrioritizedSweepingAgent(DynaQAgent):
+    """Prioritized sweeping over the multinomial model."""
+
+    name: ClassVar[str] = "prioritized-sweeping"
+    config_class: ClassVar[type[QLearningConfig]] = PrioritizedSweepingConfig
+    config: PrioritizedSweepingConfig
+
+    def __init__(
+        self,
+        n_states: int,
+        n_actions: int,
+        config: QLearningConfig | None = None,
+        rng: np.random.Generator | None = None,
+    ) -> None:
+        super().__init__(n_states, n_actions, config, rng)
+        self.queue = make_heap(n_states * n_actions)
+        """Pairs s·n_actions + a waiting for an update, by priority (24 bytes per pair)."""
+
+    def _learn(
+        self,
+        state: int,
+        action: int,
+        reward: float,
+        next_state: int,
+        terminated: bool,
+        info: Mapping[str, Any],
+    ) -> None:
+        config = self.config
+        pair = self.model.observe(state, action, reward, next_state, terminated)
+        mode = config.planning_mode_code
+        uniform = self.rng.random() if mode == MOST_PROBABLE else 0.0
+        queue_pair(
+            self.q, self.model.arrays, self.queue, pair, config.theta, config.gamma, mode, uniform
+        )
+        self.planning_updates += int(
+            prioritized_sweeping(
+                self.q,
+                self.model.arrays,
+                self.queue,
+                config.planning_steps,
+                config.theta,
+                config.alpha,
+                config.gamma,
+                mode,
+                self.rng,
+            )
+        )
+
+    def _state_arrays(self) -> dict[str, np.ndarray]:
+        size = int(self.queue.size[0])
+        return {
+            **super()._state_arrays(),
+            "queue_items": self.queue.item[:size],
+            "queue_priorities": self.queue.priority[:size],
+        }
+
+    def _restore_state_arrays(self, arrays: Mapping[str, np.ndarray]) -> None:
+        super()._restore_state_arrays(arrays)
+        self.queue = make_heap(self.n_states * self.n_actions)
+        items = arrays["queue_items"]
+        priorities = arrays["queue_priorities"]
+        n_items = self.n_states * self.n_actions
+        if items.shape != priorities.shape or len(set(items.tolist())) != items.size:
+            raise ValueError("queue arrays disagree")
+        if items.size and (items.min() < 0 or items.max() >= n_items):
+            raise ValueError("queue item out of range")
+        # Saved slots are in heap order: pushing them in order rebuilds the same heap.
+        for item, priority in zip(items.tolist(), priorities.tolist(), strict=True):
+            heap_push(self.queue, int(item), float(priority))
+
+
+AGENT_NAME = "prioritized-sweeping"
+AGENT_CLASS = PrioritizedSweepingAgent

@@ -1,0 +1,183 @@
+"""The plain training loop: any agent on any Gymnasium env with Discrete observations and actions.
+
+:func:`train_agent` runs whole episodes and returns a :class:`TrainingLog` of per-episode arrays;
+:func:`train_for_steps` runs a fixed number of real steps across episodes (the cumulative-reward
+view of Sutton & Barto (2018) Examples 8.2 and 8.3). A compiled trainer may replace
+:func:`train_agent` for speed as long as it has the same signature and output.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, NamedTuple, Protocol
+
+import gymnasium as gym
+import numpy as np
+
+from skidnav.errors import UserError
+
+
+class Learner(Protocol):
+    """What the loop needs from an agent (every :class:`~skidnav.agents.core.TabularAgent`)."""
+
+    planning_updates: int
+
+    def act(self, state: int) -> int: ...
+
+    def greedy_action(self, state: int) -> int: ...
+
+    def observe(
+        self,
+        state: int,
+        action: int,
+        reward: float,
+        next_state: int,
+        terminated: bool,
+        truncated: bool,
+        info: dict[str, Any],
+    ) -> None: ...
+
+    def end_episode(self) -> None: ...
+
+
+class TrainingLog(NamedTuple):
+    """Per-episode results, each an array of shape (n_episodes,)."""
+
+    returns: np.ndarray
+    """Undiscounted sum of rewards (float64)."""
+    lengths: np.ndarray
+    """Actions taken (int64)."""
+    successes: np.ndarray
+    """True if the episode terminated (reached a terminal state) rather than being truncated."""
+    collisions: np.ndarray
+    """Steps whose ``info["collision"]`` was true (int64; 0 for envs without the key)."""
+    planning_updates: np.ndarray
+    """Model-based value updates made **during** the episode (int64; ``np.cumsum`` for totals)."""
+    wall_time: np.ndarray
+    """Seconds spent in the episode, greedy evaluation excluded (float64)."""
+    greedy_lengths: np.ndarray
+    """Length of a greedy rollout on the evaluation env after the episode; −1 if it did not
+    terminate within the limit, or if no evaluation env was given (int64)."""
+
+
+def _check_discrete(env: gym.Env[Any, Any]) -> None:
+    if not isinstance(env.observation_space, gym.spaces.Discrete) or not isinstance(
+        env.action_space, gym.spaces.Discrete
+    ):
+        raise UserError("expected an env with Discrete observations and actions")
+
+
+def greedy_rollout(agent: Learner, env: gym.Env[Any, Any], max_steps: int) -> int:
+    """Run the greedy policy for at most ``max_steps`` actions (without learning); return the
+    number of actions if the env terminated, else −1."""
+    state, _ = env.reset()
+    for step in range(1, max_steps + 1):
+        state, _, terminated, truncated, _ = env.step(agent.greedy_action(int(state)))
+        if terminated:
+            return step
+        if truncated:
+            return -1
+    return -1
+
+
+def run_episode(
+    agent: Learner, env: gym.Env[Any, Any], state: int, max_steps: int | None
+) -> tuple[float, int, bool, int]:
+    """One learning episode from ``state`` (already reset); returns (return, length, terminated,
+    collisions). The episode is truncated after ``max_steps`` actions if given."""
+    total, length, collisions = 0.0, 0, 0
+    while True:
+        action = agent.act(state)
+        next_state, reward, terminated, truncated, info = env.step(action)
+        length += 1
+        truncated = bool(truncated) or (max_steps is not None and length >= max_steps)
+        collisions += int(bool(info.get("collision", False)))
+        total += float(reward)
+        agent.observe(
+            state, action, float(reward), int(next_state), bool(terminated), truncated, info
+        )
+        state = int(next_state)
+        if terminated or truncated:
+            agent.end_episode()
+            return total, length, bool(terminated), collisions
+
+
+def train_agent(
+    agent: Learner,
+    env: gym.Env[Any, Any],
+    n_episodes: int,
+    *,
+    max_steps: int | None = None,
+    greedy_eval_env: gym.Env[Any, Any] | None = None,
+    greedy_max_steps: int | None = None,
+    seed: int | None = None,
+) -> TrainingLog:
+    """Train ``agent`` for ``n_episodes`` episodes on ``env``.
+
+    ``max_steps`` truncates each episode (the env's own time limit applies too). ``seed`` seeds the
+    first ``env.reset`` (and ``seed + 1`` the evaluation env's first reset); later resets continue
+    the env's own generator, as Gymnasium intends. The greedy rollout after each episode stops after
+    ``greedy_max_steps`` actions (default: ``max_steps``, else 10,000).
+    """
+    if n_episodes < 0 or (max_steps is not None and max_steps < 1):
+        raise ValueError(
+            f"expected n_episodes >= 0 and max_steps >= 1, got {n_episodes}, {max_steps}"
+        )
+    _check_discrete(env)
+    limit = greedy_max_steps or max_steps or 10_000
+    columns: dict[str, list[Any]] = {name: [] for name in TrainingLog._fields}
+    for episode in range(n_episodes):
+        start = time.perf_counter()
+        planned_before = agent.planning_updates
+        state, _ = env.reset(seed=seed if episode == 0 else None)
+        total, length, success, collisions = run_episode(agent, env, int(state), max_steps)
+        columns["wall_time"].append(time.perf_counter() - start)
+        columns["returns"].append(total)
+        columns["lengths"].append(length)
+        columns["successes"].append(success)
+        columns["collisions"].append(collisions)
+        columns["planning_updates"].append(agent.planning_updates - planned_before)
+        greedy = -1
+        if greedy_eval_env is not None:
+            if episode == 0 and seed is not None:
+                greedy_eval_env.reset(seed=seed + 1)
+            greedy = greedy_rollout(agent, greedy_eval_env, limit)
+        columns["greedy_lengths"].append(greedy)
+    dtypes = (np.float64, np.int64, np.bool_, np.int64, np.int64, np.float64, np.int64)
+    return TrainingLog(
+        *(
+            np.array(columns[name], dtype=dtype)
+            for name, dtype in zip(TrainingLog._fields, dtypes, strict=True)
+        )
+    )
+
+
+def train_for_steps(
+    agent: Learner, env: gym.Env[Any, Any], n_steps: int, *, seed: int | None = None
+) -> np.ndarray:
+    """Train for exactly ``n_steps`` real steps, starting new episodes as needed (an unfinished
+    last episode is left open, without ``end_episode``). Returns the cumulative reward after each
+    step, float64 (n_steps,)."""
+    _check_discrete(env)
+    cumulative = np.zeros(n_steps, dtype=np.float64)
+    state, _ = env.reset(seed=seed)
+    total = 0.0
+    for step in range(n_steps):
+        action = agent.act(int(state))
+        next_state, reward, terminated, truncated, info = env.step(action)
+        total += float(reward)
+        cumulative[step] = total
+        agent.observe(
+            int(state),
+            action,
+            float(reward),
+            int(next_state),
+            bool(terminated),
+            bool(truncated),
+            info,
+        )
+        state = next_state
+        if terminated or truncated:
+            agent.end_episode()
+            state, _ = env.reset()
+    return cumulative

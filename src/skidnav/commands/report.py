@@ -1,0 +1,34 @@
+"""``skidnav report RUN_DIR``: write the self-contained HTML report of a results directory."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from skidnav.errors import UserError
+
+
+def add_parser(subparsers: Any) -> None:
+    """Add the ``report`` subcommand."""
+    parser = subparsers.add_parser(
+        "report",
+        help="write one self-contained HTML report of a results directory",
+        description="Aggregate a results directory written by 'skidnav run' into one HTML file "
+        "(tables, embedded figures, the config).",
+    )
+    parser.add_argument("run_dir", type=Path, help="results directory")
+    parser.add_argument(
+        "-o", "--output", type=Path, default=None, help="output file (default: RUN_DIR/report.html)"
+    )
+    parser.set_defaults(func=report_command)
+
+
+def report_command(args: argparse.Namespace) -> int:
+    """Write the report; print its path."""
+    if not args.run_dir.is_dir():
+        raise UserError(f"{args.run_dir}: no such results directory")
+    from skidnav.experiments.report import write_report
+
+    print(f"report: {write_report(args.run_dir, args.output)}")
+    return 0

@@ -1,0 +1,203 @@
+"""``skidnav reproduce sutton-barto``: the textbook checks of Sutton & Barto (2018) ch. 8.
+
+Writes per-episode (or per-step) CSV files and PNG plots to ``--out`` and prints a summary:
+
+* ``dyna_maze.csv/.png`` — Example 8.1: steps per episode of Dyna-Q with n = 0, 5, 50 planning
+  steps (γ = 0.95, α = 0.1, ε = 0.1), ``--runs`` runs of 50 episodes;
+* ``blocking_maze.*``, ``shortcut_maze.*`` — Examples 8.2/8.3: cumulative reward of Dyna-Q vs
+  Dyna-Q+;
+* ``prioritized_sweeping.csv/.png`` — Example 8.4: value updates until the greedy path is optimal,
+  Dyna-Q vs prioritized sweeping on Dyna Mazes scaled ×1, ×2, ×3.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skidnav.agents.registry import make_agent
+from skidnav.agents.training import greedy_rollout, run_episode, train_agent, train_for_steps
+from skidnav.envs.mazes import GridMazeEnv, blocking_maze, dyna_maze, shortcut_maze
+from skidnav.errors import UserError
+
+BOOK = {"alpha": 0.1, "gamma": 0.95, "epsilon": 0.1}
+CHANGING = {"alpha": 1.0, "gamma": 0.95, "epsilon": 0.1, "planning_steps": 10}
+SWEEP = {"alpha": 1.0, "gamma": 0.95, "epsilon": 0.1, "planning_steps": 5}
+NEAR_OPTIMAL = 18.0
+PATH_TOLERANCE = 1.2
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register ``skidnav reproduce``."""
+    parser = subparsers.add_parser("reproduce", help="reproduce reference results")
+    parser.add_argument("target", choices=["sutton-barto"], help="which results")
+    parser.add_argument("--runs", type=int, default=30, help="independent runs (seeds 0..N-1)")
+    parser.add_argument("--out", type=Path, default=Path("runs/sutton-barto"), help="output folder")
+    parser.set_defaults(func=run)
+
+
+def _write_csv(path: Path, header: Sequence[str], rows: list[Sequence[Any]]) -> None:
+    with path.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        writer.writerows(rows)
+
+
+def _plot(path: Path, curves: dict[str, np.ndarray], xlabel: str, ylabel: str, x0: int = 1) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axes = plt.subplots(figsize=(6, 4))
+    for label, values in curves.items():
+        axes.plot(np.arange(x0, x0 + len(values)), values, label=label)
+    axes.set_xlabel(xlabel)
+    axes.set_ylabel(ylabel)
+    axes.legend()
+    figure.tight_layout()
+    figure.savefig(path, dpi=100)
+    plt.close(figure)
+
+
+def dyna_maze_experiment(runs: int, out: Path) -> dict[int, np.ndarray]:
+    """Example 8.1; returns mean steps per episode for each n."""
+    rows: list[Sequence[Any]] = []
+    means = {}
+    for n in (0, 5, 50):
+        lengths = []
+        for seed in range(runs):
+            agent = make_agent(
+                "dyna-q", 54, 4, {**BOOK, "planning_steps": n}, np.random.default_rng(seed)
+            )
+            log = train_agent(agent, dyna_maze(), 50, seed=seed)
+            lengths.append(log.lengths)
+            rows.extend(
+                (n, seed, episode + 1, int(steps)) for episode, steps in enumerate(log.lengths)
+            )
+        means[n] = np.mean(lengths, axis=0)
+    _write_csv(out / "dyna_maze.csv", ("planning_steps", "run", "episode", "steps"), rows)
+    curves = {f"n = {n}": values[1:] for n, values in means.items()}
+    _plot(out / "dyna_maze.png", curves, "episode", "steps per episode", x0=2)
+    return means
+
+
+def first_episode_below(mean_steps: np.ndarray, level: float = NEAR_OPTIMAL) -> int:
+    """First episode (1-based) whose mean steps are ≤ ``level``; −1 if none."""
+    below = np.nonzero(mean_steps <= level)[0]
+    return int(below[0]) + 1 if below.size else -1
+
+
+def changing_maze_experiment(
+    name: str, make_env: Any, n_steps: int, runs: int, out: Path
+) -> dict[str, np.ndarray]:
+    """Examples 8.2/8.3; returns the mean cumulative reward per step for each agent."""
+    means = {}
+    rows: list[Sequence[Any]] = []
+    for agent_name, extra in (("dyna-q", {}), ("dyna-q-plus", {"kappa": 1e-3})):
+        curves = []
+        for seed in range(runs):
+            agent = make_agent(
+                agent_name, 54, 4, {**CHANGING, **extra}, np.random.default_rng(seed)
+            )
+            curves.append(train_for_steps(agent, make_env(), n_steps, seed=seed))
+        means[agent_name] = np.mean(curves, axis=0)
+        rows.extend((agent_name, step + 1, value) for step, value in enumerate(means[agent_name]))
+    _write_csv(out / f"{name}.csv", ("agent", "step", "mean_cumulative_reward"), rows)
+    _plot(out / f"{name}.png", means, "time step", "cumulative reward")
+    return means
+
+
+def updates_until_optimal(name: str, scale: int, seed: int, max_episodes: int = 300) -> int:
+    """Value updates (real + planning) until the greedy path is first within
+    :data:`PATH_TOLERANCE` of the shortest path (−1 if not within ``max_episodes``). The tolerance
+    is needed because ε-greedy exploration may never try the pairs of the one optimal path."""
+    env: GridMazeEnv = dyna_maze(scale)
+    optimal = env.shortest_path_length()
+    options = {**SWEEP, "theta": 1e-4} if name == "prioritized-sweeping" else SWEEP
+    n_states = env.n_rows * env.n_cols
+    agent = make_agent(name, n_states, 4, options, np.random.default_rng(seed))
+    state, _ = env.reset(seed=seed)
+    for _ in range(max_episodes):
+        run_episode(agent, env, int(state), None)
+        state, _ = env.reset()
+        length = greedy_rollout(agent, dyna_maze(scale), 4 * optimal)
+        if 0 < length <= PATH_TOLERANCE * optimal:
+            real = 0 if name == "prioritized-sweeping" else agent.steps
+            return real + agent.planning_updates
+    return -1
+
+
+def sweeping_experiment(runs: int, out: Path) -> dict[tuple[str, int], float]:
+    """Example 8.4; returns the median updates until near-optimal per (agent, scale)."""
+    rows: list[Sequence[Any]] = []
+    medians: dict[tuple[str, int], float] = {}
+    for name in ("dyna-q", "prioritized-sweeping"):
+        for scale in (1, 2, 3):
+            counts = [updates_until_optimal(name, scale, seed) for seed in range(runs)]
+            rows.extend(
+                (name, 54 * scale * scale, seed, count) for seed, count in enumerate(counts)
+            )
+            # A run that never got there counts as infinitely many updates.
+            medians[(name, scale)] = float(np.median([c if c >= 0 else np.inf for c in counts]))
+    _write_csv(out / "prioritized_sweeping.csv", ("agent", "n_states", "run", "updates"), rows)
+    curves = {
+        name: np.array([medians[(name, scale)] for scale in (1, 2, 3)])
+        for name in ("dyna-q", "prioritized-sweeping")
+    }
+    _plot(out / "prioritized_sweeping.png", curves, "maze scale", "updates until optimal")
+    return medians
+
+
+def _report_dyna_maze(runs: int, out: Path) -> None:
+    means = dyna_maze_experiment(runs, out)
+    print(f"Dyna Maze (Example 8.1), {runs} runs; optimum 14 steps")
+    for n, values in means.items():
+        print(
+            f"  n = {n:2d}: episode 2 {values[1]:6.1f} steps, last 10 {values[-10:].mean():5.1f},"
+            f" first mean <= {NEAR_OPTIMAL:g} at episode {first_episode_below(values)}"
+        )
+
+
+def _report_changing_mazes(runs: int, out: Path) -> None:
+    for name, make_env, n_steps, change in (
+        ("blocking_maze", blocking_maze, 3000, 1000),
+        ("shortcut_maze", shortcut_maze, 6000, 3000),
+    ):
+        curves = changing_maze_experiment(name, make_env, n_steps, runs, out)
+        gains = {agent: curve[-1] - curve[change - 1] for agent, curve in curves.items()}
+        print(
+            f"{name}, {runs} runs: mean reward after the change at step {change}: "
+            + ", ".join(f"{agent} {gain:.1f}" for agent, gain in gains.items())
+        )
+
+
+def _report_sweeping(runs: int, out: Path) -> None:
+    medians = sweeping_experiment(runs, out)
+    print(f"Updates until the greedy path is within {PATH_TOLERANCE:g}× optimal, median of {runs}:")
+    for scale in (1, 2, 3):
+        dyna, sweep = medians[("dyna-q", scale)], medians[("prioritized-sweeping", scale)]
+        print(
+            f"  {54 * scale * scale:4d} states: dyna-q {dyna:9.0f}, prioritized {sweep:9.0f}"
+            f" (×{dyna / sweep:.1f} fewer)"
+        )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run every textbook check and print the summary."""
+    if args.runs < 1:
+        raise UserError(f"expected --runs >= 1, got {args.runs}")
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    _report_dyna_maze(args.runs, out)
+    _report_changing_mazes(args.runs, out)
+    _report_sweeping(min(args.runs, 10), out)
+    print(f"wrote CSV and PNG files to {out} in {time.perf_counter() - start:.0f} s")
+    return 0

@@ -1,0 +1,132 @@
+"""``skidnav robot``: the real-time platform (docs/realtime.md).
+
+``skidnav robot sim-server`` runs the simulated robot server; ``skidnav robot run`` runs an agent
+in real time against a robot driver.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import signal
+import sys
+from pathlib import Path
+from types import FrameType
+from typing import Any
+
+from skidnav.errors import UserError
+
+
+def add_parser(subparsers: Any) -> None:
+    """Add ``robot`` with its ``sim-server`` and ``run`` subcommands."""
+    robot = subparsers.add_parser("robot", help="run agents in real time on a robot or sim server")
+    commands = robot.add_subparsers(dest="robot_command", required=True)
+    _add_sim_server(commands)
+    _add_run(commands)
+
+
+def _add_sim_server(commands: Any) -> None:
+    server = commands.add_parser("sim-server", help="simulated robot speaking the line protocol")
+    server.add_argument("--port", type=int, required=True, help="TCP port (0: pick a free one)")
+    server.add_argument("--host", default="127.0.0.1", help="bind address (default 127.0.0.1)")
+    server.add_argument("--time-scale", type=float, default=1.0, help="robot s per wall s")
+    server.add_argument("--slip", default="rough", help="slip preset: thesis, slippery, rough")
+    server.add_argument("--drift", type=float, default=0.0, help="relative slip drift amplitude")
+    server.add_argument("--drift-period", type=float, default=600.0, help="drift period [s]")
+    server.add_argument("--latency", type=float, default=0.0, help="command latency [s]")
+    server.add_argument("--pose-noise", type=float, default=0.0, help="pose noise σ [m]")
+    server.add_argument("--drop", type=float, default=0.0, help="pose drop probability")
+    server.add_argument("--map", default="free", help="free, obstacles, maze or a map file")
+    server.add_argument("--seed", type=int, default=0, help="root seed (map, slip, noise)")
+    server.add_argument("--log", type=Path, help="JSON-lines log of received commands")
+    server.add_argument("--link-timeout", type=float, default=0.5, help="quiet link stop [s]")
+    server.add_argument(
+        "--fault", default="", help="comma-separated faults injected by successive SIGUSR1s"
+    )
+    server.set_defaults(func=_run_sim_server)
+
+
+def _run_sim_server(args: argparse.Namespace) -> int:
+    from skidnav.realtime import sim_server as ss
+    from skidnav.realtime.sim_robot import SimRobotConfig, build_robot, warm_up
+
+    try:
+        config = SimRobotConfig(latency=args.latency, pose_noise=args.pose_noise, drop=args.drop)
+        options = ss.ServerOptions(
+            time_scale=args.time_scale,
+            link_timeout=args.link_timeout,
+            faults=tuple(fault for fault in args.fault.split(",") if fault),
+        )
+    except ValueError as error:
+        raise UserError(str(error)) from None
+    robot = build_robot(
+        slip=args.slip,
+        drift=args.drift,
+        drift_period=args.drift_period,
+        map_spec=args.map,
+        seed=args.seed,
+        config=config,
+    )
+    warm_up(robot)
+    try:
+        listener = ss.bind_listener(args.host, args.port)
+    except OSError as error:
+        raise UserError(f"cannot listen on {args.host}:{args.port}: {error}") from None
+    with contextlib.ExitStack() as stack:
+        stream = stack.enter_context(args.log.open("a", encoding="utf-8")) if args.log else None
+        server = ss.SimServer(robot, options, ss.EventLog(stream))
+
+        def on_signal(signum: int, frame: FrameType | None) -> None:
+            if signum == signal.SIGUSR1:
+                server.inject()
+            else:
+                server.shutdown.set()
+
+        for signum in (signal.SIGUSR1, signal.SIGTERM, signal.SIGINT):
+            signal.signal(signum, on_signal)
+        host, port = listener.getsockname()[:2]
+        print(f"listening on {host}:{port}", flush=True)
+        try:
+            server.serve_tcp(listener)
+        finally:
+            listener.close()
+    return 0
+
+
+def _add_run(commands: Any) -> None:
+    run = commands.add_parser("run", help="run an agent in real time")
+    run.add_argument(
+        "--driver", choices=("sim", "tcp", "serial", "ros2"), default="sim", help="robot link"
+    )
+    run.add_argument(
+        "--agent", required=True, help="agent name (q-learning, dyna-q, dyna-kinematic, …)"
+    )
+    run.add_argument("--config", type=Path, help="real-time TOML config (configs/realtime.toml)")
+    run.add_argument("--preset", help="a [presets.NAME] table of the config to apply")
+    run.add_argument("--episodes", type=int, help="episodes to run (overrides the config)")
+    run.add_argument(
+        "--time-scale", type=float, help="robot s per wall s (a sim server's; 1 for a real robot)"
+    )
+    run.add_argument("--reset", choices=("auto", "manual"), help="between episodes")
+    run.add_argument("--out", type=Path, default=Path("realtime-run"), help="output directory")
+    run.add_argument("--resume", action="store_true", help="continue from the last checkpoint")
+    run.add_argument("--quiet", action="store_true", help="no live progress line")
+    run.set_defaults(func=_run_loop)
+
+
+def _run_loop(args: argparse.Namespace) -> int:
+    from skidnav.realtime.run import run_from_args
+
+    def progress(line: str) -> None:
+        if not args.quiet:
+            print(f"\r{line:<79}", end="", file=sys.stderr, flush=True)
+
+    def wait_for_operator(message: str) -> None:
+        print(f"\n{message} — press Enter when ready", file=sys.stderr, flush=True)
+        sys.stdin.readline()
+
+    code, summary = run_from_args(args, progress=progress, wait_for_operator=wait_for_operator)
+    if not args.quiet:
+        print(file=sys.stderr)
+    print(summary)
+    return code

@@ -1,0 +1,65 @@
+"""``skidnav run CONFIG``: run (or resume) an experiment grid."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from skidnav.experiments.configfile import load_config
+from skidnav.experiments.runner import BACKENDS, run_experiment
+
+
+def add_parser(subparsers: Any) -> None:
+    """Add the ``run`` subcommand."""
+    parser = subparsers.add_parser(
+        "run",
+        help="run an experiment config (agents × maps × presets × seeds); resumable",
+        description="Run every run of an experiment config. Started again on the same --out "
+        "directory it skips the runs already finished.",
+    )
+    parser.add_argument("config", type=Path, help="experiment config (TOML)")
+    parser.add_argument(
+        "--out", type=Path, default=None, help="results directory (default: runs/<config name>)"
+    )
+    parser.add_argument(
+        "--jobs", type=int, default=None, help="worker processes (default: local cores)"
+    )
+    parser.add_argument(
+        "--backend",
+        choices=BACKENDS,
+        default="process",
+        help="serial, local process pool, or Dask (default: process)",
+    )
+    parser.add_argument(
+        "--scheduler",
+        default=None,
+        help="Dask scheduler address, e.g. tcp://127.0.0.1:8786 (with --backend dask)",
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--report", action="store_true", help="write report.html when done")
+    parser.set_defaults(func=run_command)
+
+
+def run_command(args: argparse.Namespace) -> int:
+    """Run the experiment; print where the results are."""
+    config = load_config(args.config)
+    out = args.out if args.out is not None else Path("runs") / config.name
+    outcome = run_experiment(
+        config,
+        out,
+        backend=args.backend,
+        jobs=args.jobs,
+        scheduler=args.scheduler,
+        source_text=args.config.read_text(encoding="utf-8"),
+        progress=not args.no_progress,
+    )
+    print(
+        f"{outcome.n_runs} runs in {outcome.out_dir} ({outcome.executed} run now, "
+        f"{outcome.skipped} already done) in {outcome.wall_time:.1f} s"
+    )
+    if args.report:
+        from skidnav.experiments.report import write_report
+
+        print(f"report: {write_report(outcome.out_dir)}")
+    return 0

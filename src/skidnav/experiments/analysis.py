@@ -1,0 +1,230 @@
+"""Aggregates over seeds and the comparisons behind the thesis claims (SPEC §5).
+
+Every interval is a seeded percentile bootstrap (:mod:`skidnav.experiments.stats`); each table
+cell gets its own generator keyed by the root seed and the cell's labels, so the numbers do not
+depend on the order in which they are computed. Agents are compared *paired by seed*: all agents
+of a (map, preset) cell meet the same maps and floors (see :mod:`skidnav.experiments.runs`).
+"""
+
+from __future__ import annotations
+
+import zlib
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from skidnav.experiments.config import ExperimentConfig
+from skidnav.experiments.stats import (
+    Interval,
+    bootstrap_interval,
+    difference_interval,
+    ratio_interval,
+    rowwise_iqm,
+    rowwise_mean,
+)
+
+METRICS = {
+    "convergence_episode": "convergence episode (greedy)",
+    "convergence_episode_robust": "convergence episode (greedy, robust)",
+    "convergence_episode_training": "convergence episode (training)",
+    "converged": "converged share",
+    "first_success_episode": "first successful episode",
+    "final_length_actions": "final greedy length [actions]",
+    "final_length_m": "final greedy length [m]",
+    "success_rate": "success rate (all episodes)",
+    "success_rate_last10": "success rate (last 10 %)",
+    "mean_return": "mean return",
+    "collisions_per_episode": "collisions per episode",
+    "planning_updates": "planning updates",
+    "wall_time": "wall time [s]",
+}
+"""Summary columns aggregated in the report, with their display names."""
+
+
+def stats_rng(config: ExperimentConfig, *keys: object) -> np.random.Generator:
+    """A generator for one table cell, keyed by the root seed and the cell's labels."""
+    key = zlib.crc32("|".join(str(k) for k in keys).encode())
+    return np.random.default_rng([config.root_seed, 0x5747, key])
+
+
+def cells(summaries: pd.DataFrame) -> Iterator[tuple[str, str, pd.DataFrame]]:
+    """(map, preset, rows) for every map × preset cell present, in order of appearance."""
+    for (map_label, preset), rows in summaries.groupby(["map", "preset"], sort=False):
+        yield str(map_label), str(preset), rows
+
+
+def _by_seed(rows: pd.DataFrame, agent: str, column: str) -> pd.Series:
+    selected = rows[rows["agent"] == agent].set_index("seed")[column]
+    return selected.sort_index().astype(np.float64)
+
+
+def aggregate(summaries: pd.DataFrame, config: ExperimentConfig) -> pd.DataFrame:
+    """Mean and IQM with bootstrap intervals of every metric per (map, preset, agent).
+
+    Returns a long table: map, preset, agent, metric, n, mean, mean_low, mean_high, iqm,
+    iqm_low, iqm_high.
+    """
+    records = []
+    for map_label, preset, rows in cells(summaries):
+        for agent in config.agent_labels:
+            agent_rows = rows[rows["agent"] == agent]
+            if agent_rows.empty:
+                continue
+            for metric in METRICS:
+                values = agent_rows[metric].to_numpy(np.float64)
+                rng = stats_rng(config, map_label, preset, agent, metric)
+                mean = bootstrap_interval(
+                    values,
+                    rng,
+                    statistic=rowwise_mean,
+                    n_resamples=config.bootstrap_samples,
+                    confidence=config.confidence,
+                )
+                iqm = bootstrap_interval(
+                    values,
+                    rng,
+                    statistic=rowwise_iqm,
+                    n_resamples=config.bootstrap_samples,
+                    confidence=config.confidence,
+                )
+                records.append(
+                    {
+                        "map": map_label,
+                        "preset": preset,
+                        "agent": agent,
+                        "metric": metric,
+                        "n": int(np.isfinite(values).sum()),
+                        "mean": mean.estimate,
+                        "mean_low": mean.low,
+                        "mean_high": mean.high,
+                        "iqm": iqm.estimate,
+                        "iqm_low": iqm.low,
+                        "iqm_high": iqm.high,
+                    }
+                )
+    return pd.DataFrame.from_records(records)
+
+
+def _paired(
+    rows: pd.DataFrame, first: str, second: str, column: str
+) -> tuple[np.ndarray, np.ndarray, bool]:
+    a, b = _by_seed(rows, first, column), _by_seed(rows, second, column)
+    paired = list(a.index) == list(b.index)
+    return a.to_numpy(), b.to_numpy(), paired
+
+
+def compare_to_baseline(summaries: pd.DataFrame, config: ExperimentConfig) -> pd.DataFrame:
+    """Each agent against the baseline, per (map, preset), paired by seed.
+
+    Columns: ``speedup`` (mean convergence episode of the baseline / of the agent; > 1 = faster),
+    ``speedup_robust`` and ``speedup_training`` (same, robust and training views),
+    ``success_gain`` (success rate agent − baseline, absolute), ``success_gain_relative``
+    (agent / baseline − 1), ``success_gain_last10``, ``length_difference`` (final greedy length
+    agent − baseline [actions], runs whose final policy reached the goal), each with ``_low`` /
+    ``_high`` bounds, and ``length_no_difference`` (the interval of the length difference
+    contains 0), ``length_pairs`` (seeds where both reached the goal), ``baseline_converged``
+    (share of the baseline's runs that converged; the others are censored at N).
+    """
+    records = []
+    base = config.baseline
+    for map_label, preset, rows in cells(summaries):
+        for agent in config.agent_labels:
+            if agent == base or rows[rows["agent"] == agent].empty:
+                continue
+            record: dict[str, object] = {"map": map_label, "preset": preset, "agent": agent}
+            for name, interval in _comparisons(rows, agent, base, config, map_label, preset):
+                record[name] = interval.estimate
+                record[f"{name}_low"] = interval.low
+                record[f"{name}_high"] = interval.high
+            record["length_pairs"] = _length_pairs(rows, agent, base)
+            record["baseline_converged"] = float(_by_seed(rows, base, "converged").mean())
+            low, high = record["length_difference_low"], record["length_difference_high"]
+            record["length_no_difference"] = bool(low <= 0 <= high)  # type: ignore[operator]
+            records.append(record)
+    return pd.DataFrame.from_records(records)
+
+
+def _length_pairs(rows: pd.DataFrame, agent: str, base: str) -> int:
+    """Seeds where both agents' final greedy trajectories reached the goal."""
+    a, b, _ = _paired(rows, agent, base, "final_length_actions")
+    return int((np.isfinite(a) & np.isfinite(b)).sum()) if a.size == b.size else 0
+
+
+def _comparisons(
+    rows: pd.DataFrame, agent: str, base: str, config: ExperimentConfig, *cell: str
+) -> Iterator[tuple[str, Interval]]:
+    options: dict[str, Any] = {
+        "n_resamples": config.bootstrap_samples,
+        "confidence": config.confidence,
+    }
+    for name, column in (
+        ("speedup", "convergence_episode"),
+        ("speedup_robust", "convergence_episode_robust"),
+        ("speedup_training", "convergence_episode_training"),
+    ):
+        a, b, paired = _paired(rows, base, agent, column)
+        yield (
+            name,
+            ratio_interval(a, b, stats_rng(config, *cell, agent, name), paired=paired, **options),
+        )  # type: ignore[arg-type]
+    for name, column in (
+        ("success_gain", "success_rate"),
+        ("success_gain_last10", "success_rate_last10"),
+        ("length_difference", "final_length_actions"),
+    ):
+        a, b, paired = _paired(rows, agent, base, column)
+        yield (
+            name,
+            difference_interval(
+                a, b, stats_rng(config, *cell, agent, name), paired=paired, **options
+            ),
+        )  # type: ignore[arg-type]
+    a, b, paired = _paired(rows, agent, base, "success_rate")
+    ratio = ratio_interval(
+        a, b, stats_rng(config, *cell, agent, "relative"), paired=paired, **options
+    )  # type: ignore[arg-type]
+    yield "success_gain_relative", Interval(ratio.estimate - 1, ratio.low - 1, ratio.high - 1)
+
+
+def compare_surfaces(
+    summaries: pd.DataFrame,
+    config: ExperimentConfig,
+    rough: str = "rough",
+    slippery: str = "slippery",
+) -> pd.DataFrame:
+    """Success rate on the rough floor over that on the slippery floor, per (map, agent).
+
+    The two floors are different worlds, so the seeds are resampled independently (unpaired).
+    Columns: map, agent, metric, ratio, ratio_low, ratio_high, rough, slippery (mean rates).
+    """
+    if not {rough, slippery} <= set(summaries["preset"]):
+        return pd.DataFrame()
+    records = []
+    for (map_label, agent), rows in summaries.groupby(["map", "agent"], sort=False):
+        for metric in ("success_rate", "success_rate_last10"):
+            a = rows[rows["preset"] == rough][metric].to_numpy(np.float64)
+            b = rows[rows["preset"] == slippery][metric].to_numpy(np.float64)
+            rng = stats_rng(config, map_label, agent, metric, "surfaces")
+            ratio = ratio_interval(
+                a,
+                b,
+                rng,
+                paired=False,
+                n_resamples=config.bootstrap_samples,
+                confidence=config.confidence,
+            )
+            records.append(
+                {
+                    "map": map_label,
+                    "agent": agent,
+                    "metric": metric,
+                    "ratio": ratio.estimate,
+                    "ratio_low": ratio.low,
+                    "ratio_high": ratio.high,
+                    "rough": float(np.nanmean(a)),
+                    "slippery": float(np.nanmean(b)),
+                }
+            )
+    return pd.DataFrame.from_records(records)

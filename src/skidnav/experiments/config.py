@@ -1,0 +1,276 @@
+"""Experiment configs: frozen, validated dataclasses loaded from TOML.
+
+An experiment is the grid agents × maps × slip presets × seeds (SPEC §5). The TOML layout is::
+
+    [experiment]
+    name = "quick"
+    episodes = 60            # training episodes per run
+    max_steps = 300          # action limit per episode (truncation)
+    seeds = 5                # seeds per (agent, map, preset)
+    root_seed = 2020         # the one root seed of the whole experiment
+    presets = ["thesis"]     # slip presets (skidnav.robot.slip.SLIP_PRESETS)
+    drift_amplitude = 0.0    # relative slip drift amplitude (0: stationary)
+
+    [env]                    # optional keyword arguments of the environment
+    [[maps]]                 # kind = "free" | "obstacles" | "maze", or file = "maps/a.txt"
+    [[agents]]               # name, label, params = {...}, sweep = {key = [values]}
+
+Every field is documented on :class:`ExperimentConfig`; docs/experiments.md has the full schema.
+Configs are never mutated: :func:`config_to_dict` and :func:`config_from_dict` round-trip them
+through JSON, which is how the resolved config is saved next to the results.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from skidnav.robot.slip import SLIP_PRESETS
+from skidnav.world.grid import MAP_KINDS
+
+#: Values a hyperparameter or option may take: TOML scalars, or tuples of them (TOML arrays).
+Scalar = bool | int | float | str | tuple[bool | int | float | str, ...]
+Params = tuple[tuple[str, Scalar], ...]
+_SCALARS = (bool, int, float, str)
+
+DEFAULT_ENV_ID = "skidnav/SkidSteerNav-v0"
+
+
+def _check_params(name: str, params: Params) -> None:
+    for key, value in params:
+        if not isinstance(key, str) or not key:
+            raise ValueError(f"expected {name} keys to be non-empty strings, got {key!r}")
+        items = value if isinstance(value, tuple) else (value,)
+        if not all(isinstance(item, _SCALARS) for item in items):
+            raise ValueError(f"expected {name}.{key} to be a number, string or bool, got {value!r}")
+
+
+def freeze_params(mapping: dict[str, Any] | Params | None) -> Params:
+    """A mapping of scalar options as a sorted tuple of (key, value) pairs (hashable, ordered)."""
+    if mapping is None:
+        return ()
+    items = mapping.items() if isinstance(mapping, dict) else mapping
+    return tuple(
+        sorted(
+            (str(key), tuple(value) if isinstance(value, list) else value) for key, value in items
+        )
+    )
+
+
+@dataclass(frozen=True)
+class AgentSpec:
+    """One agent variant of the grid.
+
+    Attributes:
+        name: algorithm name understood by ``skidnav.agents.make_agent``.
+        label: unique display name (default: the name, plus swept values).
+        params: hyperparameters passed to the agent, as sorted (key, value) pairs.
+    """
+
+    name: str
+    label: str
+    params: Params = ()
+
+    def __post_init__(self) -> None:
+        if not self.name:
+            raise ValueError(f"expected a non-empty agent name, got {self.name!r}")
+        if not self.label:
+            raise ValueError(f"expected a non-empty agent label, got {self.label!r}")
+        _check_params(f"agent {self.label!r} params", self.params)
+
+    def params_dict(self) -> dict[str, Scalar]:
+        """The hyperparameters as a fresh dict."""
+        return dict(self.params)
+
+
+@dataclass(frozen=True)
+class MapSpec:
+    """One map of the grid: a generated kind or a map file.
+
+    Attributes:
+        label: unique display name.
+        kind: generated map kind (one of :data:`MAP_KINDS`) or ``""`` for a file.
+        file: absolute path of a map file, or ``""`` for a generated kind.
+        options: extra keyword arguments of the map generator, as (key, value) pairs.
+    """
+
+    label: str
+    kind: str = ""
+    file: str = ""
+    options: Params = ()
+
+    def __post_init__(self) -> None:
+        if bool(self.kind) == bool(self.file):
+            raise ValueError("expected exactly one of kind or file in a map")
+        if self.kind and self.kind not in MAP_KINDS:
+            raise ValueError(f"expected map kind one of {', '.join(MAP_KINDS)}, got {self.kind!r}")
+        if self.file and self.options:
+            raise ValueError("expected no options for a map file")
+        if not self.label:
+            raise ValueError("expected a non-empty map label")
+        _check_params(f"map {self.label!r} options", self.options)
+
+
+def _check_range(name: str, value: float, low: float, high: float, *, integer: bool) -> None:
+    kind = "an integer" if integer else "a number"
+    ok_type = isinstance(value, int) if integer else isinstance(value, int | float)
+    if isinstance(value, bool) or not ok_type or not (low <= value <= high):
+        bounds = f"in [{low}, {high}]" if math.isfinite(high) else f">= {low}"
+        raise ValueError(f"expected {name} to be {kind} {bounds}, got {value!r}")
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """A whole experiment, validated on construction.
+
+    Attributes:
+        name: experiment name (used in the report title).
+        agents: agent variants, unique labels.
+        maps: maps, unique labels.
+        presets: slip presets, unique, from ``skidnav.robot.slip.SLIP_PRESETS``.
+        seeds: seeds per (agent, map, preset) cell, ≥ 1 (≥ 30 for headline claims).
+        episodes: training episodes per run, ≥ 2.
+        max_steps: action limit per episode (truncation), ≥ 1; ``None`` keeps the env default.
+        root_seed: the one root seed; every run's streams are spawned from it.
+        drift_amplitude: relative slip drift amplitude A ≥ 0 (``SlipField``; 0: stationary).
+        drift_period: slip drift period [s] > 0.
+        convergence_tolerance: relative band around the final greedy trajectory length that
+            defines convergence, in (0, 1) (default 0.10 = 10 %).
+        baseline: label of the agent every other agent is compared to (default: the first
+            agent named ``q-learning``, else the first agent).
+        bootstrap_samples: bootstrap resamples for every interval, ≥ 100.
+        confidence: confidence level of every interval, in [0.5, 0.999].
+        greedy_eval: evaluate the greedy policy after each episode (needed for the primary
+            convergence definition).
+        env_id: Gymnasium id of the environment.
+        env_options: extra keyword arguments of the environment, as (key, value) pairs.
+        description: free text shown in the report.
+    """
+
+    name: str
+    agents: tuple[AgentSpec, ...]
+    maps: tuple[MapSpec, ...]
+    presets: tuple[str, ...] = ("thesis",)
+    seeds: int = 30
+    episodes: int = 100
+    max_steps: int | None = None
+    root_seed: int = 0
+    drift_amplitude: float = 0.0
+    drift_period: float = 600.0
+    convergence_tolerance: float = 0.10
+    baseline: str = ""
+    bootstrap_samples: int = 2000
+    confidence: float = 0.95
+    greedy_eval: bool = True
+    env_id: str = DEFAULT_ENV_ID
+    env_options: Params = ()
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.name:
+            raise ValueError("expected a non-empty experiment name")
+        self._check_members()
+        self._check_numbers()
+        if not self.baseline:
+            names = [agent.label for agent in self.agents if agent.name == "q-learning"]
+            object.__setattr__(self, "baseline", (names or [self.agents[0].label])[0])
+        if self.baseline not in self.agent_labels:
+            raise ValueError(f"expected baseline to be an agent label, got {self.baseline!r}")
+        _check_params("env", self.env_options)
+
+    def _check_members(self) -> None:
+        if not self.agents:
+            raise ValueError("expected at least one agent")
+        if not self.maps:
+            raise ValueError("expected at least one map")
+        if not self.presets:
+            raise ValueError("expected at least one slip preset")
+        for preset in self.presets:
+            if preset not in SLIP_PRESETS:
+                raise ValueError(f"expected presets from {', '.join(SLIP_PRESETS)}, got {preset!r}")
+        for what, labels in (
+            ("agent labels", self.agent_labels),
+            ("map labels", [m.label for m in self.maps]),
+            ("presets", list(self.presets)),
+        ):
+            if len(set(labels)) != len(labels):
+                raise ValueError(f"expected unique {what}, got {labels}")
+
+    def _check_numbers(self) -> None:
+        inf = math.inf
+        _check_range("seeds", self.seeds, 1, inf, integer=True)
+        _check_range("episodes", self.episodes, 2, inf, integer=True)
+        if self.max_steps is not None:
+            _check_range("max_steps", self.max_steps, 1, inf, integer=True)
+        _check_range("root_seed", self.root_seed, 0, inf, integer=True)
+        _check_range("drift_amplitude", self.drift_amplitude, 0.0, inf, integer=False)
+        _check_range("drift_period", self.drift_period, 1e-9, inf, integer=False)
+        _check_range(
+            "convergence_tolerance", self.convergence_tolerance, 1e-6, 0.999, integer=False
+        )
+        _check_range("bootstrap_samples", self.bootstrap_samples, 100, inf, integer=True)
+        _check_range("confidence", self.confidence, 0.5, 0.999, integer=False)
+        if not isinstance(self.greedy_eval, bool):
+            raise ValueError(f"expected greedy_eval to be true or false, got {self.greedy_eval!r}")
+
+    @property
+    def agent_labels(self) -> list[str]:
+        """Agent labels in config order."""
+        return [agent.label for agent in self.agents]
+
+    @property
+    def n_runs(self) -> int:
+        """Number of runs in the expanded grid."""
+        return len(self.agents) * len(self.maps) * len(self.presets) * self.seeds
+
+    def fingerprint(self) -> str:
+        """SHA-256 of the canonical JSON of the resolved config (identifies a results dir)."""
+        text = json.dumps(config_to_dict(self), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+def config_to_dict(config: ExperimentConfig) -> dict[str, Any]:
+    """The resolved config as a JSON-ready dict (inverse of :func:`config_from_dict`)."""
+    return {
+        "name": config.name,
+        "description": config.description,
+        "env_id": config.env_id,
+        "env_options": dict(config.env_options),
+        "episodes": config.episodes,
+        "max_steps": config.max_steps,
+        "seeds": config.seeds,
+        "root_seed": config.root_seed,
+        "presets": list(config.presets),
+        "drift_amplitude": config.drift_amplitude,
+        "drift_period": config.drift_period,
+        "convergence_tolerance": config.convergence_tolerance,
+        "baseline": config.baseline,
+        "bootstrap_samples": config.bootstrap_samples,
+        "confidence": config.confidence,
+        "greedy_eval": config.greedy_eval,
+        "agents": [
+            {"name": a.name, "label": a.label, "params": dict(a.params)} for a in config.agents
+        ],
+        "maps": [
+            {"label": m.label, "kind": m.kind, "file": m.file, "options": dict(m.options)}
+            for m in config.maps
+        ],
+    }
+
+
+def config_from_dict(data: dict[str, Any]) -> ExperimentConfig:
+    """Rebuild a config saved by :func:`config_to_dict`."""
+    values = dict(data)
+    agents = tuple(
+        AgentSpec(a["name"], a["label"], freeze_params(a["params"])) for a in values.pop("agents")
+    )
+    maps = tuple(
+        MapSpec(m["label"], m["kind"], m["file"], freeze_params(m["options"]))
+        for m in values.pop("maps")
+    )
+    values["presets"] = tuple(values["presets"])
+    values["env_options"] = freeze_params(values["env_options"])
+    return ExperimentConfig(agents=agents, maps=maps, **values)

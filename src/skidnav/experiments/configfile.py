@@ -1,0 +1,189 @@
+"""Reading experiment configs from TOML files, with one-line errors a user can act on.
+
+Every problem raises :class:`skidnav.errors.UserError` naming the file and the key, e.g.
+``configs/a.toml: [experiment] unknown key 'episods'`` or
+``configs/a.toml:4:9: malformed TOML: Invalid value``. Map files are resolved relative to the
+config file. Agent names and hyperparameters are checked against the agents package by
+:func:`skidnav.experiments.trial.check_config`, which the runner calls before any run starts.
+"""
+
+from __future__ import annotations
+
+import itertools
+import re
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from skidnav.errors import UserError
+from skidnav.experiments.config import (
+    DEFAULT_ENV_ID,
+    AgentSpec,
+    ExperimentConfig,
+    MapSpec,
+    freeze_params,
+)
+
+TOP_KEYS = ("experiment", "env", "maps", "agents")
+EXPERIMENT_KEYS = (
+    "name",
+    "description",
+    "env_id",
+    "episodes",
+    "max_steps",
+    "seeds",
+    "root_seed",
+    "presets",
+    "drift_amplitude",
+    "drift_period",
+    "convergence_tolerance",
+    "baseline",
+    "bootstrap_samples",
+    "confidence",
+    "greedy_eval",
+)
+AGENT_KEYS = ("name", "label", "params", "sweep")
+MAP_KEYS = ("kind", "file", "label", "options")
+_TOML_POSITION = re.compile(r"^(?P<message>.*) \(at line (?P<line>\d+), column (?P<column>\d+)\)$")
+
+
+def load_config(path: Path | str) -> ExperimentConfig:
+    """Read and validate an experiment config file.
+
+    Raises:
+        UserError: missing or unreadable file, malformed TOML (with line and column), unknown
+            key, wrong type or out-of-range value, missing map file.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise UserError(f"{path}: no such config file") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise UserError(f"{path}: cannot read config ({error.__class__.__name__})") from None
+    return parse_config(text, path)
+
+
+def parse_config(text: str, path: Path | str = "<string>") -> ExperimentConfig:
+    """Validate config text; map files are resolved relative to ``path``'s folder."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise UserError(_toml_error(path, error)) from None
+    try:
+        return _build(data, Path(path))
+    except (ValueError, TypeError) as error:
+        raise UserError(f"{path}: {error}") from None
+
+
+def _toml_error(path: Path | str, error: tomllib.TOMLDecodeError) -> str:
+    match = _TOML_POSITION.match(str(error))
+    if match is None:
+        return f"{path}: malformed TOML: {error}"
+    return f"{path}:{match['line']}:{match['column']}: malformed TOML: {match['message']}"
+
+
+def _check_keys(table: dict[str, Any], allowed: tuple[str, ...], where: str) -> None:
+    for key in table:
+        if key not in allowed:
+            raise ValueError(f"{where} unknown key {key!r} (expected one of {', '.join(allowed)})")
+
+
+def _table(value: Any, where: str) -> dict[str, Any]:
+    if not isinstance(value, dict):
+        raise ValueError(f"{where} expected a table, got {value!r}")
+    return value
+
+
+def _tables(value: Any, where: str) -> list[dict[str, Any]]:
+    if not isinstance(value, list) or not value:
+        raise ValueError(f"expected at least one [[{where}]] table")
+    return [_table(item, f"[[{where}]] #{n + 1}:") for n, item in enumerate(value)]
+
+
+def _string(table: dict[str, Any], key: str, where: str, default: str | None = None) -> str:
+    value = table.get(key, default)
+    if value is None:
+        raise ValueError(f"{where} missing key {key!r}")
+    if not isinstance(value, str):
+        raise ValueError(f"{where} {key}: expected a string, got {value!r}")
+    return value
+
+
+def _build(data: dict[str, Any], path: Path) -> ExperimentConfig:
+    _check_keys(data, TOP_KEYS, "top level:")
+    experiment = _table(data.get("experiment"), "[experiment]")
+    _check_keys(experiment, EXPERIMENT_KEYS, "[experiment]")
+    values = dict(experiment)
+    for key in ("name", "description", "env_id", "baseline"):
+        if key in values:
+            values[key] = _string(values, key, "[experiment]")
+    if "name" not in values:
+        values["name"] = path.stem
+    presets = values.get("presets", ["thesis"])
+    if not isinstance(presets, list) or not all(isinstance(p, str) for p in presets):
+        raise ValueError(f"[experiment] presets: expected a list of strings, got {presets!r}")
+    values["presets"] = tuple(presets)
+    agents = tuple(
+        itertools.chain.from_iterable(
+            _agents(table, f"[[agents]] #{n + 1}:")
+            for n, table in enumerate(_tables(data.get("agents"), "agents"))
+        )
+    )
+    maps = _maps(data, values.get("env_id", DEFAULT_ENV_ID), path.parent)
+    env = freeze_params(_table(data.get("env", {}), "[env]"))
+    try:
+        return ExperimentConfig(agents=agents, maps=maps, env_options=env, **values)
+    except ValueError as error:
+        raise ValueError(f"[experiment] {error}") from None
+
+
+def _agents(table: dict[str, Any], where: str) -> list[AgentSpec]:
+    """One agent table, expanded over the cartesian product of its ``sweep`` lists."""
+    _check_keys(table, AGENT_KEYS, where)
+    name = _string(table, "name", where)
+    label = _string(table, "label", where, default=name)
+    params = _table(table.get("params", {}), f"{where} params:")
+    sweep = _table(table.get("sweep", {}), f"{where} sweep:")
+    for key, values in sweep.items():
+        if not isinstance(values, list) or not values:
+            raise ValueError(f"{where} sweep.{key}: expected a non-empty list, got {values!r}")
+        if key in params:
+            raise ValueError(f"{where} {key!r} is both in params and in sweep")
+    keys = sorted(sweep)
+    agents = []
+    for combination in itertools.product(*(sweep[key] for key in keys)):
+        chosen = dict(zip(keys, combination, strict=True))
+        suffix = ",".join(f"{key}={value}" for key, value in chosen.items())
+        full_label = f"{label}[{suffix}]" if suffix else label
+        try:
+            agents.append(AgentSpec(name, full_label, freeze_params({**params, **chosen})))
+        except ValueError as error:
+            raise ValueError(f"{where} {error}") from None
+    return agents
+
+
+def _maps(data: dict[str, Any], env_id: str, folder: Path) -> tuple[MapSpec, ...]:
+    """The ``[[maps]]`` tables; an env other than the skid-steer one brings its own world, so
+    its maps may be omitted (one placeholder map named after the env)."""
+    if "maps" not in data and env_id != DEFAULT_ENV_ID:
+        return (MapSpec(label=env_id.rsplit(":", 1)[-1], kind="free"),)
+    tables = _tables(data.get("maps"), "maps")
+    return tuple(_map(table, f"[[maps]] #{n + 1}:", folder) for n, table in enumerate(tables))
+
+
+def _map(table: dict[str, Any], where: str, folder: Path) -> MapSpec:
+    _check_keys(table, MAP_KEYS, where)
+    kind = _string(table, "kind", where, default="")
+    file = _string(table, "file", where, default="")
+    if file:
+        resolved = (folder / file).resolve()
+        if not resolved.is_file():
+            raise ValueError(f"{where} file: no such map file {file!r} (looked at {resolved})")
+        file = str(resolved)
+    label = _string(table, "label", where, default=kind or Path(file).stem)
+    options = freeze_params(_table(table.get("options", {}), f"{where} options:"))
+    try:
+        return MapSpec(label=label, kind=kind, file=file, options=options)
+    except ValueError as error:
+        raise ValueError(f"{where} {error}") from None

@@ -1,0 +1,203 @@
+"""The experiment report: ONE self-contained HTML file (tables, base64 PNG figures, the config).
+
+Sections: setup, metric definitions (with the convergence tolerance), thesis reproduction
+(speed-up, success-rate gain, final-length difference, rough vs slippery floor), aggregate
+tables, per-cell figures (learning curves, per-seed metrics, final greedy trajectories, value and
+policy maps), provenance (config, versions, commit). The numbers are what was measured.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+import logging
+from pathlib import Path
+
+import pandas as pd
+
+from skidnav.experiments import plots
+from skidnav.experiments.analysis import (
+    METRICS,
+    aggregate,
+    cells,
+    compare_surfaces,
+    compare_to_baseline,
+)
+from skidnav.experiments.config import ExperimentConfig, config_to_dict
+from skidnav.experiments.reproduction import reproduction_section
+from skidnav.experiments.store import ResultStore
+
+logger = logging.getLogger(__name__)
+
+STYLE = """
+body{font-family:system-ui,sans-serif;max-width:1250px;margin:2em auto;padding:0 1em;color:#222}
+table{border-collapse:collapse;font-size:13px;margin:0.6em 0}
+td,th{border:1px solid #ccc;padding:3px 7px;text-align:right}
+th{background:#f0f0f0} td:first-child,th:first-child{text-align:left}
+img{max-width:100%} pre{background:#f6f6f6;padding:0.8em;overflow-x:auto;font-size:12px}
+.yes{color:#17631b;font-weight:600} .no{color:#9b1c1c;font-weight:600}
+.note{color:#555;font-size:13px}
+"""
+
+
+def interval_text(mean: float, low: float, high: float, digits: int = 2) -> str:
+    """``"12.3 [10.1, 14.2]"``; ``"–"`` when undefined."""
+    if mean != mean:  # NaN
+        return "–"
+    return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
+
+
+def image(png: bytes, alt: str) -> str:
+    """An <img> tag embedding ``png`` as base64."""
+    encoded = base64.b64encode(png).decode("ascii")
+    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{encoded}">'
+
+
+def table(frame: pd.DataFrame) -> str:
+    """An HTML table of preformatted string cells."""
+    return frame.to_html(index=False, escape=True, border=0)
+
+
+def aggregate_table(aggregates: pd.DataFrame, map_label: str, preset: str) -> str:
+    """Mean [CI] and IQM [CI] of every metric per agent for one cell."""
+    rows = aggregates[(aggregates["map"] == map_label) & (aggregates["preset"] == preset)]
+    records = []
+    for metric, title in METRICS.items():
+        record = {"metric": title}
+        for _, r in rows[rows["metric"] == metric].iterrows():
+            for kind, label in (("mean", "mean"), ("iqm", "IQM")):
+                record[f"{r['agent']} {label}"] = interval_text(
+                    float(r[kind]), float(r[f"{kind}_low"]), float(r[f"{kind}_high"])
+                )
+        records.append(record)
+    return table(pd.DataFrame.from_records(records))
+
+
+def definitions(config: ExperimentConfig) -> str:
+    """The metric definitions, with this experiment's tolerance and interval settings."""
+    tol = config.convergence_tolerance
+    return f"""<ul class="note">
+<li><b>Convergence episode (greedy, primary)</b>: after every training episode the greedy policy
+is run once; the convergence episode is the first episode after which its trajectory length stays
+within <b>{tol:.0%}</b> of its final value until the end of training. A run whose final greedy
+policy does not reach the goal is not converged and counts as episode {config.episodes}
+(censored), so speed-ups against a baseline that often fails to converge are understated.</li>
+<li><b>Convergence episode (greedy, robust)</b>: the same rule on the trailing median
+(window {max(1, round(config.episodes / 20))} evaluations; a failed evaluation counts as infinitely
+long), so one isolated bad evaluation late in training does not reset convergence.</li>
+<li><b>Convergence episode (training view)</b>: the same rule on the moving average
+(window {max(1, round(config.episodes / 20))} episodes) of the training episodes' lengths.</li>
+<li><b>Final greedy length</b>: actions (and metres travelled) of one greedy rollout from the start
+after the last episode (the trajectory drawn below); only runs where it reached the goal, and
+comparisons only over seeds where both agents' rollouts did.</li>
+<li><b>Success rate</b>: share of training episodes that reached the goal within
+{config.max_steps or "the environment's"} actions (all episodes, and the last 10 %).</li>
+<li>Intervals: {config.confidence:.0%} percentile bootstrap over seeds,
+{config.bootstrap_samples} resamples, seeded. IQM: mean of the middle 50 % of seeds.
+Comparisons with the baseline <b>{html.escape(config.baseline)}</b> are paired by seed (every agent
+meets the same maps and floors). "No significant difference" means the interval of the difference
+contains 0; its width tells how large a difference could have gone unnoticed.</li></ul>"""
+
+
+def setup(config: ExperimentConfig, metadata: dict[str, object], n_runs: int) -> str:
+    """The experiment grid in a few lines."""
+    agents = ", ".join(html.escape(label) for label in config.agent_labels)
+    maps = ", ".join(html.escape(m.label) for m in config.maps)
+    return (
+        f"<p>{html.escape(config.description)}</p><ul><li>agents: {agents}</li>"
+        f"<li>maps: {maps}; slip presets: {', '.join(config.presets)}; drift amplitude "
+        f"{config.drift_amplitude}</li><li>{config.seeds} seeds per cell, {config.episodes} "
+        f"episodes per run, action limit {config.max_steps or 'env default'}; root seed "
+        f"{config.root_seed}; {n_runs} runs finished of {config.n_runs}</li>"
+        f"<li>environment {html.escape(config.env_id)}; git commit "
+        f"{html.escape(str(metadata.get('git_commit')))}</li></ul>"
+    )
+
+
+def figures_for_cell(
+    store: ResultStore,
+    config: ExperimentConfig,
+    episodes: pd.DataFrame,
+    summaries: pd.DataFrame,
+    aggregates: pd.DataFrame,
+    map_label: str,
+    preset: str,
+) -> str:
+    """Learning curves, per-seed metrics, trajectories and value maps of one cell."""
+    parts = [
+        image(
+            plots.learning_curves(
+                episodes, config, map_label, preset, float(summaries["action_limit"].max())
+            ),
+            "learning curves",
+        ),
+        image(plots.metric_strips(summaries, aggregates, config, map_label, preset), "metrics"),
+    ]
+    cell = summaries[(summaries["map"] == map_label) & (summaries["preset"] == preset)]
+    first_seed = int(cell["seed"].min())
+    run_ids = [
+        str(rows.iloc[0]["run_id"])
+        for agent in config.agent_labels
+        if not (rows := cell[(cell["agent"] == agent) & (cell["seed"] == first_seed)]).empty
+    ]
+    runs = [run for run in store.iter_runs(run_ids) if "occupancy" in run.arrays]
+    if not runs:  # not the skid-steer env: no arena to draw
+        return "\n".join(parts)
+    title = f"{map_label} · {preset}, seed {first_seed}"
+    parts.append(
+        image(
+            plots.trajectories(runs, f"final greedy trajectories, {title} (shading: slip η)"),
+            "trajectories",
+        )
+    )
+    parts.append(
+        image(plots.value_maps(runs, f"state values and preferred headings, {title}"), "value maps")
+    )
+    return "\n".join(parts)
+
+
+def build_report(run_dir: Path | str) -> str:
+    """The report of a results directory as one HTML string."""
+    store = ResultStore(run_dir)
+    config = store.config()
+    episodes, summaries = store.load_tables()
+    aggregates = aggregate(summaries, config)
+    comparisons = compare_to_baseline(summaries, config)
+    surfaces = compare_surfaces(summaries, config)
+    metadata = store.metadata()
+    body = [
+        f"<h1>skidnav experiment: {html.escape(config.name)}</h1>",
+        setup(config, metadata, len(summaries)),
+        "<h2>Definitions</h2>",
+        definitions(config),
+        reproduction_section(comparisons, surfaces, summaries, config),
+    ]
+    if not surfaces.empty:
+        body.append(image(plots.surface_bars(surfaces), "rough vs slippery"))
+    for map_label, preset, _ in cells(summaries):
+        logger.info("report: cell %s / %s", map_label, preset)
+        body += [
+            f"<h2>Map {html.escape(map_label)} · preset {html.escape(preset)}</h2>",
+            aggregate_table(aggregates, map_label, preset),
+            figures_for_cell(store, config, episodes, summaries, aggregates, map_label, preset),
+        ]
+    body += [
+        "<h2>Config (resolved)</h2>",
+        f"<pre>{html.escape(json.dumps(config_to_dict(config), indent=2))}</pre>",
+        "<h2>Provenance</h2>",
+        f"<pre>{html.escape(json.dumps(metadata.get('versions', {}), indent=2))}</pre>",
+    ]
+    return (
+        "<!DOCTYPE html><html><head><meta charset='utf-8'>"
+        f"<title>skidnav: {html.escape(config.name)}</title><style>{STYLE}</style></head>"
+        f"<body>{''.join(body)}</body></html>"
+    )
+
+
+def write_report(run_dir: Path | str, output: Path | str | None = None) -> Path:
+    """Write the report of ``run_dir`` (default ``RUN_DIR/report.html``); returns its path."""
+    path = Path(output) if output is not None else Path(run_dir) / "report.html"
+    text = build_report(run_dir)
+    path.write_text(text, encoding="utf-8")
+    return path

@@ -1,0 +1,109 @@
+"""The expanded grid of runs and their random streams.
+
+Seeding (architecture.md, "Randomness"): one root ``SeedSequence(root_seed)`` is spawned into two
+children, a *world* root and a *run* root.
+
+* ``run root.spawn(n_runs)[index]`` is the stream of the run at position ``index`` of the grid
+  (agent-major, then map, preset, seed): it drives the agent and the episodes.
+* ``world root.spawn(n_worlds)[w]`` with ``w`` the position of (map, preset, seed) drives the map
+  generation and the slip field. Every agent therefore meets the *same* map and floor for a given
+  seed (common random numbers), which makes the agent comparisons paired.
+
+Both depend only on positions in the grid, so a run has the same streams on every backend, in
+any order, and after a resume.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec
+
+
+@dataclass(frozen=True)
+class SeedKey:
+    """A SeedSequence as plain integers (JSON- and pickle-friendly)."""
+
+    entropy: int
+    spawn_key: tuple[int, ...]
+
+    def sequence(self) -> np.random.SeedSequence:
+        """The SeedSequence these integers name."""
+        return np.random.SeedSequence(self.entropy, spawn_key=self.spawn_key)
+
+    @classmethod
+    def of(cls, sequence: np.random.SeedSequence) -> SeedKey:
+        """The integers naming ``sequence``."""
+        entropy = sequence.entropy
+        assert isinstance(entropy, int)
+        return cls(entropy, tuple(int(k) for k in sequence.spawn_key))
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """Everything one run needs; picklable, so it can travel to a process or Dask worker.
+
+    Attributes:
+        index: position in the expanded grid (agent-major, then map, preset, seed).
+        agent, map, preset, seed: the grid coordinates (``seed`` is the seed index 0..seeds−1).
+        world_seed: stream of the map and slip field (shared by all agents).
+        run_seed: stream of the agent and the episodes.
+        config: the whole experiment (episodes, max steps, drift, env options …).
+    """
+
+    index: int
+    agent: AgentSpec
+    map: MapSpec
+    preset: str
+    seed: int
+    world_seed: SeedKey
+    run_seed: SeedKey
+    config: ExperimentConfig
+
+    @property
+    def run_id(self) -> str:
+        """Stable file-name-safe id, e.g. ``run-000042``."""
+        return f"run-{self.index:06d}"
+
+
+def world_index(config: ExperimentConfig, map_index: int, preset_index: int, seed: int) -> int:
+    """Position of a (map, preset, seed) world among all worlds of the config."""
+    return (map_index * len(config.presets) + preset_index) * config.seeds + seed
+
+
+def expand_runs(config: ExperimentConfig) -> list[RunSpec]:
+    """Every run of the grid, in index order.
+
+    >>> from skidnav.experiments.config import AgentSpec, MapSpec, ExperimentConfig
+    >>> cfg = ExperimentConfig("x", (AgentSpec("q-learning", "Q"),), (MapSpec("free", "free"),),
+    ...                        seeds=3, root_seed=7)
+    >>> [(r.run_id, r.seed) for r in expand_runs(cfg)]
+    [('run-000000', 0), ('run-000001', 1), ('run-000002', 2)]
+    """
+    world_root, run_root = np.random.SeedSequence(config.root_seed).spawn(2)
+    n_worlds = len(config.maps) * len(config.presets) * config.seeds
+    worlds = world_root.spawn(n_worlds)
+    run_seeds = run_root.spawn(config.n_runs)
+    runs = []
+    index = 0
+    for agent in config.agents:
+        for map_index, map_spec in enumerate(config.maps):
+            for preset_index, preset in enumerate(config.presets):
+                for seed in range(config.seeds):
+                    world = worlds[world_index(config, map_index, preset_index, seed)]
+                    runs.append(
+                        RunSpec(
+                            index,
+                            agent,
+                            map_spec,
+                            preset,
+                            seed,
+                            SeedKey.of(world),
+                            SeedKey.of(run_seeds[index]),
+                            config,
+                        )
+                    )
+                    index += 1
+    return runs

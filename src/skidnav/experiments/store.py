@@ -1,0 +1,205 @@
+"""The results directory: one atomic file per finished run, tidy tables, metadata.
+
+Layout of a results directory::
+
+    config.json          resolved config + fingerprint (a resume must match it)
+    config.toml          the config file as given (when run from a file)
+    runs/run-000042.npz  one finished run: episode arrays, final trajectory, maps, summary JSON
+    episodes.parquet     tidy: one row per (run, episode)
+    summaries.parquet    one row per run: grid coordinates + every metric (also summaries.csv)
+    metadata.json        config, package versions, git commit, seeds, timing
+
+A run file is written to a temporary name, synced and moved into place with ``os.replace``, so a
+run is either completely there or absent: after a kill, the runs already written are skipped and
+the rest are run again (none lost, none duplicated). Nothing is pickled (``.npz`` is loaded with
+``allow_pickle=False``).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+import pandas as pd
+
+from skidnav.errors import CorruptFileError, UserError
+from skidnav.experiments.config import ExperimentConfig, config_from_dict, config_to_dict
+
+EPISODE_COLUMNS = (
+    "return",
+    "length",
+    "success",
+    "collisions",
+    "planning_updates",
+    "wall_time",
+    "greedy_length",
+    "greedy_success",
+)
+GRID_COLUMNS = ("run_id", "agent", "algorithm", "map", "preset", "seed")
+
+
+class TrialResult(NamedTuple):
+    """What one run sends back to the runner (picklable: plain arrays, dicts and strings).
+
+    Attributes:
+        run_id: ``RunSpec.run_id``.
+        coordinates: grid coordinates: agent (label), algorithm, map, preset, seed.
+        episodes: per-episode arrays, keys :data:`EPISODE_COLUMNS`, each shape (N,).
+        summary: per-run metrics (:func:`skidnav.experiments.metrics.run_metrics`).
+        arrays: ``greedy_poses`` (T, 3) [m, m, rad], ``value_map`` (n_x, n_y),
+            ``policy_map`` (n_x, n_y) greedy action at the start heading, ``occupancy``
+            (n_x, n_y) bool, ``start`` and ``goal`` (2,), ``slip_eta`` (regions_x, regions_y)
+            [rad/s].
+    """
+
+    run_id: str
+    coordinates: dict[str, Any]
+    episodes: dict[str, np.ndarray]
+    summary: dict[str, float]
+    arrays: dict[str, np.ndarray]
+
+
+def write_atomic(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` all-or-nothing (temporary file, fsync, ``os.replace``)."""
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with open(temporary, "wb") as handle:
+        handle.write(data)
+        handle.flush()
+        os.fsync(handle.fileno())
+    os.replace(temporary, path)
+
+
+class ResultStore:
+    """A results directory bound to one config (see module docs)."""
+
+    def __init__(self, root: Path | str) -> None:
+        self.root = Path(root)
+        self.runs_dir = self.root / "runs"
+
+    @classmethod
+    def open(cls, root: Path | str, config: ExperimentConfig, source_text: str = "") -> ResultStore:
+        """Create the directory for ``config`` or reopen it to resume the same config.
+
+        Raises:
+            UserError: the directory holds results of a different config.
+        """
+        store = cls(root)
+        store.runs_dir.mkdir(parents=True, exist_ok=True)
+        for stale in store.runs_dir.glob(".*.tmp"):
+            stale.unlink(missing_ok=True)
+        config_path = store.root / "config.json"
+        fingerprint = config.fingerprint()
+        if config_path.exists():
+            saved = store._read_json(config_path)
+            if saved.get("fingerprint") != fingerprint:
+                raise UserError(
+                    f"{store.root}: holds results of a different config; choose another --out"
+                )
+            return store
+        document = {"fingerprint": fingerprint, "config": config_to_dict(config)}
+        write_atomic(config_path, json.dumps(document, indent=2).encode())
+        if source_text:
+            write_atomic(store.root / "config.toml", source_text.encode())
+        return store
+
+    def _read_json(self, path: Path) -> dict[str, Any]:
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise UserError(f"{path}: missing; is {self.root} a results directory?") from None
+        except (OSError, ValueError) as error:
+            raise CorruptFileError(f"{path}: unreadable ({error.__class__.__name__})") from None
+        if not isinstance(data, dict):
+            raise CorruptFileError(f"{path}: expected a JSON object")
+        return data
+
+    def config(self) -> ExperimentConfig:
+        """The config these results belong to."""
+        document = self._read_json(self.root / "config.json")
+        try:
+            return config_from_dict(document["config"])
+        except (KeyError, TypeError, ValueError) as error:
+            raise CorruptFileError(
+                f"{self.root / 'config.json'}: invalid config ({error})"
+            ) from None
+
+    def run_path(self, run_id: str) -> Path:
+        """Where the run file of ``run_id`` lives."""
+        return self.runs_dir / f"{run_id}.npz"
+
+    def finished(self) -> set[str]:
+        """Ids of the runs already written."""
+        return {path.stem for path in self.runs_dir.glob("run-*.npz")}
+
+    def write_run(self, result: TrialResult) -> None:
+        """Store one finished run atomically."""
+        payload: dict[str, np.ndarray] = {
+            f"episode.{key}": np.asarray(value) for key, value in result.episodes.items()
+        }
+        payload.update({f"array.{key}": np.asarray(v) for key, v in result.arrays.items()})
+        document = {"coordinates": result.coordinates, "summary": result.summary}
+        payload["document"] = np.array(json.dumps(document))
+        buffer = io.BytesIO()
+        np.savez_compressed(buffer, **payload)  # type: ignore[arg-type]
+        write_atomic(self.run_path(result.run_id), buffer.getvalue())
+
+    def read_run(self, run_id: str) -> TrialResult:
+        """Load one run file."""
+        path = self.run_path(run_id)
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                arrays = {key: data[key] for key in data.files}
+            document = json.loads(str(arrays.pop("document")))
+        except (OSError, ValueError, KeyError) as error:
+            raise CorruptFileError(f"{path}: unreadable run file ({error})") from None
+        episodes = {k.split(".", 1)[1]: v for k, v in arrays.items() if k.startswith("episode.")}
+        others = {k.split(".", 1)[1]: v for k, v in arrays.items() if k.startswith("array.")}
+        return TrialResult(run_id, document["coordinates"], episodes, document["summary"], others)
+
+    def iter_runs(self, run_ids: Iterable[str] | None = None) -> Iterable[TrialResult]:
+        """Every finished run (or the given ones), in id order."""
+        for run_id in sorted(self.finished() if run_ids is None else run_ids):
+            yield self.read_run(run_id)
+
+    def consolidate(self) -> tuple[pd.DataFrame, pd.DataFrame]:
+        """Write ``episodes.parquet``, ``summaries.parquet`` and ``summaries.csv`` from the run
+        files; returns (episodes, summaries)."""
+        episode_frames, summary_rows = [], []
+        for result in self.iter_runs():
+            frame = pd.DataFrame({key: result.episodes[key] for key in EPISODE_COLUMNS})
+            frame.insert(0, "episode", np.arange(1, len(frame) + 1))
+            for position, key in enumerate(GRID_COLUMNS):
+                value = result.run_id if key == "run_id" else result.coordinates[key]
+                frame.insert(position, key, value)
+            episode_frames.append(frame)
+            summary_rows.append({"run_id": result.run_id, **result.coordinates, **result.summary})
+        if not summary_rows:
+            raise UserError(f"{self.root}: no finished runs")
+        episodes = pd.concat(episode_frames, ignore_index=True)
+        summaries = pd.DataFrame(summary_rows)
+        for name, frame in (("episodes", episodes), ("summaries", summaries)):
+            write_atomic(self.root / f"{name}.parquet", frame.to_parquet(index=False))
+        write_atomic(self.root / "summaries.csv", summaries.to_csv(index=False).encode())
+        return episodes, summaries
+
+    def load_tables(self) -> tuple[pd.DataFrame, pd.DataFrame]:
+        """(episodes, summaries) from the Parquet files (consolidating first if missing)."""
+        paths = [self.root / "episodes.parquet", self.root / "summaries.parquet"]
+        if not all(path.exists() for path in paths):
+            return self.consolidate()
+        return pd.read_parquet(paths[0]), pd.read_parquet(paths[1])
+
+    def write_metadata(self, metadata: dict[str, Any]) -> None:
+        """Write ``metadata.json`` atomically."""
+        text = json.dumps(metadata, indent=2, default=str)
+        write_atomic(self.root / "metadata.json", text.encode())
+
+    def metadata(self) -> dict[str, Any]:
+        """``metadata.json`` (empty when missing)."""
+        path = self.root / "metadata.json"
+        return self._read_json(path) if path.exists() else {}

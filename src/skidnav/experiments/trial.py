@@ -1,0 +1,229 @@
+"""One run of the grid: build the world, train the agent, measure it (a pure function of its spec).
+
+:func:`run_trial` takes a :class:`~skidnav.experiments.runs.RunSpec` and returns a
+:class:`~skidnav.experiments.store.TrialResult`; it draws every random number from the run's two
+seed streams (world: map and slip field; run: agent and episodes), so it gives the same numbers in
+any process, on any Dask worker, in any order. Only ``wall_time`` differs between machines.
+
+Training uses the compiled trainer ``skidnav.agents.fast_training.train_agent_fast`` for the
+skid-steer environment when it is installed and supports the agent, else
+``skidnav.agents.training.train_agent``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import logging
+from typing import Any
+
+import gymnasium
+import numpy as np
+
+from skidnav.agents.registry import agent_class, make_agent, make_config
+from skidnav.errors import UserError
+from skidnav.experiments.config import ExperimentConfig, MapSpec
+from skidnav.experiments.metrics import run_metrics
+from skidnav.experiments.runs import RunSpec, expand_runs
+from skidnav.experiments.store import EPISODE_COLUMNS, TrialResult
+from skidnav.world.grid import GridMap, generate_map
+from skidnav.world.mapfile import load_map
+
+logger = logging.getLogger(__name__)
+
+SKID_ENV_ID = "skidnav/SkidSteerNav-v0"
+
+
+def _seed_int(sequence: np.random.SeedSequence) -> int:
+    """A 63-bit integer seed drawn from ``sequence`` (for APIs that take an int seed)."""
+    return int(sequence.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
+
+
+def build_map(spec: MapSpec, rng: np.random.Generator) -> GridMap:
+    """The map of a run: read from its file or generated with ``rng``."""
+    if spec.file:
+        return load_map(spec.file)
+    return generate_map(spec.kind, rng, **dict(spec.options))  # type: ignore[arg-type]
+
+
+def make_env(spec: RunSpec, grid_map: GridMap, slip_seed: int) -> gymnasium.Env[Any, Any]:
+    """The environment of a run (unwrapped: the trainer enforces the action limit).
+
+    ``env_id`` is a registered Gymnasium id, or ``package.module:function`` naming a factory
+    called with the ``[env]`` options (e.g. ``skidnav.envs.mazes:dyna_maze``). Only the
+    skid-steer env receives the map, slip preset and drift of the run.
+    """
+    config = spec.config
+    options: dict[str, Any] = dict(config.env_options)
+    if config.env_id == SKID_ENV_ID:
+        options.update(
+            grid_map=grid_map,
+            world_seed=slip_seed,
+            slip=spec.preset,
+            drift_amplitude=config.drift_amplitude,
+            drift_period=config.drift_period,
+        )
+        if config.max_steps is not None:
+            options["max_episode_steps"] = config.max_steps
+    if ":" in config.env_id:
+        module_name, _, factory = config.env_id.partition(":")
+        try:
+            function = getattr(importlib.import_module(module_name), factory)
+        except (ImportError, AttributeError):
+            raise UserError(f"environment factory {config.env_id!r} not found") from None
+        env: gymnasium.Env[Any, Any] = function(**options)
+        return env.unwrapped
+    return gymnasium.make(config.env_id, **options).unwrapped
+
+
+def _agent_context(name: str, env: gymnasium.Env[Any, Any]) -> dict[str, Any]:
+    """Extra constructor arguments an agent asks for by name (e.g. the navigation ``task``)."""
+    parameters = inspect.signature(agent_class(name).__init__).parameters
+    context = {}
+    if "task" in parameters and hasattr(env, "task"):
+        context["task"] = env.task
+    return context
+
+
+def _trainer(env: gymnasium.Env[Any, Any]) -> Any:
+    """The compiled trainer for the skid-steer env (it falls back to the plain loop itself for
+    agents it does not compile), else the plain training loop."""
+    if hasattr(env, "task"):
+        try:
+            return importlib.import_module("skidnav.agents.fast_training").train_agent_fast
+        except ModuleNotFoundError as error:
+            if error.name != "skidnav.agents.fast_training":
+                raise
+    return importlib.import_module("skidnav.agents.training").train_agent
+
+
+def greedy_rollout(
+    agent: Any, env: gymnasium.Env[Any, Any], seed: int, max_steps: int
+) -> tuple[np.ndarray, bool]:
+    """Follow the greedy policy from the start; returns (poses (T+1, 3) [m, m, rad], reached)."""
+    state, info = env.reset(seed=seed)
+    poses = [info.get("pose", (np.nan, np.nan, np.nan))]
+    for _ in range(max_steps):
+        state, _, terminated, truncated, info = env.step(agent.greedy_action(state))
+        poses.append(info.get("pose", (np.nan, np.nan, np.nan)))
+        if terminated or truncated:
+            return np.asarray(poses, dtype=np.float64), bool(terminated)
+    return np.asarray(poses, dtype=np.float64), False
+
+
+def value_maps(q: np.ndarray, grid_map: GridMap) -> tuple[np.ndarray, np.ndarray]:
+    """(value, preferred heading bin) per cell from a Q table, each shape (n_x, n_y).
+
+    value = max over headings and actions of Q; the preferred heading is the heading bin where that
+    maximum is reached. Walls and cells whose Q entries were never changed (all equal) are
+    NaN / −1.
+    """
+    n_x, n_y = grid_map.occupancy.shape
+    per_cell = q.reshape(n_x, n_y, -1)
+    per_heading = q.max(axis=1).reshape(n_x, n_y, -1)
+    value = per_heading.max(axis=2)
+    heading = per_heading.argmax(axis=2).astype(np.int64)
+    blank = grid_map.occupancy | (per_cell.max(axis=2) == per_cell.min(axis=2))
+    value[blank] = np.nan
+    heading[blank] = -1
+    return value, heading
+
+
+def _world_arrays(
+    q: np.ndarray, grid_map: GridMap, env: gymnasium.Env[Any, Any]
+) -> dict[str, np.ndarray]:
+    """Value and heading maps, walls, start, goal and slip η of a skid-steer run."""
+    value, heading = value_maps(q, grid_map)
+    return {
+        "value_map": value,
+        "heading_map": heading,
+        "occupancy": grid_map.occupancy,
+        "start": np.asarray(grid_map.start),
+        "goal": np.asarray(grid_map.goal),
+        "slip_eta": env.slip_field.eta,  # type: ignore[attr-defined]
+    }
+
+
+def _episode_arrays(log: Any) -> dict[str, np.ndarray]:
+    """The TrainingLog as record columns; a failed greedy evaluation (−1) becomes NaN."""
+    greedy = np.asarray(log.greedy_lengths, dtype=np.float64)
+    reached = greedy > 0
+    greedy[~reached] = np.nan
+    arrays = {
+        "return": np.asarray(log.returns, dtype=np.float64),
+        "length": np.asarray(log.lengths, dtype=np.int64),
+        "success": np.asarray(log.successes, dtype=bool),
+        "collisions": np.asarray(log.collisions, dtype=np.int64),
+        "planning_updates": np.asarray(log.planning_updates, dtype=np.int64),
+        "wall_time": np.asarray(log.wall_time, dtype=np.float64),
+        "greedy_length": greedy,
+        "greedy_success": reached,
+    }
+    assert set(arrays) == set(EPISODE_COLUMNS)
+    return arrays
+
+
+def run_trial(spec: RunSpec) -> TrialResult:
+    """Train and measure one run of the grid (see module docs)."""
+    config = spec.config
+    map_seed, slip_seed = spec.world_seed.sequence().spawn(2)
+    agent_seed, episode_seed, eval_seed = spec.run_seed.sequence().spawn(3)
+    skid = config.env_id == SKID_ENV_ID
+    grid_map = build_map(spec.map, np.random.default_rng(map_seed)) if skid else None
+    env = make_env(spec, grid_map, _seed_int(slip_seed))  # type: ignore[arg-type]
+    eval_env = make_env(spec, grid_map, _seed_int(slip_seed))  # type: ignore[arg-type]
+    env.reset(seed=_seed_int(episode_seed))
+    eval_env.reset(seed=_seed_int(eval_seed))
+    name = spec.agent.name
+    n_states, n_actions = int(env.observation_space.n), int(env.action_space.n)  # type: ignore[attr-defined]
+    agent = make_agent(
+        name,
+        n_states,
+        n_actions,
+        spec.agent.params_dict(),
+        np.random.default_rng(agent_seed),
+        **_agent_context(name, env),
+    )
+    max_steps = config.max_steps or int(getattr(env, "max_episode_steps", None) or 10_000)
+    train = _trainer(env)
+    log = train(
+        agent,
+        env,
+        config.episodes,
+        max_steps=max_steps,
+        greedy_eval_env=eval_env if config.greedy_eval else None,
+    )
+    episodes = _episode_arrays(log)
+    poses, reached = greedy_rollout(agent, eval_env, _seed_int(eval_seed), max_steps)
+    arrays = {"greedy_poses": poses}
+    if grid_map is not None:
+        arrays.update(_world_arrays(agent.q, grid_map, env))
+    coordinates = {
+        "agent": spec.agent.label,
+        "algorithm": name,
+        "map": spec.map.label,
+        "preset": spec.preset,
+        "seed": spec.seed,
+    }
+    summary = run_metrics(episodes, poses, reached, config.convergence_tolerance)
+    summary["action_limit"] = float(max_steps)
+    return TrialResult(spec.run_id, coordinates, episodes, summary, arrays)
+
+
+def check_config(config: ExperimentConfig) -> None:
+    """Check what only the library knows before any run starts: agent names and hyperparameters,
+    environment options, map files. Raises UserError naming the problem."""
+    for agent in config.agents:
+        make_config(agent.name, agent.params_dict())
+    for map_spec in config.maps:
+        if map_spec.file:
+            load_map(map_spec.file)
+    first = expand_runs(config)[0]
+    try:
+        for map_spec in config.maps:
+            grid_map = build_map(map_spec, np.random.default_rng(0))
+        make_env(first, grid_map, 0).close()
+    except gymnasium.error.Error as error:
+        raise UserError(f"environment {config.env_id!r}: {error}") from None
+    except (TypeError, ValueError) as error:
+        raise UserError(f"environment or map options: {error}") from None

@@ -1,0 +1,293 @@
+"""Compiled kernels of the sparse multinomial transition model (:mod:`skidnav.models.multinomial`).
+
+The model counts real transitions N(s, a, s′) and estimates
+
+    p(s′ | s, a) = N(s, a, s′) / N(s, a),  r̄(s, a, s′) = mean reward,  β(s, a, s′) = share ended
+
+(the thesis's multinomial model; Sutton & Barto (2018) §8.1 for its use in planning).
+
+Randomness: helpers take a uniform draw ``uniform`` ∈ [0, 1) from the caller instead of the
+Generator. (Passing a Generator into a compiled helper that draws from it costs ~0.3 µs a call in
+numba 0.68; the planning loops therefore draw in their own body and pass the number down.)
+
+Storage (:class:`MultinomialArrays`), memory proportional to the number of distinct observed
+(s, a) pairs and (s, a, s′) outcomes, never to S²·A:
+
+* **pairs** — one slot per observed (s, a): ``pair_key`` = s · n_actions + a, ``pair_total`` =
+  N(s, a), ``pair_head`` = first outcome of the pair (−1 none). Slots are numbered in order of first
+  visit, so ``pair_key[:n_pairs]`` is the list of visited pairs. ``pair_table`` is an
+  open-addressing hash table (linear probing, size a power of two, load ≤ 1/2) mapping a key to its
+  slot.
+* **outcomes** — one entry per observed (s, a, s′): ``entry_next_state``, ``entry_count``,
+  ``entry_reward_sum``, ``entry_terminal_count``, ``entry_pair`` (its pair slot),
+  ``entry_sibling`` (next outcome of the same pair, −1 ends) and ``entry_pred_link`` (next outcome
+  leading to the same s′, −1 ends).
+* **targets** — one slot per state seen as s′: ``target_state``, ``target_head`` (first outcome
+  leading to it) and the hash ``target_table``. Following ``target_head`` then ``entry_pred_link``
+  lists the predecessors (s, a) of a state (for prioritized sweeping, §8.4).
+
+``counters`` int64 (3,) holds ``[n_pairs, n_entries, n_targets]``. Kernels never grow arrays: the
+owner reserves room first (:meth:`skidnav.models.multinomial.MultinomialModel.reserve`); one
+observation needs at most one free slot of each kind.
+
+Planning modes (``mode`` argument): :data:`MOST_PROBABLE` (thesis default: the outcome with the
+largest count, ties broken uniformly), :data:`SAMPLE` (s′ drawn from p(·|s, a)) and
+:data:`EXPECTED` (the expectation over all outcomes). In every mode the bootstrap is weighted by
+the continuation 1 − β(s, a, s′), exact for deterministic termination.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from skidnav._jit import jit
+from skidnav.kernels.tabular import inline_jit, td_target
+
+MOST_PROBABLE = 0
+SAMPLE = 1
+EXPECTED = 2
+PLANNING_MODES = {"most-probable": MOST_PROBABLE, "sample": SAMPLE, "expected": EXPECTED}
+"""Planning-mode names (as in configs) → the integer codes the kernels take."""
+
+
+class MultinomialArrays(NamedTuple):
+    """The model's arrays (see the module docstring); every array is 1-D."""
+
+    n_actions: int
+    counters: np.ndarray
+    pair_table: np.ndarray
+    pair_key: np.ndarray
+    pair_total: np.ndarray
+    pair_head: np.ndarray
+    entry_next_state: np.ndarray
+    entry_count: np.ndarray
+    entry_reward_sum: np.ndarray
+    entry_terminal_count: np.ndarray
+    entry_pair: np.ndarray
+    entry_sibling: np.ndarray
+    entry_pred_link: np.ndarray
+    target_table: np.ndarray
+    target_state: np.ndarray
+    target_head: np.ndarray
+
+
+@inline_jit
+def hash_slot(key: int, mask: int) -> int:
+    """Home slot of a non-negative integer key in a table of ``mask + 1`` slots (no overflow: the
+    same numbers interpreted and compiled)."""
+    mixed = (key ^ (key >> 17)) & 0x7FFFFFFF
+    return (mixed * 73244475 + (key >> 31)) & mask
+
+
+@inline_jit
+def hash_find(table: np.ndarray, keys: np.ndarray, key: int) -> int:
+    """Index ``i`` with ``keys[i] == key`` registered in ``table``, or −1."""
+    mask = table.shape[0] - 1
+    slot = hash_slot(key, mask)
+    while True:
+        index = table[slot]
+        if index < 0:
+            return -1
+        if keys[index] == key:
+            return index
+        slot = (slot + 1) & mask
+
+
+@jit
+def hash_insert(table: np.ndarray, keys: np.ndarray, index: int) -> None:
+    """Register ``index`` (whose key ``keys[index]`` is not yet in ``table``)."""
+    mask = table.shape[0] - 1
+    slot = hash_slot(keys[index], mask)
+    while table[slot] >= 0:
+        slot = (slot + 1) & mask
+    table[slot] = index
+
+
+@jit
+def hash_rebuild(table: np.ndarray, keys: np.ndarray, count: int) -> None:
+    """Fill an empty ``table`` (all −1) with indices ``0 .. count − 1``."""
+    for index in range(count):
+        hash_insert(table, keys, index)
+
+
+@inline_jit
+def find_pair(model: MultinomialArrays, state: int, action: int) -> int:
+    """Pair slot of (state, action), or −1 if never observed."""
+    return hash_find(model.pair_table, model.pair_key, state * model.n_actions + action)
+
+
+@jit
+def _new_pair(model: MultinomialArrays, key: int) -> int:
+    pair = model.counters[0]
+    model.counters[0] = pair + 1
+    model.pair_key[pair] = key
+    model.pair_total[pair] = 0
+    model.pair_head[pair] = -1
+    hash_insert(model.pair_table, model.pair_key, pair)
+    return pair
+
+
+@jit
+def _target_of(model: MultinomialArrays, next_state: int) -> int:
+    target = hash_find(model.target_table, model.target_state, next_state)
+    if target < 0:
+        target = model.counters[2]
+        model.counters[2] = target + 1
+        model.target_state[target] = next_state
+        model.target_head[target] = -1
+        hash_insert(model.target_table, model.target_state, target)
+    return target
+
+
+@jit
+def _new_entry(model: MultinomialArrays, pair: int, next_state: int) -> int:
+    entry = model.counters[1]
+    model.counters[1] = entry + 1
+    model.entry_next_state[entry] = next_state
+    model.entry_count[entry] = 0
+    model.entry_reward_sum[entry] = 0.0
+    model.entry_terminal_count[entry] = 0
+    model.entry_pair[entry] = pair
+    model.entry_sibling[entry] = model.pair_head[pair]
+    model.pair_head[pair] = entry
+    target = _target_of(model, next_state)
+    model.entry_pred_link[entry] = model.target_head[target]
+    model.target_head[target] = entry
+    return entry
+
+
+@jit
+def model_observe(
+    model: MultinomialArrays,
+    state: int,
+    action: int,
+    reward: float,
+    next_state: int,
+    terminated: bool,
+) -> int:
+    """Count one real transition; returns its pair slot. Room must have been reserved."""
+    key = state * model.n_actions + action
+    pair = hash_find(model.pair_table, model.pair_key, key)
+    if pair < 0:
+        pair = _new_pair(model, key)
+    model.pair_total[pair] += 1
+    entry = model.pair_head[pair]
+    while entry >= 0 and model.entry_next_state[entry] != next_state:
+        entry = model.entry_sibling[entry]
+    if entry < 0:
+        entry = _new_entry(model, pair, next_state)
+    model.entry_count[entry] += 1
+    model.entry_reward_sum[entry] += reward
+    if terminated:
+        model.entry_terminal_count[entry] += 1
+    return pair
+
+
+@inline_jit
+def outcome_target(model: MultinomialArrays, q: np.ndarray, entry: int, gamma: float) -> float:
+    """TD target of one outcome: ``r̄ + γ · (1 − β) · max_a q[s′, a]``."""
+    count = model.entry_count[entry]
+    reward = model.entry_reward_sum[entry] / count
+    continuation = 1.0 - model.entry_terminal_count[entry] / count
+    return td_target(q, reward, model.entry_next_state[entry], continuation, gamma)
+
+
+@inline_jit
+def _nth_with_count(model: MultinomialArrays, pair: int, count: int, index: int) -> int:
+    """The ``index``-th (0-based) outcome of ``pair`` whose count is ``count``."""
+    entry = model.pair_head[pair]
+    while entry >= 0:
+        if model.entry_count[entry] == count:
+            if index == 0:
+                return entry
+            index -= 1
+        entry = model.entry_sibling[entry]
+    return -1
+
+
+@inline_jit
+def most_probable_entry(model: MultinomialArrays, pair: int, uniform: float) -> int:
+    """The outcome of ``pair`` with the largest count; ties broken uniformly by ``uniform``, a
+    draw in [0, 1) made by the caller."""
+    counts = model.entry_count
+    siblings = model.entry_sibling
+    entry = model.pair_head[pair]
+    best_entry = entry
+    best_count = counts[entry]
+    n_ties = 1
+    entry = siblings[entry]
+    while entry >= 0:
+        if counts[entry] > best_count:
+            best_entry = entry
+            best_count = counts[entry]
+            n_ties = 1
+        elif counts[entry] == best_count:
+            n_ties += 1
+        entry = siblings[entry]
+    if n_ties == 1:
+        return best_entry
+    return _nth_with_count(model, pair, best_count, int(uniform * n_ties))
+
+
+@inline_jit
+def sample_entry(model: MultinomialArrays, pair: int, uniform: float) -> int:
+    """An outcome of ``pair`` drawn with probability N(s, a, s′)/N(s, a) by ``uniform`` ∈ [0, 1)."""
+    threshold = int(uniform * model.pair_total[pair])
+    entry = model.pair_head[pair]
+    while True:
+        threshold -= model.entry_count[entry]
+        if threshold < 0 or model.entry_sibling[entry] < 0:
+            return entry
+        entry = model.entry_sibling[entry]
+
+
+@inline_jit
+def expected_target(model: MultinomialArrays, q: np.ndarray, pair: int, gamma: float) -> float:
+    """``Σ_s′ p(s′|s, a) · outcome target`` over every observed outcome of ``pair``."""
+    total = model.pair_total[pair]
+    value = 0.0
+    entry = model.pair_head[pair]
+    while entry >= 0:
+        value += model.entry_count[entry] / total * outcome_target(model, q, entry, gamma)
+        entry = model.entry_sibling[entry]
+    return value
+
+
+@inline_jit
+def model_target(
+    model: MultinomialArrays,
+    q: np.ndarray,
+    pair: int,
+    mode: int,
+    gamma: float,
+    uniform: float,
+) -> float:
+    """Planning target of an observed pair slot under ``mode`` (MOST_PROBABLE, SAMPLE, EXPECTED).
+
+    ``uniform`` is one ``rng.random()`` drawn by the caller: it picks the outcome (SAMPLE) or
+    breaks ties (MOST_PROBABLE); EXPECTED ignores it.
+    """
+    if mode == EXPECTED:
+        return expected_target(model, q, pair, gamma)
+    if mode == SAMPLE:
+        return outcome_target(model, q, sample_entry(model, pair, uniform), gamma)
+    return outcome_target(model, q, most_probable_entry(model, pair, uniform), gamma)
+
+
+@inline_jit
+def pair_state_action(model: MultinomialArrays, pair: int) -> tuple[int, int]:
+    """(state, action) of a pair slot."""
+    key = model.pair_key[pair]
+    return key // model.n_actions, key % model.n_actions
+
+
+@inline_jit
+def first_predecessor(model: MultinomialArrays, state: int) -> int:
+    """First outcome entry leading to ``state`` (−1 if none); iterate with ``entry_pred_link`` and
+    read the predecessor pair from ``entry_pair``."""
+    target = hash_find(model.target_table, model.target_state, state)
+    if target < 0:
+        return -1
+    return model.target_head[target]

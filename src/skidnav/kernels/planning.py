@@ -1,0 +1,137 @@
+"""Compiled planning loops over the multinomial model (Sutton & Barto (2018) ch. 8).
+
+Each loop applies the one update rule of :mod:`skidnav.kernels.tabular` (``update_toward``) to
+targets computed by :func:`skidnav.kernels.multinomial.model_target`, and returns the number of
+value updates it made. All draws are ``rng.random()``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from skidnav._jit import jit
+from skidnav.kernels.multinomial import (
+    EXPECTED,
+    MOST_PROBABLE,
+    SAMPLE,
+    MultinomialArrays,
+    find_pair,
+    first_predecessor,
+    model_target,
+    pair_state_action,
+)
+from skidnav.kernels.priority_queue import HeapArrays, heap_pop, heap_push
+from skidnav.kernels.tabular import inline_jit, td_target, update_toward
+
+
+@jit
+def dyna_planning(
+    q: np.ndarray,
+    model: MultinomialArrays,
+    n_steps: int,
+    alpha: float,
+    gamma: float,
+    mode: int,
+    rng: np.random.Generator,
+) -> int:
+    """Dyna-Q planning (§8.2): ``n_steps`` times, replay a visited (s, a) pair drawn uniformly
+    through the model and update ``q`` toward its target. Returns the number of updates."""
+    n_pairs = model.counters[0]
+    if n_pairs == 0:
+        return 0
+    for _ in range(n_steps):
+        pair = int(rng.random() * n_pairs)
+        state, action = pair_state_action(model, pair)
+        target = model_target(model, q, pair, mode, gamma, rng.random())
+        update_toward(q, state, action, target, alpha)
+    return n_steps
+
+
+@jit
+def dyna_plus_planning(
+    q: np.ndarray,
+    model: MultinomialArrays,
+    visited_states: np.ndarray,
+    n_visited: int,
+    last_tried: np.ndarray,
+    now: int,
+    kappa: float,
+    n_steps: int,
+    alpha: float,
+    gamma: float,
+    mode: int,
+    rng: np.random.Generator,
+) -> int:
+    """Dyna-Q+ planning (§8.3): draw a visited state uniformly, then any action uniformly. A pair
+    never tried is modelled as "back to the same state, reward 0" (the book's footnote). The
+    target gets the bonus ``kappa · sqrt(now − last_tried[s, a])`` (``last_tried`` int64
+    (n_states, n_actions), in real steps). Returns the number of updates."""
+    if n_visited == 0:
+        return 0
+    n_actions = q.shape[1]
+    for _ in range(n_steps):
+        state = visited_states[int(rng.random() * n_visited)]
+        action = int(rng.random() * n_actions)
+        pair = find_pair(model, state, action)
+        if pair < 0:
+            target = td_target(q, 0.0, state, 1.0, gamma)
+        else:
+            target = model_target(model, q, pair, mode, gamma, rng.random())
+        target += kappa * math.sqrt(now - last_tried[state, action])
+        update_toward(q, state, action, target, alpha)
+    return n_steps
+
+
+@inline_jit
+def queue_pair(
+    q: np.ndarray,
+    model: MultinomialArrays,
+    heap: HeapArrays,
+    pair: int,
+    theta: float,
+    gamma: float,
+    mode: int,
+    uniform: float,
+) -> None:
+    """Queue pair slot ``pair`` (as item s·n_actions + a) with priority |target − q[s, a]| if that
+    exceeds ``theta``. A ``SAMPLE`` model is asked for its expected target (no noisy priority);
+    ``uniform`` ∈ [0, 1) breaks most-probable ties."""
+    state, action = pair_state_action(model, pair)
+    priority_mode = EXPECTED if mode == SAMPLE else mode
+    priority = abs(model_target(model, q, pair, priority_mode, gamma, uniform) - q[state, action])
+    if priority > theta:
+        heap_push(heap, model.pair_key[pair], priority)
+
+
+@jit
+def prioritized_sweeping(
+    q: np.ndarray,
+    model: MultinomialArrays,
+    heap: HeapArrays,
+    n_steps: int,
+    theta: float,
+    alpha: float,
+    gamma: float,
+    mode: int,
+    rng: np.random.Generator,
+) -> int:
+    """Prioritized sweeping (§8.4): up to ``n_steps`` times while the queue is not empty, pop the
+    pair of highest priority, update it toward its model target, then queue each predecessor
+    (s̄, ā) of s whose |TD error| exceeds ``theta``. Returns the number of updates."""
+    updates = 0
+    n_actions = q.shape[1]
+    while updates < n_steps and heap.size[0] > 0:
+        key, _ = heap_pop(heap)
+        state = key // n_actions
+        pair = find_pair(model, state, key % n_actions)
+        target = model_target(model, q, pair, mode, gamma, rng.random())
+        update_toward(q, state, key % n_actions, target, alpha)
+        updates += 1
+        entry = first_predecessor(model, state)
+        while entry >= 0:
+            uniform = rng.random() if mode == MOST_PROBABLE else 0.0
+            queue_pair(q, model, heap, model.entry_pair[entry], theta, gamma, mode, uniform)
+            entry = model.entry_pred_link[entry]
+    return updates

@@ -1,0 +1,342 @@
+"""Learned skid-steer kinematics: one Bayesian ridge regression per coarse slip region.
+
+The thesis (SPEC §4 item 3) learns the ICR model of Kozłowski & Pazderski (2004) online by
+Bayesian ridge regression (MacKay 1992; Tipping 2001; scikit-learn ``BayesianRidge``), one model
+per coarse region, and uses it to predict the outcome of actions at states never visited. Per
+region three regressions are fitted on the free sub-steps of the kinematic log:
+
+    v_x      ≈ vx_wl·ω_L + vx_wr·ω_R (+ vx_b)       (truth: r/2, r/2)
+    yaw_rate ≈ yaw_wl·ω_L + yaw_wr·ω_R (+ yaw_b)    (truth: −r/2c, r/2c)
+    v_y      ≈ vy_yaw·yaw_rate (+ vy_b)             (truth: −x_ICR)
+
+with ω_L, ω_R the *commanded* wheel speeds [rad/s], so wheel-speed loss from slip is absorbed
+into the coefficients. Intercepts are off by default (no wheel motion, no body motion).
+
+Shrinkage hierarchy (ours): the pooled model (all regions' samples) regresses the residual of
+the nominal robot (:class:`~skidnav.robot.params.RobotParams`, the prior); each region regresses
+the residual of the pooled model. The zero-mean Gaussian prior of Bayesian ridge thus shrinks a
+region towards the pooled fit and the pooled fit towards the nominal robot; directions the data
+do not excite (e.g. v_y in a region where the robot never turned) keep the parent's value.
+Regions with fewer than ``min_samples`` samples use the pooled fit outright; with fewer than
+``min_samples`` samples in total, the prior.
+
+Refit schedule (ours): :meth:`KinematicModel.maybe_refit` refits when at least
+``max(refit_every, refit_growth · n_at_last_refit)`` samples arrived since the last refit, so a
+stationary run refits a logarithmic number of times (the default doubles); set ``refit_growth=0``
+for drifting slip. Only regions with new samples are refitted (plus the pooled model, fitted on
+the newest ``window / n_active_regions`` samples of each active region). Forgetting: sample weights
+``forgetting ** age`` (age in samples of the same region, newest 0) and a sliding window of the
+last ``window`` samples per region.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+from sklearn.linear_model import BayesianRidge
+
+from skidnav.errors import CorruptFileError
+from skidnav.kernels.kinematic_prediction import (
+    action_velocities,
+    feed_rows,
+    predict_action,
+    prediction_table,
+)
+from skidnav.robot.kinematics import N_ACTIONS
+from skidnav.robot.params import RobotParams
+from skidnav.world.discretization import Discretization
+
+logger = logging.getLogger(__name__)
+
+N_COEFFICIENTS = 8
+"""Columns of :attr:`KinematicModel.coefficients`:
+``[vx_wl, vx_wr, vx_b, yaw_wl, yaw_wr, yaw_b, vy_yaw, vy_b]``."""
+_FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class KinematicModelConfig:
+    """Hyperparameters of the learned kinematic model.
+
+    Attributes:
+        min_samples: samples a region (or the pool) needs before its own fit is used.
+        refit_every: minimum new samples (free sub-steps) between two refits.
+        refit_growth: also wait for ``refit_growth ×`` the samples seen at the last refit
+            (0: refit every ``refit_every`` samples).
+        window: samples kept per region (sliding window) [sub-steps].
+        forgetting: per-sample weight decay in (0, 1]; 1 weighs all kept samples equally.
+        fit_intercept: fit the intercepts vx_b, yaw_b, vy_b.
+    """
+
+    min_samples: int = 20
+    refit_every: int = 500
+    refit_growth: float = 1.0
+    window: int = 500
+    forgetting: float = 1.0
+    fit_intercept: bool = False
+
+    def __post_init__(self) -> None:
+        for name in ("min_samples", "refit_every", "window"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and value >= 1):
+                raise ValueError(f"expected {name} to be an integer >= 1, got {value!r}")
+        if not self.refit_growth >= 0:
+            raise ValueError(f"expected refit_growth >= 0, got {self.refit_growth}")
+        if not 0 < self.forgetting <= 1:
+            raise ValueError(f"expected forgetting in (0, 1], got {self.forgetting}")
+
+
+def nominal_coefficients(robot: RobotParams) -> np.ndarray:
+    """The prior: coefficients of the nominal (slip-free) robot, shape (8,)."""
+    half = robot.wheel_radius / 2.0
+    turn = robot.wheel_radius / (2.0 * robot.half_track)
+    return np.array([half, half, 0.0, -turn, turn, 0.0, -robot.x_icr, 0.0])
+
+
+class KinematicModel:
+    """Per-region Bayesian ridge kinematics with a compiled prediction table.
+
+    Args:
+        robot: nominal robot (prior, sub-step timing, integration scheme, arena).
+        grid: the state discretization (cells, headings, slip regions).
+        config: hyperparameters.
+
+    >>> model = KinematicModel(RobotParams(), Discretization())
+    >>> [round(v, 4) for v in model.estimates(0)]
+    [0.0225, 0.06, 0.05]
+    """
+
+    def __init__(
+        self,
+        robot: RobotParams,
+        grid: Discretization,
+        config: KinematicModelConfig | None = None,
+    ) -> None:
+        self.robot = robot
+        self.grid = grid
+        self.config = config or KinematicModelConfig()
+        n_regions = grid.n_regions
+        self.data = np.zeros((n_regions, self.config.window, 5))
+        self.counts = np.zeros(n_regions, dtype=np.int64)
+        self.fitted_counts = np.zeros(n_regions, dtype=np.int64)
+        self.coefficients = np.tile(nominal_coefficients(robot), (n_regions, 1))
+        self.velocities = np.zeros((n_regions, N_ACTIONS, 3))
+        self.refits = 0
+        self._pooled_fitted = 0
+        action_velocities(self.coefficients, robot.wheel_speed, self.velocities)
+
+    # -- learning --------------------------------------------------------------------------
+
+    def feed(self, log: np.ndarray) -> int:
+        """Store kinematic-log rows ``(n, 6)``; returns how many were stored (no refit)."""
+        rows = np.ascontiguousarray(log, dtype=np.float64).reshape(-1, 6)
+        return int(feed_rows(self.data, self.counts, rows, self.grid.n_regions))
+
+    @property
+    def new_samples(self) -> int:
+        """Samples fed since the last refit."""
+        return int(self.counts.sum()) - self._pooled_fitted
+
+    def refit_due(self) -> bool:
+        """True when the refit schedule (see the module docstring) asks for a refit."""
+        needed = max(self.config.refit_every, int(self.config.refit_growth * self._pooled_fitted))
+        return self.new_samples >= needed
+
+    def maybe_refit(self) -> bool:
+        """Refit if :meth:`refit_due`; returns whether it did."""
+        if not self.refit_due():
+            return False
+        self.refit()
+        return True
+
+    def refit(self) -> None:
+        """Refit the pooled model and every region with at least ``min_samples`` new samples (or
+        none fitted yet), then the velocity table."""
+        prior = nominal_coefficients(self.robot)
+        pooled = self._fit_pooled(prior)
+        fresh = self.counts - self.fitted_counts
+        minimum = self.config.min_samples
+        for region in range(self.grid.n_regions):
+            if self.counts[region] < minimum:
+                self.coefficients[region] = pooled
+            elif fresh[region] >= minimum or self.fitted_counts[region] < minimum:
+                x, w = self._region_samples(region)
+                self.coefficients[region] = self._fit(x, w, pooled)
+                self.fitted_counts[region] = self.counts[region]
+        self.refits += 1
+        self._pooled_fitted = int(self.counts.sum())
+        action_velocities(self.coefficients, self.robot.wheel_speed, self.velocities)
+        logger.debug("kinematic refit %d", self.refits)
+
+    def _region_samples(self, region: int) -> tuple[np.ndarray, np.ndarray]:
+        """Kept samples of a region (n, 5) and their forgetting weights (n,)."""
+        count = int(self.counts[region])
+        window = self.config.window
+        n = min(count, window)
+        slots = np.arange(count - n, count) % window
+        age = np.arange(n - 1, -1, -1, dtype=np.float64)
+        return self.data[region, slots], self.config.forgetting**age
+
+    def _fit_pooled(self, prior: np.ndarray) -> np.ndarray:
+        """Fit on the newest ``window / n_active`` samples of each active region (so a pooled
+        fit costs no more than a regional one)."""
+        active = np.flatnonzero(self.counts)
+        if int(self.counts.sum()) < self.config.min_samples:
+            return prior
+        share = -(-self.config.window // active.size)
+        parts = [self._region_samples(int(r)) for r in active]
+        x = np.concatenate([p[0][-share:] for p in parts])
+        w = np.concatenate([p[1][-share:] for p in parts])
+        return self._fit(x, w, prior)
+
+    def _fit(self, samples: np.ndarray, weights: np.ndarray, base: np.ndarray) -> np.ndarray:
+        """Fit the three regressions on the residual of ``base`` coefficients; returns (8,)."""
+        wheels = samples[:, 0:2]
+        v_x, v_y, yaw_rate = samples[:, 2], samples[:, 3], samples[:, 4]
+        out = base.copy()
+        out[0:3] = self._ridge(wheels, v_x, weights, base[0:3])
+        out[3:6] = self._ridge(wheels, yaw_rate, weights, base[3:6])
+        out[6:8] = self._ridge(yaw_rate[:, None], v_y, weights, base[6:8])
+        return out
+
+    def _ridge(
+        self, inputs: np.ndarray, target: np.ndarray, weights: np.ndarray, base: np.ndarray
+    ) -> np.ndarray:
+        """Bayesian ridge on ``target − base·[inputs, 1]``; returns base + (coef, intercept)."""
+        slopes, intercept = base[:-1], base[-1]
+        residual = target - inputs @ slopes - intercept
+        if not np.any(np.abs(residual) > 1e-15):
+            return base.copy()
+        fit_intercept = self.config.fit_intercept
+        regression = BayesianRidge(fit_intercept=fit_intercept)
+        regression.fit(inputs, residual, sample_weight=weights)
+        delta = np.append(regression.coef_, regression.intercept_ if fit_intercept else 0.0)
+        return base + delta
+
+    # -- prediction ------------------------------------------------------------------------
+
+    def estimates(self, region: int) -> tuple[float, float, float]:
+        """Physical reading of a region's fit: (r [m], c [m], x_ICR [m]).
+
+        r = vx_wl + vx_wr; c = r / (yaw_wr − yaw_wl); x_ICR = −vy_yaw.
+        """
+        c = self.coefficients[region]
+        wheel_radius = float(c[0] + c[1])
+        half_track = wheel_radius / float(c[4] - c[3])
+        return wheel_radius, half_track, float(-c[6])
+
+    def predict(
+        self,
+        pose: tuple[float, float, float],
+        action: int,
+        walls: np.ndarray | None = None,
+        goals: np.ndarray | None = None,
+    ) -> tuple[tuple[float, float, float], int]:
+        """Predicted pose after ``action`` from ``pose`` (x [m], y [m], heading [rad]).
+
+        Returns ((x, y, heading), outcome) with the outcome codes of
+        :mod:`skidnav.kernels.kinematic_prediction`.
+        """
+        walls_, goals_ = self._masks(walls, goals)
+        x, y, heading, outcome = predict_action(
+            float(pose[0]), float(pose[1]), float(pose[2]), int(action), self.velocities,
+            walls_, goals_, self.robot.kernel_constants(), self.grid.grid_shape(),
+        )  # fmt: skip
+        return (float(x), float(y), float(heading)), int(outcome)
+
+    def table(
+        self, walls: np.ndarray | None = None, goals: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Predicted next state and outcome of every (state, action) from cell centres.
+
+        Returns:
+            ``next_state`` (n_states, n_actions) int32 and ``outcome`` (n_states, n_actions) int8.
+        """
+        next_state = np.empty((self.grid.n_states, N_ACTIONS), dtype=np.int32)
+        outcome = np.empty((self.grid.n_states, N_ACTIONS), dtype=np.int8)
+        self.fill_table(next_state, outcome, walls, goals)
+        return next_state, outcome
+
+    def fill_table(
+        self,
+        next_state: np.ndarray,
+        outcome: np.ndarray,
+        walls: np.ndarray | None = None,
+        goals: np.ndarray | None = None,
+    ) -> None:
+        """As :meth:`table`, writing into preallocated arrays."""
+        walls_, goals_ = self._masks(walls, goals)
+        prediction_table(
+            self.velocities, walls_, goals_, self.robot.kernel_constants(),
+            self.grid.grid_shape(), next_state, outcome,
+        )  # fmt: skip
+
+    def _masks(
+        self, walls: np.ndarray | None, goals: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        shape = (self.grid.n_x, self.grid.n_y)
+        walls_ = np.zeros(shape, dtype=np.bool_) if walls is None else np.asarray(walls, bool)
+        goals_ = np.zeros(shape, dtype=np.bool_) if goals is None else np.asarray(goals, bool)
+        if walls_.shape != shape or goals_.shape != shape:
+            raise ValueError(f"expected walls and goals of shape {shape}, got {walls_.shape}")
+        return walls_, goals_
+
+    # -- persistence -----------------------------------------------------------------------
+
+    def state_arrays(self, prefix: str = "kinematic_") -> dict[str, np.ndarray]:
+        """The learned state as named arrays (for an agent's .npz)."""
+        return {
+            f"{prefix}data": self.data,
+            f"{prefix}counts": self.counts,
+            f"{prefix}fitted_counts": self.fitted_counts,
+            f"{prefix}coefficients": self.coefficients,
+            f"{prefix}refits": np.array([self.refits, self._pooled_fitted]),
+        }
+
+    def load_arrays(self, arrays: dict[str, np.ndarray], prefix: str = "kinematic_") -> None:
+        """Restore :meth:`state_arrays` output (shapes are checked)."""
+        for name in ("data", "counts", "fitted_counts", "coefficients"):
+            value = np.asarray(arrays[f"{prefix}{name}"])
+            if value.shape != getattr(self, name).shape:
+                raise CorruptFileError(f"kinematic model {name}: unexpected shape {value.shape}")
+            getattr(self, name)[...] = value
+        self.refits, self._pooled_fitted = (int(v) for v in arrays[f"{prefix}refits"])
+        action_velocities(self.coefficients, self.robot.wheel_speed, self.velocities)
+
+    def metadata(self) -> dict[str, object]:
+        """JSON-ready description: config, robot and discretization."""
+        return {
+            "format_version": _FORMAT_VERSION,
+            "config": asdict(self.config),
+            "robot": asdict(self.robot),
+            "grid": asdict(self.grid),
+        }
+
+    def save(self, path: str | Path) -> None:
+        """Write ``<path>.npz`` (arrays) and ``<path>.json`` (config); never pickle."""
+        base = Path(path).with_suffix("")
+        np.savez(base.with_suffix(".npz"), **self.state_arrays())  # type: ignore[arg-type]
+        base.with_suffix(".json").write_text(json.dumps(self.metadata(), indent=2))
+
+    @classmethod
+    def load(cls, path: str | Path) -> KinematicModel:
+        """Read a model written by :meth:`save`."""
+        base = Path(path).with_suffix("")
+        try:
+            meta = json.loads(base.with_suffix(".json").read_text())
+            if meta.get("format_version") != _FORMAT_VERSION:
+                raise CorruptFileError(f"{base}.json: unsupported format version")
+            model = cls(
+                RobotParams(**meta["robot"]),
+                Discretization(**meta["grid"]),
+                KinematicModelConfig(**meta["config"]),
+            )
+            with np.load(base.with_suffix(".npz"), allow_pickle=False) as arrays:
+                model.load_arrays(dict(arrays))
+        except (OSError, KeyError, TypeError, ValueError, json.JSONDecodeError) as error:
+            raise CorruptFileError(f"{base}: cannot load kinematic model ({error})") from error
+        return model

@@ -1,0 +1,128 @@
+"""Where camera frames come from: a live camera, a video file, or a folder of images.
+
+:func:`open_frames` takes the user's ``--source`` (``"0"`` for camera 0, a video path, or a folder)
+and returns one :class:`FrameSource` that yields :class:`Frame` objects with timestamps.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import NamedTuple
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from skidnav.errors import UserError
+
+LOGGER = logging.getLogger(__name__)
+
+IMAGE_SUFFIXES = frozenset({".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff"})
+
+
+class Frame(NamedTuple):
+    """One camera image.
+
+    Attributes:
+        number: 0-based position of the frame in its source.
+        stamp: capture time [s]: ``time.monotonic()`` when a live camera frame was read; the
+            position in the recording (``number / fps``) for a video file or an image folder.
+        image: BGR image, uint8, shape (height, width, 3).
+    """
+
+    number: int
+    stamp: float
+    image: NDArray[np.uint8]
+
+
+class FrameSource:
+    """Iterable over the frames of a camera index, a video file or an image folder (sorted by name).
+
+    Use as a context manager, or call :meth:`close`. Iterating twice over a camera or video reads
+    on from where the first iteration stopped; an image folder starts over.
+
+    Args:
+        source: camera index (int, or a string of digits), a video file, or a folder of images.
+        fps: frame rate [Hz] assumed for an image folder (and for a video that reports none).
+    """
+
+    def __init__(self, source: int | str | Path, fps: float = 30.0) -> None:
+        if not fps > 0:
+            raise ValueError(f"expected fps > 0, got {fps}")
+        self.fps = fps
+        self.description = str(source)
+        self._files: list[Path] | None = None
+        self._capture: cv2.VideoCapture | None = None
+        self._live = False
+        if isinstance(source, int) or (isinstance(source, str) and source.isdigit()):
+            self._open_capture(int(source))
+            self._live = True
+            return
+        path = Path(source)
+        if path.is_dir():
+            self._files = sorted(p for p in path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+            if not self._files:
+                raise UserError(
+                    f"{path}: no images ({', '.join(sorted(IMAGE_SUFFIXES))}) in folder"
+                )
+        elif path.is_file():
+            self._open_capture(str(path))
+        else:
+            raise UserError(f"{path}: no such camera, video file or image folder")
+
+    def _open_capture(self, target: int | str) -> None:
+        capture = cv2.VideoCapture(target)
+        if not capture.isOpened():
+            capture.release()
+            kind = "camera" if isinstance(target, int) else "video file"
+            raise UserError(f"{target}: cannot open {kind}")
+        self._capture = capture
+        reported = float(capture.get(cv2.CAP_PROP_FPS) or 0.0)
+        if reported > 0 and not self._live:
+            self.fps = reported
+
+    def __iter__(self) -> Iterator[Frame]:
+        if self._files is not None:
+            yield from self._iterate_files(self._files)
+        else:
+            yield from self._iterate_capture()
+
+    def _iterate_files(self, files: list[Path]) -> Iterator[Frame]:
+        for index, file in enumerate(files):
+            image = cv2.imread(str(file), cv2.IMREAD_COLOR)
+            if image is None:
+                LOGGER.warning("%s: unreadable image, skipped", file)
+                continue
+            yield Frame(index, index / self.fps, np.asarray(image, dtype=np.uint8))
+
+    def _iterate_capture(self) -> Iterator[Frame]:
+        index = 0
+        while self._capture is not None:
+            ok, image = self._capture.read()
+            if not ok or image is None:
+                return
+            stamp = time.monotonic() if self._live else index / self.fps
+            if image.ndim == 2:
+                image = cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+            yield Frame(index, stamp, np.asarray(image, dtype=np.uint8))
+            index += 1
+
+    def close(self) -> None:
+        """Release the camera or video file (idempotent)."""
+        if self._capture is not None:
+            self._capture.release()
+            self._capture = None
+
+    def __enter__(self) -> FrameSource:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+
+def open_frames(source: int | str | Path, fps: float = 30.0) -> FrameSource:
+    """A :class:`FrameSource` for ``source`` (see there); raises ``UserError`` if unusable."""
+    return FrameSource(source, fps=fps)

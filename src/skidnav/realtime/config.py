@@ -1,0 +1,213 @@
+"""Configuration of a real-time run, read from TOML (configs/realtime.toml, docs/realtime.md).
+
+Tables: ``[run]`` (:class:`RunSettings`), ``[sim]`` (:class:`SimSettings`), ``[tcp]``,
+``[serial]``, ``[ros2]`` (driver options), ``[agents.NAME]`` (the agent's hyperparameters) and
+``[presets.NAME]`` (tables merged over the others when the preset is chosen).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypeVar
+
+from skidnav.errors import UserError
+from skidnav.robot.slip import SLIP_PRESETS
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """How the loop runs, validated on construction.
+
+    Attributes:
+        episodes: episodes to run (aborted ones count).
+        max_actions: actions per episode before truncation.
+        time_scale: robot seconds per wall second; must match the sim server's (1 for a real robot).
+        period: control period [s robot time]; one action is ``substeps`` periods.
+        substeps: control periods per action.
+        reset: ``"auto"`` (drive back to the start) or ``"manual"`` (wait for the operator).
+        seed: root seed (map, sim server, agent).
+        map: map kind (free, obstacles, maze) or map file.
+        pose_timeout_periods: control periods without a new pose before the safety trip.
+        pose_timeout_min: floor of that timeout [s wall] (high time scales on a busy machine).
+        arena_margin: tolerated excursion outside the arena [m].
+        reconnect_timeout: how long to retry the link after a fault [s wall]; 0 ends the run.
+        homing_tolerance: homing ends within this distance of the start [m] (under half a cell).
+        settle_periods: first periods of each action left out of the kinematic log (the wheels
+            are still reaching the new command), and periods waited after the closing stop
+            before the end pose is read (at least 1); raise it with the link's latency.
+        homing_timeout: longest homing [s robot time].
+        keep_checkpoints: episode checkpoints kept on disk (the newest ones).
+    """
+
+    episodes: int = 20
+    max_actions: int = 100
+    time_scale: float = 1.0
+    period: float = 0.1
+    substeps: int = 10
+    reset: str = "auto"
+    seed: int = 0
+    map: str = "free"
+    pose_timeout_periods: int = 5
+    pose_timeout_min: float = 0.1
+    arena_margin: float = 0.03
+    reconnect_timeout: float = 5.0
+    homing_tolerance: float = 0.008
+    homing_timeout: float = 120.0
+    settle_periods: int = 1
+    keep_checkpoints: int = 3
+
+    def __post_init__(self) -> None:
+        for name in ("episodes", "max_actions", "substeps", "pose_timeout_periods"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and value >= 1):
+                raise ValueError(f"expected {name} to be an integer >= 1, got {value!r}")
+        for name in ("time_scale", "period", "homing_tolerance", "homing_timeout"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"expected {name} > 0, got {getattr(self, name)}")
+        for name in ("arena_margin", "reconnect_timeout", "pose_timeout_min"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"expected {name} >= 0, got {getattr(self, name)}")
+        settle = self.settle_periods
+        if not (isinstance(settle, int) and 0 <= settle < self.substeps):
+            raise ValueError(f"expected settle_periods in [0, substeps), got {settle!r}")
+        if self.reset not in ("auto", "manual"):
+            raise ValueError(f"expected reset 'auto' or 'manual', got {self.reset!r}")
+        if not (isinstance(self.keep_checkpoints, int) and self.keep_checkpoints >= 1):
+            raise ValueError(f"expected keep_checkpoints >= 1, got {self.keep_checkpoints!r}")
+
+    @property
+    def period_wall(self) -> float:
+        """Control period in wall seconds."""
+        return self.period / self.time_scale
+
+    @property
+    def pose_timeout(self) -> float:
+        """Longest wait for a new pose before the safety trip [s wall]."""
+        return max(self.pose_timeout_periods * self.period_wall, self.pose_timeout_min)
+
+
+@dataclass(frozen=True)
+class SimSettings:
+    """The simulated robot server the ``sim`` driver starts (options of ``robot sim-server``).
+
+    Attributes:
+        slip: slip preset. drift: relative drift amplitude. drift_period: [s].
+        latency: command latency [s]. pose_noise: σ of x, y [m]. drop: pose drop probability.
+        link_timeout: the server stops the wheels after this quiet time [s wall].
+    """
+
+    slip: str = "rough"
+    drift: float = 0.0
+    drift_period: float = 600.0
+    latency: float = 0.0
+    pose_noise: float = 0.0
+    drop: float = 0.0
+    link_timeout: float = 0.5
+
+    def __post_init__(self) -> None:
+        if self.slip not in SLIP_PRESETS:
+            raise ValueError(f"expected slip one of {', '.join(SLIP_PRESETS)}, got {self.slip!r}")
+        for name in ("drift", "latency", "pose_noise", "drop"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"expected {name} >= 0, got {getattr(self, name)}")
+        if not (self.drift_period > 0 and self.link_timeout > 0 and self.drop < 1):
+            raise ValueError("expected drift_period > 0, link_timeout > 0 and drop < 1")
+
+    def server_arguments(self) -> list[str]:
+        """The matching ``skidnav robot sim-server`` options."""
+        return [
+            "--slip",
+            self.slip,
+            "--drift",
+            str(self.drift),
+            "--drift-period",
+            str(self.drift_period),
+            "--latency",
+            str(self.latency),
+            "--pose-noise",
+            str(self.pose_noise),
+            "--drop",
+            str(self.drop),
+            "--link-timeout",
+            str(self.link_timeout),
+        ]
+
+
+@dataclass(frozen=True)
+class RealtimeConfig:
+    """Everything a real-time run needs besides the command line."""
+
+    run: RunSettings = field(default_factory=RunSettings)
+    sim: SimSettings = field(default_factory=SimSettings)
+    drivers: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    agents: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+
+
+def _merge(base: dict[str, Any], override: Mapping[str, Any]) -> dict[str, Any]:
+    """Recursive merge of TOML tables (override wins)."""
+    merged = dict(base)
+    for key, value in override.items():
+        if isinstance(value, Mapping) and isinstance(merged.get(key), Mapping):
+            merged[key] = _merge(dict(merged[key]), value)
+        else:
+            merged[key] = value
+    return merged
+
+
+def _build(cls: type[T], table: Mapping[str, Any], where: str) -> T:
+    known = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+    unknown = sorted(set(table) - known)
+    if unknown:
+        raise UserError(f"{where}: unknown option(s) {', '.join(unknown)}")
+    try:
+        return cls(**table)
+    except (ValueError, TypeError) as error:
+        raise UserError(f"{where}: {error}") from None
+
+
+def config_from_mapping(data: Mapping[str, Any], preset: str | None = None) -> RealtimeConfig:
+    """A config from parsed TOML, with ``[presets.NAME]`` merged over it if ``preset`` is given."""
+    tables = {key: value for key, value in data.items() if key != "presets"}
+    if preset is not None:
+        presets = data.get("presets", {})
+        if preset not in presets:
+            raise UserError(f"unknown preset {preset!r}; expected one of {', '.join(presets)}")
+        tables = _merge(tables, presets[preset])
+    unknown = sorted(set(tables) - {"run", "sim", "tcp", "serial", "ros2", "agents"})
+    if unknown:
+        raise UserError(f"unknown config table(s) {', '.join(unknown)}")
+    return RealtimeConfig(
+        run=_build(RunSettings, tables.get("run", {}), "[run]"),
+        sim=_build(SimSettings, tables.get("sim", {}), "[sim]"),
+        drivers={name: dict(tables.get(name, {})) for name in ("tcp", "serial", "ros2")},
+        agents={name: dict(value) for name, value in tables.get("agents", {}).items()},
+    )
+
+
+def load_config(path: Path | None, preset: str | None = None) -> RealtimeConfig:
+    """Read a TOML config (defaults without a path); UserError if unreadable or invalid."""
+    if path is None:
+        return config_from_mapping({}, preset)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, tomllib.TOMLDecodeError) as error:
+        raise UserError(f"{path}: {error}") from None
+    return config_from_mapping(data, preset)
+
+
+def with_overrides(config: RealtimeConfig, **run_fields: Any) -> RealtimeConfig:
+    """A copy with the given :class:`RunSettings` fields replaced (None values ignored)."""
+    changes = {key: value for key, value in run_fields.items() if value is not None}
+    if not changes:
+        return config
+    try:
+        run = dataclasses.replace(config.run, **changes)
+    except (ValueError, TypeError) as error:
+        raise UserError(str(error)) from None
+    return dataclasses.replace(config, run=run)

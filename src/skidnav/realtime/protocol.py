@@ -1,0 +1,276 @@
+"""The skidnav robot line protocol, version 1 (docs/protocol.md).
+
+One message is one JSON object on one UTF-8 line ending in ``\\n``, at most :data:`MAX_LINE_BYTES`
+bytes including the newline. Every message carries ``"v"`` (protocol version), ``"type"`` and
+``"seq"`` (the sender's own counter, a non-negative integer that increases by one per message).
+The same messages travel over TCP, a serial line or a pty, so a microcontroller only needs a
+line reader, a JSON formatter and a float parser.
+
+Message types and their fields (units SI):
+
+==============  =========  ==========================================================
+type            direction  fields besides v, type, seq
+==============  =========  ==========================================================
+``hello``       both       ``name`` (str), ``period`` (s, robot → host; 0 from host)
+``cmd``         host→robot ``omega_left``, ``omega_right`` (rad/s)
+``ack``         robot→host ``ack`` (seq of the acknowledged ``cmd``)
+``pose``        robot→host ``stamp`` (robot clock, s), ``x``, ``y`` (m), ``heading`` (rad)
+``stop``        host→robot (none): zero both wheels now
+``stopped``     robot→host ``ack`` (seq of the ``stop``): the wheels are at zero
+``heartbeat``   both       ``stamp`` (sender clock, s)
+``error``       both       ``code`` (str), ``message`` (str)
+==============  =========  ==========================================================
+
+Any line that is not valid UTF-8 JSON, is too long, lacks a field, has a field of the wrong type,
+a non-finite number, another version or an unknown type raises :class:`ProtocolError` — the only
+exception :func:`decode` and :class:`LineBuffer` raise.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass
+from typing import Any, ClassVar
+
+from skidnav.errors import UserError
+
+PROTOCOL_VERSION = 1
+MAX_LINE_BYTES = 1024
+"""Longest accepted line [bytes], the terminating newline included."""
+
+
+class ProtocolError(UserError):
+    """A line that is not a valid protocol message.
+
+    Attributes:
+        code: ``"oversized"``, ``"encoding"``, ``"json"``, ``"field"``, ``"version"`` or
+            ``"unknown_type"`` — the ``code`` of the ``error`` reply a peer may send back.
+    """
+
+    def __init__(self, code: str, message: str) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+@dataclass(frozen=True)
+class Message:
+    """Base of every message: ``seq`` is the sender's message counter (≥ 0)."""
+
+    TYPE: ClassVar[str] = ""
+    FLOATS: ClassVar[tuple[str, ...]] = ()
+    INTS: ClassVar[tuple[str, ...]] = ()
+    STRS: ClassVar[tuple[str, ...]] = ()
+    seq: int
+
+
+@dataclass(frozen=True)
+class Hello(Message):
+    """Handshake: the host sends it first; the robot answers with its own, ``period`` [s] > 0."""
+
+    TYPE: ClassVar[str] = "hello"
+    FLOATS: ClassVar[tuple[str, ...]] = ("period",)
+    STRS: ClassVar[tuple[str, ...]] = ("name",)
+    name: str
+    period: float = 0.0
+
+
+@dataclass(frozen=True)
+class Command(Message):
+    """Wheel angular speeds [rad/s] to hold until the next command."""
+
+    TYPE: ClassVar[str] = "cmd"
+    FLOATS: ClassVar[tuple[str, ...]] = ("omega_left", "omega_right")
+    omega_left: float
+    omega_right: float
+
+
+@dataclass(frozen=True)
+class Ack(Message):
+    """The robot received command number ``ack``."""
+
+    TYPE: ClassVar[str] = "ack"
+    INTS: ClassVar[tuple[str, ...]] = ("ack",)
+    ack: int
+
+
+@dataclass(frozen=True)
+class PoseReport(Message):
+    """A pose measurement: ``stamp`` [s, robot clock], x, y [m], heading [rad, CCW from +x]."""
+
+    TYPE: ClassVar[str] = "pose"
+    FLOATS: ClassVar[tuple[str, ...]] = ("stamp", "x", "y", "heading")
+    stamp: float
+    x: float
+    y: float
+    heading: float
+
+
+@dataclass(frozen=True)
+class Stop(Message):
+    """Zero both wheels at once, bypassing any command queue."""
+
+    TYPE: ClassVar[str] = "stop"
+
+
+@dataclass(frozen=True)
+class Stopped(Message):
+    """The wheels are at zero after stop number ``ack``."""
+
+    TYPE: ClassVar[str] = "stopped"
+    INTS: ClassVar[tuple[str, ...]] = ("ack",)
+    ack: int
+
+
+@dataclass(frozen=True)
+class Heartbeat(Message):
+    """Keep-alive; ``stamp`` is the sender's clock [s]."""
+
+    TYPE: ClassVar[str] = "heartbeat"
+    FLOATS: ClassVar[tuple[str, ...]] = ("stamp",)
+    stamp: float
+
+
+@dataclass(frozen=True)
+class Error(Message):
+    """A problem report; ``code`` as :attr:`ProtocolError.code` or ``"busy"``, ``"state"``."""
+
+    TYPE: ClassVar[str] = "error"
+    STRS: ClassVar[tuple[str, ...]] = ("code", "message")
+    code: str
+    message: str
+
+
+MESSAGE_TYPES: dict[str, type[Message]] = {
+    cls.TYPE: cls for cls in (Hello, Command, Ack, PoseReport, Stop, Stopped, Heartbeat, Error)
+}
+
+
+def encode(message: Message) -> bytes:
+    """One protocol line (UTF-8, ``\\n``-terminated) for ``message``.
+
+    Raises ProtocolError if the result would exceed :data:`MAX_LINE_BYTES` or holds a
+    non-finite number.
+
+    >>> encode(Command(seq=3, omega_left=1.7, omega_right=-1.7))
+    b'{"v":1,"type":"cmd","seq":3,"omega_left":1.7,"omega_right":-1.7}\\n'
+    """
+    body: dict[str, Any] = {"v": PROTOCOL_VERSION, "type": message.TYPE}
+    body.update(asdict(message))
+    try:
+        text = json.dumps(body, separators=(",", ":"), ensure_ascii=False, allow_nan=False)
+    except ValueError as error:
+        raise ProtocolError("field", f"cannot encode {message.TYPE}: {error}") from None
+    line = text.encode("utf-8") + b"\n"
+    if len(line) > MAX_LINE_BYTES:
+        raise ProtocolError("oversized", f"{message.TYPE} line of {len(line)} bytes")
+    return line
+
+
+def _parse_json(line: bytes) -> dict[str, Any]:
+    """The JSON object of one line (newline optional)."""
+    if len(line) > MAX_LINE_BYTES:
+        raise ProtocolError("oversized", f"line of {len(line)} bytes > {MAX_LINE_BYTES}")
+    try:
+        text = line.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ProtocolError("encoding", "line is not valid UTF-8") from None
+    try:
+        body = json.loads(text, parse_constant=_reject_constant)
+    except (ValueError, RecursionError):
+        raise ProtocolError("json", "line is not valid JSON") from None
+    if not isinstance(body, dict):
+        raise ProtocolError("json", "line is not a JSON object")
+    return body
+
+
+def _reject_constant(name: str) -> float:
+    raise ValueError(f"{name} is not allowed")
+
+
+def _field(body: dict[str, Any], name: str, kind: str) -> Any:
+    """Field ``name`` checked as ``kind`` ("float", "int" or "str")."""
+    if name not in body:
+        raise ProtocolError("field", f"{body.get('type')} lacks field {name!r}")
+    value = body[name]
+    if kind == "str":
+        ok = isinstance(value, str)
+    elif kind == "int":
+        ok = isinstance(value, int) and not isinstance(value, bool) and value >= 0
+    else:
+        ok = isinstance(value, int | float) and not isinstance(value, bool)
+        ok = ok and math.isfinite(value)
+        value = float(value) if ok else value
+    if not ok:
+        raise ProtocolError("field", f"field {name!r} is not a valid {kind}")
+    return value
+
+
+def decode(line: bytes) -> Message:
+    """Parse one line (with or without its newline) into a message.
+
+    Raises:
+        ProtocolError: for anything that is not a valid version-1 message; never anything else.
+
+    >>> decode(b'{"v":1,"type":"stop","seq":7}\\n')
+    Stop(seq=7)
+    """
+    body = _parse_json(line.rstrip(b"\n"))
+    if body.get("v") != PROTOCOL_VERSION or isinstance(body.get("v"), bool):
+        raise ProtocolError("version", f"expected protocol version {PROTOCOL_VERSION}")
+    kind = body.get("type")
+    cls = MESSAGE_TYPES.get(kind) if isinstance(kind, str) else None
+    if cls is None:
+        raise ProtocolError("unknown_type", "unknown message type")
+    fields: dict[str, Any] = {"seq": _field(body, "seq", "int")}
+    for names, kind_name in ((cls.FLOATS, "float"), (cls.INTS, "int"), (cls.STRS, "str")):
+        for name in names:
+            if name == "period" and name not in body:
+                continue
+            fields[name] = _field(body, name, kind_name)
+    return cls(**fields)
+
+
+class LineBuffer:
+    """Splits a byte stream into protocol lines, enforcing :data:`MAX_LINE_BYTES`.
+
+    Feed raw bytes with :meth:`feed`; iterate the completed lines with :meth:`lines`. A line that
+    grows past the limit is discarded up to its newline and reported once as a ProtocolError
+    ("oversized"); the stream then resynchronizes on the next line.
+    """
+
+    def __init__(self, max_line: int = MAX_LINE_BYTES) -> None:
+        self._max_line = max_line
+        self._pending = bytearray()
+        self._discarding = False
+
+    def feed(self, data: bytes) -> None:
+        """Append received bytes."""
+        self._pending += data
+
+    def lines(self) -> Iterator[bytes]:
+        """Yield each complete line (without newline); raises ProtocolError on an oversized one.
+
+        After an error, call again to continue with the following lines.
+        """
+        while True:
+            end = self._pending.find(b"\n")
+            if self._discarding:
+                if end < 0:
+                    self._pending.clear()
+                    return
+                del self._pending[: end + 1]
+                self._discarding = False
+                continue
+            if end < 0:
+                if len(self._pending) >= self._max_line:
+                    self._pending.clear()
+                    self._discarding = True
+                    raise ProtocolError("oversized", f"line longer than {self._max_line} bytes")
+                return
+            line = bytes(self._pending[:end])
+            del self._pending[: end + 1]
+            if end + 1 > self._max_line:
+                raise ProtocolError("oversized", f"line longer than {self._max_line} bytes")
+            yield line

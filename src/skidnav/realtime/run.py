@@ -1,0 +1,172 @@
+"""Assembling a real-time run from the command line: config, map, agent, driver, loop, signals.
+
+Files written under ``--out`` (docs/realtime.md): ``run.jsonl`` (every command, pose, transition,
+safety event), ``checkpoints/`` (per episode), ``summary.json``, and for the ``sim`` driver the
+server's own command log ``sim-server.jsonl``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import json
+import signal
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from types import FrameType
+from typing import Any
+
+from skidnav.errors import UserError
+from skidnav.realtime.arena import build_map, seed_streams
+from skidnav.realtime.checkpoint import Checkpoints
+from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
+from skidnav.realtime.drivers import make_driver
+from skidnav.realtime.loop import RealtimeLoop
+from skidnav.robot.kinematics import N_ACTIONS
+from skidnav.robot.params import RobotParams
+from skidnav.world.discretization import Discretization
+
+
+def agent_context(name: str, robot: RobotParams, grid: Discretization) -> dict[str, Any]:
+    """Extra constructor arguments of agent ``name``: the model-based agents take the robot
+    geometry and discretization (``robot``, ``discretization``) for their kinematic model."""
+    from skidnav.agents.registry import agent_class
+
+    parameters = inspect.signature(agent_class(name).__init__).parameters
+    context: dict[str, Any] = {}
+    if "robot" in parameters:
+        context["robot"] = robot
+    if "discretization" in parameters:
+        context["discretization"] = grid
+    return context
+
+
+def _make_or_resume_agent(
+    args: argparse.Namespace, config: RealtimeConfig, context: dict[str, Any], grid: Discretization
+) -> tuple[Any, int, dict[str, Any] | None]:
+    """(agent, first episode, loop state to restore or None)."""
+    from skidnav.agents.registry import load_agent, make_agent
+
+    if args.resume:
+        latest = Checkpoints(args.out / "checkpoints").latest()
+        if latest is None:
+            raise UserError(f"{args.out}: no checkpoint to resume from")
+        episode, directory, state = latest
+        agent = load_agent(directory / "agent", **context)
+        if agent.name != args.agent:
+            raise UserError(
+                f"{directory}: checkpoint holds agent {agent.name!r}, not {args.agent!r}"
+            )
+        return agent, episode + 1, state
+    rng = seed_streams(config.run.seed)["agent"]
+    table = config.agents.get(args.agent)
+    agent = make_agent(args.agent, grid.n_states, N_ACTIONS, table, rng, **context)
+    return agent, 0, None
+
+
+def warm_up_agent(
+    name: str, config: RealtimeConfig, context: dict[str, Any], n_states: int
+) -> None:
+    """Compile (numba) every kernel of agent ``name`` before the robot moves: a throwaway agent
+    acts, learns from one dummy step and ends an episode. Compilation holds the GIL, which would
+    starve the driver's reader thread and trip the pose watchdog mid-episode."""
+    import numpy as np
+
+    from skidnav.agents.registry import make_agent
+
+    agent = make_agent(
+        name, n_states, N_ACTIONS, config.agents.get(name), np.random.default_rng(0), **context
+    )
+    info = {
+        "pose": (0.0, 0.0, 0.0),
+        "cell": (0, 0, 0),
+        "collision": False,
+        "wheel_speeds": (0.0, 0.0),
+        "region": 0,
+        "kinematic_log": np.zeros((0, 6)),
+    }
+    for terminated in (False, True):
+        action = agent.act(0)
+        agent.observe(0, action, -1.0, 1, terminated, False, info)
+    agent.greedy_action(0)
+    agent.end_episode()
+
+
+@contextmanager
+def interrupt_handlers(loop: RealtimeLoop) -> Iterator[None]:
+    """SIGINT and SIGTERM trip the safety monitor (and end an operator wait) while inside."""
+
+    def handler(signum: int, frame: FrameType | None) -> None:
+        loop.interrupt(f"signal {signal.Signals(signum).name}")
+        if loop.waiting_for_operator:
+            raise KeyboardInterrupt
+
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for signum, old in previous.items():
+            signal.signal(signum, old)
+
+
+def run_from_args(
+    args: argparse.Namespace,
+    *,
+    progress: Callable[[str], None],
+    wait_for_operator: Callable[[str], None],
+) -> tuple[int, str]:
+    """Run ``skidnav robot run``; returns (exit code, one-line summary)."""
+    config = load_config(args.config, args.preset)
+    config = with_overrides(
+        config, episodes=args.episodes, time_scale=args.time_scale, reset=args.reset
+    )
+    robot, grid = RobotParams(), Discretization()
+    grid_map = build_map(config.run.map, config.run.seed, grid)
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    context = agent_context(args.agent, robot, grid)
+    agent, first_episode, state = _make_or_resume_agent(args, config, context, grid)
+    warm_up_agent(args.agent, config, context, grid.n_states)
+    driver = make_driver(args.driver, config, server_log=out / "sim-server.jsonl")
+    try:
+        driver.connect()
+    except ConnectionError as error:
+        getattr(driver, "shutdown", driver.close)()
+        raise UserError(f"cannot connect to the robot ({args.driver}): {error}") from None
+    loop = RealtimeLoop(
+        driver,
+        agent,
+        grid_map,
+        config,
+        out,
+        robot=robot,
+        grid=grid,
+        progress=progress,
+        wait_for_operator=wait_for_operator,
+    )
+    if state is not None:
+        loop.restore(state)
+    try:
+        with interrupt_handlers(loop):
+            code = loop.run(first_episode)
+    finally:
+        getattr(driver, "shutdown", driver.close)()
+    return code, _summarize(loop, out, code)
+
+
+def _summarize(loop: RealtimeLoop, out: Path, code: int) -> str:
+    results = loop.results
+    summary = {
+        "exit_code": code,
+        "episodes": len(results),
+        "goals": sum(r.reached_goal for r in results),
+        "aborted": sum(r.aborted for r in results),
+        "actions": sum(r.actions for r in results),
+        "last_abort_reason": next((r.reason for r in reversed(results) if r.aborted), None),
+    }
+    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    return (
+        f"{summary['episodes']} episodes, {summary['goals']} reached the goal, "
+        f"{summary['aborted']} aborted; results in {out}"
+    )

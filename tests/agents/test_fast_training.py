@@ -1,0 +1,116 @@
+"""The fused compiled trainer gives the same numbers as the plain loop, with and without numba."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import skidnav.envs  # noqa: F401  (registers the env)
+from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.registry import make_agent
+from skidnav.agents.training import TrainingLog, train_agent
+from skidnav.envs.mazes import dyna_maze
+from skidnav.world.discretization import Discretization
+
+AGENTS = (
+    "q-learning",
+    "dyna-q",
+    "dyna-q-plus",
+    "prioritized-sweeping",
+    "dyna-kinematic",
+    "trajectory-prioritized",
+    "dyna-full",
+)
+SRC = Path(__file__).resolve().parents[2] / "src"
+
+
+def _run(trainer: Any, name: str, world_seed: int = 2) -> tuple[TrainingLog, Any]:
+    env = gym.make("skidnav/SkidSteerNav-v0", map_kind="obstacles", world_seed=world_seed,
+                   slip="slippery", max_episode_steps=300)  # fmt: skip
+    evaluation = gym.make("skidnav/SkidSteerNav-v0", map_kind="obstacles", world_seed=world_seed,
+                          slip="slippery", max_episode_steps=300)  # fmt: skip
+    context = {"task": env.unwrapped.task} if name in AGENTS[4:] else {}  # type: ignore[attr-defined]
+    config = {"epsilon": 0.2} if name == "q-learning" else {"epsilon": 0.2, "planning_steps": 8}
+    agent = make_agent(name, 12_500, 4, config, np.random.default_rng(7), **context)
+    log = trainer(agent, env, 6, max_steps=250, greedy_eval_env=evaluation, seed=11)
+    return log, agent
+
+
+@pytest.mark.parametrize("name", AGENTS)
+def test_fast_trainer_matches_the_python_loop(name: str) -> None:
+    slow, slow_agent = _run(train_agent, name)
+    fast, fast_agent = _run(train_agent_fast, name)
+    for field in TrainingLog._fields:
+        if field != "wall_time":
+            np.testing.assert_array_equal(getattr(fast, field), getattr(slow, field), err_msg=field)
+    np.testing.assert_array_equal(fast_agent.q, slow_agent.q)
+    assert fast_agent.steps == slow_agent.steps == slow.lengths.sum()
+    assert fast_agent.planning_updates == slow_agent.planning_updates
+    assert fast_agent.rng.random() == slow_agent.rng.random()
+
+
+def test_other_envs_fall_back_to_the_python_loop() -> None:
+    logs = []
+    for trainer in (train_agent, train_agent_fast):
+        agent = make_agent("dyna-q", 54, 4, {"planning_steps": 5}, np.random.default_rng(0))
+        logs.append(trainer(agent, dyna_maze(), 5, seed=0))
+    np.testing.assert_array_equal(logs[0].lengths, logs[1].lengths)
+
+
+_SCRIPT = """
+import json, sys
+import numpy as np, gymnasium as gym
+import skidnav.envs
+from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.registry import make_agent
+from skidnav.robot.params import RobotParams
+from skidnav.world.discretization import Discretization
+robot = RobotParams(arena_width=0.3, arena_height=0.3)
+grid = Discretization(n_x=10, n_y=10, n_headings=10, arena_width=0.3, arena_height=0.3)
+env = gym.make("skidnav/SkidSteerNav-v0", map_kind="free", world_seed=1, slip="slippery",
+               robot=robot, discretization=grid, max_episode_steps=80)
+agent = make_agent("dyna-full", 1000, 4, {"planning_steps": 5, "kinematic_refit_every": 50},
+                   np.random.default_rng(3), task=env.unwrapped.task)
+log = train_agent_fast(agent, env, 4, seed=5)
+print(json.dumps({"q": agent.q.ravel().tolist(), "lengths": log.lengths.tolist(),
+                  "returns": log.returns.tolist(), "refits": agent.kinematic.refits,
+                  "coefficients": agent.kinematic.coefficients.ravel().tolist()}))
+"""
+
+
+def _subprocess(disable_jit: bool) -> dict[str, Any]:
+    env = {**os.environ, "PYTHONPATH": str(SRC)}
+    env.pop("NUMBA_DISABLE_JIT", None)
+    if disable_jit:
+        env["NUMBA_DISABLE_JIT"] = "1"
+    result = subprocess.run(
+        [sys.executable, "-c", _SCRIPT], env=env, capture_output=True, text=True, check=True,
+        timeout=240,
+    )  # fmt: skip
+    return json.loads(result.stdout.strip().splitlines()[-1])  # type: ignore[no-any-return]
+
+
+def test_identical_without_numba() -> None:
+    compiled = _subprocess(disable_jit=False)
+    interpreted = _subprocess(disable_jit=True)
+    assert compiled["refits"] >= 1
+    assert compiled == interpreted
+
+
+def test_agent_without_the_env_geometry_falls_back() -> None:
+    grid = Discretization(n_x=10, n_y=10, n_headings=10)
+    logs = []
+    for trainer in (train_agent, train_agent_fast):
+        env = gym.make("skidnav/SkidSteerNav-v0", map_kind="free", discretization=grid,
+                       max_episode_steps=50)  # fmt: skip
+        agent = make_agent("dyna-full", 1000, 4, None, np.random.default_rng(0))  # no task
+        logs.append(trainer(agent, env, 3, seed=0))
+    np.testing.assert_array_equal(logs[0].returns, logs[1].returns)

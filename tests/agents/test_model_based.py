@@ -1,0 +1,174 @@
+"""The thesis's model-based agents: dyna-kinematic, trajectory-prioritized, dyna-full."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import skidnav.envs  # noqa: F401  (registers the env)
+from skidnav.agents.dyna_kinematic import ModelBasedAgent
+from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.registry import load_agent, make_agent
+from skidnav.agents.training import greedy_rollout, train_agent
+from skidnav.envs.mazes import dyna_maze
+from skidnav.kernels import kinematic_planning as kp
+from skidnav.kernels.navigation import transition
+from skidnav.robot.params import RobotParams
+from skidnav.robot.slip import SlipField
+from skidnav.world.discretization import Discretization
+from skidnav.world.grid import GridMap, border_walls
+
+MODEL_BASED = ("dyna-kinematic", "trajectory-prioritized", "dyna-full")
+SMALL = {
+    "epsilon": 0.2,
+    "epsilon_decay": 0.95,
+    "epsilon_min": 0.01,
+    "alpha": 0.5,
+    "planning_steps": 10,
+}
+
+
+def small_env() -> gym.Env[Any, Any]:
+    """A 9 × 9-cell, 10-heading arena of 0.25 m × 0.25 m without slip (deterministic)."""
+    robot = RobotParams(arena_width=0.25, arena_height=0.25)
+    grid = Discretization(
+        n_x=9, n_y=9, n_headings=10, regions_x=2, regions_y=2, arena_width=0.25, arena_height=0.25
+    )
+    grid_map = GridMap(occupancy=border_walls((9, 9)), start=(2, 2), goal=(3, 6))
+    slip = SlipField(
+        eta=np.zeros((2, 2)), x_icr=np.full((2, 2), 0.05), drift_phase=np.zeros((2, 2))
+    )
+    return gym.make(
+        "skidnav/SkidSteerNav-v0", grid_map=grid_map, robot=robot, discretization=grid,
+        slip_field=slip, max_episode_steps=200,
+    )  # fmt: skip
+
+
+def shortest_path_length(env: gym.Env[Any, Any], limit: int = 7) -> int:
+    """Fewest actions from the start to the goal, by exhaustive search of the deterministic
+    simulator (action sequences up to ``limit``)."""
+    nav: Any = env.unwrapped
+    noise, log = np.zeros(20), np.zeros((10, 6))
+    frontier = [nav.start_pose()]
+    for depth in range(1, limit + 1):
+        successors = []
+        for pose in frontier:
+            for action in range(4):
+                moved = pose.copy()
+                if transition(nav.task, moved, action, 0.0, noise, log).terminated:
+                    return depth
+                successors.append(moved)
+        frontier = successors
+    raise AssertionError("no path within the limit")
+
+
+def make(name: str, env: gym.Env[Any, Any], seed: int, **options: Any) -> Any:
+    context = {"task": env.unwrapped.task} if name in MODEL_BASED else {}  # type: ignore[attr-defined]
+    config = {**SMALL, **options}
+    if name == "q-learning":
+        config.pop("planning_steps")
+    n_states = int(env.observation_space.n)  # type: ignore[attr-defined]
+    return make_agent(name, n_states, 4, config, np.random.default_rng(seed), **context)
+
+
+@pytest.mark.parametrize("name", MODEL_BASED)
+def test_each_finds_the_shortest_path_on_a_small_skidnav_map(name: str) -> None:
+    env = small_env()
+    optimum = shortest_path_length(env)
+    # One fixed seed: on this aliased map trajectory-prioritized alone also settles on 6–11-action
+    # paths for other seeds (docs/agents/trajectory-prioritized.md, "Measured").
+    agent = make(name, env, seed=0)
+    train_agent_fast(agent, env, 60, seed=0)
+    assert greedy_rollout(agent, small_env(), 50) == optimum == 5
+
+
+@pytest.mark.parametrize("name", MODEL_BASED)
+def test_without_geometry_they_still_solve_the_dyna_maze(name: str) -> None:
+    options = {"alpha": 0.1, "gamma": 0.95, "epsilon": 0.1, "initial_q": 1.0, "planning_steps": 20}
+    agent = make_agent(name, 54, 4, options, np.random.default_rng(3))
+    assert isinstance(agent, ModelBasedAgent) and agent.kinematic is None
+    train_agent(agent, dyna_maze(), 40, seed=3)
+    assert greedy_rollout(agent, dyna_maze(), 100) == 14
+
+
+def test_model_based_agents_need_fewer_steps_than_q_learning() -> None:
+    """Real steps spent in 40 episodes on the small map, mean over 3 seeds."""
+    steps = {}
+    for name in ("q-learning", *MODEL_BASED):
+        totals = []
+        for seed in range(3):
+            env = small_env()
+            totals.append(train_agent_fast(make(name, env, seed), env, 40, seed=seed).lengths.sum())
+        steps[name] = float(np.mean(totals))
+    for name in MODEL_BASED:
+        assert steps[name] < 0.8 * steps["q-learning"], steps
+
+
+def test_loop_erasure_keeps_a_chain_of_real_transitions() -> None:
+    # states 1 → 2 → 3 → 2 → 4 → 1 → 5 (actions = step index), 4 actions
+    states = [1, 2, 3, 2, 4, 1, 5]
+    keys = np.array([s * 4 + k % 4 for k, s in enumerate(states)], dtype=np.int64)
+    erased = kp.loop_erase(keys, 4, 10)
+    assert (erased // 4).tolist() == [1, 5]
+    assert erased.tolist() == [keys[5], keys[6]]
+
+
+def test_trajectory_sweeps_run_backward_from_the_goal() -> None:
+    env = small_env()
+    agent = make("dyna-full", env, seed=0)
+    train_agent_fast(agent, env, 15, seed=0)
+    assert 1 <= len(agent.trajectories) <= agent.config.n_trajectories
+    lengths = [t.size for t in agent.trajectories]
+    assert lengths == sorted(lengths)
+    counters = agent.planner.counters
+    sweep = agent.planner.trajectory_keys[: counters[kp.N_TRAJECTORY]]
+    best = agent.trajectories[0]
+    assert sweep[: best.size].tolist() == best[::-1].tolist()
+    neighbours = agent.planner.neighbour_keys[: counters[kp.N_NEIGHBOURS]]
+    assert neighbours.size > 0 and not np.isin(neighbours, sweep).any()
+    assert np.unique(neighbours).size == neighbours.size
+
+
+def test_kinematic_planning_values_pairs_never_visited() -> None:
+    values = {}
+    for name in ("dyna-q", "dyna-kinematic"):
+        env = small_env()
+        agent = make(name, env, seed=1)
+        train_agent_fast(agent, env, 5, seed=1)
+        visited = np.zeros(agent.q.size, dtype=bool)
+        visited[agent.model.visited_pairs()] = True
+        values[name] = int(np.count_nonzero(agent.q.ravel()[~visited]))
+    assert values["dyna-q"] == 0
+    assert values["dyna-kinematic"] > 100
+
+
+def test_walls_guessed_from_collisions_are_real_walls() -> None:
+    env = gym.make("skidnav/SkidSteerNav-v0", map_kind="obstacles", world_seed=4)
+    agent = make("dyna-kinematic", env, seed=0)
+    train_agent_fast(agent, env, 5, seed=0, max_steps=300)
+    walls = agent.planner.walls
+    assert walls.sum() >= 5
+    assert env.unwrapped.grid_map.occupancy[walls].all()  # type: ignore[attr-defined]
+
+
+@pytest.mark.parametrize("name", MODEL_BASED)
+def test_save_load_round_trip_continues_identically(name: str, tmp_path: Path) -> None:
+    env = small_env()
+    agent = make(name, env, seed=2)
+    train_agent_fast(agent, env, 12, seed=2)
+    agent.save(tmp_path / "agent")
+    loaded = load_agent(tmp_path / "agent")  # geometry comes from the file, no context needed
+    assert np.array_equal(loaded.q, agent.q)
+    assert [t.tolist() for t in loaded.trajectories] == [t.tolist() for t in agent.trajectories]
+    for field in kp.PlannerArrays._fields[:6]:
+        assert np.array_equal(getattr(loaded.planner, field), getattr(agent.planner, field)), field
+    twin = copy.deepcopy(env)
+    train_agent_fast(agent, env, 3)
+    train_agent_fast(loaded, twin, 3)
+    assert np.array_equal(loaded.q, agent.q)
+    assert loaded.planning_updates == agent.planning_updates

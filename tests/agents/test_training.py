@@ -1,0 +1,81 @@
+"""The plain training loop on Gymnasium's toy-text envs and on the mazes."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+
+from skidnav.agents.registry import make_agent
+from skidnav.agents.training import TrainingLog, train_agent, train_for_steps
+from skidnav.envs.mazes import blocking_maze, dyna_maze
+
+
+def test_log_fields_on_frozen_lake() -> None:
+    env = gym.make("FrozenLake-v1", is_slippery=True)
+    agent = make_agent("dyna-q", 16, 4, {"planning_steps": 3}, np.random.default_rng(0))
+    log = train_agent(
+        agent, env, 40, max_steps=30, greedy_eval_env=gym.make("FrozenLake-v1"), seed=0
+    )
+    assert isinstance(log, TrainingLog)
+    assert all(len(column) == 40 for column in log)
+    assert log.lengths.max() <= 30
+    # Terminated = goal or hole; an episode that did not terminate ran into the 30-step limit.
+    assert log.successes[log.returns > 0].all()
+    assert (log.successes | (log.lengths == 30)).all()
+    assert log.planning_updates.sum() == agent.planning_updates == 3 * log.lengths.sum()
+    assert (log.collisions == 0).all() and (log.wall_time > 0).all()
+    assert (
+        (log.greedy_lengths == -1) | ((log.greedy_lengths >= 1) & (log.greedy_lengths <= 30))
+    ).all()
+
+
+def test_cliff_walking_learns_the_cliff_path() -> None:
+    env = gym.make("CliffWalking-v1")
+    agent = make_agent(
+        "dyna-q", 48, 4, {"planning_steps": 10, "alpha": 0.5}, np.random.default_rng(1)
+    )
+    log = train_agent(agent, env, 60, max_steps=500, greedy_eval_env=gym.make("CliffWalking-v1"))
+    assert log.greedy_lengths[-1] == 13  # Q-learning's optimal path along the cliff
+
+
+def test_taxi_is_solved_by_dyna_q() -> None:
+    env = gym.make("Taxi-v4")
+    agent = make_agent(
+        "dyna-q", 500, 6, {"planning_steps": 10, "alpha": 0.5}, np.random.default_rng(2)
+    )
+    log = train_agent(agent, env, 250, max_steps=200, seed=2)
+    assert log.successes[-20:].mean() > 0.9
+    assert log.returns[-20:].mean() > 0
+
+
+def test_truncation_by_max_steps_reaches_the_agent() -> None:
+    seen: list[tuple[bool, bool]] = []
+
+    class Recorder:
+        planning_updates = 0
+
+        def act(self, state: int) -> int:
+            return 2  # left: never reaches the goal
+
+        def greedy_action(self, state: int) -> int:
+            return 2
+
+        def observe(self, *args: object) -> None:
+            seen.append((bool(args[4]), bool(args[5])))
+
+        def end_episode(self) -> None:
+            seen.append((False, False))
+
+    log = train_agent(Recorder(), dyna_maze(), 2, max_steps=4, greedy_eval_env=dyna_maze())
+    assert log.lengths.tolist() == [4, 4] and not log.successes.any()
+    assert seen[:5] == [(False, False)] * 3 + [(False, True), (False, False)]
+    assert log.greedy_lengths.tolist() == [-1, -1]
+
+
+def test_train_for_steps_counts_cumulative_reward() -> None:
+    env = blocking_maze(change_after=300)
+    agent = make_agent("dyna-q", 54, 4, {"planning_steps": 10}, np.random.default_rng(0))
+    cumulative = train_for_steps(agent, env, 600, seed=0)
+    assert cumulative.shape == (600,) and np.all(np.diff(cumulative) >= 0)
+    assert cumulative[-1] == agent.episodes  # +1 per goal reached
+    assert env.total_steps == 600 and env.walls[3, 8] and not env.walls[3, 0]

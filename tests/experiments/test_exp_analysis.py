@@ -1,0 +1,81 @@
+"""Comparisons with the baseline and the thesis verdicts on synthetic per-run summaries."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from skidnav.experiments.analysis import aggregate, compare_surfaces, compare_to_baseline
+from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec
+from skidnav.experiments.reproduction import reproduction_section
+
+CONFIG = ExperimentConfig(
+    "synthetic",
+    (AgentSpec("q-learning", "Q"), AgentSpec("dyna-q", "D")),
+    (MapSpec("m", "free"),),
+    presets=("rough", "slippery"),
+    seeds=30,
+    bootstrap_samples=500,
+)
+
+
+def _summaries(seed: int = 0) -> pd.DataFrame:
+    rng = np.random.default_rng(seed)
+    rows = []
+    for preset, rate in (("rough", 0.8), ("slippery", 0.4)):
+        for s in range(30):
+            base = rng.uniform(80, 120)
+            length = rng.uniform(10, 14)
+            for agent, factor, gain in (("Q", 1.0, 0.0), ("D", 0.25, 0.1)):
+                rows.append({
+                    "agent": agent, "map": "m", "preset": preset, "seed": s,
+                    "convergence_episode": base * factor,
+                    "convergence_episode_robust": base * factor,
+                    "convergence_episode_training": base * factor,
+                    "converged": 1.0, "first_success_episode": 1.0,
+                    "final_length_actions": length, "final_length_m": length * 0.04,
+                    "success_rate": rate * (1 - gain) + gain, "success_rate_last10": rate,
+                    "mean_return": -10.0, "collisions_per_episode": 1.0,
+                    "planning_updates": 0.0, "wall_time": 1.0,
+                })  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def test_speedup_gain_and_length_difference() -> None:
+    table = compare_to_baseline(_summaries(), CONFIG)
+    assert len(table) == 2 and set(table["agent"]) == {"D"}
+    row = table[table["preset"] == "rough"].iloc[0]
+    assert row["speedup"] == pytest.approx(4.0) and row["speedup_low"] == pytest.approx(4.0)
+    assert row["success_gain"] == pytest.approx(0.1 * (1 - 0.8))
+    assert row["length_difference"] == 0.0 and row["length_no_difference"]
+    assert row["length_pairs"] == 30 and row["baseline_converged"] == 1.0
+
+
+def test_aggregate_has_intervals_around_estimates() -> None:
+    table = aggregate(_summaries(), CONFIG)
+    assert set(table["metric"]) >= {"convergence_episode", "success_rate"}
+    assert (table["mean_low"] <= table["mean"] + 1e-9).all()
+    assert (table["mean"] <= table["mean_high"] + 1e-9).all()
+    assert (table["n"] == 30).all()
+
+
+def test_surfaces_ratio_and_verdicts() -> None:
+    summaries = _summaries()
+    surfaces = compare_surfaces(summaries, CONFIG)
+    q = surfaces[(surfaces["agent"] == "Q") & (surfaces["metric"] == "success_rate")].iloc[0]
+    assert q["ratio"] == pytest.approx(2.0)
+    text = reproduction_section(compare_to_baseline(summaries, CONFIG), surfaces, summaries, CONFIG)
+    assert "4.00×" in text and "no difference found" in text
+    assert "mixed: 2× within 1 of 2" in text  # D's ratio (0.82 / 0.46) excludes 2
+
+
+def test_few_pairs_make_the_length_claim_inconclusive() -> None:
+    summaries = _summaries()
+    summaries.loc[
+        (summaries["agent"] == "Q") & (summaries["seed"] >= 5), "final_length_actions"
+    ] = np.nan
+    comparisons = compare_to_baseline(summaries, CONFIG)
+    assert (comparisons["length_pairs"] == 5).all()
+    text = reproduction_section(comparisons, pd.DataFrame(), summaries, CONFIG)
+    assert "inconclusive" in text

@@ -1,0 +1,188 @@
+"""Helpers for the real-time tests: sim servers (in-process and as a subprocess), run
+subprocesses, and readers for their JSON-lines logs (fixtures in conftest.py)."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from skidnav.realtime import protocol as pr
+from skidnav.realtime.sim_robot import SimRobotConfig, build_robot, warm_up
+from skidnav.realtime.sim_server import EventLog, ServerOptions, SimServer, bind_listener
+
+SRC = str(Path(__file__).resolve().parents[2] / "src")
+
+
+def cli_env() -> dict[str, str]:
+    """The environment for ``python -m skidnav.cli`` subprocesses."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [SRC, env.get("PYTHONPATH")]))
+    return env
+
+
+def read_events(path: Path) -> list[dict[str, Any]]:
+    """The records of a JSON-lines log (a torn last line is ignored)."""
+    if not path.exists():
+        return []
+    records = []
+    for line in path.read_text(encoding="utf-8").splitlines():
+        try:
+            records.append(json.loads(line))
+        except json.JSONDecodeError:
+            continue
+    return records
+
+
+def wait_for(predicate: Callable[[], bool], timeout: float, what: str) -> None:
+    """Poll ``predicate`` every 10 ms; fail the test after ``timeout`` seconds."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(0.01)
+    pytest.fail(f"timed out waiting for {what}")
+
+
+class ServerThread:
+    """A :class:`SimServer` serving TCP on a loopback port (a free one by default) in a
+    background thread, optionally logging to ``log`` and injecting ``faults``."""
+
+    def __init__(
+        self,
+        time_scale: float = 10.0,
+        *,
+        log: Path | None = None,
+        faults: tuple[str, ...] = (),
+        map_spec: str = "free",
+        port: int = 0,
+        **robot_options: Any,
+    ) -> None:
+        config = SimRobotConfig(**robot_options)
+        self.robot = build_robot(
+            slip="rough", drift=0.0, drift_period=600.0, map_spec=map_spec, seed=0, config=config
+        )
+        warm_up(self.robot)
+        self.log = log
+        self._stream = log.open("a", encoding="utf-8") if log else None
+        options = ServerOptions(time_scale=time_scale, faults=faults)
+        self.server = SimServer(self.robot, options, EventLog(self._stream))
+        self.listener = bind_listener("127.0.0.1", port)
+        self.port = int(self.listener.getsockname()[1])
+        self.thread = threading.Thread(target=self.server.serve_tcp, args=(self.listener,))
+
+    def __enter__(self) -> ServerThread:
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.server.shutdown.set()
+        self.thread.join(timeout=5)
+        self.listener.close()
+        if self._stream is not None:
+            self._stream.close()
+
+    def events(self) -> list[dict[str, Any]]:
+        assert self.log is not None
+        return read_events(self.log)
+
+
+class RawClient:
+    """A bare socket speaking the protocol, for poking at the server."""
+
+    def __init__(self, port: int) -> None:
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=2.0)
+        self.buffer = pr.LineBuffer()
+        self.seq = 0
+
+    def send(self, build: Callable[[int], pr.Message]) -> int:
+        seq = self.seq
+        self.sock.sendall(pr.encode(build(seq)))
+        self.seq += 1
+        return seq
+
+    def receive_until(self, kind: type[pr.Message], timeout: float = 2.0) -> pr.Message:
+        """The next message of type ``kind`` (others are skipped)."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            for line in self.buffer.lines():
+                message = pr.decode(line)
+                if isinstance(message, kind):
+                    return message
+            self.sock.settimeout(max(0.01, deadline - time.monotonic()))
+            data = self.sock.recv(4096)
+            if not data:
+                raise ConnectionError("closed")
+            self.buffer.feed(data)
+        raise TimeoutError(f"no {kind.__name__}")
+
+    def latest_pose(self, window: float = 0.03) -> pr.PoseReport:
+        """The newest pose received within ``window`` seconds (what is buffered included)."""
+        newest = None
+        deadline = time.monotonic() + window
+        while (remaining := deadline - time.monotonic()) > 0:
+            try:
+                newest = self.receive_until(pr.PoseReport, timeout=remaining)
+            except (TimeoutError, OSError):
+                break
+        assert isinstance(newest, pr.PoseReport)
+        return newest
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+class ServerProcess:
+    """``skidnav robot sim-server`` as a subprocess with its command log."""
+
+    def __init__(self, log: Path, *arguments: str, port: int = 0) -> None:
+        command = [sys.executable, "-m", "skidnav.cli", "robot", "sim-server", "--port", str(port)]
+        command += ["--log", str(log), *arguments]
+        self.log = log
+        self.process = subprocess.Popen(command, stdout=subprocess.PIPE, text=True, env=cli_env())
+        assert self.process.stdout is not None
+        line = self.process.stdout.readline()
+        assert line.startswith("listening on "), line
+        self.port = int(line.rsplit(":", 1)[1])
+
+    def signal(self, signum: int) -> None:
+        self.process.send_signal(signum)
+
+    def stop(self) -> None:
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGTERM)
+            try:
+                self.process.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        if self.process.stdout is not None:
+            self.process.stdout.close()
+
+    def events(self) -> list[dict[str, Any]]:
+        return read_events(self.log)
+
+
+def start_run(tmp_path: Path, *arguments: str) -> subprocess.Popen[str]:
+    """``skidnav robot run`` as a subprocess writing to ``tmp_path / "out"``."""
+    command = [sys.executable, "-m", "skidnav.cli", "robot", "run", "--quiet"]
+    command += ["--out", str(tmp_path / "out"), *arguments]
+    return subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=cli_env()
+    )
+
+
+def write_config(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "realtime.toml"
+    path.write_text(text, encoding="utf-8")
+    return path

@@ -1,0 +1,65 @@
+"""Drivers by name and the agent context of a run."""
+
+from __future__ import annotations
+
+import pytest
+
+from skidnav.errors import UserError
+from skidnav.realtime.config import config_from_mapping
+from skidnav.realtime.drivers import SimDriver, make_driver
+from skidnav.realtime.line_client import LineClient, SerialLink, TcpLink
+from skidnav.realtime.run import agent_context
+from skidnav.robot.params import RobotParams
+from skidnav.world.discretization import Discretization
+
+
+def test_line_drivers_take_their_tables() -> None:
+    config = config_from_mapping(
+        {"tcp": {"host": "127.0.0.2", "port": 6000}, "serial": {"url": "loop://", "baudrate": 9600}}
+    )
+    tcp = make_driver("tcp", config)
+    assert isinstance(tcp, LineClient) and isinstance(tcp.link, TcpLink)
+    assert (tcp.link.host, tcp.link.port) == ("127.0.0.2", 6000)
+    serial = make_driver("serial", config)
+    assert isinstance(serial, LineClient) and isinstance(serial.link, SerialLink)
+    assert (serial.link.url, serial.link.baudrate) == ("loop://", 9600)
+
+
+def test_sim_driver_passes_the_run_to_the_server() -> None:
+    config = config_from_mapping(
+        {"run": {"time_scale": 7.0, "map": "maze", "seed": 5}, "sim": {"slip": "slippery"}}
+    )
+    driver = make_driver("sim", config)
+    assert isinstance(driver, SimDriver)
+    arguments = driver.server.arguments
+    for flag, value in (
+        ("--time-scale", "7.0"),
+        ("--map", "maze"),
+        ("--seed", "5"),
+        ("--slip", "slippery"),
+    ):
+        assert arguments[arguments.index(flag) + 1] == value
+
+
+def test_ros2_driver_is_built_by_name_when_installed() -> None:
+    pytest.importorskip("skidnav.realtime.ros2")
+    driver = make_driver("ros2", config_from_mapping({"ros2": {"port": 9999}}))
+    assert type(driver).__name__ == "Ros2Driver"
+    with pytest.raises(UserError, match=r"\[ros2\]"):
+        make_driver("ros2", config_from_mapping({"ros2": {"no_such_option": 1}}))
+
+
+def test_unknown_driver_and_unknown_tables_are_user_errors() -> None:
+    with pytest.raises(UserError, match="unknown driver"):
+        make_driver("carrier-pigeon", config_from_mapping({}))
+    with pytest.raises(UserError, match="unknown config table"):
+        config_from_mapping({"rnu": {}})
+    with pytest.raises(UserError, match="unknown option"):
+        config_from_mapping({"run": {"episode": 3}})
+
+
+def test_model_based_agents_get_the_geometry() -> None:
+    robot, grid = RobotParams(), Discretization()
+    assert agent_context("q-learning", robot, grid) == {}
+    context = agent_context("dyna-kinematic", robot, grid)
+    assert context == {"robot": robot, "discretization": grid}

@@ -1,0 +1,103 @@
+"""Homing on the simulated robot, kinematic log rows from poses, rewards, wheel-speed stats."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from skidnav.realtime.arena import build_map, seed_streams, start_pose
+from skidnav.realtime.driver import Pose
+from skidnav.realtime.homing import HomingController
+from skidnav.realtime.sim_robot import SimRobotConfig, build_robot
+from skidnav.realtime.transition import WheelSpeedStats, log_row, reward_of
+from skidnav.robot.kinematics import body_velocities, euler_step
+from skidnav.robot.params import RobotParams
+from skidnav.world.discretization import Discretization
+
+GRID = Discretization()
+
+
+@pytest.mark.parametrize(
+    ("spec", "slip", "seed"),
+    [("free", "rough", 0), ("obstacles", "slippery", 1), ("obstacles", "rough", 3)],
+)
+def test_homing_brings_the_robot_to_the_start_state(spec: str, slip: str, seed: int) -> None:
+    robot = build_robot(
+        slip=slip,
+        drift=0.0,
+        drift_period=600.0,
+        map_spec=spec,
+        seed=seed,
+        config=SimRobotConfig(pose_noise=0.001),
+    )
+    grid_map = build_map(spec, seed, GRID)
+    rng = np.random.default_rng(seed)
+    free = np.argwhere(~grid_map.occupancy)
+    i, j = free[int(rng.integers(len(free)))]
+    robot.pose = (*GRID.cell_centre(int(i), int(j)), float(rng.uniform(-3, 3)))
+    controller = HomingController(grid_map, GRID, 1.7, tolerance=0.008)
+    for _ in range(3000):
+        measured = robot.measured_pose()
+        assert measured is not None
+        command = controller.command(Pose(0.0, *measured))
+        if command is None:
+            break
+        robot.command(*command)
+        robot.step()
+    else:
+        pytest.fail("homing did not finish in 300 s of robot time")
+    assert GRID.state(*robot.pose) == GRID.state(*start_pose(grid_map, GRID))
+
+
+def test_log_row_recovers_the_body_twist_of_an_euler_step() -> None:
+    robot = RobotParams()
+    v_x, v_y, yaw_rate = body_velocities(1.2, 1.7, 0.03, robot.wheel_radius, robot.half_track)
+    before = Pose(10.0, 0.3, 0.2, 2.5)
+    x, y, heading = euler_step(before.x, before.y, before.heading, v_x, v_y, yaw_rate, 0.1)
+    row = log_row(before, Pose(10.05, x, y, heading), 0.1, 17, (1.2, 1.7))
+    assert row is not None
+    assert row.tolist() == pytest.approx([17, 1.2, 1.7, v_x, v_y, yaw_rate], abs=1e-12)
+    assert log_row(before, before, 0.0, 17, (1.2, 1.7)) is None
+
+
+def test_log_row_wraps_the_heading_difference() -> None:
+    row = log_row(
+        Pose(0, 0.3, 0.2, math.pi - 0.01), Pose(1, 0.3, 0.2, -math.pi + 0.01), 0.1, 0, (0.0, 0.0)
+    )
+    assert row is not None and row[5] == pytest.approx(0.2)
+
+
+def test_wheel_speed_stats_match_numpy_variance() -> None:
+    robot = RobotParams()
+    stats = WheelSpeedStats(49, robot)
+    rng = np.random.default_rng(0)
+    left, right = 1.7 - rng.uniform(0, 0.5, 50), 1.7 - rng.uniform(0, 0.5, 50)
+    yaw_rate = robot.wheel_radius * (right - left) / (2 * robot.half_track)
+    v_x = robot.wheel_radius * (right + left) / 2
+    rows = np.column_stack([np.full(50, 5.0), left, right, v_x, np.zeros(50), yaw_rate])
+    stats.add_rows(rows)
+    expected = np.var(np.column_stack([left, right]).ravel(), ddof=1)
+    assert stats.variance(5) == pytest.approx(expected)
+    assert stats.variance(6) == 0.0
+
+
+def test_reward_rule_matches_the_env() -> None:
+    grid_map = build_map("free", 0, GRID)
+    stats = WheelSpeedStats(GRID.n_regions, RobotParams())
+    goal = Pose(0, *GRID.cell_centre(*grid_map.goal), 0.0)
+    assert reward_of(goal, True, grid_map.goal, GRID, stats) == (10.0, True)
+    elsewhere = Pose(0, *GRID.cell_centre(*grid_map.start), 0.0)
+    assert reward_of(elsewhere, True, grid_map.goal, GRID, stats) == (-10.0, False)
+    assert reward_of(elsewhere, False, grid_map.goal, GRID, stats) == (-1.0, False)
+    region = GRID.region(elsewhere.x, elsewhere.y)
+    stats.add(region, 1.0)
+    stats.add(region, 2.0)
+    assert reward_of(elsewhere, False, grid_map.goal, GRID, stats) == (-1.0 - 10 * 0.5, False)
+
+
+def test_seed_streams_are_independent_and_reproducible() -> None:
+    a, b = seed_streams(4), seed_streams(4)
+    assert a["map"].random() == b["map"].random()
+    assert a["agent"].random() != a["slip"].random()

@@ -1,0 +1,106 @@
+"""The TCP and serial drivers against the sim server (thread, pty) and a misbehaving peer."""
+
+from __future__ import annotations
+
+import os
+import socket
+import threading
+import time
+
+import pytest
+from realtime_helpers import ServerThread, wait_for
+
+from skidnav.realtime import protocol as pr
+from skidnav.realtime.line_client import LineClient, SerialLink, TcpLink
+from skidnav.realtime.sim_server import FdChannel
+
+
+def test_tcp_client_drives_the_sim_robot_and_stops_it(server_thread: ServerThread) -> None:
+    client = LineClient(TcpLink("127.0.0.1", server_thread.port))
+    client.connect()
+    try:
+        assert client.robot_period == pytest.approx(0.1)
+        wait_for(lambda: client.latest_pose() is not None, 1.0, "a first pose")
+        first = client.latest_pose()
+        assert first is not None
+        client.command(-1.7, -1.7)
+        time.sleep(0.15)
+        moved = client.latest_pose()
+        assert moved is not None and moved.x < first.x - 0.02
+        assert moved.stamp > first.stamp  # stamped on our monotonic clock at receipt
+        assert client.stop() is True
+        assert server_thread.robot.wheels == (0.0, 0.0)
+        assert client.fault is None
+    finally:
+        client.close()
+
+
+def test_connect_to_nothing_raises_connection_error() -> None:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    with pytest.raises(ConnectionError):
+        LineClient(TcpLink("127.0.0.1", port, connect_timeout=0.5)).connect()
+
+
+def fake_robot(listener: socket.socket, script: list[bytes]) -> None:
+    """Accept one client, answer its hello, then send the scripted lines 50 ms apart."""
+    conn, _ = listener.accept()
+    with conn:
+        conn.recv(4096)
+        conn.sendall(pr.encode(pr.Hello(seq=0, name="fake", period=0.1)))
+        for line in script:
+            time.sleep(0.05)
+            conn.sendall(line)
+        time.sleep(0.3)
+
+
+@pytest.mark.parametrize(
+    ("script", "fault"),
+    [
+        ([b"\xff\xfe\x00junk\n"], "malformed"),
+        ([b"x" * 3000 + b"\n"], "malformed"),
+        ([pr.encode(pr.Error(seq=1, code="state", message="no"))], "robot error"),
+        ([], "link lost"),
+    ],
+)
+def test_faults_reach_the_callback_at_once(script: list[bytes], fault: str) -> None:
+    listener = socket.create_server(("127.0.0.1", 0))
+    thread = threading.Thread(target=fake_robot, args=(listener, script))
+    thread.start()
+    client = LineClient(TcpLink("127.0.0.1", listener.getsockname()[1]))
+    seen: list[tuple[str, float]] = []
+    client.on_fault = lambda reason: seen.append((reason, time.monotonic()))
+    try:
+        client.connect()
+        wait_for(lambda: bool(seen), 2.0, "a fault")
+        assert seen[0][0].startswith(fault)
+        assert client.fault == seen[0][0]
+    finally:
+        client.close()
+        thread.join()
+        listener.close()
+
+
+def test_serial_client_over_a_pty_pair() -> None:
+    master, slave = os.openpty()
+    with ServerThread(time_scale=10.0) as holder:  # borrow its robot; serve it over the pty
+        holder.server.shutdown.set()
+        holder.thread.join()
+        server = holder.server
+        server.shutdown.clear()
+        thread = threading.Thread(target=server.serve_channel, args=(FdChannel(master),))
+        thread.start()
+        client = LineClient(SerialLink(os.ttyname(slave)))
+        try:
+            client.connect()
+            wait_for(lambda: client.latest_pose() is not None, 1.0, "a pose over serial")
+            client.command(-1.7, -1.7)
+            wait_for(lambda: server.robot.wheels == (-1.7, -1.7), 1.0, "the command")
+            assert client.stop() is True
+            assert server.robot.wheels == (0.0, 0.0)
+        finally:
+            client.close()
+            server.shutdown.set()
+            thread.join(timeout=5)
+            os.close(slave)
