@@ -1,7 +1,8 @@
 """``skidnav robot``: the real-time platform (docs/realtime.md).
 
 ``skidnav robot sim-server`` runs the simulated robot server; ``skidnav robot run`` runs an agent
-in real time against a robot driver.
+in real time against a robot driver; ``skidnav robot study`` runs agents × presets × seeds against
+the sim server and tabulates success (realtime/study.py).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ def add_parser(subparsers: Any) -> None:
     commands = robot.add_subparsers(dest="robot_command", required=True)
     _add_sim_server(commands)
     _add_run(commands)
+    _add_study(commands)
 
 
 def _add_sim_server(commands: Any) -> None:
@@ -129,4 +131,43 @@ def _run_loop(args: argparse.Namespace) -> int:
     if not args.quiet:
         print(file=sys.stderr)
     print(summary)
+    return code
+
+
+def _add_study(commands: Any) -> None:
+    study = commands.add_parser(
+        "study", help="hardware-in-the-loop study: agents × presets × seeds on the sim server"
+    )
+    study.add_argument("--config", type=Path, required=True, help="configs/realtime.toml")
+    study.add_argument("--agents", help="comma-separated agent names ([study] agents)")
+    study.add_argument("--presets", help="comma-separated preset names ([study] presets)")
+    study.add_argument("--episodes", type=int, help="episodes per run (default: the preset's)")
+    study.add_argument("--time-scale", type=float, help="robot s per wall s of the sim server")
+    study.add_argument("--seeds", type=int, help="runs per agent × preset ([study] seeds)")
+    study.add_argument("--out", type=Path, required=True, help="output directory")
+    study.add_argument("--quiet", action="store_true", help="no live progress line")
+    study.set_defaults(func=_run_study)
+
+
+def _run_study(args: argparse.Namespace) -> int:
+    from skidnav.realtime.study import load_study, run_study
+
+    overrides = {
+        "agents": args.agents,
+        "presets": args.presets,
+        "episodes": args.episodes,
+        "time_scale": args.time_scale,
+        "seeds": args.seeds,
+    }
+    tables, settings = load_study(args.config, overrides)
+
+    def progress(line: str) -> None:
+        if not args.quiet:
+            print(f"\r{line:<79}", end="", file=sys.stderr, flush=True)
+
+    def announce(line: str) -> None:
+        print(f"\r{line:<79}", file=sys.stderr, flush=True)
+
+    code, records = run_study(tables, settings, args.out, progress=progress, announce=announce)
+    print(f"{len(records)} runs finished; tables in {args.out / 'study.md'}")
     return code

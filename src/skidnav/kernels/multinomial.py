@@ -186,72 +186,117 @@ def model_observe(
 
 
 @inline_jit
-def outcome_target(model: MultinomialArrays, q: np.ndarray, entry: int, gamma: float) -> float:
-    """TD target of one outcome: ``r̄ + γ · (1 − β) · max_a q[s′, a]``."""
-    count = model.entry_count[entry]
-    reward = model.entry_reward_sum[entry] / count
-    continuation = 1.0 - model.entry_terminal_count[entry] / count
-    return td_target(q, reward, model.entry_next_state[entry], continuation, gamma)
+def entry_target(
+    q: np.ndarray,
+    count: int,
+    reward_sum: float,
+    terminal_count: int,
+    next_state: int,
+    gamma: float,
+) -> float:
+    """TD target of one outcome from its statistics: ``r̄ + γ · (1 − β) · max_a q[s′, a]`` with
+    ``r̄ = reward_sum / count`` and ``β = terminal_count / count``. Takes scalars, not the model's
+    arrays: an array bound to an inlined helper's parameter is reference-counted at every call
+    unless numba prunes it, which in the planning loops cost more than the update itself."""
+    reward = reward_sum / count
+    continuation = 1.0 - terminal_count / count
+    return td_target(q, reward, next_state, continuation, gamma)
 
 
 @inline_jit
-def _nth_with_count(model: MultinomialArrays, pair: int, count: int, index: int) -> int:
+def _nth_with_count(
+    pair_head: np.ndarray,
+    entry_count: np.ndarray,
+    entry_sibling: np.ndarray,
+    pair: int,
+    count: int,
+    index: int,
+) -> int:
     """The ``index``-th (0-based) outcome of ``pair`` whose count is ``count``."""
-    entry = model.pair_head[pair]
+    entry = pair_head[pair]
     while entry >= 0:
-        if model.entry_count[entry] == count:
+        if entry_count[entry] == count:
             if index == 0:
                 return entry
             index -= 1
-        entry = model.entry_sibling[entry]
+        entry = entry_sibling[entry]
     return -1
 
 
 @inline_jit
-def most_probable_entry(model: MultinomialArrays, pair: int, uniform: float) -> int:
+def most_probable_entry(
+    pair_head: np.ndarray,
+    entry_count: np.ndarray,
+    entry_sibling: np.ndarray,
+    pair: int,
+    uniform: float,
+) -> int:
     """The outcome of ``pair`` with the largest count; ties broken uniformly by ``uniform``, a
     draw in [0, 1) made by the caller."""
-    counts = model.entry_count
-    siblings = model.entry_sibling
-    entry = model.pair_head[pair]
+    entry = pair_head[pair]
     best_entry = entry
-    best_count = counts[entry]
+    best_count = entry_count[entry]
     n_ties = 1
-    entry = siblings[entry]
+    entry = entry_sibling[entry]
     while entry >= 0:
-        if counts[entry] > best_count:
+        if entry_count[entry] > best_count:
             best_entry = entry
-            best_count = counts[entry]
+            best_count = entry_count[entry]
             n_ties = 1
-        elif counts[entry] == best_count:
+        elif entry_count[entry] == best_count:
             n_ties += 1
-        entry = siblings[entry]
+        entry = entry_sibling[entry]
     if n_ties == 1:
         return best_entry
-    return _nth_with_count(model, pair, best_count, int(uniform * n_ties))
+    index = int(uniform * n_ties)
+    return _nth_with_count(pair_head, entry_count, entry_sibling, pair, best_count, index)
 
 
 @inline_jit
-def sample_entry(model: MultinomialArrays, pair: int, uniform: float) -> int:
+def sample_entry(
+    pair_head: np.ndarray,
+    pair_total: np.ndarray,
+    entry_count: np.ndarray,
+    entry_sibling: np.ndarray,
+    pair: int,
+    uniform: float,
+) -> int:
     """An outcome of ``pair`` drawn with probability N(s, a, s′)/N(s, a) by ``uniform`` ∈ [0, 1)."""
-    threshold = int(uniform * model.pair_total[pair])
-    entry = model.pair_head[pair]
+    threshold = int(uniform * pair_total[pair])
+    entry = pair_head[pair]
     while True:
-        threshold -= model.entry_count[entry]
-        if threshold < 0 or model.entry_sibling[entry] < 0:
+        threshold -= entry_count[entry]
+        if threshold < 0 or entry_sibling[entry] < 0:
             return entry
-        entry = model.entry_sibling[entry]
+        entry = entry_sibling[entry]
 
 
 @inline_jit
-def expected_target(model: MultinomialArrays, q: np.ndarray, pair: int, gamma: float) -> float:
-    """``Σ_s′ p(s′|s, a) · outcome target`` over every observed outcome of ``pair``."""
-    total = model.pair_total[pair]
+def expected_target(
+    q: np.ndarray,
+    pair_head: np.ndarray,
+    pair_total: np.ndarray,
+    entry_count: np.ndarray,
+    entry_reward_sum: np.ndarray,
+    entry_terminal_count: np.ndarray,
+    entry_next_state: np.ndarray,
+    entry_sibling: np.ndarray,
+    pair: int,
+    gamma: float,
+) -> float:
+    """``Σ_s′ p(s′|s, a) · outcome target`` over every observed outcome of ``pair``, summed in the
+    order of the pair's outcome list."""
+    total = pair_total[pair]
     value = 0.0
-    entry = model.pair_head[pair]
+    entry = pair_head[pair]
     while entry >= 0:
-        value += model.entry_count[entry] / total * outcome_target(model, q, entry, gamma)
-        entry = model.entry_sibling[entry]
+        count = entry_count[entry]
+        outcome = entry_target(
+            q, count, entry_reward_sum[entry], entry_terminal_count[entry],
+            entry_next_state[entry], gamma,
+        )  # fmt: skip
+        value += count / total * outcome
+        entry = entry_sibling[entry]
     return value
 
 
@@ -267,13 +312,25 @@ def model_target(
     """Planning target of an observed pair slot under ``mode`` (MOST_PROBABLE, SAMPLE, EXPECTED).
 
     ``uniform`` is one ``rng.random()`` drawn by the caller: it picks the outcome (SAMPLE) or
-    breaks ties (MOST_PROBABLE); EXPECTED ignores it.
+    breaks ties (MOST_PROBABLE); EXPECTED ignores it. ``SAMPLE`` and ``MOST_PROBABLE`` give
+    ``r̄ + γ · (1 − β) · max_a q[s′, a]`` of the chosen outcome; ``EXPECTED`` gives
+    ``Σ_s′ p(s′|s, a)`` times that, summed in the order of the pair's outcome list.
     """
     if mode == EXPECTED:
-        return expected_target(model, q, pair, gamma)
+        return expected_target(
+            q, model.pair_head, model.pair_total, model.entry_count, model.entry_reward_sum,
+            model.entry_terminal_count, model.entry_next_state, model.entry_sibling, pair, gamma,
+        )  # fmt: skip
+    counts = model.entry_count
     if mode == SAMPLE:
-        return outcome_target(model, q, sample_entry(model, pair, uniform), gamma)
-    return outcome_target(model, q, most_probable_entry(model, pair, uniform), gamma)
+        entry = sample_entry(model.pair_head, model.pair_total, counts, model.entry_sibling, pair,
+                             uniform)  # fmt: skip
+    else:
+        entry = most_probable_entry(model.pair_head, counts, model.entry_sibling, pair, uniform)
+    return entry_target(
+        q, counts[entry], model.entry_reward_sum[entry], model.entry_terminal_count[entry],
+        model.entry_next_state[entry], gamma,
+    )  # fmt: skip
 
 
 @inline_jit

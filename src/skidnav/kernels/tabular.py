@@ -51,8 +51,11 @@ def inline_jit(function: F) -> F:
 
     Used for the small helpers of the hot loops: a non-inlined call that receives arrays (or a
     Generator) costs ~30–300 ns in numba 0.68 (reference counting of every array argument), more
-    than the helper's work. Called from Python it behaves like any compiled function, and with
-    ``NUMBA_DISABLE_JIT=1`` it is the plain function.
+    than the helper's work. Inlining does not remove all of it: every array (or tuple of arrays)
+    bound to a helper parameter, and every view such as ``q[state]``, is still reference-counted
+    each call unless numba can prune the pair. Hot helpers therefore index ``q[state, action]``
+    (no row views) and take only the few arrays they read. Called from Python it behaves like
+    any compiled function, and with ``NUMBA_DISABLE_JIT=1`` it is the plain function.
     """
     return numba.njit(inline="always", cache=True, nogil=True)(function)  # type: ignore
 
@@ -60,11 +63,10 @@ def inline_jit(function: F) -> F:
 @inline_jit
 def max_value(q: np.ndarray, state: int) -> float:
     """``max_a q[state, a]``: the greedy value of ``state``."""
-    row = q[state]
-    best = row[0]
-    for action in range(1, row.shape[0]):
-        if row[action] > best:
-            best = row[action]
+    best = q[state, 0]
+    for action in range(1, q.shape[1]):
+        if q[state, action] > best:
+            best = q[state, action]
     return float(best)
 
 
@@ -116,10 +118,9 @@ def td_update(
 @inline_jit
 def greedy_first(q: np.ndarray, state: int) -> int:
     """The lowest-index action among the maxima of ``q[state]`` (deterministic, draws nothing)."""
-    row = q[state]
     best_action = 0
-    for action in range(1, row.shape[0]):
-        if row[action] > row[best_action]:
+    for action in range(1, q.shape[1]):
+        if q[state, action] > q[state, best_action]:
             best_action = action
     return best_action
 
@@ -130,21 +131,21 @@ def random_argmax(q: np.ndarray, state: int, rng: np.random.Generator) -> int:
 
     Draws one ``rng.random()`` only when there is a tie (two or more maximal actions).
     """
-    row = q[state]
+    n_actions = q.shape[1]
     best = max_value(q, state)
     n_ties = 0
-    for action in range(row.shape[0]):
-        if row[action] == best:
+    for action in range(n_actions):
+        if q[state, action] == best:
             n_ties += 1
     if n_ties == 1:
         return greedy_first(q, state)
     pick = int(rng.random() * n_ties)
-    for action in range(row.shape[0]):
-        if row[action] == best:
+    for action in range(n_actions):
+        if q[state, action] == best:
             if pick == 0:
                 return action
             pick -= 1
-    return row.shape[0] - 1  # unreachable: pick < n_ties
+    return n_actions - 1  # unreachable: pick < n_ties
 
 
 @inline_jit

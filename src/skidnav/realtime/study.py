@@ -1,0 +1,256 @@
+"""Hardware-in-the-loop study: agents × floor/slip presets × seeds against the sim server.
+
+Every (agent, preset, seed) is one real-time run (:class:`skidnav.realtime.loop.RealtimeLoop`
+on the ``sim`` driver, which starts its own server on a free loopback port) written to
+``OUT/runs/AGENT/PRESET/seed-N/`` with the run's usual files plus ``result.json``. A run whose
+``result.json`` exists is skipped, so an interrupted study resumes where it stopped (an unfinished
+run starts over). ``OUT/study.csv`` holds one row per run and ``OUT/study.md`` the tables of
+docs/realtime.md ("Hardware-in-the-loop study"): success rate and mean episode length per agent
+× preset, the rough/slippery success ratio, and model-based minus Q-learning success per floor.
+The comparison mirrors the thesis's real-robot results (SPEC §5, "Thesis results to reproduce":
+model-based ≈ +12 % success; the rough floor about doubles the success of the slippery one).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import logging
+import shutil
+import tomllib
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from skidnav.errors import UserError
+from skidnav.realtime.arena import build_map, seed_streams
+from skidnav.realtime.config import RealtimeConfig, config_from_mapping, with_overrides
+from skidnav.realtime.drivers import make_driver
+from skidnav.realtime.loop import EXIT_INTERRUPTED, RealtimeLoop
+from skidnav.realtime.run import agent_context, interrupt_handlers, warm_up_agent
+from skidnav.realtime.study_report import CSV_FIELDS, markdown_report
+from skidnav.robot.kinematics import N_ACTIONS
+from skidnav.robot.params import RobotParams
+from skidnav.world.discretization import Discretization
+
+log = logging.getLogger(__name__)
+
+__all__ = ["CSV_FIELDS", "RunRecord", "StudySettings", "load_study", "run_study"]
+
+
+@dataclass(frozen=True)
+class StudySettings:
+    """What a study runs, validated on construction.
+
+    Attributes:
+        agents: agent names (registry). presets: ``[presets.NAME]`` tables of the config.
+        seeds: runs per (agent, preset), with root seeds ``seed``, ``seed + 1``, …
+        episodes: episodes per run (None: the preset's ``[run] episodes``).
+        time_scale: robot s per wall s (None: the preset's ``[run] time_scale``).
+    """
+
+    agents: tuple[str, ...] = ("q-learning", "dyna-kinematic")
+    presets: tuple[str, ...] = (
+        "rough-stationary",
+        "slippery-stationary",
+        "rough-drifting",
+        "slippery-drifting",
+    )
+    seeds: int = 1
+    episodes: int | None = None
+    time_scale: float | None = None
+
+    def __post_init__(self) -> None:
+        if not self.agents or not self.presets:
+            raise ValueError(f"expected agents and presets, got {self.agents!r}, {self.presets!r}")
+        if not (isinstance(self.seeds, int) and self.seeds >= 1):
+            raise ValueError(f"expected seeds to be an integer >= 1, got {self.seeds!r}")
+        if self.episodes is not None and not (
+            isinstance(self.episodes, int) and self.episodes >= 1
+        ):
+            raise ValueError(f"expected episodes to be an integer >= 1, got {self.episodes!r}")
+        if self.time_scale is not None and not self.time_scale > 0:
+            raise ValueError(f"expected time_scale > 0, got {self.time_scale!r}")
+
+
+@dataclass(frozen=True)
+class RunRecord:
+    """Outcome of one run (a row of ``study.csv``); ``mean_episode_actions`` is over all its
+    episodes (goal, truncated at ``max_actions`` or aborted alike)."""
+
+    agent: str
+    preset: str
+    seed: int
+    episodes: int
+    successes: int
+    success_rate: float
+    mean_episode_actions: float
+    aborted: int
+
+
+def load_study(path: Path, overrides: Mapping[str, Any]) -> tuple[dict[str, Any], StudySettings]:
+    """(TOML tables without ``[study]``, settings from ``[study]`` with ``overrides`` — keys of
+    :class:`StudySettings`, None values ignored — on top); UserError if unreadable or invalid."""
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, tomllib.TOMLDecodeError) as error:
+        raise UserError(f"{path}: {error}") from None
+    table = dict(data.pop("study", {}))
+    table.update({key: value for key, value in overrides.items() if value is not None})
+    for key in ("agents", "presets"):
+        if isinstance(table.get(key), str):
+            table[key] = [name.strip() for name in table[key].split(",") if name.strip()]
+        if key in table:
+            table[key] = tuple(table[key])
+    try:
+        settings = StudySettings(**table)
+    except (TypeError, ValueError) as error:
+        raise UserError(f"[study]: {error}") from None
+    return data, settings
+
+
+def run_config(
+    tables: Mapping[str, Any], settings: StudySettings, preset: str, seed: int
+) -> RealtimeConfig:
+    """The config of one run: ``preset`` merged over the tables, the study's overrides, ``seed``."""
+    config = config_from_mapping(tables, preset)
+    return with_overrides(
+        config,
+        episodes=settings.episodes,
+        time_scale=settings.time_scale,
+        seed=config.run.seed + seed,
+    )
+
+
+def _check_agents(agents: Sequence[str]) -> None:
+    from skidnav.agents.registry import agent_class
+
+    for name in agents:
+        agent_class(name)  # UserError if unknown
+
+
+def _run_one(
+    config: RealtimeConfig, agent_name: str, out: Path, progress: Callable[[str], None]
+) -> tuple[int, list[Any]]:
+    """One real-time run of a new agent on the ``sim`` driver; (exit code, episode results)."""
+    from skidnav.agents.registry import make_agent
+
+    robot, grid = RobotParams(), Discretization()
+    grid_map = build_map(config.run.map, config.run.seed, grid)
+    context = agent_context(agent_name, robot, grid)
+    rng = seed_streams(config.run.seed)["agent"]
+    table = config.agents.get(agent_name)
+    agent = make_agent(agent_name, grid.n_states, N_ACTIONS, table, rng, **context)
+    warm_up_agent(agent_name, config, context, grid.n_states)
+    driver = make_driver("sim", config, server_log=out / "sim-server.jsonl")
+    try:
+        driver.connect()
+    except ConnectionError as error:
+        getattr(driver, "shutdown", driver.close)()
+        raise UserError(f"cannot start the sim server: {error}") from None
+    loop = RealtimeLoop(
+        driver, agent, grid_map, config, out, robot=robot, grid=grid, progress=progress
+    )
+    try:
+        with interrupt_handlers(loop):
+            code = loop.run(0)
+    finally:
+        getattr(driver, "shutdown", driver.close)()
+    return code, loop.results
+
+
+def record_of(agent: str, preset: str, seed: int, results: Sequence[Any]) -> RunRecord:
+    """The :class:`RunRecord` of a run's episode results (``EpisodeResult`` objects)."""
+    episodes = len(results)
+    successes = sum(bool(r.reached_goal) and not r.aborted for r in results)
+    return RunRecord(
+        agent=agent,
+        preset=preset,
+        seed=seed,
+        episodes=episodes,
+        successes=successes,
+        success_rate=successes / episodes if episodes else 0.0,
+        mean_episode_actions=sum(r.actions for r in results) / episodes if episodes else 0.0,
+        aborted=sum(bool(r.aborted) for r in results),
+    )
+
+
+def _read_record(path: Path) -> RunRecord | None:
+    if not path.is_file():
+        return None
+    try:
+        return RunRecord(**json.loads(path.read_text(encoding="utf-8")))
+    except (OSError, ValueError, TypeError):
+        log.warning("%s: unreadable, the run is repeated", path)
+        return None
+
+
+def run_study(
+    tables: Mapping[str, Any],
+    settings: StudySettings,
+    out: Path,
+    *,
+    progress: Callable[[str], None] | None = None,
+    announce: Callable[[str], None] | None = None,
+) -> tuple[int, list[RunRecord]]:
+    """Run every unfinished (agent, preset, seed), then write ``study.csv`` and ``study.md``.
+
+    Returns (exit code: 0, or the code of an interrupted run; the records of all finished runs).
+    ``announce`` gets one line per run (ran or skipped); ``progress`` the loop's status lines.
+    """
+    progress = progress or (lambda line: None)
+    announce = announce or (lambda line: None)
+    _check_agents(settings.agents)
+    configs = {
+        (preset, seed): run_config(tables, settings, preset, seed)
+        for preset in settings.presets
+        for seed in range(settings.seeds)
+    }
+    records: list[RunRecord] = []
+    code = 0
+    for agent in settings.agents:
+        for (preset, seed), config in configs.items():
+            run_dir = out / "runs" / agent / preset / f"seed-{seed}"
+            record = _read_record(run_dir / "result.json")
+            if record is not None:
+                announce(f"{agent} {preset} seed {seed}: done before, skipped")
+                records.append(record)
+                continue
+            if run_dir.exists():
+                shutil.rmtree(run_dir)  # unfinished: start over
+            run_dir.mkdir(parents=True)
+            code, results = _run_one(config, agent, run_dir, progress)
+            if code == EXIT_INTERRUPTED:
+                break
+            record = record_of(agent, preset, seed, results)
+            (run_dir / "result.json").write_text(json.dumps(asdict(record), indent=1))
+            announce(
+                f"{agent} {preset} seed {seed}: {record.successes}/{record.episodes} goals, "
+                f"{record.mean_episode_actions:.1f} actions/episode, {record.aborted} aborted"
+            )
+            records.append(record)
+        if code == EXIT_INTERRUPTED:
+            break
+    write_outputs(records, configs, out)
+    return (EXIT_INTERRUPTED if code == EXIT_INTERRUPTED else 0), records
+
+
+def write_outputs(
+    records: Sequence[RunRecord], configs: Mapping[tuple[str, int], RealtimeConfig], out: Path
+) -> None:
+    """``study.csv`` (one row per run) and ``study.md`` (see :func:`markdown_report`)."""
+    out.mkdir(parents=True, exist_ok=True)
+    with (out / "study.csv").open("w", encoding="utf-8", newline="") as stream:
+        writer = csv.DictWriter(stream, fieldnames=CSV_FIELDS)
+        writer.writeheader()
+        for record in records:
+            row = asdict(record)
+            row["success_rate"] = f"{record.success_rate:.4f}"
+            row["mean_episode_actions"] = f"{record.mean_episode_actions:.2f}"
+            writer.writerow(row)
+    conditions = {
+        preset: (config.sim.slip, config.sim.drift > 0) for (preset, _), config in configs.items()
+    }
+    rows = [asdict(record) for record in records]
+    (out / "study.md").write_text(markdown_report(rows, conditions), encoding="utf-8")
