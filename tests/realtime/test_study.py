@@ -104,10 +104,13 @@ def test_report_ratios_and_differences() -> None:
     conditions = {"r": ("rough", False), "s": ("slippery", False)}
     rows = [row("q-learning", "r", 10), row("q-learning", "s", 5)]
     rows += [row("dyna-q", "r", 12), row("dyna-q", "s", 0)]
+    rows += [row("dyna-q", "d", 0), row("q-learning", "d", 0)]
+    conditions["d"] = ("rough", True)
     report = markdown_report(rows, conditions)
     assert "| q-learning | stationary | 2.00 |" in report
     assert "| dyna-q | stationary | ∞ (slippery 0) |" in report
-    assert "| rough | 50.0 % | +10.0 points |" in report
+    assert "| dyna-q | drifting |" not in report  # no slippery drifting run
+    assert "| rough | 25.0 % | +5.0 points |" in report  # pooled over r and d: 10/40 vs 12/40
     assert "| slippery | 25.0 % | -25.0 points |" in report
     assert "| dyna-q | r | 1 | 20 | 60.0 % (12/20) | 50.0 | 0 |" in report
 

@@ -25,6 +25,7 @@ from skidnav.kernels.multinomial import (
     most_probable_entry,
     pair_state_action,
     sample_entry,
+    split_key,
 )
 from skidnav.kernels.priority_queue import HeapArrays, heap_pop, heap_push
 from skidnav.kernels.tabular import inline_jit, td_target, update_toward
@@ -41,42 +42,41 @@ def dyna_planning(
     rng: np.random.Generator,
 ) -> int:
     """Dyna-Q planning (§8.2): ``n_steps`` times, replay a visited (s, a) pair drawn uniformly
-    through the model and update ``q`` toward its target. Returns the number of updates."""
+    through the model and update ``q`` toward its target. Returns the number of updates.
+
+    Same numbers as :func:`skidnav.kernels.multinomial.model_target` + ``update_toward`` per
+    step, but the model's arrays are bound once, out of the loop (see ``entry_target``)."""
     n_pairs = model.counters[0]
     if n_pairs == 0:
         return 0
-    # the arrays are bound once, out of the loop (see entry_target)
     n_actions = model.n_actions
     pair_key, head, total = model.pair_key, model.pair_head, model.pair_total
     counts, sums, terminals = model.entry_count, model.entry_reward_sum, model.entry_terminal_count
     next_states, siblings = model.entry_next_state, model.entry_sibling
-    if mode == MOST_PROBABLE:  # the default mode gets a loop of its own (no branch, ~1.3× faster)
+    if mode != SAMPLE and mode != EXPECTED:  # most-probable (default): its own loop, ~1.3×
         for _ in range(n_steps):
             pair = int(rng.random() * n_pairs)
-            key = pair_key[pair]
+            state, action = split_key(pair_key[pair], n_actions)
             entry = most_probable_entry(head, counts, siblings, pair, rng.random())
             target = entry_target(
                 q, counts[entry], sums[entry], terminals[entry], next_states[entry], gamma
             )
-            update_toward(q, key // n_actions, key % n_actions, target, alpha)
+            update_toward(q, state, action, target, alpha)
         return n_steps
     for _ in range(n_steps):
         pair = int(rng.random() * n_pairs)
-        key = pair_key[pair]
+        state, action = split_key(pair_key[pair], n_actions)
         uniform = rng.random()
         if mode == EXPECTED:
             target = expected_target(
                 q, head, total, counts, sums, terminals, next_states, siblings, pair, gamma
             )
         else:
-            if mode == SAMPLE:
-                entry = sample_entry(head, total, counts, siblings, pair, uniform)
-            else:
-                entry = most_probable_entry(head, counts, siblings, pair, uniform)
+            entry = sample_entry(head, total, counts, siblings, pair, uniform)
             target = entry_target(
                 q, counts[entry], sums[entry], terminals[entry], next_states[entry], gamma
             )
-        update_toward(q, key // n_actions, key % n_actions, target, alpha)
+        update_toward(q, state, action, target, alpha)
     return n_steps
 
 

@@ -179,7 +179,7 @@ def config_from_mapping(data: Mapping[str, Any], preset: str | None = None) -> R
         if preset not in presets:
             raise UserError(f"unknown preset {preset!r}; expected one of {', '.join(presets)}")
         tables = _merge(tables, presets[preset])
-    unknown = sorted(set(tables) - {"run", "sim", "tcp", "serial", "ros2", "agents"})
+    unknown = sorted(set(tables) - {"run", "sim", "tcp", "serial", "ros2", "agents", "study"})
     if unknown:
         raise UserError(f"unknown config table(s) {', '.join(unknown)}")
     return RealtimeConfig(

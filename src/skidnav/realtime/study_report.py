@@ -81,7 +81,10 @@ def _ratio_table(
             rough, slippery = _rate(of("rough")), _rate(of("slippery"))
             if rough is None or slippery is None:
                 continue
-            ratio = f"{rough / slippery:.2f}" if slippery > 0 else "∞ (slippery 0)"
+            if slippery > 0:
+                ratio = f"{rough / slippery:.2f}"
+            else:
+                ratio = "∞ (slippery 0)" if rough > 0 else "undefined (both 0)"
             lines.append(f"| {agent} | {label} | {ratio} |")
     return "\n".join(lines)
 

@@ -1,0 +1,57 @@
+"""The Dyna-Q planning loop (skidnav.kernels.planning.dyna_planning) against its definition."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from skidnav.kernels.multinomial import EXPECTED, MOST_PROBABLE, SAMPLE, model_target
+from skidnav.kernels.planning import dyna_planning
+from skidnav.models.multinomial import MultinomialModel
+
+N_STATES, N_ACTIONS = 30, 3
+
+
+def stochastic_model(seed: int) -> MultinomialModel:
+    """A model with several outcomes per pair, count ties, rewards and some terminations."""
+    rng = np.random.default_rng(seed)
+    model = MultinomialModel(N_ACTIONS, capacity=4)
+    for _ in range(600):
+        s, a = int(rng.integers(N_STATES)), int(rng.integers(N_ACTIONS))
+        s2 = (s + a + int(rng.integers(3))) % N_STATES
+        model.observe(s, a, float(rng.normal()), s2, bool(s2 == 0 and rng.random() < 0.5))
+    return model
+
+
+def reference_planning(
+    q: np.ndarray, model: MultinomialModel, n_steps: int, mode: int, rng: np.random.Generator
+) -> None:
+    """The planning step written from its parts: draw a pair, ask ``model_target``, update."""
+    arrays = model.arrays
+    n_pairs = int(arrays.counters[0])
+    for _ in range(n_steps):
+        pair = int(rng.random() * n_pairs)
+        state, action = divmod(int(arrays.pair_key[pair]), N_ACTIONS)
+        target = model_target(arrays, q, pair, mode, 0.9, rng.random())
+        q[state, action] += 0.2 * (target - q[state, action])
+
+
+@pytest.mark.parametrize("mode", [MOST_PROBABLE, SAMPLE, EXPECTED])
+def test_dyna_planning_equals_model_target_updates(mode: int) -> None:
+    model = stochastic_model(seed=mode)
+    start = np.random.default_rng(5).normal(size=(N_STATES, N_ACTIONS))
+    q_fast, q_ref = start.copy(), start.copy()
+    rng_fast, rng_ref = np.random.default_rng(9), np.random.default_rng(9)
+    assert dyna_planning(q_fast, model.arrays, 3000, 0.2, 0.9, mode, rng_fast) == 3000
+    reference_planning(q_ref, model, 3000, mode, rng_ref)
+    np.testing.assert_array_equal(q_fast, q_ref)
+    assert not np.array_equal(q_fast, start)
+    assert rng_fast.random() == rng_ref.random()  # the same number of draws
+
+
+def test_dyna_planning_without_pairs_does_nothing() -> None:
+    q = np.ones((4, 2))
+    rng = np.random.default_rng(0)
+    assert dyna_planning(q, MultinomialModel(2).arrays, 10, 0.5, 0.9, MOST_PROBABLE, rng) == 0
+    assert rng.random() == np.random.default_rng(0).random()
+    np.testing.assert_array_equal(q, 1.0)
