@@ -73,7 +73,8 @@ def test_study_writes_tables_and_skips_finished_runs(
         assert transitions == pytest.approx(episodes * float(row["mean_episode_actions"]))
     report = (out / "study.md").read_text()
     assert "| q-learning | slippery-drifting | 1 | 2 |" in report
-    assert "| dyna-q − q-learning |" in report and "| rough |" in report
+    assert "| dyna-q | rough | 1 |" in report and "| dyna-q | slippery | 1 |" in report
+    assert "no floor pairs" in report  # rough-stationary vs slippery-drifting: no pair
 
     # a second call skips the finished runs (no server, logs untouched) and rewrites the tables
     kept = out / "runs" / "q-learning" / "rough-stationary" / "seed-0" / "run.jsonl"
@@ -88,31 +89,56 @@ def test_study_writes_tables_and_skips_finished_runs(
     assert (out / "study.md").read_text() == report
 
 
-def test_report_ratios_and_differences() -> None:
-    def row(agent: str, preset: str, successes: int, episodes: int = 20) -> dict[str, object]:
-        return {
-            "agent": agent,
-            "preset": preset,
-            "seed": 0,
-            "episodes": episodes,
-            "successes": successes,
-            "success_rate": successes / episodes,
-            "mean_episode_actions": 50.0,
-            "aborted": 0,
-        }
+def study_row(
+    agent: str, preset: str, seed: int, successes: int, late: int, length: float = 50.0
+) -> dict[str, object]:
+    """A study.csv row of 20 episodes, ``late`` of the ``successes`` in the last 10."""
+    return {
+        "agent": agent,
+        "preset": preset,
+        "seed": seed,
+        "episodes": 20,
+        "successes": successes,
+        "success_rate": successes / 20,
+        "mean_episode_actions": length,
+        "aborted": 0,
+        "late_episodes": 10,
+        "late_successes": late,
+    }
 
-    conditions = {"r": ("rough", False), "s": ("slippery", False)}
-    rows = [row("q-learning", "r", 10), row("q-learning", "s", 5)]
-    rows += [row("dyna-q", "r", 12), row("dyna-q", "s", 0)]
-    rows += [row("dyna-q", "d", 0), row("q-learning", "d", 0)]
-    conditions["d"] = ("rough", True)
+
+def test_report_estimates_are_seed_means_with_paired_comparisons() -> None:
+    conditions = {"r": ("rough", False), "s": ("slippery", False), "d": ("rough", True)}
+    rows = [
+        study_row("q-learning", "r", 0, 4, 4, 80.0),
+        study_row("q-learning", "r", 1, 8, 6, 60.0),
+        study_row("q-learning", "s", 0, 2, 2),
+        study_row("q-learning", "s", 1, 2, 2),
+        study_row("dyna-q", "r", 0, 12, 8, 40.0),
+        study_row("dyna-q", "r", 1, 12, 8, 40.0),
+        study_row("dyna-q", "s", 0, 0, 0),
+        study_row("dyna-q", "d", 0, 0, 0),
+    ]
     report = markdown_report(rows, conditions)
-    assert "| q-learning | stationary | 2.00 |" in report
-    assert "| dyna-q | stationary | ∞ (slippery 0) |" in report
+    # q-learning on r: success 20 % and 40 % → 30 %; last half 40 %, 60 % → 50 %; length 70
+    line = next(x for x in report.splitlines() if x.startswith("| q-learning | r |"))
+    cells = [c.strip() for c in line.strip("|").split("|")]
+    assert cells[2:4] == ["2", "40"] and cells[-1] == "0"
+    assert cells[4].startswith("30.0 [") and cells[5].startswith("50.0 [")
+    assert cells[6].startswith("70.0 [")
+    for cell in cells[4:7]:  # the interval lies within the two seeds' values
+        low, high = (float(v) for v in cell.split("[")[1].rstrip("]").split(","))
+        assert low <= float(cell.split()[0]) <= high
+    # one seed: no interval
+    assert "| dyna-q | s | 1 | 20 | 0.0 | 0.0 | 50.0 | 0 |" in report
+    # rough / slippery, paired by seed, on the last half: (40 + 60) / 2 over 20
+    assert "| q-learning | stationary | 2 | 50.0 | 20.0 | 2.50 [" in report
+    assert "| dyna-q | stationary | 1 | 80.0 | 0.0 | ∞ (slippery 0) |" in report
     assert "| dyna-q | drifting |" not in report  # no slippery drifting run
-    assert "| rough | 25.0 % | +5.0 points |" in report  # pooled over r and d: 10/40 vs 12/40
-    assert "| slippery | 25.0 % | -25.0 points |" in report
-    assert "| dyna-q | r | 1 | 20 | 60.0 % (12/20) | 50.0 | 0 |" in report
+    # dyna-q minus q-learning on the rough floor: pairs (r, 0), (r, 1); (d, 0) has no partner
+    assert "| dyna-q | rough | 2 | +30.0 [+20.0, +40.0] | +30.0 [+20.0, +40.0] |" in report
+    assert "+30.0 [+20.0, +40.0] | -30.0 [-40.0, -20.0] |" in report
+    assert "| dyna-q | slippery | 1 | -10.0 | -20.0 | +0.0 |" in report
 
 
 def test_study_settings_from_table_and_overrides(

@@ -1,6 +1,6 @@
 """Aggregates over seeds and the comparisons behind the thesis claims (SPEC §5).
 
-Every interval is a seeded percentile bootstrap (:mod:`skidnav.experiments.stats`); each table
+Every interval is a seeded percentile bootstrap (:mod:`skidnav.stats`); each table
 cell gets its own generator keyed by the root seed and the cell's labels, so the numbers do not
 depend on the order in which they are computed. Agents are compared *paired by seed*: all agents
 of a (map, preset) cell meet the same maps and floors (see :mod:`skidnav.experiments.runs`).
@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from skidnav.experiments.config import ExperimentConfig
-from skidnav.experiments.stats import (
+from skidnav.stats import (
     Interval,
     bootstrap_interval,
     difference_interval,

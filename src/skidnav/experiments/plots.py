@@ -21,8 +21,8 @@ from matplotlib.figure import Figure
 
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.metrics import moving_average
-from skidnav.experiments.stats import curve_band
 from skidnav.experiments.store import TrialResult
+from skidnav.stats import curve_band
 
 ARENA = (0.62, 0.505)
 """Arena width and height [m] (SPEC §1)."""

@@ -77,7 +77,9 @@ class StudySettings:
 @dataclass(frozen=True)
 class RunRecord:
     """Outcome of one run (a row of ``study.csv``); ``mean_episode_actions`` is over all its
-    episodes (goal, truncated at ``max_actions`` or aborted alike)."""
+    episodes (goal, truncated at ``max_actions`` or aborted alike); ``late_episodes`` and
+    ``late_successes`` count the last half of the episodes (the odd middle one included), where
+    the agent has learned the most."""
 
     agent: str
     preset: str
@@ -87,6 +89,8 @@ class RunRecord:
     success_rate: float
     mean_episode_actions: float
     aborted: int
+    late_episodes: int
+    late_successes: int
 
 
 def load_study(path: Path, overrides: Mapping[str, Any]) -> tuple[dict[str, Any], StudySettings]:
@@ -163,7 +167,9 @@ def _run_one(
 def record_of(agent: str, preset: str, seed: int, results: Sequence[Any]) -> RunRecord:
     """The :class:`RunRecord` of a run's episode results (``EpisodeResult`` objects)."""
     episodes = len(results)
-    successes = sum(bool(r.reached_goal) and not r.aborted for r in results)
+    reached = [bool(r.reached_goal) and not r.aborted for r in results]
+    late = reached[episodes // 2 :]
+    successes = sum(reached)
     return RunRecord(
         agent=agent,
         preset=preset,
@@ -173,6 +179,8 @@ def record_of(agent: str, preset: str, seed: int, results: Sequence[Any]) -> Run
         success_rate=successes / episodes if episodes else 0.0,
         mean_episode_actions=sum(r.actions for r in results) / episodes if episodes else 0.0,
         aborted=sum(bool(r.aborted) for r in results),
+        late_episodes=len(late),
+        late_successes=sum(late),
     )
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skidnav.experiments.stats import (
+from skidnav.stats import (
     bootstrap_interval,
     curve_band,
     difference_interval,
