@@ -5,9 +5,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from skidnav.cli import main
+from skidnav.world.grid import generate_map
+from skidnav.world.mapfile import format_map
 
 SRC = str(Path(__file__).parents[1] / "src")
 
@@ -50,6 +53,12 @@ def test_simulate_writes_a_picture_and_csv(tmp_path, capsys):
     assert png.read_bytes()[:4] == b"\x89PNG"
     lines = table.read_text().splitlines()
     assert lines[0] == "step,action,x,y,heading,reward,collision" and len(lines) == 8
+    assert b"\r" not in table.read_bytes()  # plain "\n" line endings on every platform
+
+
+ONE_STEP = ["simulate", "--map-kind", "free", "--actions", "f"]
+EDGE_MAP = "skidnav-map 1\nwidth 6\nheight 5\nmap\n######\n#....S\n#....#\n#G...#\n######\n"
+"""A hand-written map with the start in the last column (i = 5: the arena's edge x = W)."""
 
 
 @pytest.mark.parametrize(
@@ -59,9 +68,26 @@ def test_simulate_writes_a_picture_and_csv(tmp_path, capsys):
         (["map", "show", "missing.txt"], "missing.txt: no such map file"),
         (["map", "generate", "--size", "3", "3"], "at least 5"),
         (["simulate", "--random", "0"], "--random >= 1"),
+        (["simulate", "--drift", "-1", "--random", "1"], "expected drift_amplitude >= 0"),
+        (["simulate", "--world-seed", "-5", "--random", "1"], "expected --world-seed >= 0"),
+        (["simulate", "--seed", "-5", "--random", "1"], "expected --seed >= 0"),
+        ([*ONE_STEP, "--out", "/nonexistent/x.png"], "/nonexistent/x.png: cannot write"),
+        ([*ONE_STEP, "--out", "{tmp}/x.unknown"], "x.unknown: unknown picture format"),
+        (
+            [*ONE_STEP, "--out", "{tmp}/t.png", "--csv", "/nonexistent/x.csv"],
+            "/nonexistent/x.csv: cannot write the CSV file",
+        ),
+        (["simulate", "--map", "{edge}", "--actions", "f"], "m.txt:6:6: start 'S' in the last"),
+        (["map", "generate", "--out", "/nonexistent/x.txt"], "/nonexistent/x.txt: cannot write"),
+        (["map", "show", "{map}", "--png", "/nonexistent/x.png"], "/nonexistent/x.png: cannot"),
+        (["map", "generate", "--size", "1001", "5"], "at most 1000 × 1000 cells"),
     ],
 )
-def test_user_errors_are_one_line_and_exit_2(args, message):
+def test_user_errors_are_one_line_and_exit_2(args, message, tmp_path):
+    map_file, edge_file = tmp_path / "g.txt", tmp_path / "m.txt"
+    map_file.write_text(format_map(generate_map("free", np.random.default_rng(0))))
+    edge_file.write_text(EDGE_MAP)
+    args = [arg.format(tmp=tmp_path, map=map_file, edge=edge_file) for arg in args]
     result = run_cli(*args)
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()

@@ -153,12 +153,29 @@ def test_pose_observation_and_rendering():
     assert len(rows) == 25 and "G" in rows[12] and "→" in rows[12]
 
 
+def test_drift_scales_eta_only_so_x_icr_stays_within_the_axles():
+    env = SkidSteerNavEnv(
+        map_kind="free", world_seed=4, slip="slippery", drift_amplitude=2.0, drift_period=3.0
+    )
+    env.reset(seed=0)
+    x_icr = env.slip_field.x_icr.ravel()
+    assert np.all((-env.robot.front_axle <= x_icr) & (x_icr <= env.robot.rear_axle))
+    for action in [2, 3, 0] * 10:  # turns at every drift phase: v_y = −x_ICR(region) · yaw_rate
+        log = env.step(action)[4]["kinematic_log"]
+        regions = log[:, 0].astype(int)
+        np.testing.assert_allclose(log[:, 4], -x_icr[regions] * log[:, 5], atol=1e-12)
+
+
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
         ({"observation": "image"}, "observation"),
         ({"variance": "guess"}, "variance"),
         ({"max_episode_steps": 0}, "max_episode_steps"),
+        (
+            {"slip_field": SlipField(eta=np.zeros((7, 7)), x_icr=np.full((7, 7), -0.06))},
+            r"expected x_icr in \[-a, b\] = \[-0.05, 0.05\] m in every region, got -0.06 m",
+        ),
     ],
 )
 def test_bad_arguments(kwargs, message):

@@ -1,7 +1,11 @@
 import numpy as np
 import pytest
 
+from skidnav.kernels.navigation import build_task
+from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
+from skidnav.world.discretization import Discretization
+from skidnav.world.grid import generate_map
 
 
 def test_thesis_preset_matches_the_thesis_numbers():
@@ -48,3 +52,16 @@ def test_slip_field_is_validated():
         SlipField(eta=np.ones((7, 7)), x_icr=np.zeros((6, 7)))
     with pytest.raises(ValueError, match="slip preset"):
         make_slip_field("ice", np.random.default_rng(0))
+
+
+def test_x_icr_outside_the_axles_is_rejected_when_the_task_is_built():
+    robot = RobotParams()  # a = b = 0.05 m
+    grid_map = generate_map("free", np.random.default_rng(0))
+    x_icr = np.full((7, 7), 0.05)
+    x_icr[2, 3] = 0.08
+    x_icr[4, 4] = -0.07
+    field = SlipField(eta=np.zeros((7, 7)), x_icr=x_icr)
+    with pytest.raises(ValueError, match=r"\[-0.05, 0.05\] m .* got 0.08 m in region \(2, 3\)"):
+        build_task(grid_map, field, robot, Discretization())
+    wider = RobotParams(front_axle=0.1, rear_axle=0.1)
+    build_task(grid_map, field, wider, Discretization())  # within [-a, b] of that robot

@@ -43,3 +43,15 @@ def test_levels_are_configurable():
     with pytest.raises(ValueError, match="n_x"):
         Discretization(n_x=1)
     assert np.isclose(disc.heading_centre(0), -math.pi + math.pi / 8)
+
+
+@pytest.mark.parametrize("levels", [(25, 25), (11, 9), (2, 3)])
+def test_every_cell_centre_lies_in_its_cell_and_in_the_arena(levels):
+    disc = Discretization(n_x=levels[0], n_y=levels[1])
+    for i in range(disc.n_x):
+        for j in range(disc.n_y):
+            x, y = disc.cell_centre(i, j)
+            assert 0.0 <= x <= disc.arena_width and 0.0 <= y <= disc.arena_height
+            assert disc.cell(x, y) == (i, j)
+    # the last level is the zero-width boundary cell: its "centre" is the arena's edge
+    assert disc.cell_centre(disc.n_x - 1, disc.n_y - 1) == (disc.arena_width, disc.arena_height)

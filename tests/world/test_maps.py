@@ -74,6 +74,16 @@ def _broken(old: str, new: str) -> str:
         (SMALL + "extra\n", "f.txt:11: unexpected text after the map rows"),
         (_broken("#.##.#", "######"), "f.txt:9:5: goal unreachable from the start"),
         (_broken("map\n", ""), "f.txt:5: expected 'width N', 'height N' or 'map', got '######'"),
+        (
+            _broken("height 5", "height 5\nwidth 7"),
+            "f.txt:5: repeated width (first given on line 3)",
+        ),
+        (_broken("height 5", "height 5\n# note\nheight 6"), "f.txt:6: repeated height"),
+        (_broken("#...G#", "#....G"), "f.txt:9:6: goal 'G' in the last column or the top row"),
+        (
+            _broken("######\n#S...#", "#S####\n#....#"),
+            "f.txt:6:2: start 'S' in the last column or the top row",
+        ),
     ],
 )
 def test_every_map_error_is_one_line_naming_file_line_and_column(text, expected):
@@ -103,3 +113,9 @@ def test_grid_map_validation():
         GridMap(occupancy, start=(0, 0), goal=(9, 0))
     with pytest.raises(ValueError, match="differ"):
         GridMap(occupancy, start=(0, 0), goal=(0, 0))
+    # the last column and the top row are the zero-width cells at x = W and y = H
+    with pytest.raises(ValueError, match="start off the last column and the top row"):
+        GridMap(occupancy, start=(4, 1), goal=(1, 1))
+    with pytest.raises(ValueError, match="goal off the last column and the top row"):
+        GridMap(occupancy, start=(1, 1), goal=(1, 4))
+    assert GridMap(occupancy, start=(3, 3), goal=(0, 0)).start == (3, 3)

@@ -10,7 +10,7 @@ import numpy as np
 from skidnav.errors import UserError
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import MAP_KINDS, generate_map
-from skidnav.world.mapfile import format_map, load_map, save_map
+from skidnav.world.mapfile import MAX_SIZE, format_map, load_map, save_map
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -34,6 +34,11 @@ def _generate(args: argparse.Namespace) -> int:
         raise UserError(
             f"expected --size of at least 5 × 5 cells, got {args.size[0]} × {args.size[1]}"
         )
+    if max(args.size) > MAX_SIZE:
+        raise UserError(
+            f"expected --size of at most {MAX_SIZE} × {MAX_SIZE} cells (the map file limit), "
+            f"got {args.size[0]} × {args.size[1]}"
+        )
     try:
         grid = generate_map(args.kind, np.random.default_rng(args.seed), tuple(args.size))
     except ValueError as error:
@@ -41,7 +46,12 @@ def _generate(args: argparse.Namespace) -> int:
     if args.out is None:
         print(format_map(grid), end="")
     else:
-        save_map(grid, args.out)
+        try:
+            save_map(grid, args.out)
+        except OSError as error:
+            raise UserError(
+                f"{args.out}: cannot write the map ({error.strerror or error})"
+            ) from None
         print(f"wrote {args.out} ({args.kind}, start {grid.start}, goal {grid.goal})")
     return 0
 
@@ -51,15 +61,13 @@ def _show(args: argparse.Namespace) -> int:
     if args.png is None:
         print(format_map(grid), end="")
         return 0
-    from PIL import Image
-
-    from skidnav.envs.rendering import rgb_frame
+    from skidnav.envs.rendering import rgb_frame, save_frame
     from skidnav.robot.slip import make_slip_field
 
     disc = Discretization(n_x=grid.shape[0], n_y=grid.shape[1])
     start = disc.cell_centre(*grid.start)
     slip = make_slip_field("thesis", np.random.default_rng(0))
     frame = rgb_frame(grid, disc, slip, np.array([*start, 0.0]), [])
-    Image.fromarray(frame).save(args.png)
+    save_frame(frame, args.png)
     print(f"wrote {args.png}")
     return 0

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import csv
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -77,25 +78,47 @@ def _script(args: argparse.Namespace) -> list[int] | None:
     return None
 
 
-def _simulate(args: argparse.Namespace) -> int:
+def _make_env(args: argparse.Namespace, max_steps: int) -> Any:
+    """The env of the arguments; a bad value (negative drift, seed, …) raises UserError."""
     import gymnasium
-    from PIL import Image
+
+    for option, seed in (("--world-seed", args.world_seed), ("--seed", args.seed)):
+        if seed < 0:
+            raise UserError(f"expected {option} >= 0, got {seed}")
+    try:
+        return gymnasium.make(
+            "skidnav/SkidSteerNav-v0",
+            render_mode="rgb_array",
+            map_file=args.map,
+            map_kind=args.map_kind,
+            world_seed=args.world_seed,
+            slip=args.slip,
+            drift_amplitude=args.drift,
+            robot=RobotParams(integrator=args.integrator),
+            max_episode_steps=max_steps,
+        )
+    except ValueError as error:
+        raise UserError(str(error)) from None
+
+
+def _write_csv(path: Path, rows: list[tuple[Any, ...]]) -> None:
+    try:
+        with path.open("w", newline="", encoding="utf-8") as handle:
+            writer = csv.writer(handle, lineterminator="\n")
+            writer.writerow(["step", "action", "x", "y", "heading", "reward", "collision"])
+            writer.writerows(rows)
+    except OSError as error:
+        raise UserError(f"{path}: cannot write the CSV file ({error.strerror or error})") from None
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from skidnav.envs.rendering import save_frame
 
     script = _script(args)
-    env = gymnasium.make(
-        "skidnav/SkidSteerNav-v0",
-        render_mode="rgb_array",
-        map_file=args.map,
-        map_kind=args.map_kind,
-        world_seed=args.world_seed,
-        slip=args.slip,
-        drift_amplitude=args.drift,
-        robot=RobotParams(integrator=args.integrator),
-        max_episode_steps=len(script) if script else args.random,
-    )
+    env = _make_env(args, len(script) if script else args.random)
     _, info = env.reset(seed=args.seed)
     policy = np.random.default_rng(args.seed)
-    rows = [(0, -1, *info["pose"], 0.0, False)]
+    rows: list[tuple[Any, ...]] = [(0, -1, *info["pose"], 0.0, False)]
     total, step, done = 0.0, 0, False
     while not done:
         action = script[step] if script else int(policy.integers(4))
@@ -104,12 +127,9 @@ def _simulate(args: argparse.Namespace) -> int:
         total += float(reward)
         rows.append((step, action, *info["pose"], reward, info["collision"]))
         done = terminated or truncated or (script is not None and step >= len(script))
-    Image.fromarray(np.asarray(env.render())).save(args.out)
+    save_frame(np.asarray(env.render()), args.out)
     if args.csv is not None:
-        with args.csv.open("w", newline="") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(["step", "action", "x", "y", "heading", "reward", "collision"])
-            writer.writerows(rows)
+        _write_csv(args.csv, rows)
     collisions = sum(1 for row in rows if row[-1])
     outcome = "reached the goal" if terminated else "did not reach the goal"
     print(

@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 from PIL import Image, ImageDraw
 
+from skidnav.errors import UserError
 from skidnav.robot.slip import SlipField
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
@@ -102,6 +104,21 @@ def rgb_frame(
         draw.line([canvas.point(x, y) for x, y in trail], fill=TRAIL, width=2)
     _draw_robot(draw, canvas, pose, body_length)
     return np.asarray(image, dtype=np.uint8).copy()
+
+
+def save_frame(frame: np.ndarray, path: Path | str) -> None:
+    """Write an RGB frame (H, W, 3) uint8 as a picture, its format chosen by the file suffix.
+
+    Raises:
+        UserError: the path cannot be written (missing directory, no permission) or its suffix
+            names no picture format.
+    """
+    try:
+        Image.fromarray(np.asarray(frame, dtype=np.uint8)).save(path)
+    except ValueError:
+        raise UserError(f"{path}: unknown picture format (use e.g. .png)") from None
+    except OSError as error:
+        raise UserError(f"{path}: cannot write the picture ({error.strerror or error})") from None
 
 
 def ansi_frame(grid_map: GridMap, disc: Discretization, pose: np.ndarray) -> str:

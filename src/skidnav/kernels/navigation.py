@@ -269,7 +269,8 @@ def build_task(
     discretization: Discretization,
     rewards: RewardScheme | None = None,
 ) -> NavigationTask:
-    """Assemble a :class:`NavigationTask` from the Python-side objects, checking they agree."""
+    """Assemble a :class:`NavigationTask` from the Python-side objects, checking they agree
+    (map and slip-field sizes, x_ICR of every region within the robot's [−a, b])."""
     if grid_map.shape != (discretization.n_x, discretization.n_y):
         raise ValueError(
             f"expected a map of {discretization.n_x} × {discretization.n_y} cells, "
@@ -280,6 +281,7 @@ def build_task(
             f"expected a slip field of {discretization.regions_x} × {discretization.regions_y} "
             f"regions, got {slip.shape[0]} × {slip.shape[1]}"
         )
+    slip.check_x_icr(robot)
     eta, x_icr, phase = slip.kernel_arrays()
     return NavigationTask(
         robot=robot.kernel_constants(),

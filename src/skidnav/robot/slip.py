@@ -6,7 +6,8 @@ robot's coarse region (a 7 × 7 partition of the arena). A :class:`SlipField` ho
 
     η(region, t) = η₀(region) · max(0, 1 + A · sin(2π t / P + φ(region)))
 
-with relative amplitude A, period P [s] and a seeded phase φ per region. x_ICR does not drift.
+with relative amplitude A, period P [s] and a seeded phase φ per region. x_ICR does not drift,
+so once within [−a, b] (SPEC §1, :meth:`SlipField.check_x_icr`) it stays there at every time.
 The true variance of a wheel's speed in a region is η²/12 (variance of U(0, η)).
 """
 
@@ -81,6 +82,27 @@ class SlipField:
     def wheel_speed_variance(self, time: float = 0.0) -> np.ndarray:
         """True variance of a wheel's speed per region, η²/12 [rad²/s²]."""
         return self.eta_at(time) ** 2 / 12.0
+
+    def check_x_icr(self, robot: RobotParams) -> None:
+        """Raise ValueError unless x_ICR lies in [−a, b] (front and rear axle of ``robot``) in
+        every region, as the ICR model requires (Kozłowski & Pazderski 2004).
+
+        >>> field = SlipField(eta=np.zeros((2, 2)), x_icr=np.array([[0.0, 0.05], [0.2, -0.01]]),
+        ...                   drift_phase=np.zeros((2, 2)))
+        >>> field.check_x_icr(RobotParams())  # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        ValueError: expected x_icr in [-a, b] = [-0.05, 0.05] m in every region, got 0.2 m ...
+        """
+        low, high = -robot.front_axle, robot.rear_axle
+        outside = np.argwhere((self.x_icr < low) | (self.x_icr > high))
+        if len(outside):
+            i, j = (int(v) for v in outside[0])
+            more = f" and {len(outside) - 1} more regions" if len(outside) > 1 else ""
+            raise ValueError(
+                f"expected x_icr in [-a, b] = [{low:g}, {high:g}] m in every region, "
+                f"got {self.x_icr[i, j]:g} m in region ({i}, {j}){more}"
+            )
 
     def kernel_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(eta, x_icr, drift_phase) flattened to shape (regions_x·regions_y,), region-major in x,

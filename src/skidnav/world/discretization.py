@@ -166,8 +166,21 @@ class Discretization:
         return i, j, heading
 
     def cell_centre(self, i: int, j: int) -> tuple[float, float]:
-        """Centre of cell (i, j) [m]."""
-        return (i + 0.5) * self.cell_width, (j + 0.5) * self.cell_height
+        """Centre of cell (i, j) [m], clipped to the arena.
+
+        The last level (i = n_x − 1, j = n_y − 1) is a zero-width cell, the boundary line x = W
+        or y = H, so its "centre" is that line: the point returned always lies in cell (i, j) and
+        in the arena. (Maps never put the start or goal there; see :mod:`skidnav.world.grid`.)
+
+        >>> d = Discretization()
+        >>> d.cell_centre(23, 0) == (23.5 * d.cell_width, 0.5 * d.cell_height)
+        True
+        >>> d.cell_centre(24, 24), d.cell(*d.cell_centre(24, 24))
+        ((0.62, 0.505), (24, 24))
+        """
+        x = min((i + 0.5) * self.cell_width, self.arena_width)
+        y = min((j + 0.5) * self.cell_height, self.arena_height)
+        return x, y
 
     def heading_centre(self, heading_index: int) -> float:
         """Centre angle of a heading bin [rad], in [−π, π)."""

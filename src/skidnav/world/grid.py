@@ -6,6 +6,11 @@ A map's cells match the state grid (25 × 25 by default): ``occupancy[i, j]`` is
 ``maze`` (corridors three cells wide carved by a randomized depth-first search, so that the robot,
 which moves ≈1.5 cells per action and slides ≈1.2 cells sideways per turn, can pass).
 Connectivity is 4-neighbour over free cells. Every draw comes from the Generator passed in.
+
+Start and goal never lie on the far edge, the last column (i = n_x − 1) or the top row
+(j = n_y − 1): with the cell index i = ⌊x/W·(n_x − 1)⌋ of :mod:`skidnav.world.discretization`
+those cells have zero width, the lines x = W and y = H, the arena's boundary, where the robot
+cannot stand and which it reaches only by being clipped against the boundary.
 """
 
 from __future__ import annotations
@@ -28,6 +33,8 @@ class GridMap:
         occupancy: bool array, shape (n_x, n_y); True = wall.
         start: start cell (i, j); the robot starts at its centre, heading 0 (+x).
         goal: goal cell (i, j); reaching it (any heading) ends the episode.
+
+    Start and goal must be free, differ, and lie off the far edge (see :func:`on_far_edge`).
     """
 
     occupancy: np.ndarray
@@ -49,6 +56,11 @@ class GridMap:
                 raise ValueError(f"expected {name} inside the {occupancy.shape} grid, got {cell}")
             if occupancy[cell]:
                 raise ValueError(f"expected {name} on a free cell, got wall at {cell}")
+            if on_far_edge(cell, occupancy.shape):
+                raise ValueError(
+                    f"expected {name} off the last column and the top row (zero-width cells at "
+                    f"the arena's far edge), got {cell} in a {occupancy.shape} grid"
+                )
             object.__setattr__(self, name, cell)
         if self.start == self.goal:
             raise ValueError(f"expected start and goal to differ, both are {self.start}")
@@ -69,6 +81,16 @@ class GridMap:
     def as_uint8(self) -> np.ndarray:
         """Occupancy as uint8 (1 = wall), shape (n_x, n_y), for the compiled kernels."""
         return self.occupancy.astype(np.uint8)
+
+
+def on_far_edge(cell: tuple[int, ...], shape: tuple[int, ...]) -> bool:
+    """True if ``cell`` is in the last column (i = n_x − 1) or the top row (j = n_y − 1) of a
+    grid of ``shape`` (n_x, n_y): a zero-width cell on the arena's boundary x = W or y = H.
+
+    >>> [on_far_edge(cell, (25, 25)) for cell in ((24, 3), (3, 24), (0, 0), (23, 23))]
+    [True, True, False, False]
+    """
+    return cell[0] == shape[0] - 1 or cell[1] == shape[1] - 1
 
 
 def cell_distances(occupancy: np.ndarray, origin: tuple[int, int]) -> np.ndarray:

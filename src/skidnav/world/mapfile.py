@@ -14,7 +14,9 @@ Format (version 1)::
 After the line ``map`` come exactly ``height`` rows of exactly ``width`` characters. The first row
 is the top of the arena (j = height − 1), the last row the bottom (j = 0); column c is i = c.
 Characters: ``#`` or ``@`` wall, ``.`` free, ``S`` start (free), ``G`` goal (free); exactly one S
-and one G, and the goal must be reachable from the start (4-neighbour).
+and one G, and the goal must be reachable from the start (4-neighbour). Each of ``width`` and
+``height`` (3 to :data:`MAX_SIZE`) is given once. S and G may not lie in the last column nor in the
+top row: those are zero-width cells on the arena's far edge (see :mod:`skidnav.world.grid`).
 """
 
 from __future__ import annotations
@@ -24,9 +26,12 @@ from pathlib import Path
 import numpy as np
 
 from skidnav.errors import UserError
-from skidnav.world.grid import GridMap
+from skidnav.world.grid import GridMap, on_far_edge
 
 MAGIC = "skidnav-map 1"
+MIN_SIZE = 3
+MAX_SIZE = 1000
+"""Least and greatest ``width`` and ``height`` [cells]."""
 WALL_CHARS = "#@"
 FREE_CHARS = ".SG"
 
@@ -46,6 +51,7 @@ def _read_header(path: Path | str, lines: list[str]) -> tuple[int, int, int]:
         return_line = lines[0].strip() if lines else ""
         raise _fail(path, 1, f"expected first line {MAGIC!r}, got {return_line!r}")
     sizes: dict[str, int] = {}
+    given_on: dict[str, int] = {}
     for number, raw in enumerate(lines[1:], start=2):
         text = raw.strip()
         if not text or text.startswith("# "):
@@ -58,12 +64,17 @@ def _read_header(path: Path | str, lines: list[str]) -> tuple[int, int, int]:
         key, _, value = text.partition(" ")
         if key not in ("width", "height"):
             raise _fail(path, number, f"expected 'width N', 'height N' or 'map', got {text!r}")
+        if key in given_on:
+            raise _fail(path, number, f"repeated {key} (first given on line {given_on[key]})")
+        given_on[key] = number
         try:
             sizes[key] = int(value)
         except ValueError:
             raise _fail(path, number, f"expected an integer {key}, got {value.strip()!r}") from None
-        if not 3 <= sizes[key] <= 1000:
-            raise _fail(path, number, f"expected {key} between 3 and 1000, got {sizes[key]}")
+        if not MIN_SIZE <= sizes[key] <= MAX_SIZE:
+            raise _fail(
+                path, number, f"expected {key} between {MIN_SIZE} and {MAX_SIZE}, got {sizes[key]}"
+            )
     raise _fail(path, len(lines), "missing the 'map' line")
 
 
@@ -92,6 +103,25 @@ def _read_rows(
     return occupancy, marks
 
 
+def _check_marks(path: Path | str, marks: Marks, shape: tuple[int, ...], grid_start: int) -> None:
+    """Exactly one S and one G, neither on the far edge (last column, top row)."""
+    for char, name in (("S", "start"), ("G", "goal")):
+        if not marks[char]:
+            raise _fail(path, grid_start, f"no {name} '{char}' in the map")
+        if len(marks[char]) > 1:
+            _, _, line, column = marks[char][1]
+            raise _fail(path, line, f"a second {name} '{char}' (expected exactly one)", column)
+        i, j, line, column = marks[char][0]
+        if on_far_edge((i, j), shape):
+            raise _fail(
+                path,
+                line,
+                f"{name} '{char}' in the last column or the top row (zero-width cells on the "
+                "arena's far edge; move it one cell inwards)",
+                column,
+            )
+
+
 def parse_map(text: str, path: Path | str = "<string>") -> GridMap:
     """Parse map text; raises :class:`MapFileError` naming line and column of the first problem."""
     lines = text.splitlines()
@@ -103,12 +133,7 @@ def parse_map(text: str, path: Path | str = "<string>") -> GridMap:
     if extra:
         raise _fail(path, grid_start + height + extra[0] + 1, "unexpected text after the map rows")
     occupancy, marks = _read_rows(path, rows, width, grid_start)
-    for char, name in (("S", "start"), ("G", "goal")):
-        if not marks[char]:
-            raise _fail(path, grid_start, f"no {name} '{char}' in the map")
-        if len(marks[char]) > 1:
-            _, _, line, column = marks[char][1]
-            raise _fail(path, line, f"a second {name} '{char}' (expected exactly one)", column)
+    _check_marks(path, marks, occupancy.shape, grid_start)
     (si, sj, _, _), (gi, gj, g_line, g_col) = marks["S"][0], marks["G"][0]
     grid = GridMap(occupancy=occupancy, start=(si, sj), goal=(gi, gj))
     if not grid.connected():
