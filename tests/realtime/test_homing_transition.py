@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -77,7 +78,8 @@ def test_wheel_speed_stats_match_numpy_variance() -> None:
     yaw_rate = robot.wheel_radius * (right - left) / (2 * robot.half_track)
     v_x = robot.wheel_radius * (right + left) / 2
     rows = np.column_stack([np.full(50, 5.0), left, right, v_x, np.zeros(50), yaw_rate])
-    stats.add_rows(rows)
+    for row in rows:  # one period per action: no lag pairs, the plain sample variance
+        stats.add_rows(row[None, :])
     expected = np.var(np.column_stack([left, right]).ravel(), ddof=1)
     assert stats.variance(5) == pytest.approx(expected)
     assert stats.variance(6) == 0.0
@@ -101,3 +103,49 @@ def test_seed_streams_are_independent_and_reproducible() -> None:
     a, b = seed_streams(4), seed_streams(4)
     assert a["map"].random() == b["map"].random()
     assert a["agent"].random() != a["slip"].random()
+
+
+def forward_rows(
+    rng: np.random.Generator, n_actions: int, eta: float, pose_noise: float, region: int = 5
+) -> list[np.ndarray]:
+    """Kinematic log rows of ``n_actions`` straight forward actions of 10 periods of 0.1 s:
+    wheel speeds 1.7 − U(0, η) drawn each period, poses measured with N(0, pose_noise²) noise."""
+    robot, dt = RobotParams(), 0.1
+    actions = []
+    for _ in range(n_actions):
+        left, right = 1.7 - rng.uniform(0, eta, 10), 1.7 - rng.uniform(0, eta, 10)
+        v_x = robot.wheel_radius * (left + right) / 2
+        yaw = robot.wheel_radius * (right - left) / (2 * robot.half_track)
+        heading = np.concatenate([[0.0], np.cumsum(yaw * dt)])
+        x = np.concatenate([[0.1], 0.1 + np.cumsum(v_x * np.cos(heading[:-1]) * dt)])
+        y = np.concatenate([[0.2], 0.2 + np.cumsum(v_x * np.sin(heading[:-1]) * dt)])
+        x, y = x + rng.normal(0, pose_noise, 11), y + rng.normal(0, pose_noise, 11)
+        poses = [Pose(k, x[k], y[k], heading[k]) for k in range(11)]
+        rows = [log_row(a, b, dt, region, (1.7, 1.7)) for a, b in itertools.pairwise(poses)]
+        actions.append(np.array(rows))
+    return actions
+
+
+@pytest.mark.parametrize("eta", [0.0, 0.5, 1.0])
+def test_wheel_speed_variance_sees_slip_through_pose_noise(eta: float) -> None:
+    """1 mm of pose noise reads as ≈ 0.4 rad²/s² of plain sample variance; the corrected
+    estimate stays at the slip's own η²/12."""
+    rng = np.random.default_rng(3)
+    stats = WheelSpeedStats(49, RobotParams())
+    actions = forward_rows(rng, 2000, eta, 0.001)
+    for rows in actions:
+        stats.add_rows(rows)
+    speeds = np.concatenate([rows[:, 3] for rows in actions]) / RobotParams().wheel_radius
+    assert np.var(speeds) > 0.15 + eta**2 / 12  # the noise a plain variance would report
+    assert stats.variance(5) == pytest.approx(eta**2 / 12, abs=0.01)
+    assert stats.variance(6) == 0.0
+
+
+def test_wheel_speed_stats_load_the_earlier_welford_form() -> None:
+    values = np.array([1.2, 1.5, 1.6, 1.1])
+    old = np.zeros((49, 3))
+    old[5] = len(values), values.mean(), ((values - values.mean()) ** 2).sum()
+    stats = WheelSpeedStats(49, RobotParams())
+    assert stats.load(old)
+    assert stats.variance(5) == pytest.approx(np.var(values, ddof=1))
+    assert not stats.load(np.zeros((7, 2)))

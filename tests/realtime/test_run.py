@@ -112,3 +112,19 @@ def test_bad_config_is_a_one_line_user_error(
     assert capsys.readouterr().err.strip().splitlines() == [
         "skidnav: error: [run]: expected episodes to be an integer >= 1, got 0"
     ]
+
+
+def test_map_files_are_relative_to_the_config(tmp_path: Path) -> None:
+    (tmp_path / "maps").mkdir()
+    small_room_map(tmp_path / "maps" / "room.txt")
+    config_path = tmp_path / "rt.toml"
+    config_path.write_text(
+        '[run]\nmap = "maps/room.txt"\n[presets.p.run]\nmap = "maps/other.txt"\n'
+        '[presets.q.run]\nmap = "maze"\n',
+        encoding="utf-8",
+    )
+    assert load_config(config_path).run.map == str(tmp_path / "maps" / "room.txt")
+    assert load_config(config_path, "p").run.map == str(tmp_path / "maps" / "other.txt")
+    assert load_config(config_path, "q").run.map == "maze"
+    shipped = load_config(CONFIGS)
+    assert Path(shipped.run.map).is_file()

@@ -16,6 +16,7 @@ from typing import Any, TypeVar
 
 from skidnav.errors import UserError
 from skidnav.robot.slip import SLIP_PRESETS
+from skidnav.world.grid import MAP_KINDS
 
 T = TypeVar("T")
 
@@ -190,15 +191,30 @@ def config_from_mapping(data: Mapping[str, Any], preset: str | None = None) -> R
     )
 
 
-def load_config(path: Path | None, preset: str | None = None) -> RealtimeConfig:
-    """Read a TOML config (defaults without a path); UserError if unreadable or invalid."""
-    if path is None:
-        return config_from_mapping({}, preset)
+def read_tables(path: Path) -> dict[str, Any]:
+    """The TOML tables of a config file, with every relative map file path (``[run] map`` and
+    ``[presets.NAME.run] map``, when not a map kind) made relative to the file's folder;
+    UserError if unreadable."""
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (OSError, tomllib.TOMLDecodeError) as error:
         raise UserError(f"{path}: {error}") from None
-    return config_from_mapping(data, preset)
+    presets = data.get("presets", {})
+    runs = [data.get("run")] + [p.get("run") for p in presets.values() if isinstance(p, dict)]
+    for run in runs:
+        if not isinstance(run, dict):
+            continue
+        spec = run.get("map")
+        if isinstance(spec, str) and spec not in MAP_KINDS and not Path(spec).is_absolute():
+            run["map"] = str((path.parent / spec).resolve())
+    return data
+
+
+def load_config(path: Path | None, preset: str | None = None) -> RealtimeConfig:
+    """Read a TOML config (defaults without a path); UserError if unreadable or invalid."""
+    if path is None:
+        return config_from_mapping({}, preset)
+    return config_from_mapping(read_tables(path), preset)
 
 
 def with_overrides(config: RealtimeConfig, **run_fields: Any) -> RealtimeConfig:

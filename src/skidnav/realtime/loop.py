@@ -161,8 +161,8 @@ class RealtimeLoop:
         """Continue from :meth:`state_dict` of an earlier run."""
         self.results = [EpisodeResult(**result) for result in state["results"]]
         stats = np.asarray(state["wheel_speed_stats"], dtype=np.float64)
-        if stats.shape == self.stats.stats.shape:
-            self.stats.stats[:] = stats
+        if not self.stats.load(stats):
+            log.warning("checkpoint wheel-speed statistics of shape %s ignored", stats.shape)
 
     def interrupt(self, reason: str) -> None:
         """Called from a signal handler: stop now and end the run."""

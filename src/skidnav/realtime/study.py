@@ -17,7 +17,6 @@ import csv
 import json
 import logging
 import shutil
-import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -25,7 +24,12 @@ from typing import Any
 
 from skidnav.errors import UserError
 from skidnav.realtime.arena import build_map, seed_streams
-from skidnav.realtime.config import RealtimeConfig, config_from_mapping, with_overrides
+from skidnav.realtime.config import (
+    RealtimeConfig,
+    config_from_mapping,
+    read_tables,
+    with_overrides,
+)
 from skidnav.realtime.drivers import make_driver
 from skidnav.realtime.loop import EXIT_INTERRUPTED, RealtimeLoop
 from skidnav.realtime.run import agent_context, interrupt_handlers, warm_up_agent
@@ -96,10 +100,7 @@ class RunRecord:
 def load_study(path: Path, overrides: Mapping[str, Any]) -> tuple[dict[str, Any], StudySettings]:
     """(TOML tables without ``[study]``, settings from ``[study]`` with ``overrides`` — keys of
     :class:`StudySettings`, None values ignored — on top); UserError if unreadable or invalid."""
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, tomllib.TOMLDecodeError) as error:
-        raise UserError(f"{path}: {error}") from None
+    data = read_tables(path)
     table = dict(data.pop("study", {}))
     table.update({key: value for key, value in overrides.items() if value is not None})
     for key in ("agents", "presets"):

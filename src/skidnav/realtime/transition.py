@@ -10,11 +10,13 @@ the body-frame finite differences consistent with the explicit-Euler model are
 keyed by the coarse region of p₀, with the commanded wheel speeds of the action.
 
 Reward (the env's rule, SPEC §3): +10 and termination when the action ends in the goal cell; −10
-after a collision; otherwise −1 − 10·var with var the observed (thesis) sample variance of the
-wheel speeds measured during forward actions in the region where the action ends. A real robot
-has no known slip field, so the observed variance is the only one available here. Wheel speeds
-are recovered from the measured twist by inverting the ICR model: ω_R = (v_x + c·yaw_rate)/r,
-ω_L = (v_x − c·yaw_rate)/r (Kozłowski & Pazderski 2004).
+after a collision; otherwise −1 − 10·var with var the observed (thesis) variance of the wheel
+speeds measured during forward actions in the region where the action ends, corrected for pose
+noise (:class:`WheelSpeedStats`). A real robot has no known slip field, so the observed variance is
+the only one available here; uncorrected, a tracker's 1 mm of pose noise alone would read as a
+variance of ≈ 0.4 rad²/s² over 0.1 s periods, a −4 penalty on every step of every region.
+Wheel speeds are recovered from the measured twist by inverting the ICR model:
+ω_R = (v_x + c·yaw_rate)/r, ω_L = (v_x − c·yaw_rate)/r (Kozłowski & Pazderski 2004).
 """
 
 from __future__ import annotations
@@ -57,36 +59,78 @@ def log_row(
 
 
 class WheelSpeedStats:
-    """Running (count, mean, M2) of measured wheel speeds per region (Welford 1962).
+    """Per-region moments of the wheel speeds measured during forward actions, from which the
+    slip variance is estimated free of white pose noise (see :meth:`variance`).
+
+    A wheel speed measured over one control period from two noisy poses is the true speed plus
+    (e₁ − e₀)/Δt-like noise: consecutive measurements share a pose, so their noise has lag-1
+    autocovariance −½ of its variance, while slip drawn afresh each period has none. Hence
+    γ₀ + 2γ₁ (variance plus twice the lag-1 autocovariance) keeps the slip variance and cancels
+    the pose noise, whatever its size; it is also exact for slip that a measurement period
+    straddles over two periods of the robot's own (an MA(1) mix of independent draws).
 
     Attributes:
-        stats: float64 (n_regions, 3).
+        stats: float64 (n_regions, 7): per region the count n, Σω, Σω² [rad/s, rad²/s²] of
+            single measurements, and the count m, Σ ω_t, Σ ω_{t+1} and Σ ω_t·ω_{t+1} of lag-1
+            pairs (consecutive periods of one forward action, same wheel, both in the region).
     """
 
     def __init__(self, n_regions: int, robot: RobotParams) -> None:
-        self.stats = np.zeros((n_regions, 3), dtype=np.float64)
+        self.stats = np.zeros((n_regions, 7), dtype=np.float64)
         self.robot = robot
 
-    def add(self, region: int, value: float) -> None:
-        """Record one wheel speed [rad/s] measured in ``region``."""
+    def add(self, region: int, value: float, previous: float | None = None) -> None:
+        """Record one wheel speed [rad/s] measured in ``region``; ``previous``: the same wheel's
+        speed one period earlier in the same action and region, if any."""
         row = self.stats[region]
         row[0] += 1.0
-        delta = value - row[1]
-        row[1] += delta / row[0]
-        row[2] += delta * (value - row[1])
+        row[1] += value
+        row[2] += value * value
+        if previous is not None:
+            row[3] += 1.0
+            row[4] += previous
+            row[5] += value
+            row[6] += previous * value
 
     def add_rows(self, rows: np.ndarray) -> None:
-        """Record the wheel speeds implied by kinematic log rows (forward actions only)."""
+        """Record the wheel speeds implied by the kinematic log rows of one forward action,
+        in period order."""
         r, c = self.robot.wheel_radius, self.robot.half_track
+        last_region, last_left, last_right = -1, 0.0, 0.0
         for row in rows:
-            v_x, yaw_rate = row[3], row[5]
-            self.add(int(row[0]), (v_x - c * yaw_rate) / r)
-            self.add(int(row[0]), (v_x + c * yaw_rate) / r)
+            region, v_x, yaw_rate = int(row[0]), row[3], row[5]
+            left, right = (v_x - c * yaw_rate) / r, (v_x + c * yaw_rate) / r
+            paired = region == last_region
+            self.add(region, left, last_left if paired else None)
+            self.add(region, right, last_right if paired else None)
+            last_region, last_left, last_right = region, left, right
 
     def variance(self, region: int) -> float:
-        """Sample variance [rad²/s²] of ``region`` (0 with fewer than two samples)."""
-        count = self.stats[region, 0]
-        return float(self.stats[region, 2] / (count - 1.0)) if count > 1.0 else 0.0
+        """Slip variance of the wheel speeds of ``region`` [rad²/s²]: max(0, γ₀ + 2γ₁), with γ₀
+        the sample variance and γ₁ the lag-1 autocovariance (0 without lag pairs); 0 with fewer
+        than two samples."""
+        count, total, squares, pairs, firsts, seconds, products = self.stats[region]
+        if count < 2.0:
+            return 0.0
+        mean = total / count
+        gamma_0 = (squares - count * mean * mean) / (count - 1.0)
+        # centred on the pairs' own means: shifting every speed by a constant changes nothing
+        gamma_1 = (products - firsts * seconds / pairs) / pairs if pairs > 0 else 0.0
+        return float(max(0.0, gamma_0 + 2.0 * gamma_1))
+
+    def load(self, stats: np.ndarray) -> bool:
+        """Restore :attr:`stats` saved by this class or by its earlier (count, mean, M2) form
+        (Welford moments, no lag pairs); False if the shape fits neither."""
+        if stats.shape == self.stats.shape:
+            self.stats[:] = stats
+            return True
+        if stats.shape == (self.stats.shape[0], 3):
+            count, mean, m2 = stats.T
+            self.stats[:] = 0.0
+            self.stats[:, 0], self.stats[:, 1] = count, count * mean
+            self.stats[:, 2] = m2 + count * mean * mean
+            return True
+        return False
 
 
 def reward_of(
