@@ -214,20 +214,38 @@ class RealtimeLoop:
         return self._blocked(pose.x, pose.y) or self._blocked(x, y)
 
     # --- one action ----------------------------------------------------------------------
+    def _wait_for_stamp(self, target: float, deadline: float) -> tuple[Pose, float]:
+        """The newest pose once its robot-clock stamp reaches ``target`` [s], polling ten times
+        per control period; at ``deadline`` (monotonic [s]) the newest pose whatever its stamp,
+        so a dropped pose never stalls an action (the watchdog handles a silent robot)."""
+        poll = self.settings.period_wall / 10.0
+        while True:
+            pose, stamp = self._measure()
+            now = time.monotonic()
+            if stamp >= target - 1e-9 or now >= deadline:
+                return pose, stamp
+            self._wait_until(min(deadline, now + poll))
+
     def _act(self, action: int) -> tuple[Pose, np.ndarray, bool]:
-        """Execute one action; (end pose, kinematic log (n, 6), collided)."""
+        """Execute one action; (end pose, kinematic log (n, 6), collided).
+
+        Periods are counted on the robot's clock (pose stamps), not the host's: at a high time
+        scale a host scheduling delay of a millisecond is a whole period, and counting it would
+        make actions last 8 to 11 periods instead of ``substeps``. The wall clock only bounds
+        each wait (two periods), so a lost pose costs no time."""
         command = commanded_wheel_speeds(action, self.robot.wheel_speed)
+        period, period_wall = self.settings.period, self.settings.period_wall
         pose, stamp = self._measure()
+        first = stamp
         rows: list[np.ndarray] = []
         collided = False
-        start = time.monotonic()
         for k in range(self.settings.substeps):
             if self._would_collide(pose, command):
                 collided = True
                 break
             self._command(*command)
-            self._wait_until(start + (k + 1) * self.settings.period_wall)
-            new, new_stamp = self._measure()
+            target = first + (k + 1) * period
+            new, new_stamp = self._wait_for_stamp(target, time.monotonic() + 2.0 * period_wall)
             region = self.grid.region(pose.x, pose.y)
             row = log_row(pose, new, new_stamp - stamp, region, command)
             if row is not None:
@@ -236,9 +254,11 @@ class RealtimeLoop:
                 pose, stamp = new, new_stamp
         self._command(0.0, 0.0)
         # let the robot come to rest so the end pose includes all motion of the action
-        settle = time.monotonic() + max(1, self.settings.settle_periods) * self.settings.period_wall
-        self._wait_until(settle)
-        return self._pose(), np.array(rows, dtype=np.float64).reshape(-1, 6), collided
+        settle = max(1, self.settings.settle_periods)
+        end, _ = self._wait_for_stamp(
+            stamp + settle * period, time.monotonic() + (settle + 1.0) * period_wall
+        )
+        return end, np.array(rows, dtype=np.float64).reshape(-1, 6), collided
 
     def _learn(
         self, state: int, action: int, result: EpisodeResult, last: bool
