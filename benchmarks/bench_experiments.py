@@ -6,7 +6,9 @@ Usage (from the repository root)::
 
 Prints the wall time of the whole sweep (compilation included: the first run of each algorithm
 compiles or loads the numba kernels), runs per second, and per algorithm the mean training time
-of one run and its ratio to Q-learning's, all measured in this one run. The target for
+of one run (compilation excluded: each process warms the kernels up before a run's clock starts,
+see ``skidnav.experiments.trial.warm_up``) and its ratio to Q-learning's, all measured in this
+one run. The target for
 configs/thesis.toml is at most 10 minutes on 2 cores.
 """
 

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pandas as pd
 import pytest
 
 from skidnav.experiments.analysis import aggregate, compare_surfaces, compare_to_baseline
 from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec
+from skidnav.experiments.report import aggregate_table
 from skidnav.experiments.reproduction import reproduction_section
 
 CONFIG = ExperimentConfig(
@@ -79,3 +82,25 @@ def test_few_pairs_make_the_length_claim_inconclusive() -> None:
     assert (comparisons["length_pairs"] == 5).all()
     text = reproduction_section(comparisons, pd.DataFrame(), summaries, CONFIG)
     assert "inconclusive" in text
+
+
+def test_one_seed_prints_estimates_without_bounds() -> None:
+    summaries = _summaries()
+    one_seed = summaries[summaries["seed"] == 0]
+    text = aggregate_table(aggregate(one_seed, CONFIG), "m", "rough")
+    assert "nan" not in text and not re.search(r"\d \[", text)  # no "12.00 [nan, nan]"
+    assert "1.00" in text  # e.g. the converged share of the single seed
+    details = reproduction_section(
+        compare_to_baseline(one_seed, CONFIG), pd.DataFrame(), one_seed, CONFIG
+    )
+    assert "nan" not in details
+
+
+def test_floor_claim_points_to_the_surfaces_config() -> None:
+    summaries = _summaries()
+    thesis_like = summaries[summaries["preset"] == "rough"]
+    text = reproduction_section(
+        compare_to_baseline(thesis_like, CONFIG), pd.DataFrame(), thesis_like, CONFIG
+    )
+    assert "rough floor ≈ 2×" in text and "configs/surfaces.toml" in text
+    assert "not measured here" in text

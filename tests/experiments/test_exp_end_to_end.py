@@ -59,7 +59,8 @@ def test_metadata_and_saved_config(serial_results: Path) -> None:
     assert metadata["config"]["name"] == "tiny"
     assert metadata["versions"]["numpy"] == np.__version__
     assert len(metadata["seeds"]["runs"]) == 8
-    assert "git_commit" in metadata
+    assert "git_commit" in metadata and "git_dirty" in metadata
+    assert metadata["sessions"][0]["runs_done"] == 8
     store = ResultStore(serial_results)
     assert store.config() == parse_config(_tiny_text())
 
@@ -96,9 +97,9 @@ def test_report_cli_writes_one_self_contained_file(serial_results: Path, tmp_pat
     assert result.returncode == 0, result.stderr
     text = output.read_text()
     images = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', text)
-    # Per map x preset cell (2 here): learning curves, metric strips, trajectories, value maps;
-    # plus the rough / slippery success ratio.
-    assert len(images) == 2 * 4 + 1
+    # Per map x preset cell (2 here): learning curves, metric strips, trajectories, value maps,
+    # policy maps; plus the rough / slippery success ratio.
+    assert len(images) == 2 * 5 + 1
     assert all(base64.b64decode(image)[:8] == b"\x89PNG\r\n\x1a\n" for image in images)
     assert 'src="http' not in text and "<script" not in text
     for needle in (
@@ -108,6 +109,8 @@ def test_report_cli_writes_one_self_contained_file(serial_results: Path, tmp_pat
         "10%",
         "dyna-q-5",
         "&quot;root_seed&quot;: 11",
+        'alt="policy maps"',
+        "session started (UTC)",
     ):
         assert needle in text, needle
     missing = subprocess.run(

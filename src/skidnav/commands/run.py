@@ -52,6 +52,7 @@ def run_command(args: argparse.Namespace) -> int:
         jobs=args.jobs,
         scheduler=args.scheduler,
         source_text=args.config.read_text(encoding="utf-8"),
+        config_path=args.config,
         progress=not args.no_progress,
     )
     print(

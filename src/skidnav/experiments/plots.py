@@ -260,6 +260,52 @@ def value_maps(runs: list[TrialResult], title: str) -> bytes:
     return to_png(figure)
 
 
+ACTION_GLYPHS = (
+    (0, "forward", None),
+    (1, "backward", None),
+    (2, "turn left", r"$\circlearrowleft$"),
+    (3, "turn right", r"$\circlearrowright$"),
+)
+"""(action, name, marker) of the skid-steer env's actions; forward and backward are drawn as
+arrows along and against the heading."""
+
+
+def _policy_panel(ax: Axes, run: TrialResult) -> None:
+    """One run's greedy action per cell at its start heading, as glyphs over the arena."""
+    draw_arena(ax, run, slip=False)
+    policy = run.arrays["policy_map"]
+    n_x, n_y = policy.shape
+    cell_w, cell_h = ARENA[0] / (n_x - 1), ARENA[1] / (n_y - 1)
+    heading = float(run.arrays["start_heading"])
+    for action, name, marker in ACTION_GLYPHS:
+        ii, jj = np.nonzero(policy == action)
+        x, y = (ii + 0.5) * cell_w, (jj + 0.5) * cell_h
+        color = f"C{action}"
+        if marker is None:
+            sign = 1.0 if action == 0 else -1.0
+            u, v = (
+                np.full(ii.size, sign * math.cos(heading)),
+                np.full(ii.size, sign * math.sin(heading)),
+            )
+            ax.quiver(x, y, u, v, color=color, scale=45, width=0.004, pivot="middle", label=name)
+        else:
+            ax.scatter(x, y, s=22, marker=marker, color=color, linewidths=0.4, label=name)
+    ax.set_title(f"{run.coordinates['agent']} (seed {run.coordinates['seed']})", fontsize=9)
+
+
+def policy_maps(runs: list[TrialResult], title: str) -> bytes:
+    """The greedy action per cell with the robot at its start heading (``policy_map``): arrows
+    for forward (along the heading) and backward, circular arrows for the turns; no glyph on walls
+    and on cells whose Q values at that heading were never updated."""
+    figure, axes = _grid(len(runs))
+    for ax, run in zip(axes, runs, strict=True):
+        _policy_panel(ax, run)
+    handles, labels = axes[0].get_legend_handles_labels()
+    figure.legend(handles, labels, loc="outside lower center", ncols=4, fontsize=8)
+    figure.suptitle(title)
+    return to_png(figure)
+
+
 def surface_bars(surfaces: pd.DataFrame) -> bytes:
     """Rough / slippery success-rate ratio per agent with its interval (1 = no effect)."""
     rows = surfaces[surfaces["metric"] == "success_rate"]

@@ -2,8 +2,9 @@
 
 Sections: setup, metric definitions (with the convergence tolerance), thesis reproduction
 (speed-up, success-rate gain, final-length difference, rough vs slippery floor), aggregate
-tables, per-cell figures (learning curves, per-seed metrics, final greedy trajectories, value and
-policy maps), provenance (config, versions, commit). The numbers are what was measured.
+tables, per-cell figures (learning curves, per-seed metrics, final greedy trajectories, value maps
+with preferred headings, greedy-policy maps), provenance (config, versions, sessions with their
+code versions). The numbers are what was measured.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from skidnav.experiments.analysis import (
     compare_to_baseline,
 )
 from skidnav.experiments.config import ExperimentConfig, config_to_dict
+from skidnav.experiments.provenance import CODE_KEYS, describe_code
 from skidnav.experiments.reproduction import reproduction_section
 from skidnav.experiments.store import ResultStore
 
@@ -42,9 +44,16 @@ img{max-width:100%} pre{background:#f6f6f6;padding:0.8em;overflow-x:auto;font-si
 
 
 def interval_text(mean: float, low: float, high: float, digits: int = 2) -> str:
-    """``"12.3 [10.1, 14.2]"``; ``"–"`` when undefined."""
+    """``"12.30 [10.10, 14.20]"``; the estimate alone when the interval is undefined (one seed);
+    ``"–"`` when the estimate is.
+
+    >>> interval_text(12.3, 10.1, 14.2), interval_text(12.0, float("nan"), float("nan"))
+    ('12.30 [10.10, 14.20]', '12.00')
+    """
     if mean != mean:  # NaN
         return "–"
+    if low != low or high != high:
+        return f"{mean:.{digits}f}"
     return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
 
 
@@ -111,8 +120,33 @@ def setup(config: ExperimentConfig, metadata: dict[str, object], n_runs: int) ->
         f"episodes per run, action limit {config.max_steps or 'env default'}; root seed "
         f"{config.root_seed}; {n_runs} runs finished of {config.n_runs}</li>"
         f"<li>environment {html.escape(config.env_id)}; git commit "
-        f"{html.escape(str(metadata.get('git_commit')))}</li></ul>"
+        f"{html.escape(str(metadata.get('git_commit')))}"
+        f"{' (dirty)' if metadata.get('git_dirty') else ''}</li></ul>"
     )
+
+
+def sessions_table(metadata: dict[str, object]) -> str:
+    """The sessions that wrote the results (start, code, runs done), and a warning when the runs
+    come from more than one code version."""
+    sessions = metadata.get("sessions")
+    if not isinstance(sessions, list) or not sessions:
+        return ""
+    rows = [
+        {
+            "session started (UTC)": str(entry.get("started", "?")),
+            "code": describe_code({key: entry.get(key) for key in CODE_KEYS}),
+            "runs done": str(entry.get("runs_done", "?")),
+            "completed": "yes" if entry.get("completed") else "no (killed or interrupted)",
+        }
+        for entry in sessions
+    ]
+    codes = {row["code"] for row in rows if row["runs done"] not in ("0", "?")}
+    warning = (
+        f"<p class='no'>These results were produced by {len(codes)} different code versions.</p>"
+        if len(codes) > 1
+        else ""
+    )
+    return warning + table(pd.DataFrame.from_records(rows))
 
 
 def figures_for_cell(
@@ -124,7 +158,7 @@ def figures_for_cell(
     map_label: str,
     preset: str,
 ) -> str:
-    """Learning curves, per-seed metrics, trajectories and value maps of one cell."""
+    """Learning curves, per-seed metrics, trajectories, value and policy maps of one cell."""
     parts = [
         image(
             plots.learning_curves(
@@ -154,6 +188,14 @@ def figures_for_cell(
     parts.append(
         image(plots.value_maps(runs, f"state values and preferred headings, {title}"), "value maps")
     )
+    with_policy = [run for run in runs if "policy_map" in run.arrays]
+    if with_policy:  # older run files have no policy map
+        parts.append(
+            image(
+                plots.policy_maps(with_policy, f"greedy action at the start heading, {title}"),
+                "policy maps",
+            )
+        )
     return "\n".join(parts)
 
 
@@ -186,6 +228,7 @@ def build_report(run_dir: Path | str) -> str:
         "<h2>Config (resolved)</h2>",
         f"<pre>{html.escape(json.dumps(config_to_dict(config), indent=2))}</pre>",
         "<h2>Provenance</h2>",
+        sessions_table(metadata),
         f"<pre>{html.escape(json.dumps(metadata.get('versions', {}), indent=2))}</pre>",
     ]
     return (

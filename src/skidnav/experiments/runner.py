@@ -4,23 +4,27 @@ Backends (all give identical numbers, since a run is a pure function of its spec
 
 * ``serial``: one run after the other in this process.
 * ``process``: a pool of ``jobs`` local worker processes (``spawn`` start method); the first run
-  of each algorithm runs in this process first, to compile and cache the kernels once.
+  of each algorithm runs in this process first, to compile and cache the kernels once. The
+  workers end when this process dies, even by SIGKILL (:mod:`skidnav.experiments.workers`).
 * ``dask``: a ``dask.distributed`` Client on the scheduler at ``scheduler``; without an address,
-  a local cluster of ``jobs`` worker processes on 127.0.0.1.
+  a local cluster of ``jobs`` worker processes on 127.0.0.1. The client connects before the
+  results directory is created, so a scheduler that cannot be reached leaves nothing behind.
 
 Workers only compute; this process writes every finished run atomically as it arrives
-(:class:`~skidnav.experiments.store.ResultStore`). Started again on the same directory, the
-runner skips the runs already written, so a sweep killed by Ctrl-C or SIGKILL resumes with none
-lost and none duplicated. At the end the tidy tables and ``metadata.json`` are (re)written.
+(:class:`~skidnav.experiments.store.ResultStore`), with the version of the code that produced it.
+Started again on the same directory, the runner skips the runs already written, so a sweep killed
+by Ctrl-C or SIGKILL resumes with none lost and none duplicated; finished runs produced by other
+code are reused with a warning (:mod:`skidnav.experiments.sessions`). At the end the tidy tables
+and ``metadata.json`` (with the list of sessions) are (re)written.
 """
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import logging
 import multiprocessing
 import os
-import signal
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -34,14 +38,18 @@ from tqdm import tqdm
 from skidnav._jit import jit_disabled
 from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig, config_to_dict
-from skidnav.experiments.provenance import git_commit, package_versions
+from skidnav.experiments.provenance import CODE_KEYS, code_version, package_versions
 from skidnav.experiments.runs import RunSpec, expand_runs
+from skidnav.experiments.sessions import mixed_code_message, other_code, update_sessions
 from skidnav.experiments.store import ResultStore, TrialResult
+from skidnav.experiments.workers import init_worker
 
 logger = logging.getLogger(__name__)
 
 BACKENDS = ("serial", "process", "dask")
 TrialFunction = Callable[[RunSpec], TrialResult]
+DASK_CONNECT_TIMEOUT = "15s"
+"""How long the Dask client tries to reach ``scheduler``."""
 
 
 class RunOutcome(NamedTuple):
@@ -54,11 +62,6 @@ class RunOutcome(NamedTuple):
     wall_time: float
 
 
-def _ignore_sigint() -> None:
-    """Worker initializer: Ctrl-C is handled by the parent, which cancels the pool."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 def _serial(runs: Sequence[RunSpec], trial: TrialFunction) -> Iterator[TrialResult]:
     for spec in runs:
         yield trial(spec)
@@ -69,7 +72,9 @@ def _process(runs: Sequence[RunSpec], trial: TrialFunction, jobs: int) -> Iterat
         return
     jobs = min(jobs, len(runs))
     context = multiprocessing.get_context("spawn")
-    executor = ProcessPoolExecutor(jobs, mp_context=context, initializer=_ignore_sigint)
+    executor = ProcessPoolExecutor(
+        jobs, mp_context=context, initializer=init_worker, initargs=(os.getpid(),)
+    )
     try:
         futures = [executor.submit(trial, spec) for spec in runs]
         for future in as_completed(futures):
@@ -78,36 +83,44 @@ def _process(runs: Sequence[RunSpec], trial: TrialFunction, jobs: int) -> Iterat
         executor.shutdown(wait=True, cancel_futures=True)
 
 
-def _dask(
-    runs: Sequence[RunSpec], trial: TrialFunction, jobs: int, scheduler: str | None
-) -> Iterator[TrialResult]:
-    from distributed import Client, LocalCluster
-    from distributed import as_completed as dask_completed
+@contextlib.contextmanager
+def dask_client(jobs: int, scheduler: str | None) -> Iterator[Any]:
+    """A ``distributed.Client`` on ``scheduler``, or on a local cluster of ``jobs`` worker
+    processes; closed (with the cluster) on exit.
 
-    cluster = None
-    if scheduler is None:
-        cluster = LocalCluster(
+    Raises:
+        UserError: the scheduler cannot be reached within :data:`DASK_CONNECT_TIMEOUT`.
+    """
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        try:
+            client = Client(scheduler, timeout=DASK_CONNECT_TIMEOUT)
+        except OSError as error:
+            raise UserError(f"cannot connect to Dask scheduler {scheduler!r}: {error}") from None
+        with client:
+            yield client
+        return
+    with (
+        LocalCluster(
             n_workers=jobs,
             threads_per_worker=1,
             processes=True,
             host="127.0.0.1",
             dashboard_address=None,
-        )
-        client = Client(cluster)
-    else:
-        try:
-            client = Client(scheduler, timeout="15s")
-        except OSError as error:
-            raise UserError(f"cannot connect to Dask scheduler {scheduler!r}: {error}") from None
-    try:
-        keys = [f"skidnav-{spec.config.fingerprint()[:12]}-{spec.run_id}" for spec in runs]
-        futures = client.map(trial, runs, key=keys, pure=False)
-        for future in dask_completed(futures):
-            yield future.result()
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        yield client
+
+
+def _dask(runs: Sequence[RunSpec], trial: TrialFunction, client: Any) -> Iterator[TrialResult]:
+    from distributed import as_completed as dask_completed
+
+    keys = [f"skidnav-{spec.config.fingerprint()[:12]}-{spec.run_id}" for spec in runs]
+    futures = client.map(trial, runs, key=keys, pure=False)
+    for future in dask_completed(futures):
+        yield future.result()
 
 
 def warm_up_first(runs: Sequence[RunSpec]) -> tuple[list[RunSpec], list[RunSpec]]:
@@ -128,9 +141,10 @@ def execute(
     trial: TrialFunction,
     backend: str,
     jobs: int,
-    scheduler: str | None = None,
+    client: Any = None,
 ) -> Iterator[TrialResult]:
-    """Results of ``runs`` in completion order on ``backend``."""
+    """Results of ``runs`` in completion order on ``backend`` (``dask`` needs the ``client`` of
+    :func:`dask_client`)."""
     if not runs:
         return iter(())
     if backend == "serial" or (backend == "process" and min(jobs, len(runs)) == 1):
@@ -138,7 +152,8 @@ def execute(
     if backend == "process":
         first, rest = warm_up_first(runs)
         return itertools.chain(_serial(first, trial), _process(rest, trial, jobs))
-    return _dask(runs, trial, jobs, scheduler)
+    assert client is not None, "the dask backend needs a client"
+    return _dask(runs, trial, client)
 
 
 def _check_backend(backend: str, jobs: int, scheduler: str | None) -> None:
@@ -167,6 +182,7 @@ def run_experiment(
     scheduler: str | None = None,
     trial: TrialFunction | None = None,
     source_text: str = "",
+    config_path: Path | str | None = None,
     progress: bool = False,
 ) -> RunOutcome:
     """Run (or resume) every run of ``config`` into ``out_dir``.
@@ -180,6 +196,7 @@ def run_experiment(
         trial: the run function (default :func:`skidnav.experiments.trial.run_trial`); it must be
             importable by worker processes.
         source_text: the config file's text, saved as ``config.toml``.
+        config_path: the config file, named in the errors of its agents, maps and env options.
         progress: show a progress bar with ETA on stderr.
     """
     jobs = default_jobs() if jobs is None else jobs
@@ -187,54 +204,99 @@ def run_experiment(
     if trial is None:
         from skidnav.experiments.trial import check_config, run_trial
 
-        check_config(config)
+        check_config(config, config_path)
         trial = run_trial
     started = time.time()
-    store = ResultStore.open(out_dir, config, source_text)
     runs = expand_runs(config)
-    done = store.finished()
-    pending = [spec for spec in runs if spec.run_id not in done]
-    logger.info("%d runs, %d already done, %d to run", len(runs), len(done), len(pending))
-    with tqdm(
-        total=len(runs),
-        initial=len(runs) - len(pending),
-        file=sys.stderr,
-        unit="run",
-        disable=not progress,
-        dynamic_ncols=True,
-        desc=config.name,
-    ) as bar:
-        for result in execute(pending, trial, backend, jobs, scheduler):
-            store.write_run(result)
-            bar.update(1)
+    ResultStore(out_dir).check(config)
+    with contextlib.ExitStack() as stack:
+        client = None
+        if backend == "dask" and len(ResultStore(out_dir).finished()) < len(runs):
+            client = stack.enter_context(dask_client(jobs, scheduler))
+        store = ResultStore.open(out_dir, config, source_text)
+        session = _session(started, backend, jobs, scheduler)
+        records = _resume_records(store, session)
+        pending = [spec for spec in runs if spec.run_id not in records]
+        logger.info("%d runs, %d already done, %d to run", len(runs), len(records), len(pending))
+        stamp = {key: session[key] for key in CODE_KEYS} | {"session": session["started"]}
+        with _progress(config, len(runs), len(runs) - len(pending), progress) as bar:
+            for result in execute(pending, trial, backend, jobs, client):
+                store.write_run(result, stamp)
+                records[result.run_id] = stamp
+                bar.update(1)
     store.consolidate()
     wall_time = time.time() - started
-    store.write_metadata(_metadata(config, runs, backend, jobs, scheduler, started, wall_time))
+    session.update(wall_time_s=wall_time, completed=True)
+    sessions = update_sessions(_previous_sessions(store.metadata()), records, session)
+    store.write_metadata(_metadata(config, runs, session, sessions))
     return RunOutcome(store.root, len(runs), len(runs) - len(pending), len(pending), wall_time)
+
+
+def _progress(config: ExperimentConfig, total: int, done: int, show: bool) -> tqdm[Any]:
+    return tqdm(
+        total=total,
+        initial=done,
+        file=sys.stderr,
+        unit="run",
+        disable=not show,
+        dynamic_ncols=True,
+        desc=config.name,
+    )
+
+
+def _session(started: float, backend: str, jobs: int, scheduler: str | None) -> dict[str, Any]:
+    """This session's entry of ``metadata.json`` (completed at the end of the run)."""
+    return {
+        "started": datetime.fromtimestamp(started, UTC).isoformat(),
+        **code_version(),
+        "backend": backend,
+        "jobs": jobs,
+        "scheduler": scheduler,
+        "completed": False,
+    }
+
+
+def _resume_records(store: ResultStore, session: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """The code record of every finished run; warns (and notes in ``session``) how many came
+    from other code than this session's."""
+    records = {run_id: store.run_code(run_id) for run_id in sorted(store.finished())}
+    foreign = other_code(records, session)
+    session["runs_from_other_code"] = len(foreign)
+    if foreign:
+        message = mixed_code_message(records, foreign, session)
+        logger.warning("%s: %s", store.root, message)
+        session["warning"] = message
+    return records
+
+
+def _previous_sessions(metadata: dict[str, Any]) -> list[dict[str, Any]]:
+    """The session list of an existing ``metadata.json`` (older files kept only the last one)."""
+    sessions = metadata.get("sessions")
+    if isinstance(sessions, list):
+        return [entry for entry in sessions if isinstance(entry, dict)]
+    last = metadata.get("last_session")
+    if isinstance(last, dict):
+        return [{**last, "commit": metadata.get("git_commit")}]
+    return []
 
 
 def _metadata(
     config: ExperimentConfig,
     runs: Sequence[RunSpec],
-    backend: str,
-    jobs: int,
-    scheduler: str | None,
-    started: float,
-    wall_time: float,
+    session: dict[str, Any],
+    sessions: list[dict[str, Any]],
 ) -> dict[str, Any]:
     return {
         "config": config_to_dict(config),
         "fingerprint": config.fingerprint(),
         "versions": package_versions(),
-        "git_commit": git_commit(),
+        "git_commit": session["commit"],
+        "git_dirty": session["dirty"],
         "numba_jit_disabled": jit_disabled(),
-        "backend": backend,
-        "jobs": jobs,
-        "scheduler": scheduler,
-        "last_session": {
-            "started": datetime.fromtimestamp(started, UTC).isoformat(),
-            "wall_time_s": wall_time,
-        },
+        "backend": session["backend"],
+        "jobs": session["jobs"],
+        "scheduler": session["scheduler"],
+        "sessions": sessions,
         "seeds": {
             "root_seed": config.root_seed,
             "scheme": "SeedSequence(root).spawn(2) -> (world root, run root); "

@@ -4,10 +4,12 @@ Layout of a results directory::
 
     config.json          resolved config + fingerprint (a resume must match it)
     config.toml          the config file as given (when run from a file)
-    runs/run-000042.npz  one finished run: episode arrays, final trajectory, maps, summary JSON
+    runs/run-000042.npz  one finished run: episode arrays, final trajectory, maps, summary JSON,
+                         the code that produced it (version, commit, dirty flag, session)
     episodes.parquet     tidy: one row per (run, episode)
     summaries.parquet    one row per run: grid coordinates + every metric (also summaries.csv)
-    metadata.json        config, package versions, git commit, seeds, timing
+    metadata.json        config, package versions, git commit, seeds, every session (start,
+                         code, runs done)
 
 A run file is written to a temporary name, synced and moved into place with ``os.replace``, so a
 run is either completely there or absent: after a kill, the runs already written are skipped and
@@ -51,10 +53,13 @@ class TrialResult(NamedTuple):
         coordinates: grid coordinates: agent (label), algorithm, map, preset, seed.
         episodes: per-episode arrays, keys :data:`EPISODE_COLUMNS`, each shape (N,).
         summary: per-run metrics (:func:`skidnav.experiments.metrics.run_metrics`).
-        arrays: ``greedy_poses`` (T, 3) [m, m, rad], ``value_map`` (n_x, n_y),
-            ``policy_map`` (n_x, n_y) greedy action at the start heading, ``occupancy``
-            (n_x, n_y) bool, ``start`` and ``goal`` (2,), ``slip_eta`` (regions_x, regions_y)
-            [rad/s].
+        arrays: ``greedy_poses`` (T, 3) [m, m, rad]; on the skid-steer env also
+            ``value_map`` (n_x, n_y) max of Q over headings and actions, ``heading_map``
+            (n_x, n_y) heading bin of that maximum, ``policy_map`` (n_x, n_y) greedy action at
+            the start heading, ``start_heading`` () [rad], ``occupancy`` (n_x, n_y) bool,
+            ``start`` and ``goal`` (2,), ``slip_eta`` (regions_x, regions_y) [rad/s]. Cells
+            without a learned value (walls, never updated) are NaN / −1 (see
+            :func:`skidnav.experiments.trial.value_maps`).
     """
 
     run_id: str
@@ -81,6 +86,22 @@ class ResultStore:
         self.root = Path(root)
         self.runs_dir = self.root / "runs"
 
+    def check(self, config: ExperimentConfig) -> bool:
+        """True if the directory already holds results of ``config``, False if it holds none
+        (it may not exist yet); creates nothing.
+
+        Raises:
+            UserError: the directory holds results of a different config.
+        """
+        config_path = self.root / "config.json"
+        if not config_path.exists():
+            return False
+        if self._read_json(config_path).get("fingerprint") != config.fingerprint():
+            raise UserError(
+                f"{self.root}: holds results of a different config; choose another --out"
+            )
+        return True
+
     @classmethod
     def open(cls, root: Path | str, config: ExperimentConfig, source_text: str = "") -> ResultStore:
         """Create the directory for ``config`` or reopen it to resume the same config.
@@ -89,19 +110,14 @@ class ResultStore:
             UserError: the directory holds results of a different config.
         """
         store = cls(root)
+        exists = store.check(config)
         store.runs_dir.mkdir(parents=True, exist_ok=True)
         for stale in store.runs_dir.glob(".*.tmp"):
             stale.unlink(missing_ok=True)
-        config_path = store.root / "config.json"
-        fingerprint = config.fingerprint()
-        if config_path.exists():
-            saved = store._read_json(config_path)
-            if saved.get("fingerprint") != fingerprint:
-                raise UserError(
-                    f"{store.root}: holds results of a different config; choose another --out"
-                )
+        if exists:
             return store
-        document = {"fingerprint": fingerprint, "config": config_to_dict(config)}
+        config_path = store.root / "config.json"
+        document = {"fingerprint": config.fingerprint(), "config": config_to_dict(config)}
         write_atomic(config_path, json.dumps(document, indent=2).encode())
         if source_text:
             write_atomic(store.root / "config.toml", source_text.encode())
@@ -136,13 +152,18 @@ class ResultStore:
         """Ids of the runs already written."""
         return {path.stem for path in self.runs_dir.glob("run-*.npz")}
 
-    def write_run(self, result: TrialResult) -> None:
-        """Store one finished run atomically."""
+    def write_run(self, result: TrialResult, code: dict[str, Any] | None = None) -> None:
+        """Store one finished run atomically, with the record ``code`` of the code that produced
+        it (:mod:`skidnav.experiments.sessions`)."""
         payload: dict[str, np.ndarray] = {
             f"episode.{key}": np.asarray(value) for key, value in result.episodes.items()
         }
         payload.update({f"array.{key}": np.asarray(v) for key, v in result.arrays.items()})
-        document = {"coordinates": result.coordinates, "summary": result.summary}
+        document = {
+            "coordinates": result.coordinates,
+            "summary": result.summary,
+            "code": code or {},
+        }
         payload["document"] = np.array(json.dumps(document))
         buffer = io.BytesIO()
         np.savez_compressed(buffer, **payload)  # type: ignore[arg-type]
@@ -160,6 +181,17 @@ class ResultStore:
         episodes = {k.split(".", 1)[1]: v for k, v in arrays.items() if k.startswith("episode.")}
         others = {k.split(".", 1)[1]: v for k, v in arrays.items() if k.startswith("array.")}
         return TrialResult(run_id, document["coordinates"], episodes, document["summary"], others)
+
+    def run_code(self, run_id: str) -> dict[str, Any]:
+        """The record of the code that produced run ``run_id`` (empty if it was not recorded)."""
+        path = self.run_path(run_id)
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                document = json.loads(str(data["document"]))
+        except (OSError, ValueError, KeyError) as error:
+            raise CorruptFileError(f"{path}: unreadable run file ({error})") from None
+        code = document.get("code", {})
+        return code if isinstance(code, dict) else {}
 
     def iter_runs(self, run_ids: Iterable[str] | None = None) -> Iterable[TrialResult]:
         """Every finished run (or the given ones), in id order."""

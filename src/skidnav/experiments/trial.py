@@ -5,6 +5,12 @@
 seed streams (world: map and slip field; run: agent and episodes), so it gives the same numbers in
 any process, on any Dask worker, in any order. Only ``wall_time`` differs between machines.
 
+``wall_time`` measures training only: before the first run of an agent variant in a process,
+:func:`warm_up` trains a throwaway copy of it for a few short episodes on a throwaway world, so
+numba compiles (or loads from its cache) every kernel the run will call before the run's clock
+starts. The warm-up draws from its own generators, never from the run's streams, so it changes no
+number.
+
 Training uses the compiled trainer ``skidnav.agents.fast_training.train_agent_fast`` for the
 skid-steer environment when it is installed and supports the agent, else
 ``skidnav.agents.training.train_agent``.
@@ -12,9 +18,11 @@ skid-steer environment when it is installed and supports the agent, else
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import inspect
 import logging
+from pathlib import Path
 from typing import Any
 
 import gymnasium
@@ -26,12 +34,19 @@ from skidnav.experiments.config import ExperimentConfig, MapSpec
 from skidnav.experiments.metrics import run_metrics
 from skidnav.experiments.runs import RunSpec, expand_runs
 from skidnav.experiments.store import EPISODE_COLUMNS, TrialResult
-from skidnav.world.grid import GridMap, generate_map
+from skidnav.world.discretization import heading_bin
+from skidnav.world.grid import GridMap, border_walls, generate_map
 from skidnav.world.mapfile import load_map
 
 logger = logging.getLogger(__name__)
 
 SKID_ENV_ID = "skidnav/SkidSteerNav-v0"
+WARM_UP_LIMITS = (10, 300, 10, 10, 60, 10)
+"""Action limits of the :func:`warm_up` episodes. Its arena is 6 × 6 cells with the goal right
+ahead of the start, so short episodes end at the goal or run into walls between two model refits;
+the long one makes learned models outgrow their first arrays and refit. Milliseconds in all."""
+_warmed_up: set[tuple[str, str, str]] = set()
+"""(env id, agent name, parameters) of the agent variants this process has warmed up."""
 
 
 def _seed_int(sequence: np.random.SeedSequence) -> int:
@@ -129,14 +144,40 @@ def value_maps(q: np.ndarray, grid_map: GridMap) -> tuple[np.ndarray, np.ndarray
     return value, heading
 
 
+def policy_map(q: np.ndarray, grid_map: GridMap, heading_index: int) -> np.ndarray:
+    """Greedy action per cell at one heading bin, shape (n_x, n_y) int64.
+
+    The action the agent's greedy policy takes with the robot in the cell at heading bin
+    ``heading_index`` (the lowest index among the maxima, as ``TabularAgent.greedy_action``);
+    −1 on walls and where the Q values of that state were never changed (all equal).
+
+    >>> walls = np.zeros((3, 3), dtype=bool)
+    >>> walls[2, 0] = True
+    >>> q = np.zeros((3 * 3 * 2, 4))  # 3 × 3 cells, 2 heading bins, 4 actions
+    >>> q[(0 * 3 + 0) * 2 + 1, 2] = 0.5  # cell (0, 0), heading bin 1: turn left is best
+    >>> actions = policy_map(q, GridMap(walls, (0, 0), (1, 1)), 1)
+    >>> int(actions[0, 0]), int(actions[0, 1]), int(actions[2, 0])  # learned, untouched, wall
+    (2, -1, -1)
+    """
+    n_x, n_y = grid_map.occupancy.shape
+    at_heading = q.reshape(n_x, n_y, -1, q.shape[1])[:, :, heading_index, :]
+    action = at_heading.argmax(axis=2).astype(np.int64)
+    action[grid_map.occupancy | (at_heading.max(axis=2) == at_heading.min(axis=2))] = -1
+    return action
+
+
 def _world_arrays(
     q: np.ndarray, grid_map: GridMap, env: gymnasium.Env[Any, Any]
 ) -> dict[str, np.ndarray]:
-    """Value and heading maps, walls, start, goal and slip η of a skid-steer run."""
+    """Value, heading and policy maps, walls, start, goal and slip η of a skid-steer run."""
     value, heading = value_maps(q, grid_map)
+    start_heading = float(env.start_pose()[2])  # type: ignore[attr-defined]
+    n_headings = int(env.discretization.n_headings)  # type: ignore[attr-defined]
     return {
         "value_map": value,
         "heading_map": heading,
+        "policy_map": policy_map(q, grid_map, heading_bin(start_heading, n_headings)),
+        "start_heading": np.asarray(start_heading),
         "occupancy": grid_map.occupancy,
         "start": np.asarray(grid_map.start),
         "goal": np.asarray(grid_map.goal),
@@ -163,30 +204,76 @@ def _episode_arrays(log: Any) -> dict[str, np.ndarray]:
     return arrays
 
 
+def _world(
+    spec: RunSpec, map_rng: np.random.Generator, slip_seed: int
+) -> tuple[GridMap | None, gymnasium.Env[Any, Any], gymnasium.Env[Any, Any]]:
+    """(map or None, training env, evaluation env) of a run, the map drawn with ``map_rng``."""
+    skid = spec.config.env_id == SKID_ENV_ID
+    grid_map = build_map(spec.map, map_rng) if skid else None
+    env = make_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
+    eval_env = make_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
+    return grid_map, env, eval_env
+
+
+def _agent(spec: RunSpec, env: gymnasium.Env[Any, Any], rng: np.random.Generator) -> Any:
+    """A new agent of the run's variant for ``env``."""
+    name = spec.agent.name
+    n_states, n_actions = int(env.observation_space.n), int(env.action_space.n)  # type: ignore[attr-defined]
+    return make_agent(
+        name, n_states, n_actions, spec.agent.params_dict(), rng, **_agent_context(name, env)
+    )
+
+
+def warm_up(spec: RunSpec) -> None:
+    """Train a throwaway copy of the run's agent variant for a few short episodes on a throwaway
+    world, once per process and variant, so the kernels the run calls are compiled before its
+    clock starts (module docs). Draws only from its own generators."""
+    key = (spec.config.env_id, spec.agent.name, repr(spec.agent.params))
+    if key in _warmed_up:
+        return
+    grid_map = None
+    if spec.config.env_id == SKID_ENV_ID:
+        grid_map = GridMap(border_walls((6, 6)), start=(1, 1), goal=(2, 1))
+        spec = dataclasses.replace(
+            spec, config=dataclasses.replace(spec.config, max_steps=max(WARM_UP_LIMITS))
+        )
+    env, eval_env = make_env(spec, grid_map, 0), make_env(spec, grid_map, 0)  # type: ignore[arg-type]
+    env.reset(seed=1)
+    eval_env.reset(seed=2)
+    agent = _agent(spec, env, np.random.default_rng(3))
+    train = _trainer(env)
+    for limit in WARM_UP_LIMITS:
+        train(
+            agent,
+            env,
+            1,
+            max_steps=limit,
+            greedy_eval_env=eval_env if spec.config.greedy_eval else None,
+        )
+    greedy_rollout(agent, eval_env, 2, max(WARM_UP_LIMITS))
+    if grid_map is not None:
+        _world_arrays(agent.q, grid_map, env)
+    _warmed_up.add(key)
+
+
 def run_trial(spec: RunSpec) -> TrialResult:
     """Train and measure one run of the grid (see module docs)."""
+    warm_up(spec)
+    return measure_trial(spec)
+
+
+def measure_trial(spec: RunSpec) -> TrialResult:
+    """:func:`run_trial` without the warm-up: the first call in a process also times numba's
+    compilation of the kernels."""
     config = spec.config
     map_seed, slip_seed = spec.world_seed.sequence().spawn(2)
     agent_seed, episode_seed, eval_seed = spec.run_seed.sequence().spawn(3)
-    skid = config.env_id == SKID_ENV_ID
-    grid_map = build_map(spec.map, np.random.default_rng(map_seed)) if skid else None
-    env = make_env(spec, grid_map, _seed_int(slip_seed))  # type: ignore[arg-type]
-    eval_env = make_env(spec, grid_map, _seed_int(slip_seed))  # type: ignore[arg-type]
+    grid_map, env, eval_env = _world(spec, np.random.default_rng(map_seed), _seed_int(slip_seed))
     env.reset(seed=_seed_int(episode_seed))
     eval_env.reset(seed=_seed_int(eval_seed))
-    name = spec.agent.name
-    n_states, n_actions = int(env.observation_space.n), int(env.action_space.n)  # type: ignore[attr-defined]
-    agent = make_agent(
-        name,
-        n_states,
-        n_actions,
-        spec.agent.params_dict(),
-        np.random.default_rng(agent_seed),
-        **_agent_context(name, env),
-    )
+    agent = _agent(spec, env, np.random.default_rng(agent_seed))
     max_steps = config.max_steps or int(getattr(env, "max_episode_steps", None) or 10_000)
-    train = _trainer(env)
-    log = train(
+    log = _trainer(env)(
         agent,
         env,
         config.episodes,
@@ -200,7 +287,7 @@ def run_trial(spec: RunSpec) -> TrialResult:
         arrays.update(_world_arrays(agent.q, grid_map, env))
     coordinates = {
         "agent": spec.agent.label,
-        "algorithm": name,
+        "algorithm": spec.agent.name,
         "map": spec.map.label,
         "preset": spec.preset,
         "seed": spec.seed,
@@ -210,9 +297,19 @@ def run_trial(spec: RunSpec) -> TrialResult:
     return TrialResult(spec.run_id, coordinates, episodes, summary, arrays)
 
 
-def check_config(config: ExperimentConfig) -> None:
+def check_config(config: ExperimentConfig, path: Path | str | None = None) -> None:
     """Check what only the library knows before any run starts: agent names and hyperparameters,
-    environment options, map files. Raises UserError naming the problem."""
+    environment options, map files. Raises UserError naming the problem (and the config file
+    ``path`` when given)."""
+    try:
+        _check_config(config)
+    except UserError as error:
+        if path is None:
+            raise
+        raise UserError(f"{path}: {error}") from None
+
+
+def _check_config(config: ExperimentConfig) -> None:
     for agent in config.agents:
         make_config(agent.name, agent.params_dict())
     for map_spec in config.maps:
