@@ -7,7 +7,9 @@ down that distance field from the robot's cell, and finally the start position i
 The controlled point is the pivot P = (x, y) + x_ICR (cos ψ, sin ψ): the body point that stays
 still when a skid-steer robot turns on the spot (its lateral skid v_y = −x_ICR·ω cancels there,
 Kozłowski & Pazderski 2004), so turning never undoes progress. Its goal is the start position
-shifted by x_ICR along the start heading (+x).
+shifted by x_ICR along the start heading. x_ICR is one value, or one per coarse region (the
+real-time loop passes its online estimates, realtime/transition.py ``IcrEstimates``): a floor
+that shifts the ICR moves a pivot computed with the nominal value at every turn.
 
 Control law (turn-then-drive, a unicycle go-to-goal controller; see e.g. Siegwart, Nourbakhsh &
 Scaramuzza (2011) §3.6): with bearing error e = wrap(atan2(Δy, Δx) − ψ) from P to the target,
@@ -38,6 +40,7 @@ class HomingController:
     Args:
         grid_map: walls and start cell. grid: cell geometry. wheel_speed: ω_max [rad/s].
         tolerance: position tolerance [m]. lookahead: cells ahead on the path.
+        x_icr: x_ICR [m], one value or float64 (n_regions,) indexed by the flat coarse region.
     """
 
     def __init__(
@@ -47,7 +50,7 @@ class HomingController:
         wheel_speed: float,
         tolerance: float = 0.02,
         lookahead: int = 2,
-        x_icr: float = 0.05,
+        x_icr: float | np.ndarray = 0.05,
     ) -> None:
         self.grid = grid
         self.wheel_speed = wheel_speed
@@ -57,9 +60,12 @@ class HomingController:
         self.gain = 1.5
         self.heading_target = 0.25 * 2.0 * math.pi / grid.n_headings
         self.heading_tolerance = self.heading_target * 0.8
-        self.x_icr = x_icr
+        self.x_icr = np.broadcast_to(np.asarray(x_icr, dtype=np.float64), (grid.n_regions,))
         start = grid.cell_centre(*grid_map.start)
-        self.start = (start[0] + x_icr, start[1])  # the pivot's goal (start heading 0)
+        offset = self.x_icr[grid.region(*start)]
+        heading = self.heading_target
+        # the pivot's goal: where it is when the body centre is on the start, at the start heading
+        self.start = (start[0] + offset * math.cos(heading), start[1] + offset * math.sin(heading))
         self.start_cell = grid_map.start
         self.distance = cell_distances(grid_map.occupancy, grid_map.start)
         self.aligning = False
@@ -103,8 +109,9 @@ class HomingController:
 
     def command(self, pose: Pose) -> tuple[float, float] | None:
         """(ω_L, ω_R) [rad/s] for the next control period, or None once home."""
-        px = pose.x + self.x_icr * math.cos(pose.heading)
-        py = pose.y + self.x_icr * math.sin(pose.heading)
+        offset = self.x_icr[self.grid.region(pose.x, pose.y)]
+        px = pose.x + offset * math.cos(pose.heading)
+        py = pose.y + offset * math.sin(pose.heading)
         away = math.hypot(px - self.start[0], py - self.start[1])
         # hysteresis: turning on the spot slides a skid-steer robot sideways (x_ICR ≠ 0)
         self.aligning = away <= (4.0 if self.aligning else 1.0) * self.tolerance

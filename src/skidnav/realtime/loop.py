@@ -34,7 +34,7 @@ from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.driver import Pose, RobotDriver
 from skidnav.realtime.homing import HomingController
 from skidnav.realtime.safety import SafetyLimits, SafetyMonitor
-from skidnav.realtime.transition import WheelSpeedStats, log_row, reward_of
+from skidnav.realtime.transition import IcrEstimates, WheelSpeedStats, log_row, reward_of
 from skidnav.robot.kinematics import body_velocities, commanded_wheel_speeds, euler_step
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
@@ -115,6 +115,7 @@ class RealtimeLoop:
         self.log = RunLog(out / "run.jsonl")
         self.checkpoints = Checkpoints(out / "checkpoints", self.settings.keep_checkpoints)
         self.stats = WheelSpeedStats(self.grid.n_regions, self.robot)
+        self.icr = IcrEstimates(self.grid.n_regions, self.robot.x_icr)
         self.results: list[EpisodeResult] = []
         self.interrupted = False
         self.waiting_for_operator = False
@@ -154,6 +155,7 @@ class RealtimeLoop:
             "episodes_done": len(self.results),
             "results": [asdict(result) for result in self.results],
             "wheel_speed_stats": self.stats.stats.tolist(),
+            "icr_sums": self.icr.sums.tolist(),
             "run": asdict(self.settings),
         }
 
@@ -163,6 +165,9 @@ class RealtimeLoop:
         stats = np.asarray(state["wheel_speed_stats"], dtype=np.float64)
         if not self.stats.load(stats):
             log.warning("checkpoint wheel-speed statistics of shape %s ignored", stats.shape)
+        icr_sums = np.asarray(state.get("icr_sums", self.icr.sums), dtype=np.float64)
+        if icr_sums.shape == self.icr.sums.shape:
+            self.icr.sums[:] = icr_sums
 
     def interrupt(self, reason: str) -> None:
         """Called from a signal handler: stop now and end the run."""
@@ -265,6 +270,7 @@ class RealtimeLoop:
     ) -> tuple[int, bool]:
         """Act, score, observe; returns (next state, episode over)."""
         end, rows, collided = self._act(action)
+        self.icr.add_rows(rows)
         if action == 0:
             self.stats.add_rows(rows)
         reward, terminated = reward_of(end, collided, self.grid_map.goal, self.grid, self.stats)
@@ -348,17 +354,19 @@ class RealtimeLoop:
             self.grid,
             self.robot.wheel_speed,
             self.settings.homing_tolerance,
-            x_icr=self.robot.x_icr,
+            x_icr=self.icr.values(),
         )
-        periods = math.ceil(self.settings.homing_timeout / self.settings.period)
-        start = time.monotonic()
+        period, period_wall = self.settings.period, self.settings.period_wall
         self.log.write("homing_start", {})
-        for k in range(periods):
-            command = controller.command(self._pose())
+        pose, stamp = self._measure()
+        for _ in range(math.ceil(self.settings.homing_timeout / period)):
+            command = controller.command(pose)
             if command is None:
                 break
             self._command(*command)
-            self._wait_until(start + (k + 1) * self.settings.period_wall)
+            # one command per period of the robot's clock, as in _act: a controller fed the
+            # same pose twice over a lagging link overshoots and circles on a slippery floor
+            pose, stamp = self._wait_for_stamp(stamp + period, time.monotonic() + 2 * period_wall)
         else:
             log.warning("homing timed out; the next episode starts where the robot is")
         self._command(0.0, 0.0)

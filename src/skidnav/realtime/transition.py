@@ -133,6 +133,38 @@ class WheelSpeedStats:
         return False
 
 
+class IcrEstimates:
+    """Per-region estimates of the longitudinal ICR offset x_ICR [m] from kinematic log rows:
+    the skid-steer model says v_y = −x_ICR·ω (Kozłowski & Pazderski 2004), so x_ICR is the
+    least-squares slope of −v_y on ω, shrunk towards the nominal value (ridge regression with
+    ``prior_weight`` [rad²/s²], about a quarter of one turn action's rows).
+
+    The homing controller turns about the pivot this estimate puts under the robot; with the
+    nominal x_ICR on a floor that shifts it, every turn moves the controller's pivot and homing
+    can circle for ever.
+
+    Attributes:
+        sums: float64 (n_regions, 2): Σ −v_y·ω [m/s²] and Σ ω² [rad²/s²] per region.
+    """
+
+    def __init__(self, n_regions: int, nominal: float, prior_weight: float = 1.0) -> None:
+        self.sums = np.zeros((n_regions, 2), dtype=np.float64)
+        self.nominal = nominal
+        self.prior_weight = prior_weight
+
+    def add_rows(self, rows: np.ndarray) -> None:
+        """Record kinematic log rows (columns of ``LOG_COLUMNS``)."""
+        for row in rows:
+            region, v_y, yaw_rate = int(row[0]), row[4], row[5]
+            self.sums[region, 0] -= v_y * yaw_rate
+            self.sums[region, 1] += yaw_rate * yaw_rate
+
+    def values(self) -> np.ndarray:
+        """float64 (n_regions,): the estimate of every region [m]."""
+        weight = self.prior_weight
+        return (weight * self.nominal + self.sums[:, 0]) / (weight + self.sums[:, 1])
+
+
 def reward_of(
     pose: Pose,
     collided: bool,
