@@ -11,8 +11,8 @@ import pytest
 from skidnav.realtime.arena import build_map, seed_streams, start_pose
 from skidnav.realtime.driver import Pose
 from skidnav.realtime.homing import HomingController
-from skidnav.realtime.sim_robot import SimRobotConfig, build_robot
-from skidnav.realtime.transition import WheelSpeedStats, log_row, reward_of
+from skidnav.realtime.sim_robot import SimRobot, SimRobotConfig, build_robot
+from skidnav.realtime.transition import IcrEstimates, WheelSpeedStats, log_row, reward_of
 from skidnav.robot.kinematics import body_velocities, euler_step
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
@@ -149,3 +149,52 @@ def test_wheel_speed_stats_load_the_earlier_welford_form() -> None:
     assert stats.load(old)
     assert stats.variance(5) == pytest.approx(np.var(values, ddof=1))
     assert not stats.load(np.zeros((7, 2)))
+
+
+def spin_rows(robot: SimRobot, periods: int) -> np.ndarray:
+    """Kinematic log rows of the robot spinning on the spot, left then right, from its measured
+    poses (0.1 s apart)."""
+    rows = []
+    before = Pose(0.0, *robot.measured_pose())
+    for k in range(periods):
+        command = (-1.7, 1.7) if k < periods // 2 else (1.7, -1.7)
+        robot.command(*command)
+        robot.step()
+        after = Pose(0.0, *robot.measured_pose())
+        rows.append(log_row(before, after, 0.1, GRID.region(before.x, before.y), command))
+        before = after
+    return np.array(rows)
+
+
+def test_homing_with_the_estimated_icr_reaches_the_start_on_a_shifted_floor() -> None:
+    """A floor whose x_ICR is −3 cm instead of the nominal +5 cm: spinning at the start gives
+    the estimate; homing about that pivot still ends in the start state."""
+    robot = build_robot(
+        slip="rough",
+        drift=0.0,
+        drift_period=600.0,
+        map_spec="free",
+        seed=2,
+        config=SimRobotConfig(pose_noise=0.001),
+    )
+    robot.slip.x_icr[:] = -0.03
+    estimates = IcrEstimates(GRID.n_regions, RobotParams().x_icr)
+    estimates.add_rows(spin_rows(robot, 400))
+    seen = estimates.sums[:, 1] > 20.0  # the spin crosses a corner of four coarse regions
+    assert seen.sum() >= 2
+    assert estimates.values()[seen] == pytest.approx(-0.03, abs=0.005)
+    unseen = estimates.sums[:, 1] == 0.0
+    assert np.all(estimates.values()[unseen] == RobotParams().x_icr)  # the prior there
+    grid_map = build_map("free", 2, GRID)
+    controller = HomingController(grid_map, GRID, 1.7, tolerance=0.008, x_icr=estimates.values())
+    x, y = GRID.cell_centre(grid_map.start[0] + 6, grid_map.start[1] + 5)
+    robot.pose = (x, y, 2.0)
+    for _ in range(3000):
+        command = controller.command(Pose(0.0, *robot.measured_pose()))
+        if command is None:
+            break
+        robot.command(*command)
+        robot.step()
+    else:
+        pytest.fail("homing did not finish in 300 s of robot time")
+    assert GRID.state(*robot.pose) == GRID.state(*start_pose(grid_map, GRID))
