@@ -147,6 +147,70 @@ def test_corrupt_or_missing_files_raise_one_line_errors(tmp_path: Path) -> None:
         load_agent(tmp_path / "missing")
 
 
+def test_damaged_archives_and_json_name_the_file(tmp_path: Path) -> None:
+    agent, _ = trained("dyna-q", 2, planning_steps=2)
+    npz_path, json_path = agent.save(tmp_path / "a")
+    data, meta = npz_path.read_bytes(), json_path.read_text()
+    # Flipped bytes anywhere in the compressed archive: bad deflate streams (zlib.error), bad CRCs,
+    # a bad compression-method field (NotImplementedError), damaged headers; some land in fields
+    # nobody reads and the agent loads.
+    failures = 0
+    for offset in range(0, len(data), 7):
+        damaged = bytearray(data)
+        damaged[offset] ^= 0xFF
+        npz_path.write_bytes(bytes(damaged))
+        try:
+            load_agent(tmp_path / "a")
+        except CorruptFileError as error:
+            assert str(error).startswith(str(npz_path)) and "\n" not in str(error)
+            failures += 1
+    assert failures > len(data) // 14
+    npz_path.write_bytes(data)
+    for not_an_object in ("[]", "null", "42", '"agent"'):
+        json_path.write_text(not_an_object)
+        with pytest.raises(CorruptFileError, match=f"^{json_path}: .*JSON object"):
+            load_agent(tmp_path / "a")
+    json_path.write_text(meta.replace('"steps": ', '"steps": -'))
+    with pytest.raises(CorruptFileError, match="counter steps"):
+        load_agent(tmp_path / "a")
+    json_path.write_text(meta)
+    arrays = dict(np.load(npz_path))
+    np.savez_compressed(npz_path, **{**arrays, "q": arrays["q"].astype(np.float32)})
+    with pytest.raises(CorruptFileError, match=r"float32 of shape \(54, 4\), expected float64"):
+        load_agent(tmp_path / "a")
+    del arrays["model.pair_key"]
+    np.savez_compressed(npz_path, **arrays)
+    with pytest.raises(
+        CorruptFileError, match=f"^{npz_path}: .*missing model array 'model.pair_key'"
+    ):
+        load_agent(tmp_path / "a")
+
+
+@pytest.mark.parametrize(
+    ("name", "array", "change", "problem"),
+    [
+        ("dyna-q-plus", "visited_states", lambda v: np.append(v, v[0]), "visited states repeat"),
+        ("dyna-q-plus", "last_tried", lambda v: v + 10**6, "last_tried"),
+        # state 11 is the wall cell (1, 2): never the start of a transition
+        ("prioritized-sweeping", "queue_items", lambda v: np.r_[11 * 4, v[1:]], "never observed"),
+        ("dyna-q", "model.entry_sibling", np.zeros_like, "model arrays"),
+        ("dyna-q", "model.pair_key", lambda v: v + 54 * 4, "outside the Q table"),
+    ],
+)
+def test_inconsistent_state_arrays_are_rejected(
+    name: str, array: str, change: object, problem: str, tmp_path: Path
+) -> None:
+    agent, _ = trained(name, 3, seed=1, planning_steps=5)
+    npz_path, _ = agent.save(tmp_path / "a")
+    with np.load(npz_path) as archive:
+        arrays = {key: archive[key] for key in archive.files}
+    assert arrays[array].size > 0
+    arrays[array] = change(arrays[array])  # type: ignore[operator]
+    np.savez_compressed(npz_path, **arrays)
+    with pytest.raises(CorruptFileError, match=problem):
+        load_agent(tmp_path / "a")
+
+
 def test_memory_of_dyna_q_model_on_a_large_state_space() -> None:
     n_states = 360_000
     agent = make_agent("dyna-q", n_states, 4, {"planning_steps": 1}, np.random.default_rng(0))

@@ -16,6 +16,7 @@ from skidnav.agents.fast_training import train_agent_fast
 from skidnav.agents.registry import load_agent, make_agent
 from skidnav.agents.training import greedy_rollout, train_agent
 from skidnav.envs.mazes import dyna_maze
+from skidnav.errors import CorruptFileError
 from skidnav.kernels import kinematic_planning as kp
 from skidnav.kernels.navigation import transition
 from skidnav.robot.params import RobotParams
@@ -172,3 +173,84 @@ def test_save_load_round_trip_continues_identically(name: str, tmp_path: Path) -
     train_agent_fast(loaded, twin, 3)
     assert np.array_equal(loaded.q, agent.q)
     assert loaded.planning_updates == agent.planning_updates
+
+
+def test_kinematic_planning_only_with_a_discretization_and_kinematic_logs() -> None:
+    # The size of the thesis grid alone is no geometry (e.g. any env with 12,500 states).
+    guessed = make_agent("dyna-kinematic", 12_500, 4, None, np.random.default_rng(0))
+    assert guessed.kinematic is None and guessed.discretization is None
+    grid = Discretization()
+    rng = np.random.default_rng(1)
+    states = rng.integers(0, 200, (300, 2)).tolist()
+    transitions = [
+        (s, a, s2) for (s, s2), a in zip(states, rng.integers(0, 4, 300).tolist(), strict=True)
+    ]
+    unvisited_values = {}
+    for logs in (False, True):
+        agent = make_agent(
+            "dyna-kinematic", grid.n_states, 4, {"planning_steps": 10}, np.random.default_rng(0),
+            discretization=grid,
+        )  # fmt: skip
+        assert agent.kinematic is not None
+        info = {"kinematic_log": np.zeros((0, 6))} if logs else {}
+        for state, action, next_state in transitions:
+            agent.observe(state, action, -1.0, next_state, False, False, info)
+        visited = np.zeros(agent.q.size, dtype=bool)
+        visited[agent.model.visited_pairs()] = True
+        unvisited_values[logs] = int(np.count_nonzero(agent.q.ravel()[~visited]))
+        assert agent.planner.counters[kp.USE_KINEMATIC] == int(logs)
+    assert unvisited_values == {False: 0, True: unvisited_values[True]} and unvisited_values[True]
+
+
+@pytest.fixture(scope="module")
+def saved_dyna_full(tmp_path_factory: pytest.TempPathFactory) -> dict[str, np.ndarray]:
+    env = small_env()
+    agent = make("dyna-full", env, seed=2)
+    train_agent_fast(agent, env, 12, seed=2)
+    assert agent.trajectories and agent.planner.counters[kp.N_NEIGHBOURS] > 0
+    folder = tmp_path_factory.mktemp("dyna-full")
+    npz_path, json_path = agent.save(folder / "agent")
+    with np.load(npz_path) as archive:
+        arrays = {key: archive[key] for key in archive.files}
+    return {"json": json_path.read_text(), **arrays}  # type: ignore[dict-item]
+
+
+def _with(arrays: dict[str, Any], name: str, change: Any) -> dict[str, Any]:
+    values = np.array(arrays[name])
+    change(values)
+    return {**arrays, name: values}
+
+
+def _set(index: int, value: int) -> Any:
+    return lambda values: values.__setitem__(index, value)
+
+
+@pytest.mark.parametrize(
+    ("name", "change", "problem"),
+    [
+        ("planner_counters", _set(kp.N_TRAJECTORY, 10**7), "N_TRAJECTORY"),
+        ("planner_counters", _set(kp.TRAJECTORY_CURSOR, 10**7), "TRAJECTORY_CURSOR"),
+        ("planner_counters", _set(kp.N_NEIGHBOURS, 0), "N_NEIGHBOURS"),
+        ("planner_counters", _set(kp.NEIGHBOUR_CURSOR, -1), "NEIGHBOUR_CURSOR"),
+        ("planner_counters", _set(kp.EPISODE_LENGTH, 10**6), "EPISODE_LENGTH"),
+        ("planner_counters", _set(kp.USE_KINEMATIC, 2), "USE_KINEMATIC"),
+        ("planner_trajectory_keys", _set(0, 10**9), "outside the Q table"),
+        ("planner_neighbour_keys", _set(-1, -5), "outside the Q table"),
+        ("trajectory_keys", _set(0, 4 * 810), "outside the Q table"),
+        ("trajectory_lengths", _set(0, 1000), "trajectory lengths"),
+        ("planner_reward_stats", _set(0, np.nan), "reward_stats"),
+        ("model.entry_sibling", lambda values: values.fill(0), "model arrays"),
+        ("kinematic_coefficients", _set(0, np.inf), "kinematic model coefficients"),
+        ("kinematic_fitted_counts", _set(0, 10**6), "kinematic model sample counts"),
+    ],
+)
+def test_files_with_valid_checksums_but_inconsistent_contents_are_rejected(
+    saved_dyna_full: dict[str, Any], tmp_path: Path, name: str, change: Any, problem: str
+) -> None:
+    arrays = dict(saved_dyna_full)
+    (tmp_path / "agent.json").write_text(arrays.pop("json"))
+    np.savez_compressed(tmp_path / "agent.npz", **_with(arrays, name, change))
+    with pytest.raises(CorruptFileError, match=problem):
+        load_agent(tmp_path / "agent")
+    np.savez_compressed(tmp_path / "agent.npz", **arrays)
+    load_agent(tmp_path / "agent")  # the untouched file loads

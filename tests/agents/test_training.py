@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import gymnasium as gym
 import numpy as np
+import pytest
 
-from skidnav.agents.registry import make_agent
+from skidnav.agents.registry import available_agents, make_agent
 from skidnav.agents.training import TrainingLog, train_agent, train_for_steps
 from skidnav.envs.mazes import blocking_maze, dyna_maze
 
@@ -36,6 +37,28 @@ def test_cliff_walking_learns_the_cliff_path() -> None:
     )
     log = train_agent(agent, env, 60, max_steps=500, greedy_eval_env=gym.make("CliffWalking-v1"))
     assert log.greedy_lengths[-1] == 13  # Q-learning's optimal path along the cliff
+
+
+@pytest.mark.parametrize("name", available_agents())
+def test_every_agent_learns_the_cliff_path(name: str) -> None:
+    """Every registered agent on a Gymnasium toy-text env (no navigation geometry): after 100
+    episodes (Q-learning needs ~65, the planning agents ~15) the greedy policy has walked the
+    13-step cliff path at every one of the last 20 evaluations."""
+    options = {"alpha": 0.5} if name == "q-learning" else {"alpha": 0.5, "planning_steps": 10}
+    agent = make_agent(name, 48, 4, options, np.random.default_rng(0))
+    log = train_agent(
+        agent, gym.make("CliffWalking-v1"), 100, max_steps=500,
+        greedy_eval_env=gym.make("CliffWalking-v1"), seed=0,
+    )  # fmt: skip
+    assert log.greedy_lengths[-20:].tolist() == [13] * 20
+
+
+@pytest.mark.parametrize("name", available_agents())
+def test_every_agent_takes_six_actions_on_taxi(name: str) -> None:
+    agent = make_agent(name, 500, 6, {"alpha": 0.5}, np.random.default_rng(0))
+    log = train_agent(agent, gym.make("Taxi-v4"), 3, max_steps=100, seed=0)
+    assert agent.q.shape == (500, 6) and agent.steps == log.lengths.sum()
+    assert np.count_nonzero(agent.q) > 10
 
 
 def test_taxi_is_solved_by_dyna_q() -> None:

@@ -109,3 +109,113 @@ def test_round_trip_and_corrupt_arrays() -> None:
     del broken["model.pair_key"]
     with pytest.raises(CorruptFileError):
         MultinomialModel.from_arrays(broken)
+
+
+def _stochastic_model() -> MultinomialModel:
+    rng = np.random.default_rng(4)
+    model = MultinomialModel(3, capacity=4)
+    for _ in range(3000):
+        s, a = int(rng.integers(60)), int(rng.integers(3))
+        s2 = (s + a + int(rng.integers(3))) % 60
+        model.observe(s, a, float(rng.normal()), s2, bool(s2 == 0 and rng.random() < 0.5))
+    return model
+
+
+def _tampered(model: MultinomialModel, name: str, change: object) -> dict[str, np.ndarray]:
+    saved = model.to_arrays()
+    values = saved[f"model.{name}"].copy()
+    if callable(change):
+        change(values)
+    else:
+        values[...] = change
+    saved[f"model.{name}"] = values
+    return saved
+
+
+def _swap_first_two(values: np.ndarray) -> None:
+    values[[0, 1]] = values[[1, 0]]
+
+
+@pytest.mark.parametrize(
+    ("name", "change"),
+    [
+        ("entry_sibling", 0),  # every outcome list loops on entry 0
+        ("entry_sibling", lambda v: v.__setitem__(5, 5)),  # a self-loop
+        ("entry_sibling", lambda v: v.__setitem__(3, v.size + 2)),  # out of range
+        ("entry_sibling", lambda v: v.__setitem__(np.flatnonzero(v >= 0)[0], -1)),  # cut a list
+        ("entry_pred_link", 0),
+        ("entry_pred_link", lambda v: v.__setitem__(np.flatnonzero(v >= 0)[0], v.size - 1)),
+        ("pair_head", _swap_first_two),  # each pair heads the other's list
+        ("pair_head", lambda v: v.__setitem__(0, -1)),
+        ("target_head", lambda v: v.__setitem__(0, v[1])),
+        ("pair_total", lambda v: v.__setitem__(7, v[7] + 1)),  # counts no longer add up
+        ("entry_count", lambda v: v.__setitem__(7, 0)),
+        ("entry_terminal_count", lambda v: v.__setitem__(2, v[2] + 10**6)),
+        ("entry_pair", _swap_first_two),
+        ("entry_next_state", lambda v: v.__setitem__(4, v[4] + 1)),  # not its target's state
+        ("entry_reward_sum", np.nan),
+        ("pair_key", lambda v: v.__setitem__(1, v[0])),  # two slots for one pair
+        ("pair_key", lambda v: v.__setitem__(1, -4)),
+    ],
+)
+def test_tampered_arrays_are_rejected(name: str, change: object) -> None:
+    model = _stochastic_model()
+    with pytest.raises(CorruptFileError, match="inconsistent multinomial model arrays"):
+        MultinomialModel.from_arrays(_tampered(model, name, change))
+
+
+def test_arrays_of_the_wrong_length_or_type_are_rejected() -> None:
+    model = _stochastic_model()
+    saved = model.to_arrays()
+    for name, values in (
+        ("model.entry_count", saved["model.entry_count"][:-1]),
+        ("model.pair_head", saved["model.pair_head"].astype(np.float64)),
+        ("model.target_head", saved["model.target_head"].reshape(1, -1)),
+    ):
+        with pytest.raises(CorruptFileError, match=name.removeprefix("model.")):
+            MultinomialModel.from_arrays({**saved, name: values})
+
+
+def _most_probable_by_definition(model: MultinomialModel, pair: int, uniform: float) -> int:
+    """Walk the outcome list: the int(uniform · n_ties)-th outcome of the largest count."""
+    arrays, entries = model.arrays, []
+    entry = int(arrays.pair_head[pair])
+    while entry >= 0:
+        entries.append(entry)
+        entry = int(arrays.entry_sibling[entry])
+    counts = arrays.entry_count[entries]
+    tied = [e for e, count in zip(entries, counts, strict=True) if count == counts.max()]
+    return tied[int(uniform * len(tied))]
+
+
+def test_most_probable_cache_matches_the_definition_live_and_after_loading() -> None:
+    model = _stochastic_model()
+    loaded = MultinomialModel.from_arrays(model.to_arrays())
+    q = np.random.default_rng(0).normal(size=(60, 3))
+    n_pairs = model.n_pairs
+    assert 0 < int((model.arrays.pair_ties[:n_pairs] > 1).sum()) < n_pairs  # ties and no ties
+    for current in (model, loaded):
+        arrays = current.arrays
+        for pair in range(n_pairs):
+            for uniform in (0.0, 0.49, 0.99):
+                entry = _most_probable_by_definition(current, pair, uniform)
+                count = arrays.entry_count[entry]
+                expected = (
+                    arrays.entry_reward_sum[entry] / count
+                    + 0.9
+                    * (1.0 - arrays.entry_terminal_count[entry] / count)
+                    * q[arrays.entry_next_state[entry]].max()
+                )
+                if arrays.entry_terminal_count[entry] == count:
+                    expected = arrays.entry_reward_sum[entry] / count
+                got = model_target(arrays, q, pair, MOST_PROBABLE, 0.9, uniform)
+                assert got == expected, (pair, uniform)
+    ties = model.arrays.pair_ties[:n_pairs]
+    np.testing.assert_array_equal(loaded.arrays.pair_ties[:n_pairs], ties)
+    unique = ties == 1  # with ties the cached outcome may be any of the tied ones
+    for name in ("pair_best", "pair_best_next", "pair_best_reward", "pair_best_continuation"):
+        np.testing.assert_array_equal(
+            getattr(loaded.arrays, name)[:n_pairs][unique],
+            getattr(model.arrays, name)[:n_pairs][unique],
+            name,
+        )

@@ -175,11 +175,18 @@ class TabularAgent:
         """Fill a freshly built agent from saved data; CorruptFileError when inconsistent."""
         q = arrays["q"]
         if q.shape != self.q.shape or q.dtype != np.float64:
-            raise CorruptFileError(f"saved Q table has shape {q.shape}, expected {self.q.shape}")
+            raise CorruptFileError(
+                f"saved Q table is {q.dtype} of shape {q.shape}, expected float64 of shape "
+                f"{self.q.shape}"
+            )
         self.q[:] = q
-        counters = meta["counters"]
-        self.steps = int(counters["steps"])
-        self.episodes = int(counters["episodes"])
-        self.planning_updates = int(counters["planning_updates"])
-        self.rng = generator_from_state(meta["rng"])
+        counters, rng_state = meta["counters"], meta["rng"]
+        if not isinstance(counters, Mapping) or not isinstance(rng_state, Mapping):
+            raise CorruptFileError("saved counters and generator state must be JSON objects")
+        for name in ("steps", "episodes", "planning_updates"):
+            value = counters[name]
+            if not isinstance(value, int) or value < 0:
+                raise CorruptFileError(f"saved counter {name} is {value!r}, expected an int >= 0")
+            setattr(self, name, value)
+        self.rng = generator_from_state(rng_state)
         self._restore_state_arrays(arrays)

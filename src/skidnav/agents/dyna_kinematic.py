@@ -103,8 +103,10 @@ class ModelBasedAgent(DynaQAgent):
 
     Context keyword arguments (from :func:`~skidnav.agents.registry.make_agent`): ``task`` (a
     :class:`NavigationTask`, e.g. ``env.unwrapped.task``) or ``robot`` and ``discretization``.
-    Without them the thesis robot and grid are assumed when ``n_states`` is 12,500; otherwise
-    (a non-navigation env) the agent has no geometry: no kinematic model, no spatial neighbours.
+    Without a discretization the agent has no geometry, whatever ``n_states`` is: no kinematic
+    model, no spatial neighbours. With one, kinematic planning starts at the first real step whose
+    ``info`` carries a ``kinematic_log`` (an env that never supplies one gets plain replay, not
+    predictions of the untrained prior).
     """
 
     uses_kinematic: ClassVar[bool] = False
@@ -124,8 +126,6 @@ class ModelBasedAgent(DynaQAgent):
         super().__init__(n_states, n_actions, config, rng)
         if task is not None:
             robot, discretization = geometry_from_task(task)
-        elif discretization is None and n_states == Discretization().n_states:
-            discretization = Discretization()
         self._set_geometry(robot or RobotParams(), discretization)
 
     def _set_geometry(self, robot: RobotParams, grid: Discretization | None) -> None:
@@ -152,8 +152,7 @@ class ModelBasedAgent(DynaQAgent):
         shape = (self.kernel_grid.n_x, self.kernel_grid.n_y)
         n_regions = self.kernel_grid.regions_x * self.kernel_grid.regions_y
         velocities = self.kinematic.velocities if self.kinematic else np.zeros((1, 4, 3))
-        counters = np.zeros(kp.N_COUNTERS, dtype=np.int64)
-        counters[kp.USE_KINEMATIC] = int(self.kinematic is not None)
+        counters = np.zeros(kp.N_COUNTERS, dtype=np.int64)  # USE_KINEMATIC set by the first log
         return kp.PlannerArrays(
             pred_next=np.zeros((n_table, self.n_actions), dtype=np.int32),
             pred_outcome=np.zeros((n_table, self.n_actions), dtype=np.int8),
@@ -205,6 +204,8 @@ class ModelBasedAgent(DynaQAgent):
         if self.discretization is None:
             pose[0] = -1.0
         collided = bool(info.get("collision", False))
+        if self.kinematic is not None and "kinematic_log" in info:
+            self.planner.counters[kp.USE_KINEMATIC] = 1
         kp.planner_observe(
             self.planner, state, action, reward, next_state, terminated, collided, pose,
             self.kernel_robot, self.kernel_grid,
@@ -320,20 +321,56 @@ class ModelBasedAgent(DynaQAgent):
             if saved.shape != getattr(planner, name).shape:
                 raise ValueError(f"saved planner {name} has shape {saved.shape}")
             getattr(planner, name)[...] = saved
-        self.planner = planner._replace(
-            trajectory_keys=_at_least_one(arrays["planner_trajectory_keys"]),
-            neighbour_keys=_at_least_one(arrays["planner_neighbour_keys"]),
+        sweeps = [_saved_keys(arrays, f"planner_{name}_keys", self.q.size)
+                  for name in ("trajectory", "neighbour", "episode")]  # fmt: skip
+        _check_counters(
+            planner.counters, [keys.size for keys in sweeps], self.kinematic is not None
         )
-        self.reserve_episode(0)
-        episode = np.asarray(arrays["planner_episode_keys"], dtype=np.int64)
-        self.reserve_episode(episode.size)
-        self.planner.episode_keys[: episode.size] = episode
-        splits = np.cumsum(arrays["trajectory_lengths"])[:-1]
-        keys = np.asarray(arrays["trajectory_keys"], dtype=np.int64)
-        self.trajectories = np.split(keys, splits) if arrays["trajectory_lengths"].size else []
+        if not np.isfinite(planner.reward_stats).all() or (planner.reward_stats[:, 1] < 0).any():
+            raise ValueError("saved planner reward_stats are not finite counts")
+        self.planner = planner._replace(
+            trajectory_keys=_at_least_one(sweeps[0]), neighbour_keys=_at_least_one(sweeps[1])
+        )
+        self.reserve_episode(0)  # room for the saved EPISODE_LENGTH pairs
+        self.planner.episode_keys[: sweeps[2].size] = sweeps[2]
+        keys = _saved_keys(arrays, "trajectory_keys", self.q.size)
+        lengths = np.asarray(arrays["trajectory_lengths"], dtype=np.int64)
+        if (lengths < 1).any() or lengths.sum() != keys.size:
+            raise ValueError("saved trajectory lengths do not match the trajectory keys")
+        self.trajectories = np.split(keys, np.cumsum(lengths)[:-1]) if lengths.size else []
         if self.kinematic is not None:
             self.kinematic.load_arrays(dict(arrays))
             self._refresh_table()
+
+
+def _saved_keys(arrays: Mapping[str, np.ndarray], name: str, n_keys: int) -> np.ndarray:
+    """Saved pair keys ``arrays[name]`` as int64; ValueError unless each is in [0, n_keys)."""
+    keys = np.asarray(arrays[name])
+    if keys.ndim != 1 or (keys.size and keys.dtype.kind not in "iu"):
+        raise ValueError(f"saved {name} are not a list of integers")
+    keys = keys.astype(np.int64)
+    if keys.size and (keys.min() < 0 or keys.max() >= n_keys):
+        raise ValueError(f"saved {name} refer to pairs outside the Q table")
+    return keys
+
+
+def _check_counters(counters: np.ndarray, sizes: list[int], has_kinematic: bool) -> None:
+    """ValueError unless the planner counters agree with the saved sweep and episode lists
+    (``sizes``: trajectory, neighbour, episode keys): the compiled planner indexes by them."""
+    n_trajectory, n_neighbours, n_episode = sizes
+    expected = {
+        "N_TRAJECTORY": counters[kp.N_TRAJECTORY] == n_trajectory,
+        "TRAJECTORY_CURSOR": 0 <= counters[kp.TRAJECTORY_CURSOR] < max(n_trajectory, 1),
+        "N_NEIGHBOURS": counters[kp.N_NEIGHBOURS] == n_neighbours,
+        "NEIGHBOUR_CURSOR": 0 <= counters[kp.NEIGHBOUR_CURSOR] < max(n_neighbours, 1),
+        "EPISODE_LENGTH": counters[kp.EPISODE_LENGTH] == n_episode,
+        "REFRESH_RADIUS": counters[kp.REFRESH_RADIUS] >= 0,
+        "USE_KINEMATIC": counters[kp.USE_KINEMATIC] in ((0, 1) if has_kinematic else (0,)),
+        "EPISODE_TERMINATED": counters[kp.EPISODE_TERMINATED] in (0, 1),
+    }
+    wrong = [name for name, ok in expected.items() if not ok]
+    if wrong:
+        raise ValueError(f"saved planner counters inconsistent with its arrays: {', '.join(wrong)}")
 
 
 def _first_occurrences(keys: np.ndarray) -> np.ndarray:

@@ -88,10 +88,14 @@ class DynaQPlusAgent(DynaQAgent):
         last_tried = arrays["last_tried"]
         if last_tried.shape != self.last_tried.shape:
             raise ValueError(f"last_tried has shape {last_tried.shape}")
+        if last_tried.size and (last_tried.min() < 0 or last_tried.max() > self.steps):
+            raise ValueError(f"last_tried outside [0, {self.steps}] real steps")
         self.last_tried[:] = last_tried
         visited = np.array(arrays["visited_states"], dtype=np.int64)
         if visited.size and (visited.min() < 0 or visited.max() >= self.n_states):
             raise ValueError("visited state out of range")
+        if np.any(np.diff(np.sort(visited)) == 0):
+            raise ValueError("visited states repeat")  # the compiled trainer holds n_states
         self.visited_states = visited
         self._is_visited[:] = False
         self._is_visited[self.visited_states] = True

@@ -21,6 +21,7 @@ import numpy as np
 from skidnav.agents.core import TabularAgent
 from skidnav.agents.dyna_kinematic import ModelBasedAgent
 from skidnav.agents.training import TrainingLog, train_agent
+from skidnav.kernels import kinematic_planning as kp
 from skidnav.kernels import trainer
 from skidnav.kernels.priority_queue import make_heap
 
@@ -53,6 +54,8 @@ def _learner_arrays(agent: TabularAgent, reserve: int) -> trainer.LearnerArrays:
         shares = agent.shares
         if agent.kinematic is not None:
             data, counts = agent.kinematic.data, agent.kinematic.counts
+            # The navigation env logs every step: as ``observe`` does at the first one.
+            planner.counters[kp.USE_KINEMATIC] = 1
     model = getattr(agent, "model", None)
     if model is not None:
         model.reserve(reserve)

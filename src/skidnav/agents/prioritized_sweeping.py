@@ -93,6 +93,10 @@ class PrioritizedSweepingAgent(DynaQAgent):
             raise ValueError("queue arrays disagree")
         if items.size and (items.min() < 0 or items.max() >= n_items):
             raise ValueError("queue item out of range")
+        if not np.isin(items, self.model.visited_pairs()).all():
+            raise ValueError("queued pair never observed")  # the model must answer every pop
+        if not np.isfinite(priorities).all():
+            raise ValueError("queue priority not finite")
         # Saved slots are in heap order: pushing them in order rebuilds the same heap.
         for item, priority in zip(items.tolist(), priorities.tolist(), strict=True):
             heap_push(self.queue, int(item), float(priority))

@@ -16,6 +16,7 @@ from __future__ import annotations
 import importlib
 import json
 import zipfile
+import zlib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -103,32 +104,57 @@ def make_agent(
 
 
 def load_agent(path: str | Path, **context: Any) -> TabularAgent:
-    """Read an agent written by ``agent.save(path)``; CorruptFileError if missing or damaged."""
+    """Read an agent written by ``agent.save(path)``; CorruptFileError naming the file if either
+    file is missing, damaged or inconsistent (checked before any kernel touches the arrays)."""
     npz_path, json_path = save_paths(path)
+    meta = _read_meta(json_path)
     try:
-        meta = json.loads(json_path.read_text())
-        if meta.get("format") != SAVE_FORMAT or meta.get("version") != SAVE_VERSION:
-            raise ValueError("not a skidnav agent file of this version")
         name = str(meta["agent"])
-        config = agent_class(name).config_class.from_mapping(meta["config"])
+        config = agent_class(name).config_class.from_mapping(_mapping(meta, "config"))
         agent = agent_class(name)(
             int(meta["n_states"]), int(meta["n_actions"]), config, None, **context
         )
         with np.load(npz_path, allow_pickle=False) as archive:
             arrays = {key: archive[key] for key in archive.files}
         agent._restore(meta, arrays)
-    except CorruptFileError:
-        raise
-    except (
-        OSError,
-        ValueError,
-        KeyError,
-        TypeError,
-        IndexError,
-        EOFError,
-        zipfile.BadZipFile,
-        UserError,
-    ) as error:
-        message = str(error).splitlines()[0] if str(error) else type(error).__name__
-        raise CorruptFileError(f"{npz_path}: cannot load agent: {message}") from None
+    except KeyError as error:
+        raise CorruptFileError(
+            f"{npz_path}: cannot load agent: missing {error.args[0]!r}"
+        ) from None
+    except _LOAD_ERRORS as error:
+        raise CorruptFileError(f"{npz_path}: cannot load agent: {_first_line(error)}") from None
     return agent
+
+
+_LOAD_ERRORS = (
+    OSError, ValueError, TypeError, IndexError, EOFError, zipfile.BadZipFile, zlib.error,
+    NotImplementedError, UserError,
+)  # fmt: skip
+"""What reading a damaged file can raise (a CorruptFileError is a UserError; zipfile raises
+NotImplementedError for a damaged compression-method field)."""
+
+
+def _first_line(error: BaseException) -> str:
+    return str(error).splitlines()[0] if str(error) else type(error).__name__
+
+
+def _read_meta(json_path: Path) -> dict[str, Any]:
+    """The JSON object of a saved agent; CorruptFileError naming the file otherwise."""
+    try:
+        meta = json.loads(json_path.read_text())
+    except (OSError, ValueError) as error:
+        raise CorruptFileError(f"{json_path}: cannot load agent: {_first_line(error)}") from None
+    if not isinstance(meta, dict):
+        raise CorruptFileError(
+            f"{json_path}: cannot load agent: expected a JSON object, got {type(meta).__name__}"
+        )
+    if meta.get("format") != SAVE_FORMAT or meta.get("version") != SAVE_VERSION:
+        raise CorruptFileError(f"{json_path}: not a skidnav agent file of version {SAVE_VERSION}")
+    return meta
+
+
+def _mapping(meta: Mapping[str, Any], key: str) -> Mapping[str, Any]:
+    value = meta[key]
+    if not isinstance(value, Mapping):
+        raise ValueError(f"expected {key!r} to be a JSON object, got {type(value).__name__}")
+    return value

@@ -25,7 +25,6 @@ from skidnav.kernels.multinomial import (
     most_probable_entry,
     pair_state_action,
     sample_entry,
-    split_key,
 )
 from skidnav.kernels.priority_queue import HeapArrays, heap_pop, heap_push
 from skidnav.kernels.tabular import inline_jit, td_target, update_toward
@@ -42,30 +41,39 @@ def dyna_planning(
     rng: np.random.Generator,
 ) -> int:
     """Dyna-Q planning (§8.2): ``n_steps`` times, replay a visited (s, a) pair drawn uniformly
-    through the model and update ``q`` toward its target. Returns the number of updates.
+    through the model and update ``q`` (C-contiguous) toward its target. Returns the number of
+    updates.
 
     Same numbers as :func:`skidnav.kernels.multinomial.model_target` + ``update_toward`` per
-    step, but the model's arrays are bound once, out of the loop (see ``entry_target``)."""
+    step, but the model's arrays are bound once, out of the loop (see ``entry_target``), and the
+    updated value is addressed by the pair key in a (n_states · n_actions, 1) view of ``q`` (no
+    integer division per update)."""
     n_pairs = model.counters[0]
     if n_pairs == 0:
         return 0
-    n_actions = model.n_actions
+    cells = q.reshape(-1, 1)  # row s·n_actions + a is q[s, a]
     pair_key, head, total = model.pair_key, model.pair_head, model.pair_total
     counts, sums, terminals = model.entry_count, model.entry_reward_sum, model.entry_terminal_count
     next_states, siblings = model.entry_next_state, model.entry_sibling
-    if mode != SAMPLE and mode != EXPECTED:  # most-probable (default): its own loop, ~1.3×
+    if mode != SAMPLE and mode != EXPECTED:  # most-probable (default): its own loop
+        best, ties, best_next = model.pair_best, model.pair_ties, model.pair_best_next
+        best_reward, best_continuation = model.pair_best_reward, model.pair_best_continuation
         for _ in range(n_steps):
             pair = int(rng.random() * n_pairs)
-            state, action = split_key(pair_key[pair], n_actions)
-            entry = most_probable_entry(head, counts, siblings, pair, rng.random())
-            target = entry_target(
-                q, counts[entry], sums[entry], terminals[entry], next_states[entry], gamma
-            )
-            update_toward(q, state, action, target, alpha)
+            uniform = rng.random()
+            if ties[pair] == 1:  # the usual case: read the most-probable cache
+                target = td_target(
+                    q, best_reward[pair], best_next[pair], best_continuation[pair], gamma
+                )
+            else:
+                entry = most_probable_entry(best, ties, head, counts, siblings, pair, uniform)
+                target = entry_target(
+                    q, counts[entry], sums[entry], terminals[entry], next_states[entry], gamma
+                )
+            update_toward(cells, pair_key[pair], 0, target, alpha)
         return n_steps
     for _ in range(n_steps):
         pair = int(rng.random() * n_pairs)
-        state, action = split_key(pair_key[pair], n_actions)
         uniform = rng.random()
         if mode == EXPECTED:
             target = expected_target(
@@ -76,7 +84,7 @@ def dyna_planning(
             target = entry_target(
                 q, counts[entry], sums[entry], terminals[entry], next_states[entry], gamma
             )
-        update_toward(q, state, action, target, alpha)
+        update_toward(cells, pair_key[pair], 0, target, alpha)
     return n_steps
 
 

@@ -303,8 +303,20 @@ class KinematicModel:
             value = np.asarray(arrays[f"{prefix}{name}"])
             if value.shape != getattr(self, name).shape:
                 raise CorruptFileError(f"kinematic model {name}: unexpected shape {value.shape}")
+            if not np.isfinite(value).all():
+                raise CorruptFileError(f"kinematic model {name}: not finite")
             getattr(self, name)[...] = value
-        self.refits, self._pooled_fitted = (int(v) for v in arrays[f"{prefix}refits"])
+        refits = np.asarray(arrays[f"{prefix}refits"])
+        if refits.shape != (2,):
+            raise CorruptFileError(f"kinematic model refits: unexpected shape {refits.shape}")
+        self.refits, self._pooled_fitted = (int(v) for v in refits)
+        if (
+            (self.fitted_counts < 0).any()
+            or (self.fitted_counts > self.counts).any()
+            or self.refits < 0
+            or not 0 <= self._pooled_fitted <= int(self.counts.sum())
+        ):
+            raise CorruptFileError("kinematic model sample counts are inconsistent")
         action_velocities(self.coefficients, self.robot.wheel_speed, self.velocities)
 
     def metadata(self) -> dict[str, object]:

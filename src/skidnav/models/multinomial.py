@@ -57,6 +57,14 @@ _ENTRY_FIELDS = (
     "entry_pred_link",
 )
 _TARGET_FIELDS = ("target_state", "target_head")
+_CACHE_FIELDS = (
+    "pair_best",
+    "pair_ties",
+    "pair_best_next",
+    "pair_best_reward",
+    "pair_best_continuation",
+)
+"""Per-pair most-probable cache: grown with the pairs, never saved (rebuilt on load)."""
 
 
 class Outcomes(NamedTuple):
@@ -85,6 +93,11 @@ def _empty_arrays(n_actions: int, capacity: int) -> MultinomialArrays:
         pair_key=ints(capacity),
         pair_total=ints(capacity),
         pair_head=ints(capacity),
+        pair_best=ints(capacity),
+        pair_ties=ints(capacity),
+        pair_best_next=ints(capacity),
+        pair_best_reward=np.zeros(capacity, dtype=np.float64),
+        pair_best_continuation=np.zeros(capacity, dtype=np.float64),
         entry_next_state=ints(capacity),
         entry_count=ints(capacity),
         entry_reward_sum=np.zeros(capacity, dtype=np.float64),
@@ -154,7 +167,8 @@ class MultinomialModel:
         targets = _capacity_for(int(need[2]), arrays.target_state.shape[0])
         changes: dict[str, np.ndarray] = {}
         if pairs > arrays.pair_key.shape[0]:
-            changes.update({name: _grown(getattr(arrays, name), pairs) for name in _PAIR_FIELDS})
+            grown = _PAIR_FIELDS + _CACHE_FIELDS
+            changes.update({name: _grown(getattr(arrays, name), pairs) for name in grown})
             changes["pair_table"] = np.full(2 * pairs, -1, dtype=np.int64)
             hash_rebuild(changes["pair_table"], changes["pair_key"], int(arrays.counters[0]))
         if entries > arrays.entry_count.shape[0]:
@@ -227,38 +241,110 @@ class MultinomialModel:
 
     @classmethod
     def from_arrays(cls, saved: dict[str, np.ndarray], prefix: str = "model.") -> MultinomialModel:
-        """Rebuild a model from :meth:`to_arrays`; CorruptFileError if inconsistent."""
+        """Rebuild a model from :meth:`to_arrays`; CorruptFileError if inconsistent (checked in
+        O(n_entries): a model that loads can be planned with and observed without risk)."""
         try:
             n_actions = int(saved[f"{prefix}n_actions"][0])
             used = [
-                saved[prefix + names[0]].shape[0]
+                np.asarray(saved[prefix + names[0]]).shape[0]
                 for names in (_PAIR_FIELDS, _ENTRY_FIELDS, _TARGET_FIELDS)
             ]
             model = cls(n_actions, _capacity_for(max(*used, 1), _INITIAL_CAPACITY))
             model.arrays.counters[:] = used
-            for name in _PAIR_FIELDS + _ENTRY_FIELDS + _TARGET_FIELDS:
-                values = saved[prefix + name]
-                getattr(model.arrays, name)[: values.shape[0]] = values
+            for names, n_used in zip(
+                (_PAIR_FIELDS, _ENTRY_FIELDS, _TARGET_FIELDS), used, strict=True
+            ):
+                for name in names:
+                    _copy_saved(getattr(model.arrays, name), saved[prefix + name], name, n_used)
             _check_links(model.arrays, used)
-        except (KeyError, IndexError, ValueError, TypeError) as error:
+        except KeyError as error:
+            raise CorruptFileError(f"missing model array {error.args[0]!r}") from None
+        except (IndexError, ValueError, TypeError) as error:
             raise CorruptFileError(f"inconsistent multinomial model arrays ({error})") from None
+        _rebuild_cache(model.arrays, used[0], used[1])
         hash_rebuild(model.arrays.pair_table, model.arrays.pair_key, used[0])
         hash_rebuild(model.arrays.target_table, model.arrays.target_state, used[2])
         return model
 
 
+def _copy_saved(target: np.ndarray, values: np.ndarray, name: str, n_used: int) -> None:
+    """Copy a saved array into the first ``n_used`` slots of ``target`` (same dtype, 1-D)."""
+    values = np.asarray(values)
+    if values.shape != (n_used,) or values.dtype != target.dtype:
+        expected = f"{target.dtype} of shape ({n_used},)"
+        raise ValueError(f"{name}: expected {expected}, got {values.dtype} {values.shape}")
+    target[:n_used] = values
+
+
+def _check(condition: bool | np.bool_, problem: str) -> None:
+    if not condition:
+        raise ValueError(problem)
+
+
 def _check_links(arrays: MultinomialArrays, used: list[int]) -> None:
-    """Raise ValueError unless every stored index points inside the used part of its array."""
+    """Raise ValueError unless the saved arrays form a model :func:`model_observe` could have built.
+
+    Outcomes are appended, and each new outcome links to the previous head of its lists, so every
+    link points to an *older* entry: requiring that rules out cycles without walking. Requiring
+    also that every entry is linked to exactly once (from its pair's head or a sibling of the same
+    pair) makes the outcome lists partition the entries, each list holding exactly the outcomes
+    of its pair, so the counts of a pair's list add up to ``pair_total`` when the per-pair sums
+    do. The same holds for the predecessor lists of the targets. O(n_pairs + n_entries).
+    """
     n_pairs, n_entries, n_targets = used
-    links = (
-        (arrays.pair_head[:n_pairs], n_entries),
-        (arrays.entry_pair[:n_entries], n_pairs),
-        (arrays.entry_sibling[:n_entries], n_entries),
-        (arrays.entry_pred_link[:n_entries], n_entries),
-        (arrays.target_head[:n_targets], n_entries),
+    keys, total, head = (arrays.pair_key[:n_pairs], arrays.pair_total[:n_pairs],
+                         arrays.pair_head[:n_pairs])  # fmt: skip
+    count, terminal = arrays.entry_count[:n_entries], arrays.entry_terminal_count[:n_entries]
+    owner, next_state = arrays.entry_pair[:n_entries], arrays.entry_next_state[:n_entries]
+    sibling, pred_link = arrays.entry_sibling[:n_entries], arrays.entry_pred_link[:n_entries]
+    state, target_head = arrays.target_state[:n_targets], arrays.target_head[:n_targets]
+    _check(np.all(keys >= 0) and _distinct(keys), "pair keys not distinct >= 0")
+    _check(np.all(state >= 0) and _distinct(state), "target states not distinct >= 0")
+    _check(np.all(count >= 1), "empty outcome")
+    _check(np.all((terminal >= 0) & (terminal <= count)), "terminal count outside [0, count]")
+    _check(np.isfinite(arrays.entry_reward_sum[:n_entries]).all(), "non-finite reward sum")
+    _check(np.all((owner >= 0) & (owner < n_pairs)), "outcome of an unknown pair")
+    entries = np.arange(n_entries)
+    for heads, links, name in ((head, sibling, "outcome"), (target_head, pred_link, "predecessor")):
+        _check(np.all((heads >= 0) & (heads < n_entries)), f"{name} list head out of range")
+        _check(np.all((links >= -1) & (links < entries)), f"{name} link out of range or cyclic")
+        linked = np.concatenate([heads, links[links >= 0]])
+        _check(
+            np.array_equal(np.bincount(linked, minlength=n_entries), np.ones(n_entries, np.int64)),
+            f"{name} lists do not cover every outcome once",
+        )
+    linked = sibling >= 0
+    _check(
+        np.array_equal(owner[head], np.arange(n_pairs))
+        and np.array_equal(owner[sibling[linked]], owner[linked]),
+        "outcome list mixes pairs",
     )
-    for values, bound in links:
-        if values.size and (values.min() < -1 or values.max() >= bound):
-            raise ValueError("index out of range")
-    if n_entries and arrays.entry_count[:n_entries].min() < 1:
-        raise ValueError("empty outcome")
+    linked = pred_link >= 0
+    _check(
+        np.array_equal(next_state[target_head], state)
+        and np.array_equal(next_state[pred_link[linked]], next_state[linked]),
+        "predecessor list mixes states",
+    )
+    sums = np.bincount(owner, weights=count, minlength=n_pairs)  # exact below 2⁵³
+    _check(np.array_equal(sums, total), "outcome counts do not add up to pair_total")
+
+
+def _distinct(values: np.ndarray) -> bool:
+    """True if no value repeats (a sort: ``np.unique`` is ~50× slower on 10⁶ int64 in NumPy 2.4)."""
+    return bool(np.all(np.diff(np.sort(values)) != 0))
+
+
+def _rebuild_cache(arrays: MultinomialArrays, n_pairs: int, n_entries: int) -> None:
+    """Recompute the most-probable cache (see :mod:`skidnav.kernels.multinomial`) of checked
+    arrays, with the same operations as ``model_observe``."""
+    owner, count = arrays.entry_pair[:n_entries], arrays.entry_count[:n_entries]
+    largest = np.zeros(n_pairs, dtype=np.int64)
+    np.maximum.at(largest, owner, count)
+    is_max = count == largest[owner]
+    arrays.pair_ties[:n_pairs] = np.bincount(owner[is_max], minlength=n_pairs)
+    arrays.pair_best[owner[is_max]] = np.flatnonzero(is_max)
+    best = arrays.pair_best[:n_pairs]
+    best_count = arrays.entry_count[best]
+    arrays.pair_best_next[:n_pairs] = arrays.entry_next_state[best]
+    arrays.pair_best_reward[:n_pairs] = arrays.entry_reward_sum[best] / best_count
+    arrays.pair_best_continuation[:n_pairs] = 1.0 - arrays.entry_terminal_count[best] / best_count
