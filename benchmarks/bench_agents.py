@@ -1,31 +1,130 @@
-"""Tabular agents: planning throughput against a plain-Python Dyna-Q, and the Dyna Maze wall time.
+"""Tabular agents against plain-Python equivalents, all measured in this run on one core.
 
-Prints, all measured in this run on one core (planning rates: best of three timings each):
-* Dyna-Q planning updates/s of the compiled kernel and of a dict-based plain-Python Dyna-Q,
-  and their ratio (targets: ≥ 10 million/s and ≥ 50×);
-* prioritized-sweeping value updates/s (queue, predecessors and model included);
-* the wall time of the 30-run Dyna Maze experiment (Sutton & Barto (2018) Example 8.1).
+Prints (planning rates: best of three timings each):
+* Dyna-Q planning updates/s of the compiled kernel and of a dict-based plain-Python Dyna-Q, and
+  their ratio (targets: ≥ 10 million/s and ≥ 50×);
+* prioritized-sweeping value updates/s of the whole agent (queue, predecessors, model and the
+  Python env loop included) against a plain-Python prioritized sweeping on the same maze;
+* the wall time of the 30 Dyna Maze runs of ``skidnav reproduce`` (Sutton & Barto (2018)
+  Example 8.1, n = 0, 5, 50, without writing files) against the same runs of the plain-Python
+  Dyna-Q (a few runs, scaled to 30).
+
+The plain-Python agents are the usual textbook code: Q as a list of lists, the model as a dict
+(s, a) → (r, s′, terminated) (the mazes are deterministic), ``random.Random``, ``heapq``. They run
+through the same training loop and envs as the compiled agents.
 """
 
 from __future__ import annotations
 
+import heapq
 import math
 import random
-import tempfile
 import time
-from pathlib import Path
+from collections import defaultdict
+from typing import Any
 
 import numpy as np
 
 from skidnav.agents.registry import make_agent
 from skidnav.agents.training import train_agent
-from skidnav.commands.reproduce import dyna_maze_experiment
+from skidnav.commands.reproduce import BOOK, PLANNING_STEPS, dyna_maze_runs
 from skidnav.envs.mazes import dyna_maze
 from skidnav.kernels.multinomial import MOST_PROBABLE
 from skidnav.kernels.planning import dyna_planning
 
 SCALE = 3  # 486-state maze: a model with every pair seen
 REPEATS = 3  # each rate is the best of this many timings (the machine is shared)
+SWEEP = {"planning_steps": 200, "alpha": 0.5, "gamma": 0.95, "epsilon": 0.1, "theta": 1e-6}
+SWEEP_EPISODES = 30
+MAZE_RUNS = 30
+PLAIN_MAZE_RUNS = 3
+
+
+class PlainDynaQ:
+    """Dict-based tabular Dyna-Q (Sutton & Barto (2018) §8.2) in plain Python."""
+
+    def __init__(self, n_states: int, n_actions: int, planning_steps: int, seed: int) -> None:
+        self.q = [[0.0] * n_actions for _ in range(n_states)]
+        self.model: dict[tuple[int, int], tuple[float, int, bool]] = {}
+        self.pairs: list[tuple[int, int]] = []
+        self.planning_steps = planning_steps
+        self.alpha, self.gamma, self.epsilon = BOOK["alpha"], BOOK["gamma"], BOOK["epsilon"]
+        self.random = random.Random(seed)
+        self.planning_updates = 0
+
+    def act(self, state: int) -> int:
+        values = self.q[state]
+        if self.random.random() < self.epsilon:
+            return self.random.randrange(len(values))
+        best = max(values)
+        return self.random.choice([a for a, value in enumerate(values) if value == best])
+
+    def greedy_action(self, state: int) -> int:
+        values = self.q[state]
+        return values.index(max(values))
+
+    def observe(self, state: int, action: int, reward: float, next_state: int,
+                terminated: bool, truncated: bool = False, info: Any = None) -> None:  # fmt: skip
+        q = self.q
+        target = reward if terminated else reward + self.gamma * max(q[next_state])
+        q[state][action] += self.alpha * (target - q[state][action])
+        if (state, action) not in self.model:
+            self.pairs.append((state, action))
+        self.model[(state, action)] = (reward, next_state, terminated)
+        self.plan(self.planning_steps)
+
+    def plan(self, n_updates: int) -> None:
+        q, model, pairs, generator = self.q, self.model, self.pairs, self.random
+        alpha, gamma = self.alpha, self.gamma
+        for _ in range(n_updates):
+            state, action = pairs[int(generator.random() * len(pairs))]
+            reward, next_state, done = model[(state, action)]
+            target = reward if done else reward + gamma * max(q[next_state])
+            q[state][action] += alpha * (target - q[state][action])
+        self.planning_updates += n_updates
+
+    def end_episode(self) -> None:
+        pass
+
+
+class PlainPrioritizedSweeping(PlainDynaQ):
+    """Dict-based prioritized sweeping (Sutton & Barto (2018) §8.4) with ``heapq``: a pair is
+    queued at most once, at its highest priority (older heap entries are skipped when popped)."""
+
+    def __init__(self, n_states: int, n_actions: int, options: dict[str, Any], seed: int) -> None:
+        super().__init__(n_states, n_actions, options["planning_steps"], seed)
+        self.alpha, self.gamma = options["alpha"], options["gamma"]
+        self.epsilon, self.theta = options["epsilon"], options["theta"]
+        self.predecessors: defaultdict[int, set[tuple[int, int]]] = defaultdict(set)
+        self.heap: list[tuple[float, tuple[int, int]]] = []
+        self.queued: dict[tuple[int, int], float] = {}
+
+    def _queue(self, pair: tuple[int, int]) -> None:
+        reward, next_state, done = self.model[pair]
+        target = reward if done else reward + self.gamma * max(self.q[next_state])
+        priority = abs(target - self.q[pair[0]][pair[1]])
+        if priority > self.theta and priority > self.queued.get(pair, 0.0):
+            self.queued[pair] = priority
+            heapq.heappush(self.heap, (-priority, pair))
+
+    def observe(self, state: int, action: int, reward: float, next_state: int,
+                terminated: bool, truncated: bool = False, info: Any = None) -> None:  # fmt: skip
+        self.model[(state, action)] = (reward, next_state, terminated)
+        self.predecessors[next_state].add((state, action))
+        self._queue((state, action))
+        q, updates = self.q, 0
+        while self.heap and updates < self.planning_steps:
+            negative, pair = heapq.heappop(self.heap)
+            if self.queued.get(pair) != -negative:
+                continue  # superseded by a higher priority
+            del self.queued[pair]
+            reward_, next_, done = self.model[pair]
+            target = reward_ if done else reward_ + self.gamma * max(q[next_])
+            q[pair[0]][pair[1]] += self.alpha * (target - q[pair[0]][pair[1]])
+            updates += 1
+            for predecessor in self.predecessors[pair[0]]:
+                self._queue(predecessor)
+        self.planning_updates += updates
 
 
 def trained_dyna_agent():  # type: ignore[no-untyped-def]
@@ -56,42 +155,49 @@ def plain_python_rate(agent, n_updates: int = 200_000) -> float:  # type: ignore
 
 
 def plain_python_planning(agent, n_updates: int) -> float:  # type: ignore[no-untyped-def]
-    """Seconds taken by ``n_updates`` steps of the usual dict-based Dyna-Q planning loop
-    (deterministic model: (s, a) → (r, s′, done); Q as a list of lists; only the loop timed)."""
-    model: dict[tuple[int, int], tuple[float, int, bool]] = {}
+    """Seconds taken by ``n_updates`` steps of :meth:`PlainDynaQ.plan` on the compiled agent's
+    model and Q table (only the loop timed)."""
+    plain = PlainDynaQ(agent.n_states, agent.n_actions, 0, seed=1)
     for key in agent.model.visited_pairs().tolist():
         state, action = divmod(key, 4)
         out = agent.model.outcomes(state, action)
-        model[(state, action)] = (
+        plain.pairs.append((state, action))
+        plain.model[(state, action)] = (
             float(out.mean_rewards[0]),
             int(out.next_states[0]),
             bool(out.termination[0]),
         )
-    q = agent.q.tolist()
-    pairs = list(model)
-    generator = random.Random(1)
+    plain.q = agent.q.tolist()
+    plain.alpha, plain.gamma = 0.1, 0.95
     start = time.perf_counter()
-    for _ in range(n_updates):
-        state, action = pairs[int(generator.random() * len(pairs))]
-        reward, next_state, done = model[(state, action)]
-        target = reward if done else reward + 0.95 * max(q[next_state])
-        q[state][action] += 0.1 * (target - q[state][action])
+    plain.plan(n_updates)
     return time.perf_counter() - start
 
 
-def sweeping_rate() -> float:
+def sweeping_rates() -> tuple[float, float]:
+    """Value updates/s of the compiled prioritized-sweeping agent and of
+    :class:`PlainPrioritizedSweeping`, :data:`SWEEP_EPISODES` episodes each on the ×:data:`SCALE`
+    Dyna Maze, training loop and env included."""
     env = dyna_maze(SCALE)
-    options = {"planning_steps": 200, "alpha": 0.5, "theta": 1e-6}
-    agent = make_agent(
-        "prioritized-sweeping", env.n_rows * env.n_cols, 4, options, np.random.default_rng(0)
-    )
-    train_agent(agent, dyna_maze(1), 1, seed=0)  # compile on a small maze first
-    agent = make_agent(
-        "prioritized-sweeping", env.n_rows * env.n_cols, 4, options, np.random.default_rng(0)
-    )
+    n_states = env.n_rows * env.n_cols
+    warm_up = make_agent("prioritized-sweeping", 54, 4, SWEEP, np.random.default_rng(0))
+    train_agent(warm_up, dyna_maze(1), 1, seed=0)  # compile on a small maze first
+    compiled = make_agent("prioritized-sweeping", n_states, 4, SWEEP, np.random.default_rng(0))
+    rates: list[float] = []
+    for agent in (compiled, PlainPrioritizedSweeping(n_states, 4, SWEEP, seed=0)):
+        start = time.perf_counter()
+        train_agent(agent, dyna_maze(SCALE), SWEEP_EPISODES, seed=0)
+        rates.append(agent.planning_updates / (time.perf_counter() - start))
+    return rates[0], rates[1]
+
+
+def plain_dyna_maze_seconds(runs: int) -> float:
+    """Wall time of ``runs`` runs of :func:`dyna_maze_runs` with :class:`PlainDynaQ`."""
     start = time.perf_counter()
-    train_agent(agent, env, 30, seed=0)
-    return agent.planning_updates / (time.perf_counter() - start)
+    for n in PLANNING_STEPS:
+        for seed in range(runs):
+            train_agent(PlainDynaQ(54, 4, n, seed), dyna_maze(), 50, seed=seed)
+    return time.perf_counter() - start
 
 
 def main() -> None:
@@ -101,11 +207,21 @@ def main() -> None:
     print(f"dyna-q planning, compiled:      {compiled / 1e6:8.2f} M updates/s (target >= 10)")
     print(f"dyna-q planning, plain Python:  {plain / 1e6:8.2f} M updates/s")
     print(f"compiled / plain Python:        {compiled / plain:8.1f} × (target >= 50)")
-    print(f"prioritized sweeping (whole agent): {sweeping_rate() / 1e6:8.2f} M updates/s")
-    with tempfile.TemporaryDirectory() as folder:
-        start = time.perf_counter()
-        dyna_maze_experiment(30, Path(folder))
-        print(f"Dyna Maze, 30 runs × 3 n × 50 episodes: {time.perf_counter() - start:6.1f} s")
+    sweep, plain_sweep = sweeping_rates()
+    print(
+        f"prioritized sweeping (whole agent): {sweep / 1e6:6.2f} M updates/s compiled, "
+        f"{plain_sweep / 1e6:6.3f} plain Python: {sweep / plain_sweep:5.1f} ×"
+    )
+    dyna_maze_runs(1)  # compile / warm up
+    start = time.perf_counter()
+    dyna_maze_runs(MAZE_RUNS)
+    seconds = time.perf_counter() - start
+    plain_seconds = plain_dyna_maze_seconds(PLAIN_MAZE_RUNS) * MAZE_RUNS / PLAIN_MAZE_RUNS
+    print(
+        f"Dyna Maze, {MAZE_RUNS} runs × 3 n × 50 episodes: {seconds:6.1f} s compiled, "
+        f"{plain_seconds:6.1f} s plain Python (from {PLAIN_MAZE_RUNS} runs): "
+        f"{plain_seconds / seconds:5.1f} ×"
+    )
 
 
 if __name__ == "__main__":

@@ -66,22 +66,37 @@ def _plot(path: Path, curves: dict[str, np.ndarray], xlabel: str, ylabel: str, x
     plt.close(figure)
 
 
-def dyna_maze_experiment(runs: int, out: Path) -> dict[int, np.ndarray]:
-    """Example 8.1; returns mean steps per episode for each n."""
-    rows: list[Sequence[Any]] = []
-    means = {}
-    for n in (0, 5, 50):
-        lengths = []
-        for seed in range(runs):
+PLANNING_STEPS = (0, 5, 50)
+"""The planning steps n compared in Example 8.1."""
+
+
+def dyna_maze_runs(
+    runs: int, first_seed: int = 0, planning_steps: Sequence[int] = PLANNING_STEPS
+) -> dict[int, np.ndarray]:
+    """Example 8.1 without output files: steps per episode, int64 (runs, 50), of Dyna-Q for each
+    n, run k seeded ``first_seed + k`` (agent generator and first env reset)."""
+    lengths = {}
+    for n in planning_steps:
+        per_run = []
+        for seed in range(first_seed, first_seed + runs):
             agent = make_agent(
                 "dyna-q", 54, 4, {**BOOK, "planning_steps": n}, np.random.default_rng(seed)
             )
-            log = train_agent(agent, dyna_maze(), 50, seed=seed)
-            lengths.append(log.lengths)
-            rows.extend(
-                (n, seed, episode + 1, int(steps)) for episode, steps in enumerate(log.lengths)
-            )
-        means[n] = np.mean(lengths, axis=0)
+            per_run.append(train_agent(agent, dyna_maze(), 50, seed=seed).lengths)
+        lengths[n] = np.array(per_run, dtype=np.int64)
+    return lengths
+
+
+def dyna_maze_experiment(runs: int, out: Path, first_seed: int = 0) -> dict[int, np.ndarray]:
+    """Example 8.1 (writes ``dyna_maze.csv/.png``); returns mean steps per episode for each n."""
+    lengths = dyna_maze_runs(runs, first_seed)
+    rows: list[Sequence[Any]] = [
+        (n, first_seed + run, episode + 1, int(steps))
+        for n, per_run in lengths.items()
+        for run, run_lengths in enumerate(per_run)
+        for episode, steps in enumerate(run_lengths)
+    ]
+    means = {n: per_run.mean(axis=0) for n, per_run in lengths.items()}
     _write_csv(out / "dyna_maze.csv", ("planning_steps", "run", "episode", "steps"), rows)
     curves = {f"n = {n}": values[1:] for n, values in means.items()}
     _plot(out / "dyna_maze.png", curves, "episode", "steps per episode", x0=2)
@@ -94,21 +109,42 @@ def first_episode_below(mean_steps: np.ndarray, level: float = NEAR_OPTIMAL) -> 
     return int(below[0]) + 1 if below.size else -1
 
 
-def changing_maze_experiment(
-    name: str, make_env: Any, n_steps: int, runs: int, out: Path
+CHANGING_AGENTS: tuple[tuple[str, dict[str, Any]], ...] = (
+    ("dyna-q", {}),
+    ("dyna-q-plus", {"kappa": 1e-3}),
+)
+"""The agents of Examples 8.2/8.3 and their options beyond :data:`CHANGING`."""
+
+
+def changing_maze_runs(
+    make_env: Any, n_steps: int, runs: int, first_seed: int = 0
 ) -> dict[str, np.ndarray]:
-    """Examples 8.2/8.3; returns the mean cumulative reward per step for each agent."""
-    means = {}
-    rows: list[Sequence[Any]] = []
-    for agent_name, extra in (("dyna-q", {}), ("dyna-q-plus", {"kappa": 1e-3})):
-        curves = []
-        for seed in range(runs):
+    """Examples 8.2/8.3 without output files: cumulative reward after each step, float64
+    (runs, n_steps), for each agent; run k seeded ``first_seed + k``."""
+    curves = {}
+    for agent_name, extra in CHANGING_AGENTS:
+        per_run = []
+        for seed in range(first_seed, first_seed + runs):
             agent = make_agent(
                 agent_name, 54, 4, {**CHANGING, **extra}, np.random.default_rng(seed)
             )
-            curves.append(train_for_steps(agent, make_env(), n_steps, seed=seed))
-        means[agent_name] = np.mean(curves, axis=0)
-        rows.extend((agent_name, step + 1, value) for step, value in enumerate(means[agent_name]))
+            per_run.append(train_for_steps(agent, make_env(), n_steps, seed=seed))
+        curves[agent_name] = np.array(per_run)
+    return curves
+
+
+def changing_maze_experiment(
+    name: str, make_env: Any, n_steps: int, runs: int, out: Path, first_seed: int = 0
+) -> dict[str, np.ndarray]:
+    """Examples 8.2/8.3 (writes ``<name>.csv/.png``); returns the mean cumulative reward per step
+    for each agent."""
+    means = {
+        agent: curves.mean(axis=0)
+        for agent, curves in changing_maze_runs(make_env, n_steps, runs, first_seed).items()
+    }
+    rows: list[Sequence[Any]] = [
+        (agent, step + 1, value) for agent, mean in means.items() for step, value in enumerate(mean)
+    ]
     _write_csv(out / f"{name}.csv", ("agent", "step", "mean_cumulative_reward"), rows)
     _plot(out / f"{name}.png", means, "time step", "cumulative reward")
     return means
