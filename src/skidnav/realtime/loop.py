@@ -17,13 +17,11 @@ pose faults, up to ``reconnect_timeout``) or ends (interrupt, robot outside the 
 
 from __future__ import annotations
 
-import json
 import logging
 import math
-import threading
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +31,7 @@ from skidnav.realtime.checkpoint import Checkpoints
 from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.driver import Pose, RobotDriver
 from skidnav.realtime.homing import HomingController
+from skidnav.realtime.records import EpisodeResult, RunLog
 from skidnav.realtime.safety import SafetyLimits, SafetyMonitor
 from skidnav.realtime.transition import IcrEstimates, WheelSpeedStats, log_row, reward_of
 from skidnav.robot.kinematics import body_velocities, commanded_wheel_speeds, euler_step
@@ -47,40 +46,6 @@ EXIT_DONE, EXIT_SAFETY, EXIT_INTERRUPTED = 0, 3, 130
 
 class Aborted(Exception):
     """The safety monitor tripped; the current episode or homing ends."""
-
-
-@dataclass
-class EpisodeResult:
-    """Outcome of one episode (``return_`` is the undiscounted return)."""
-
-    episode: int
-    actions: int = 0
-    return_: float = 0.0
-    collisions: int = 0
-    reached_goal: bool = False
-    aborted: bool = False
-    reason: str | None = None
-    wall_time: float = 0.0
-
-
-class RunLog:
-    """Thread-safe JSON-lines log; every record gets ``mono`` (monotonic clock [s])."""
-
-    def __init__(self, path: Path) -> None:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        self._stream = path.open("a", encoding="utf-8")
-        self._lock = threading.Lock()
-
-    def write(self, event: str, fields: dict[str, Any]) -> None:
-        record = {"mono": time.monotonic(), "event": event, **fields}
-        with self._lock:
-            if not self._stream.closed:
-                self._stream.write(json.dumps(record) + "\n")
-                self._stream.flush()
-
-    def close(self) -> None:
-        with self._lock:
-            self._stream.close()
 
 
 class RealtimeLoop:
