@@ -38,18 +38,21 @@ def test_homing_brings_the_robot_to_the_start_state(spec: str, slip: str, seed: 
     free = np.argwhere(~grid_map.occupancy)
     i, j = free[int(rng.integers(len(free)))]
     robot.pose = (*GRID.cell_centre(int(i), int(j)), float(rng.uniform(-3, 3)))
-    controller = HomingController(grid_map, GRID, 1.7, tolerance=0.008)
+    home(robot, HomingController(grid_map, GRID, 1.7, tolerance=0.008))
+    assert GRID.state(*robot.pose) == GRID.state(*start_pose(grid_map, GRID))
+
+
+def home(robot: SimRobot, controller: HomingController) -> None:
+    """Drive ``robot`` with ``controller`` until it is home; fail after 300 s of robot time."""
     for _ in range(3000):
         measured = robot.measured_pose()
         assert measured is not None
         command = controller.command(Pose(0.0, *measured))
         if command is None:
-            break
+            return
         robot.command(*command)
         robot.step()
-    else:
-        pytest.fail("homing did not finish in 300 s of robot time")
-    assert GRID.state(*robot.pose) == GRID.state(*start_pose(grid_map, GRID))
+    pytest.fail("homing did not finish in 300 s of robot time")
 
 
 def test_log_row_recovers_the_body_twist_of_an_euler_step() -> None:
@@ -189,12 +192,5 @@ def test_homing_with_the_estimated_icr_reaches_the_start_on_a_shifted_floor() ->
     controller = HomingController(grid_map, GRID, 1.7, tolerance=0.008, x_icr=estimates.values())
     x, y = GRID.cell_centre(grid_map.start[0] + 6, grid_map.start[1] + 5)
     robot.pose = (x, y, 2.0)
-    for _ in range(3000):
-        command = controller.command(Pose(0.0, *robot.measured_pose()))
-        if command is None:
-            break
-        robot.command(*command)
-        robot.step()
-    else:
-        pytest.fail("homing did not finish in 300 s of robot time")
+    home(robot, controller)
     assert GRID.state(*robot.pose) == GRID.state(*start_pose(grid_map, GRID))
