@@ -4,14 +4,16 @@ Prints (planning rates: best of three timings each):
 * Dyna-Q planning updates/s of the compiled kernel and of a dict-based plain-Python Dyna-Q, and
   their ratio (targets: ≥ 10 million/s and ≥ 50×);
 * prioritized-sweeping value updates/s of the whole agent (queue, predecessors, model and the
-  Python env loop included) against a plain-Python prioritized sweeping on the same maze;
+  episode loop included), trained by the fused maze trainer (``train_agent_fast``) and step by
+  step from Python (``train_agent`` on the Gymnasium maze), against a plain-Python prioritized
+  sweeping on the same maze;
 * the wall time of the 30 Dyna Maze runs of ``skidnav reproduce`` (Sutton & Barto (2018)
-  Example 8.1, n = 0, 5, 50, without writing files) against the same runs of the plain-Python
-  Dyna-Q (a few runs, scaled to 30).
+  Example 8.1, n = 0, 5, 50, without writing files; fused maze trainer) against the same runs of
+  the plain-Python Dyna-Q (a few runs, scaled to 30).
 
 The plain-Python agents are the usual textbook code: Q as a list of lists, the model as a dict
 (s, a) → (r, s′, terminated) (the mazes are deterministic), ``random.Random``, ``heapq``. They run
-through the same training loop and envs as the compiled agents.
+through the plain training loop (``train_agent``) on the Gymnasium mazes.
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from skidnav.agents.fast_training import train_agent_fast
 from skidnav.agents.registry import make_agent
 from skidnav.agents.training import train_agent
 from skidnav.commands.reproduce import BOOK, PLANNING_STEPS, dyna_maze_runs
@@ -174,21 +177,27 @@ def plain_python_planning(agent, n_updates: int) -> float:  # type: ignore[no-un
     return time.perf_counter() - start
 
 
-def sweeping_rates() -> tuple[float, float]:
-    """Value updates/s of the compiled prioritized-sweeping agent and of
-    :class:`PlainPrioritizedSweeping`, :data:`SWEEP_EPISODES` episodes each on the ×:data:`SCALE`
-    Dyna Maze, training loop and env included."""
+def sweeping_rates() -> tuple[float, float, float]:
+    """Value updates/s of the compiled prioritized-sweeping agent (fused trainer, then step by
+    step) and of :class:`PlainPrioritizedSweeping`, :data:`SWEEP_EPISODES` episodes each on the
+    ×:data:`SCALE` Dyna Maze, training loop and env included (both compiled runs make the same
+    updates)."""
     env = dyna_maze(SCALE)
     n_states = env.n_rows * env.n_cols
-    warm_up = make_agent("prioritized-sweeping", 54, 4, SWEEP, np.random.default_rng(0))
-    train_agent(warm_up, dyna_maze(1), 1, seed=0)  # compile on a small maze first
-    compiled = make_agent("prioritized-sweeping", n_states, 4, SWEEP, np.random.default_rng(0))
+    for trainer in (train_agent_fast, train_agent):  # compile on a small maze first
+        warm_up = make_agent("prioritized-sweeping", 54, 4, SWEEP, np.random.default_rng(0))
+        trainer(warm_up, dyna_maze(1), 1, seed=0)
+    runs: list[tuple[Any, Any]] = [
+        (make_agent("prioritized-sweeping", n_states, 4, SWEEP, np.random.default_rng(0)), trainer)
+        for trainer in (train_agent_fast, train_agent)
+    ]
+    runs.append((PlainPrioritizedSweeping(n_states, 4, SWEEP, seed=0), train_agent))
     rates: list[float] = []
-    for agent in (compiled, PlainPrioritizedSweeping(n_states, 4, SWEEP, seed=0)):
+    for agent, trainer in runs:
         start = time.perf_counter()
-        train_agent(agent, dyna_maze(SCALE), SWEEP_EPISODES, seed=0)
+        trainer(agent, dyna_maze(SCALE), SWEEP_EPISODES, seed=0)
         rates.append(agent.planning_updates / (time.perf_counter() - start))
-    return rates[0], rates[1]
+    return rates[0], rates[1], rates[2]
 
 
 def plain_dyna_maze_seconds(runs: int) -> float:
@@ -207,10 +216,11 @@ def main() -> None:
     print(f"dyna-q planning, compiled:      {compiled / 1e6:8.2f} M updates/s (target >= 10)")
     print(f"dyna-q planning, plain Python:  {plain / 1e6:8.2f} M updates/s")
     print(f"compiled / plain Python:        {compiled / plain:8.1f} × (target >= 50)")
-    sweep, plain_sweep = sweeping_rates()
+    fused, stepped, plain_sweep = sweeping_rates()
     print(
-        f"prioritized sweeping (whole agent): {sweep / 1e6:6.2f} M updates/s compiled, "
-        f"{plain_sweep / 1e6:6.3f} plain Python: {sweep / plain_sweep:5.1f} ×"
+        f"prioritized sweeping (whole agent), M updates/s: fused {fused / 1e6:6.2f}, "
+        f"step by step {stepped / 1e6:6.3f}, plain Python {plain_sweep / 1e6:6.3f}: "
+        f"{fused / plain_sweep:5.1f} × and {stepped / plain_sweep:4.1f} ×"
     )
     dyna_maze_runs(1)  # compile / warm up
     start = time.perf_counter()

@@ -1,4 +1,4 @@
-"""The fused compiled trainer gives the same numbers as the plain loop, with and without numba."""
+"""The fused compiled trainers give the same numbers as the plain loops, with and without numba."""
 
 from __future__ import annotations
 
@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
 from skidnav.agents.registry import make_agent
-from skidnav.agents.training import TrainingLog, train_agent
-from skidnav.envs.mazes import dyna_maze
+from skidnav.agents.training import TrainingLog, train_agent, train_for_steps
+from skidnav.envs.mazes import blocking_maze, dyna_maze
 from skidnav.world.discretization import Discretization
 
 AGENTS = (
@@ -60,9 +60,53 @@ def test_fast_trainer_matches_the_python_loop(name: str) -> None:
 def test_other_envs_fall_back_to_the_python_loop() -> None:
     logs = []
     for trainer in (train_agent, train_agent_fast):
-        agent = make_agent("dyna-q", 54, 4, {"planning_steps": 5}, np.random.default_rng(0))
-        logs.append(trainer(agent, dyna_maze(), 5, seed=0))
+        agent = make_agent("dyna-q", 48, 4, {"planning_steps": 5}, np.random.default_rng(0))
+        logs.append(trainer(agent, gym.make("CliffWalking-v1"), 3, max_steps=200, seed=0))
     np.testing.assert_array_equal(logs[0].lengths, logs[1].lengths)
+
+
+MAZE_AGENTS = AGENTS[:4]
+"""The agents the fused maze loop runs (the model-based ones need the navigation env)."""
+
+
+def _maze_config(name: str) -> dict[str, Any]:
+    return {"epsilon": 0.2} if name == "q-learning" else {"epsilon": 0.2, "planning_steps": 8}
+
+
+@pytest.mark.parametrize("name", MAZE_AGENTS)
+def test_fast_maze_trainer_matches_the_python_loop(name: str) -> None:
+    runs = []
+    for trainer in (train_agent, train_agent_fast):
+        agent = make_agent(name, 54, 4, _maze_config(name), np.random.default_rng(5))
+        env, evaluation = dyna_maze(max_episode_steps=400), dyna_maze(max_episode_steps=40)
+        log = trainer(agent, env, 8, max_steps=300, greedy_eval_env=evaluation, seed=5)
+        runs.append((log, agent, env.progress(), evaluation.progress()))
+    (slow, slow_agent, *slow_envs), (fast, fast_agent, *fast_envs) = runs
+    for field in TrainingLog._fields:
+        if field != "wall_time":
+            np.testing.assert_array_equal(getattr(fast, field), getattr(slow, field), err_msg=field)
+    assert slow.successes.any() and (slow.lengths == 300).any()  # both ends of an episode
+    np.testing.assert_array_equal(fast_agent.q, slow_agent.q)
+    assert (fast_agent.steps, fast_agent.episodes) == (slow_agent.steps, slow_agent.episodes)
+    assert fast_agent.planning_updates == slow_agent.planning_updates
+    assert fast_agent.rng.random() == slow_agent.rng.random()
+    assert fast_envs == slow_envs  # the envs are left where the plain loop leaves them
+
+
+@pytest.mark.parametrize("name", MAZE_AGENTS)
+def test_fast_step_budget_matches_the_python_loop(name: str) -> None:
+    runs = []
+    for trainer in (train_for_steps, train_for_steps_fast):
+        agent = make_agent(name, 54, 4, _maze_config(name), np.random.default_rng(6))
+        env = blocking_maze(change_after=1000)  # the walls change mid-run
+        runs.append((trainer(agent, env, 3000, seed=6), agent, env.progress()))
+    (slow, slow_agent, slow_env), (fast, fast_agent, fast_env) = runs
+    np.testing.assert_array_equal(fast, slow)
+    assert slow[-1] >= 1 and slow_agent.episodes >= 1
+    np.testing.assert_array_equal(fast_agent.q, slow_agent.q)
+    assert (fast_agent.steps, fast_agent.episodes) == (slow_agent.steps, slow_agent.episodes)
+    assert fast_agent.rng.random() == slow_agent.rng.random()
+    assert fast_env == slow_env
 
 
 _SCRIPT = """
@@ -86,13 +130,13 @@ print(json.dumps({"q": agent.q.ravel().tolist(), "lengths": log.lengths.tolist()
 """
 
 
-def _subprocess(disable_jit: bool) -> dict[str, Any]:
+def _subprocess(disable_jit: bool, script: str = _SCRIPT) -> dict[str, Any]:
     env = {**os.environ, "PYTHONPATH": str(SRC)}
     env.pop("NUMBA_DISABLE_JIT", None)
     if disable_jit:
         env["NUMBA_DISABLE_JIT"] = "1"
     result = subprocess.run(
-        [sys.executable, "-c", _SCRIPT], env=env, capture_output=True, text=True, check=True,
+        [sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True,
         timeout=240,
     )  # fmt: skip
     return json.loads(result.stdout.strip().splitlines()[-1])  # type: ignore[no-any-return]
@@ -102,6 +146,30 @@ def test_identical_without_numba() -> None:
     compiled = _subprocess(disable_jit=False)
     interpreted = _subprocess(disable_jit=True)
     assert compiled["refits"] >= 1
+    assert compiled == interpreted
+
+
+_MAZE_SCRIPT = """
+import json
+import numpy as np
+from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
+from skidnav.agents.registry import make_agent
+from skidnav.envs.mazes import dyna_maze, shortcut_maze
+out = {}
+for index, name in enumerate(("q-learning", "dyna-q", "dyna-q-plus", "prioritized-sweeping")):
+    options = {"planning_steps": 5} if index else {}
+    agent = make_agent(name, 54, 4, options, np.random.default_rng(index))
+    log = train_agent_fast(agent, dyna_maze(max_episode_steps=300), 4, seed=index)
+    cumulative = train_for_steps_fast(agent, shortcut_maze(change_after=200), 500, seed=index)
+    out[name] = [agent.q.ravel().tolist(), log.lengths.tolist(), cumulative.tolist(),
+                 agent.planning_updates, agent.rng.random()]
+print(json.dumps(out))
+"""
+
+
+def test_maze_trainer_identical_without_numba() -> None:
+    compiled = _subprocess(disable_jit=False, script=_MAZE_SCRIPT)
+    interpreted = _subprocess(disable_jit=True, script=_MAZE_SCRIPT)
     assert compiled == interpreted
 
 

@@ -1,18 +1,22 @@
-"""The fused compiled trainer: :func:`train_agent_fast`, a drop-in for
-:func:`skidnav.agents.training.train_agent` on ``skidnav/SkidSteerNav-v0``.
+"""The fused compiled trainers: :func:`train_agent_fast`, a drop-in for
+:func:`skidnav.agents.training.train_agent` on ``skidnav/SkidSteerNav-v0`` and on the grid mazes
+(:class:`skidnav.envs.mazes.GridMazeEnv`), and :func:`train_for_steps_fast`, a drop-in for
+:func:`skidnav.agents.training.train_for_steps` on the mazes.
 
-Whole episodes run in one numba call (:mod:`skidnav.kernels.trainer`): simulation, ε-greedy,
-TD update, model update and planning. Between episodes Python does what the agent does in
-``end_episode`` (ε decay, trajectory bookkeeping, kinematic refits with scikit-learn) and the
-greedy evaluation rollout (also compiled). Same signature, same :class:`TrainingLog`, and the same
-numbers as ``train_agent`` for the same seed (tested), except ``wall_time``. Agents or envs it does
-not know fall back to ``train_agent``. The env's ``trail`` (for rendering) is not recorded.
+Whole episodes run in one numba call (:mod:`skidnav.kernels.trainer`,
+:mod:`skidnav.kernels.maze_trainer`): simulation, ε-greedy, TD update, model update and planning.
+Between episodes Python does what the agent does in ``end_episode`` (ε decay, trajectory
+bookkeeping, kinematic refits with scikit-learn) and the greedy evaluation rollout (also
+compiled). Same signature, same output, and the same numbers as the plain loop for the same seed
+(tested), except ``wall_time``. Agents or envs it does not know fall back to the plain loop. The
+navigation env's ``trail`` (for rendering) is not recorded.
 """
 
 from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from typing import Any
 
 import gymnasium as gym
@@ -20,9 +24,9 @@ import numpy as np
 
 from skidnav.agents.core import TabularAgent
 from skidnav.agents.dyna_kinematic import ModelBasedAgent
-from skidnav.agents.training import TrainingLog, train_agent
+from skidnav.agents.training import TrainingLog, train_agent, train_for_steps
 from skidnav.kernels import kinematic_planning as kp
-from skidnav.kernels import trainer
+from skidnav.kernels import maze_trainer, trainer
 from skidnav.kernels.priority_queue import make_heap
 
 logger = logging.getLogger(__name__)
@@ -30,18 +34,33 @@ logger = logging.getLogger(__name__)
 _BIG = np.iinfo(np.int64).max // 4
 
 
-def _navigation_env(env: gym.Env[Any, Any]) -> tuple[Any, int] | None:
-    """The unwrapped navigation env and the smallest step limit along the wrappers (None if the
-    env is not ``SkidSteerNavEnv`` with discrete observations)."""
+def _unwrapped(env: gym.Env[Any, Any]) -> tuple[Any, int]:
+    """The innermost env and the smallest ``TimeLimit`` along the wrappers (``_BIG`` if none)."""
     limit = _BIG
     layer: Any = env
     while isinstance(layer, gym.Wrapper):
         if isinstance(layer, gym.wrappers.TimeLimit):
             limit = min(limit, int(layer._max_episode_steps))
         layer = layer.env
+    return layer, limit
+
+
+def _navigation_env(env: gym.Env[Any, Any]) -> tuple[Any, int] | None:
+    """The unwrapped navigation env and the smallest step limit along the wrappers (None if the
+    env is not ``SkidSteerNavEnv`` with discrete observations)."""
+    layer, limit = _unwrapped(env)
     if not hasattr(layer, "task") or getattr(layer, "observation_kind", None) != "discrete":
         return None
     return layer, min(limit, int(layer.max_episode_steps))
+
+
+def _maze_env(env: gym.Env[Any, Any]) -> tuple[Any, int] | None:
+    """The unwrapped grid maze (``skidnav.envs.mazes.GridMazeEnv``, known by its
+    ``maze_arrays``) and the smallest step limit along the wrappers; None for other envs."""
+    layer, limit = _unwrapped(env)
+    if not callable(getattr(layer, "maze_arrays", None)):
+        return None
+    return layer, min(limit, layer.max_episode_steps or _BIG)
 
 
 def _learner_arrays(agent: TabularAgent, reserve: int) -> trainer.LearnerArrays:
@@ -110,6 +129,22 @@ def _settings(agent: TabularAgent, max_steps: int, env_limit: int) -> trainer.Le
     )  # fmt: skip
 
 
+def _start_tally(agent: TabularAgent, size: int = trainer.N_TALLY) -> np.ndarray:
+    """The int64 counters of a compiled call, (size,), with the agent's steps and visits."""
+    tally = np.zeros(size, dtype=np.int64)
+    tally[trainer.STEPS] = agent.steps
+    tally[trainer.N_VISITED] = agent.visited_states.size if hasattr(agent, "visited_states") else 0
+    return tally
+
+
+def _absorb(agent: TabularAgent, arrays: trainer.LearnerArrays, tally: np.ndarray) -> None:
+    """Copy the counters of a compiled call back into the agent."""
+    agent.steps = int(tally[trainer.STEPS])
+    agent.planning_updates += int(tally[trainer.PLANNING_UPDATES])
+    if hasattr(agent, "visited_states"):
+        agent.visited_states = arrays.visited[: tally[trainer.N_VISITED]].copy()
+
+
 def _fast_episode(
     agent: TabularAgent, nav: Any, env_limit: int, max_steps: int, seed: int | None
 ) -> tuple[float, int, bool, int, int]:
@@ -117,20 +152,14 @@ def _fast_episode(
     terminated, collisions, planning updates)."""
     state, _ = nav.reset(seed=seed)
     arrays = _learner_arrays(agent, min(max_steps, env_limit))
-    tally = np.zeros(trainer.N_TALLY, dtype=np.int64)
-    tally[trainer.STEPS] = agent.steps
-    n_visited = agent.visited_states.size if hasattr(agent, "visited_states") else 0
-    tally[trainer.N_VISITED] = n_visited
+    tally = _start_tally(agent)
     settings = _settings(agent, max_steps, env_limit)
     total, nav.time = trainer.run_episode(
         nav.task, nav.pose, int(state), float(nav.time), arrays, settings, tally,
         nav.np_random, agent.rng,
     )  # fmt: skip
     nav.elapsed_steps = int(tally[trainer.ELAPSED])
-    agent.steps = int(tally[trainer.STEPS])
-    agent.planning_updates += int(tally[trainer.PLANNING_UPDATES])
-    if hasattr(agent, "visited_states"):
-        agent.visited_states = arrays.visited[: tally[trainer.N_VISITED]].copy()
+    _absorb(agent, arrays, tally)
     agent.end_episode()
     return (
         float(total), int(tally[trainer.LENGTH]), bool(tally[trainer.TERMINATED]),
@@ -147,6 +176,84 @@ def _greedy(agent: TabularAgent, eval_nav: Any, limit: int, env_limit: int) -> i
     return int(length)
 
 
+_NO_REWARDS = np.zeros(0)
+
+
+def _maze_stretch(
+    agent: TabularAgent, maze: Any, state: int, limits: tuple[int, int, int], rewards: np.ndarray
+) -> tuple[float, int, np.ndarray]:
+    """Run the fused maze loop from ``state`` (``limits`` = env limit, ``max_steps``, step
+    budget), leave the env where it stopped; returns (return, last state, tally)."""
+    env_limit, max_steps, budget = limits
+    # A maze pair has at most two outcomes (walls before and after the change): this bounds the
+    # model's growth however long the stretch is.
+    arrays = _learner_arrays(agent, min(budget, max_steps, 2 * agent.q.size))
+    tally = _start_tally(agent, maze_trainer.N_MAZE_TALLY)
+    _, tally[trainer.ELAPSED], tally[maze_trainer.TOTAL_STEPS] = maze.progress()
+    total, state = maze_trainer.maze_episode(
+        maze.maze_arrays(), int(state), arrays, _settings(agent, max_steps, env_limit), tally,
+        rewards, budget, agent.rng,
+    )  # fmt: skip
+    maze.restore_progress(state, tally[trainer.ELAPSED], tally[maze_trainer.TOTAL_STEPS])
+    _absorb(agent, arrays, tally)
+    return float(total), int(state), tally
+
+
+def _fast_maze_episode(
+    agent: TabularAgent, maze: Any, env_limit: int, max_steps: int, seed: int | None
+) -> tuple[float, int, bool, int, int]:
+    """As :func:`_fast_episode`, on a grid maze (no collisions)."""
+    state, _ = maze.reset(seed=seed)
+    total, _, tally = _maze_stretch(agent, maze, state, (env_limit, max_steps, _BIG), _NO_REWARDS)
+    agent.end_episode()
+    length, terminated = int(tally[trainer.LENGTH]), bool(tally[trainer.TERMINATED])
+    return total, length, terminated, 0, int(tally[trainer.PLANNING_UPDATES])
+
+
+def _maze_greedy(agent: TabularAgent, eval_maze: Any, limit: int, env_limit: int) -> int:
+    state, _ = eval_maze.reset()
+    total_steps = eval_maze.progress()[2]
+    length, state, taken = maze_trainer.maze_greedy(
+        eval_maze.maze_arrays(), int(state), agent.q, limit, env_limit, total_steps
+    )
+    eval_maze.restore_progress(state, taken, total_steps + taken)
+    return int(length)
+
+
+def _supported_maze(agent: TabularAgent, maze: Any) -> bool:
+    """True if the fused maze loop reproduces this agent on this maze exactly."""
+    kind = trainer.AGENT_KINDS.get(agent.name, trainer.MODEL_BASED)
+    return kind != trainer.MODEL_BASED and agent.n_states == maze.observation_space.n
+
+
+Episode = Callable[[TabularAgent, Any, int, int, int | None], tuple[float, int, bool, int, int]]
+"""(agent, env, env limit, max_steps, seed) → (return, length, terminated, collisions, updates)."""
+Greedy = Callable[[TabularAgent, Any, int, int], int]
+"""(agent, evaluation env, step limit, env limit) → greedy length or −1."""
+
+
+def _fused_functions(
+    agent: TabularAgent, env: gym.Env[Any, Any], greedy_eval_env: gym.Env[Any, Any] | None
+) -> tuple[Episode, tuple[Any, int], Greedy, tuple[Any, int] | None] | None:
+    """The fused episode and greedy functions for this agent and these envs, with the unwrapped
+    envs and their limits; None if the plain loop must be used."""
+    found, eval_found = _maze_env(env), None
+    episode: Episode
+    greedy: Greedy
+    if found is not None and _supported_maze(agent, found[0]):
+        episode, greedy = _fast_maze_episode, _maze_greedy
+        eval_found = None if greedy_eval_env is None else _maze_env(greedy_eval_env)
+    else:
+        found = _navigation_env(env)
+        if found is None or not _supported(agent, found[0]):
+            return None
+        episode, greedy = _fast_episode, _greedy
+        eval_found = None if greedy_eval_env is None else _navigation_env(greedy_eval_env)
+    if greedy_eval_env is not None and eval_found is None:
+        return None
+    return episode, found, greedy, eval_found
+
+
 def train_agent_fast(
     agent: TabularAgent,
     env: gym.Env[Any, Any],
@@ -158,13 +265,8 @@ def train_agent_fast(
     seed: int | None = None,
 ) -> TrainingLog:
     """As :func:`skidnav.agents.training.train_agent`, with compiled episodes (see module doc)."""
-    found = _navigation_env(env)
-    eval_found = None if greedy_eval_env is None else _navigation_env(greedy_eval_env)
-    if (
-        found is None
-        or not _supported(agent, found[0])
-        or (greedy_eval_env is not None and eval_found is None)
-    ):
+    fused = _fused_functions(agent, env, greedy_eval_env)
+    if fused is None:
         logger.info("train_agent_fast: falling back to train_agent for %s", agent.name)
         return train_agent(
             agent, env, n_episodes, max_steps=max_steps, greedy_eval_env=greedy_eval_env,
@@ -174,21 +276,45 @@ def train_agent_fast(
         raise ValueError(
             f"expected n_episodes >= 0 and max_steps >= 1, got {n_episodes}, {max_steps}"
         )
-    nav, env_limit = found
+    episode_function, (unwrapped, env_limit), greedy_function, eval_found = fused
     limit = greedy_max_steps or max_steps or 10_000
     rows = []
     for episode in range(n_episodes):
         start = time.perf_counter()
-        result = _fast_episode(
-            agent, nav, env_limit, max_steps or _BIG, seed if episode == 0 else None
+        result = episode_function(
+            agent, unwrapped, env_limit, max_steps or _BIG, seed if episode == 0 else None
         )
         elapsed = time.perf_counter() - start
         greedy = -1
         if eval_found is not None:
             if episode == 0 and seed is not None:
                 eval_found[0].reset(seed=seed + 1)
-            greedy = _greedy(agent, eval_found[0], limit, eval_found[1])
-        rows.append((result[0], result[1], result[2], result[3], result[4], elapsed, greedy))
+            greedy = greedy_function(agent, eval_found[0], limit, eval_found[1])
+        rows.append((*result, elapsed, greedy))
     columns = list(zip(*rows, strict=True)) if rows else [()] * 7
     dtypes = (np.float64, np.int64, np.bool_, np.int64, np.int64, np.float64, np.int64)
     return TrainingLog(*(np.array(c, dtype=d) for c, d in zip(columns, dtypes, strict=True)))
+
+
+def train_for_steps_fast(
+    agent: TabularAgent, env: gym.Env[Any, Any], n_steps: int, *, seed: int | None = None
+) -> np.ndarray:
+    """As :func:`skidnav.agents.training.train_for_steps` (cumulative reward after each step,
+    float64 (n_steps,)), compiled on the grid mazes; other envs or agents use the plain loop."""
+    found = _maze_env(env)
+    if found is None or not _supported_maze(agent, found[0]):
+        logger.info("train_for_steps_fast: falling back to train_for_steps for %s", agent.name)
+        return train_for_steps(agent, env, n_steps, seed=seed)
+    maze, env_limit = found
+    rewards = np.zeros(n_steps, dtype=np.float64)
+    state, _ = maze.reset(seed=seed)
+    done = 0
+    while done < n_steps:
+        limits = (env_limit, _BIG, n_steps - done)
+        _, state, tally = _maze_stretch(agent, maze, state, limits, rewards[done:])
+        done += int(tally[trainer.LENGTH])
+        if tally[maze_trainer.ENDED]:
+            agent.end_episode()
+            state, _ = maze.reset()
+    # The rewards are summed in step order, as the plain loop does.
+    return np.cumsum(rewards)

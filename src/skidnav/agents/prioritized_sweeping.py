@@ -22,8 +22,7 @@ import numpy as np
 
 from skidnav.agents.config import PrioritizedSweepingConfig, QLearningConfig
 from skidnav.agents.dyna_q import DynaQAgent
-from skidnav.kernels.multinomial import MOST_PROBABLE
-from skidnav.kernels.planning import prioritized_sweeping, queue_pair
+from skidnav.kernels.planning import sweep_step
 from skidnav.kernels.priority_queue import heap_push, make_heap
 
 
@@ -55,25 +54,14 @@ class PrioritizedSweepingAgent(DynaQAgent):
         info: Mapping[str, Any],
     ) -> None:
         config = self.config
-        pair = self.model.observe(state, action, reward, next_state, terminated)
-        mode = config.planning_mode_code
-        uniform = self.rng.random() if mode == MOST_PROBABLE else 0.0
-        queue_pair(
-            self.q, self.model.arrays, self.queue, pair, config.theta, config.gamma, mode, uniform
-        )
+        self.model.prepare(state, action, next_state)
         self.planning_updates += int(
-            prioritized_sweeping(
-                self.q,
-                self.model.arrays,
-                self.queue,
-                config.planning_steps,
-                config.theta,
-                config.alpha,
-                config.gamma,
-                mode,
-                self.rng,
+            sweep_step(
+                self.q, self.model.arrays, self.queue, state, action, reward, next_state,
+                terminated, config.planning_steps, config.theta, config.alpha, config.gamma,
+                config.planning_mode_code, self.rng,
             )
-        )
+        )  # fmt: skip
 
     def _state_arrays(self) -> dict[str, np.ndarray]:
         size = int(self.queue.size[0])

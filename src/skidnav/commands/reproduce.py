@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
 from skidnav.agents.registry import make_agent
-from skidnav.agents.training import greedy_rollout, run_episode, train_agent, train_for_steps
 from skidnav.envs.mazes import GridMazeEnv, blocking_maze, dyna_maze, shortcut_maze
 from skidnav.errors import UserError
 
@@ -82,7 +82,7 @@ def dyna_maze_runs(
             agent = make_agent(
                 "dyna-q", 54, 4, {**BOOK, "planning_steps": n}, np.random.default_rng(seed)
             )
-            per_run.append(train_agent(agent, dyna_maze(), 50, seed=seed).lengths)
+            per_run.append(train_agent_fast(agent, dyna_maze(), 50, seed=seed).lengths)
         lengths[n] = np.array(per_run, dtype=np.int64)
     return lengths
 
@@ -128,7 +128,7 @@ def changing_maze_runs(
             agent = make_agent(
                 agent_name, 54, 4, {**CHANGING, **extra}, np.random.default_rng(seed)
             )
-            per_run.append(train_for_steps(agent, make_env(), n_steps, seed=seed))
+            per_run.append(train_for_steps_fast(agent, make_env(), n_steps, seed=seed))
         curves[agent_name] = np.array(per_run)
     return curves
 
@@ -159,11 +159,12 @@ def updates_until_optimal(name: str, scale: int, seed: int, max_episodes: int = 
     options = {**SWEEP, "theta": 1e-4} if name == "prioritized-sweeping" else SWEEP
     n_states = env.n_rows * env.n_cols
     agent = make_agent(name, n_states, 4, options, np.random.default_rng(seed))
-    state, _ = env.reset(seed=seed)
-    for _ in range(max_episodes):
-        run_episode(agent, env, int(state), None)
-        state, _ = env.reset()
-        length = greedy_rollout(agent, dyna_maze(scale), 4 * optimal)
+    for episode in range(max_episodes):
+        log = train_agent_fast(
+            agent, env, 1, greedy_eval_env=dyna_maze(scale), greedy_max_steps=4 * optimal,
+            seed=seed if episode == 0 else None,
+        )  # fmt: skip
+        length = int(log.greedy_lengths[0])
         if 0 < length <= PATH_TOLERANCE * optimal:
             real = 0 if name == "prioritized-sweeping" else agent.steps
             return real + agent.planning_updates

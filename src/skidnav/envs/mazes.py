@@ -21,6 +21,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from skidnav.kernels.maze_trainer import MazeArrays
+
 Cell = tuple[int, int]
 MOVES = ((-1, 0), (1, 0), (0, -1), (0, 1))
 """(row, column) change of actions 0 up, 1 down, 2 left, 3 right."""
@@ -138,6 +140,25 @@ class GridMazeEnv(gym.Env[int, int]):
             and self._episode_steps >= self.max_episode_steps
         )
         return self.state_of(self._cell), 1.0 if terminated else 0.0, terminated, truncated, {}
+
+    def maze_arrays(self) -> MazeArrays:
+        """The maze for the compiled loop of :mod:`skidnav.kernels.maze_trainer` (walls arrays
+        shared, not copied)."""
+        never = np.iinfo(np.int64).max
+        after = self._walls_after if self._walls_after is not None else self._walls_before
+        change = never if self._walls_after is None else int(self.change_after or 0)
+        return MazeArrays(self._walls_before, after, change, self.state_of(self.goal))
+
+    def progress(self) -> tuple[int, int, int]:
+        """(flat state, steps of the current episode, steps in all): what a compiled loop needs
+        to continue from here."""
+        return self.state_of(self._cell), self._episode_steps, self.total_steps
+
+    def restore_progress(self, state: int, episode_steps: int, total_steps: int) -> None:
+        """Put the env where a compiled loop left it (the inverse of :meth:`progress`)."""
+        self._cell = divmod(int(state), self.n_cols)
+        self._episode_steps = int(episode_steps)
+        self.total_steps = int(total_steps)
 
     def shortest_path_length(self) -> int:
         """Fewest actions from start to goal with the current walls (breadth-first), or −1."""

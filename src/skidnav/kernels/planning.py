@@ -21,6 +21,7 @@ from skidnav.kernels.multinomial import (
     expected_target,
     find_pair,
     first_predecessor,
+    model_observe,
     model_target,
     most_probable_entry,
     pair_state_action,
@@ -174,3 +175,31 @@ def prioritized_sweeping(
             queue_pair(q, model, heap, model.entry_pair[entry], theta, gamma, mode, uniform)
             entry = model.entry_pred_link[entry]
     return updates
+
+
+@jit
+def sweep_step(
+    q: np.ndarray,
+    model: MultinomialArrays,
+    heap: HeapArrays,
+    state: int,
+    action: int,
+    reward: float,
+    next_state: int,
+    terminated: bool,
+    n_steps: int,
+    theta: float,
+    alpha: float,
+    gamma: float,
+    mode: int,
+    rng: np.random.Generator,
+) -> int:
+    """Prioritized sweeping's whole learning step from one real transition, in one compiled call
+    (a call from Python pays ~20 µs for its arguments, the Generator most): count it in the model
+    (the caller has reserved room for one more transition), queue its pair (a most-probable model
+    draws one ``rng.random()`` for ties first), then :func:`prioritized_sweeping`. Returns the
+    number of value updates."""
+    pair = model_observe(model, state, action, reward, next_state, terminated)
+    uniform = rng.random() if mode == MOST_PROBABLE else 0.0
+    queue_pair(q, model, heap, pair, theta, gamma, mode, uniform)
+    return prioritized_sweeping(q, model, heap, n_steps, theta, alpha, gamma, mode, rng)

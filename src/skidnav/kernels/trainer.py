@@ -23,14 +23,9 @@ import numpy as np
 
 from skidnav._jit import jit
 from skidnav.kernels import kinematic_planning as kp
-from skidnav.kernels.multinomial import MOST_PROBABLE, MultinomialArrays, model_observe
+from skidnav.kernels.multinomial import MultinomialArrays, model_observe
 from skidnav.kernels.navigation import NavigationTask, draw_noise, transition
-from skidnav.kernels.planning import (
-    dyna_planning,
-    dyna_plus_planning,
-    prioritized_sweeping,
-    queue_pair,
-)
+from skidnav.kernels.planning import dyna_planning, dyna_plus_planning, sweep_step
 from skidnav.kernels.priority_queue import HeapArrays
 from skidnav.kernels.tabular import epsilon_greedy, greedy_first, td_update
 
@@ -86,7 +81,7 @@ class LearnerArrays(NamedTuple):
 
 
 @jit
-def _classic_learn(
+def classic_learn(
     agent: LearnerArrays,
     settings: LearnerSettings,
     tally: np.ndarray,
@@ -100,12 +95,9 @@ def _classic_learn(
     """The ``_learn`` of Q-learning, Dyna-Q, Dyna-Q+ and prioritized sweeping."""
     s = settings
     if s.kind == PRIORITIZED_SWEEPING:
-        pair = model_observe(agent.model, state, action, reward, next_state, terminated)
-        uniform = rng.random() if s.mode == MOST_PROBABLE else 0.0
-        queue_pair(agent.q, agent.model, agent.heap, pair, s.theta, s.gamma, s.mode, uniform)
-        tally[PLANNING_UPDATES] += prioritized_sweeping(
-            agent.q, agent.model, agent.heap, s.planning_steps, s.theta, s.alpha, s.gamma,
-            s.mode, rng,
+        tally[PLANNING_UPDATES] += sweep_step(
+            agent.q, agent.model, agent.heap, state, action, reward, next_state, terminated,
+            s.planning_steps, s.theta, s.alpha, s.gamma, s.mode, rng,
         )  # fmt: skip
         return
     if s.kind == DYNA_Q_PLUS:
@@ -201,7 +193,7 @@ def run_episode(
                 terminated, outcome.collided, pose, log, outcome.n_logged, agent_rng,
             )  # fmt: skip
         else:
-            _classic_learn(
+            classic_learn(
                 agent, settings, tally, state, action, outcome.reward, outcome.state,
                 terminated, agent_rng,
             )  # fmt: skip

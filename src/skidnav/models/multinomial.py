@@ -182,13 +182,18 @@ class MultinomialModel:
         if changes:
             self.arrays = arrays._replace(**changes)  # type: ignore[arg-type]
 
+    def prepare(self, state: int, action: int, next_state: int) -> None:
+        """Check a transition and make room for it, before a compiled kernel counts it
+        (:func:`skidnav.kernels.multinomial.model_observe`); ValueError if it is invalid."""
+        if not 0 <= action < self.n_actions or state < 0 or next_state < 0:
+            raise ValueError(f"expected a valid transition, got ({state}, {action}, {next_state})")
+        self.reserve(1)
+
     def observe(
         self, state: int, action: int, reward: float, next_state: int, terminated: bool
     ) -> int:
         """Count one real transition (s, a, r, s′, terminated); returns its pair slot."""
-        if not 0 <= action < self.n_actions or state < 0 or next_state < 0:
-            raise ValueError(f"expected a valid transition, got ({state}, {action}, {next_state})")
-        self.reserve(1)
+        self.prepare(state, action, next_state)
         return int(
             model_observe(self.arrays, state, action, float(reward), next_state, bool(terminated))
         )
