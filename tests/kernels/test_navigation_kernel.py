@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from skidnav.envs.navigation import SkidSteerNavEnv
+
 DIGEST_SCRIPT = """
 import hashlib, numpy as np, skidnav
 from skidnav.envs.navigation import SkidSteerNavEnv
@@ -60,3 +62,63 @@ def test_draw_noise_matches_the_generator_vector_draw():
         hashlib.sha256(noise.tobytes()).hexdigest()
         != hashlib.sha256(np.zeros(20).tobytes()).hexdigest()
     )
+
+
+def _slippery_env(variance: str = "observed") -> SkidSteerNavEnv:
+    return SkidSteerNavEnv(map_kind="obstacles", world_seed=3, slip="slippery",
+                           drift_amplitude=0.5, drift_period=7.0, variance=variance)  # fmt: skip
+
+
+def _free_poses(env: SkidSteerNavEnv, n: int, rng: np.random.Generator) -> np.ndarray:
+    """Centres of random free cells with random headings [rad], shape (n, 3)."""
+    cells = np.argwhere(env.grid_map.as_uint8() == 0)
+    chosen = cells[rng.integers(0, len(cells), n)]
+    centres = [env.discretization.cell_centre(int(i), int(j)) for i, j in chosen]
+    return np.column_stack([np.array(centres), rng.uniform(-4.0, 4.0, n)])
+
+
+def test_batch_is_transition_robot_by_robot() -> None:
+    from skidnav.kernels.navigation import draw_noise, simulate_batch, transition
+
+    batch_env, loop_env = _slippery_env(), _slippery_env()
+    poses = _free_poses(batch_env, 300, np.random.default_rng(4))
+    actions = np.random.default_rng(6).integers(0, 4, 300)
+    rewards, states = np.zeros(300), np.zeros(300, dtype=np.int64)
+    batch_poses = poses.copy()
+    collisions = simulate_batch(
+        batch_env.task, batch_poses, actions, 2.0, np.random.default_rng(8), rewards, states
+    )
+    rng, noise, log = np.random.default_rng(8), np.empty(20), np.empty((10, 6))
+    expected_collisions = 0
+    for k in range(300):
+        pose = poses[k].copy()
+        draw_noise(rng, noise)
+        outcome = transition(loop_env.task, pose, int(actions[k]), 2.0, noise, log)
+        assert pose.tobytes() == batch_poses[k].tobytes()
+        assert (outcome.reward, outcome.state) == (rewards[k], states[k])
+        expected_collisions += outcome.collided
+    assert collisions == expected_collisions > 0
+    assert loop_env.task.variance_stats.tobytes() == batch_env.task.variance_stats.tobytes()
+
+
+def test_log_replays_to_the_pose_with_the_region_of_each_substep_start() -> None:
+    from skidnav.kernels.navigation import draw_noise, transition
+    from skidnav.robot.kinematics import euler_step
+
+    env = _slippery_env(variance="true")
+    robot, grid = env.robot, env.discretization
+    rng, noise, log = np.random.default_rng(1), np.empty(20), np.empty((10, 6))
+    poses = _free_poses(env, 200, np.random.default_rng(2))
+    for k, action in enumerate(np.random.default_rng(3).integers(0, 4, 200)):
+        pose = poses[k].copy()
+        x, y, heading = pose
+        draw_noise(rng, noise)
+        outcome = transition(env.task, pose, int(action), 0.5 * k, noise, log)
+        for region, _, _, v_x, v_y, yaw_rate in log[: outcome.n_logged]:
+            assert region == grid.region(x, y)
+            x, y, heading = euler_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
+            x = min(max(x, 0.0), robot.arena_width)
+            y = min(max(y, 0.0), robot.arena_height)
+        assert (x, y) == (pose[0], pose[1])
+        assert outcome.region == grid.region(x, y)
+        assert outcome.state == grid.state(*pose)

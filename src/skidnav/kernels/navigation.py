@@ -30,6 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
+from skidnav.kernels.tabular import inline_jit
 from skidnav.robot.kinematics import (
     apply_slip,
     body_velocities,
@@ -109,17 +110,28 @@ class Outcome(NamedTuple):
     region: int
 
 
-@jit
-def slip_scale(task: NavigationTask, region: int, time: float) -> float:
-    """η of ``region`` at simulated time ``time`` [s] (rad/s)."""
-    eta = task.eta[region]
-    if task.drift_amplitude > 0.0:
-        phase = 2.0 * math.pi * time / task.drift_period + task.drift_phase[region]
-        eta *= max(0.0, 1.0 + task.drift_amplitude * math.sin(phase))
+@inline_jit
+def drifted_slip(eta: float, phase: float, amplitude: float, period: float, time: float) -> float:
+    """η [rad/s] scaled by the drift factor max(0, 1 + A sin(2π t / P + φ)) at time ``time`` [s]
+    (unchanged when the amplitude A is 0); ``phase`` φ [rad], ``period`` P [s].
+
+    Scalars only: the branch of an inlined helper that reads ``task`` arrays keeps numba from
+    pruning their reference counts, which cost about as much as the rest of a sub-step.
+    """
+    if amplitude > 0.0:
+        eta *= max(0.0, 1.0 + amplitude * math.sin(2.0 * math.pi * time / period + phase))
     return eta
 
 
-@jit
+@inline_jit
+def slip_scale(task: NavigationTask, region: int, time: float) -> float:
+    """η of ``region`` at simulated time ``time`` [s] (rad/s)."""
+    return drifted_slip(
+        task.eta[region], task.drift_phase[region], task.drift_amplitude, task.drift_period, time
+    )
+
+
+@inline_jit
 def _record_wheel_speed(stats: np.ndarray, region: int, value: float) -> None:
     """Welford update of the running wheel-speed statistics of one region."""
     stats[region, 0] += 1.0
@@ -128,7 +140,7 @@ def _record_wheel_speed(stats: np.ndarray, region: int, value: float) -> None:
     stats[region, 2] += delta * (value - stats[region, 1])
 
 
-@jit
+@inline_jit
 def region_variance(task: NavigationTask, region: int, time: float) -> float:
     """Wheel-speed variance of a region [rad²/s²]: observed or true η²/12 (see module doc)."""
     if task.rewards.observed_variance:
@@ -138,7 +150,45 @@ def region_variance(task: NavigationTask, region: int, time: float) -> float:
     return eta * eta / 12.0
 
 
-@jit
+@inline_jit
+def integrate(
+    robot: KinematicConstants,
+    x: float,
+    y: float,
+    heading: float,
+    twist: tuple[float, float, float],
+) -> tuple[float, float, float]:
+    """One sub-step of the robot's integrator (Euler or exact, ``robot.dt`` seconds) from pose
+    (x [m], y [m], heading [rad]) with body twist (v_x, v_y [m/s], yaw_rate [rad/s]); the new
+    position is clipped to the arena [0, W] × [0, H]."""
+    v_x, v_y, yaw_rate = twist
+    if robot.exact_integration:
+        new_x, new_y, new_heading = exact_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
+    else:
+        new_x, new_y, new_heading = euler_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
+    new_x = min(max(new_x, 0.0), robot.arena_width)
+    new_y = min(max(new_y, 0.0), robot.arena_height)
+    return new_x, new_y, new_heading
+
+
+@inline_jit
+def _log_row(
+    log: np.ndarray,
+    row: int,
+    region: int,
+    commands: tuple[float, float],
+    twist: tuple[float, float, float],
+) -> None:
+    """Write one free sub-step as row ``row`` of the kinematic log (see :data:`LOG_COLUMNS`)."""
+    log[row, 0] = region
+    log[row, 1] = commands[0]
+    log[row, 2] = commands[1]
+    log[row, 3] = twist[0]
+    log[row, 4] = twist[1]
+    log[row, 5] = twist[2]
+
+
+@inline_jit
 def simulate_action(
     task: NavigationTask,
     pose: np.ndarray,
@@ -157,46 +207,38 @@ def simulate_action(
     Returns:
         (collided, rows logged, ω_L and ω_R of the last sub-step [rad/s]).
     """
-    robot = task.robot
-    command_left, command_right = commanded_wheel_speeds(action, robot.wheel_speed)
+    robot, grid = task.robot, task.grid
+    commands = commanded_wheel_speeds(action, robot.wheel_speed)
+    record = action == 0 and task.rewards.observed_variance
+    x, y, heading = pose[0], pose[1], pose[2]
+    region = region_of(x, y, grid)
     omega_left = omega_right = 0.0
     n_logged = 0
+    collided = False
     for substep in range(robot.substeps):
-        x, y, heading = pose[0], pose[1], pose[2]
-        region = region_of(x, y, task.grid)
         eta = slip_scale(task, region, time + substep * robot.dt)
-        omega_left = apply_slip(command_left, noise[2 * substep] * eta)
-        omega_right = apply_slip(command_right, noise[2 * substep + 1] * eta)
-        v_x, v_y, yaw_rate = body_velocities(
+        omega_left = apply_slip(commands[0], noise[2 * substep] * eta)
+        omega_right = apply_slip(commands[1], noise[2 * substep + 1] * eta)
+        twist = body_velocities(
             omega_left, omega_right, task.x_icr[region], robot.wheel_radius, robot.half_track
         )
-        if robot.exact_integration:
-            new_x, new_y, new_heading = exact_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
-        else:
-            new_x, new_y, new_heading = euler_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
-        new_x = min(max(new_x, 0.0), robot.arena_width)
-        new_y = min(max(new_y, 0.0), robot.arena_height)
-        i, j = cell_of(new_x, new_y, task.grid)
-        pose[2] = new_heading
+        new_x, new_y, heading = integrate(robot, x, y, heading, twist)
+        i, j = cell_of(new_x, new_y, grid)
         if task.occupancy[i, j] != 0:
-            return True, n_logged, omega_left, omega_right
-        pose[0] = new_x
-        pose[1] = new_y
-        row = log[n_logged]
-        row[0] = region
-        row[1] = command_left
-        row[2] = command_right
-        row[3] = v_x
-        row[4] = v_y
-        row[5] = yaw_rate
+            collided = True
+            break
+        x, y = new_x, new_y
+        _log_row(log, n_logged, region, commands, twist)
         n_logged += 1
-        if action == 0 and task.rewards.observed_variance:
+        if record:
             _record_wheel_speed(task.variance_stats, region, omega_left)
             _record_wheel_speed(task.variance_stats, region, omega_right)
-    return False, n_logged, omega_left, omega_right
+        region = region_of(x, y, grid)  # the next sub-step's region (shares x / W with cell_of)
+    pose[0], pose[1], pose[2] = x, y, heading
+    return collided, n_logged, omega_left, omega_right
 
 
-@jit
+@inline_jit
 def transition(
     task: NavigationTask,
     pose: np.ndarray,
@@ -224,7 +266,7 @@ def transition(
     return Outcome(reward, terminated, collided, n_logged, omega_left, omega_right, state, region)
 
 
-@jit
+@inline_jit
 def draw_noise(rng: np.random.Generator, noise: np.ndarray) -> None:
     """Fill ``noise`` with ``rng.random()`` draws, in order (identical to ``rng.random(n)``)."""
     for k in range(noise.shape[0]):
@@ -251,10 +293,13 @@ def simulate_batch(
     floor); writes rewards (float64 (n,)) and next states (int64 (n,)); returns collisions."""
     log = np.empty((task.robot.substeps, 6))
     noise = np.empty(2 * task.robot.substeps)
+    pose = np.empty(3)  # each robot's pose is copied through it: no view of ``poses`` per robot
     collisions = 0
     for k in range(poses.shape[0]):
         draw_noise(rng, noise)
-        outcome = transition(task, poses[k], actions[k], time, noise, log)
+        pose[0], pose[1], pose[2] = poses[k, 0], poses[k, 1], poses[k, 2]
+        outcome = transition(task, pose, actions[k], time, noise, log)
+        poses[k, 0], poses[k, 1], poses[k, 2] = pose[0], pose[1], pose[2]
         rewards[k] = outcome.reward
         states[k] = outcome.state
         if outcome.collided:
