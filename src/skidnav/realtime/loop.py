@@ -1,8 +1,9 @@
 """The real-time loop: an agent acting on a robot at wall-clock pace (SPEC §6, docs/realtime.md).
 
 One action = ``substeps`` control periods of ``period`` seconds of robot time (``period /
-time_scale`` wall seconds). In each period the loop re-sends the action's wheel command, waits for
-the period's end and reads the newest pose; consecutive poses give the kinematic log rows
+time_scale`` wall seconds). In each period the loop re-sends the action's wheel command and waits
+for the robot's next pose, periods being counted on the robot's own clock (the poses' stamps);
+consecutive poses give the kinematic log rows
 (realtime/transition.py). A virtual bumper predicts the next period's pose with the nominal
 kinematics: if it would enter a wall cell of the map, the wheels stop and the action is a
 collision, as in the env. At the end of an action the wheels are stopped while the agent learns
@@ -202,7 +203,7 @@ class RealtimeLoop:
         Periods are counted on the robot's clock (pose stamps), not the host's: at a high time
         scale a host scheduling delay of a millisecond is a whole period, and counting it would
         make actions last 8 to 11 periods instead of ``substeps``. The wall clock only bounds
-        each wait (two periods), so a lost pose costs no time."""
+        each wait (two periods), so a lost pose cannot stall the action."""
         command = commanded_wheel_speeds(action, self.robot.wheel_speed)
         period, period_wall = self.settings.period, self.settings.period_wall
         pose, stamp = self._measure()
