@@ -20,7 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from skidnav._jit import jit
-from skidnav.robot.kinematics import commanded_wheel_speeds, euler_step, exact_step
+from skidnav.kernels.navigation import integrate
+from skidnav.robot.kinematics import commanded_wheel_speeds
 from skidnav.robot.params import KinematicConstants
 from skidnav.world.discretization import GridShape, cell_of, region_of, state_of
 
@@ -88,15 +89,12 @@ def predict_action(
     """
     for _ in range(robot.substeps):
         region = region_of(x, y, grid)
-        v_x = velocities[region, action, 0]
-        v_y = velocities[region, action, 1]
-        yaw_rate = velocities[region, action, 2]
-        if robot.exact_integration:
-            nx, ny, nh = exact_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
-        else:
-            nx, ny, nh = euler_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
-        nx = min(max(nx, 0.0), robot.arena_width)
-        ny = min(max(ny, 0.0), robot.arena_height)
+        twist = (
+            velocities[region, action, 0],
+            velocities[region, action, 1],
+            velocities[region, action, 2],
+        )
+        nx, ny, nh = integrate(robot, x, y, heading, twist)
         i, j = cell_of(nx, ny, grid)
         if walls[i, j]:
             return x, y, nh, PREDICT_COLLISION
@@ -195,18 +193,15 @@ def collision_wall_cell(
         current cell.
     """
     region = region_of(x, y, grid)
-    v_x = velocities[region, action, 0]
-    v_y = velocities[region, action, 1]
-    yaw_rate = velocities[region, action, 2]
+    twist = (
+        velocities[region, action, 0],
+        velocities[region, action, 1],
+        velocities[region, action, 2],
+    )
     ci, cj = cell_of(x, y, grid)
-    heading = heading - yaw_rate * robot.dt
+    heading = heading - twist[2] * robot.dt
     for _ in range(robot.substeps):
-        if robot.exact_integration:
-            x, y, heading = exact_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
-        else:
-            x, y, heading = euler_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
-        x = min(max(x, 0.0), robot.arena_width)
-        y = min(max(y, 0.0), robot.arena_height)
+        x, y, heading = integrate(robot, x, y, heading, twist)
         i, j = cell_of(x, y, grid)
         if i != ci or j != cj:
             return i, j

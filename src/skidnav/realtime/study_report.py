@@ -106,7 +106,10 @@ def _cell_table(rows: Sequence[Row], agents: list[str], presets: list[str]) -> s
 
 
 def _floor_pairs(
-    rows: Sequence[Row], agent: str, conditions: Mapping[str, tuple[str, bool]], drifting: Any
+    rows: Sequence[Row],
+    agent: str,
+    conditions: Mapping[str, tuple[str, bool]],
+    drifting: bool | None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Late success on the rough and on the slippery floor, paired by (slip condition, seed)."""
     rough, slippery = [], []
