@@ -7,6 +7,11 @@ Prints (planning rates: best of three timings each):
   episode loop included), trained by the fused maze trainer (``train_agent_fast``) and step by
   step from Python (``train_agent`` on the Gymnasium maze), against a plain-Python prioritized
   sweeping on the same maze;
+* per model-based agent, planning updates/s inside the fused trainer (``train_agent_fast``) on
+  the 25 × 25 × 20 obstacles arena at a large planning budget (:data:`ARENA_BUDGETS` updates per
+  real step, everything of the trainer timed: simulation, real steps, end-of-episode refits),
+  against the identical kernels as plain Python (``NUMBA_DISABLE_JIT=1`` in a subprocess, on
+  the budget :data:`PLAIN_ARENA` and a short episode);
 * the wall time of the 30 Dyna Maze runs of ``skidnav reproduce`` (Sutton & Barto (2018)
   Example 8.1, n = 0, 5, 50, without writing files; fused maze trainer) against the same runs of
   the plain-Python Dyna-Q (a few runs, scaled to 30).
@@ -20,7 +25,10 @@ from __future__ import annotations
 
 import heapq
 import math
+import os
 import random
+import subprocess
+import sys
 import time
 from collections import defaultdict
 from typing import Any
@@ -39,6 +47,13 @@ SCALE = 3  # 486-state maze: a model with every pair seen
 REPEATS = 3  # each rate is the best of this many timings (the machine is shared)
 SWEEP = {"planning_steps": 200, "alpha": 0.5, "gamma": 0.95, "epsilon": 0.1, "theta": 1e-6}
 SWEEP_EPISODES = 30
+ARENA_AGENTS = (
+    "dyna-q", "dyna-kinematic", "trajectory-prioritized", "dyna-full", "prioritized-sweeping",
+    "dyna-sweep",
+)  # fmt: skip
+ARENA_BUDGETS = (1000, 10_000)  # planning updates per real step
+ARENA_EPISODES = {1000: 6, 10_000: 2}  # timed, after 4 warm-up episodes at the same budget
+PLAIN_ARENA = (200, 40)  # plain Python: planning updates per real step, real steps
 MAZE_RUNS = 30
 PLAIN_MAZE_RUNS = 3
 
@@ -209,7 +224,63 @@ def plain_dyna_maze_seconds(runs: int) -> float:
     return time.perf_counter() - start
 
 
+def arena_planning_rate(name: str, budget: int, episodes: int, max_steps: int = 500) -> float:
+    """Planning updates/s of ``name`` trained by ``train_agent_fast`` on the obstacles arena
+    (α 0.5, γ 0.95, ε 0.1, θ 1e-6), over ``episodes`` episodes after :data:`WARM_UP` at the same
+    budget (compilation, first model, first refits), all the trainer's time included."""
+    import gymnasium as gym
+
+    import skidnav.envs  # noqa: F401  (registers the env)
+
+    env = gym.make("skidnav/SkidSteerNav-v0", map_kind="obstacles", world_seed=3, slip="slippery")
+    config = {"alpha": 0.5, "gamma": 0.95, "epsilon": 0.1, "planning_steps": budget}
+    if name == "prioritized-sweeping":
+        config["theta"] = 1e-6
+    context = {} if name in ("dyna-q", "prioritized-sweeping") else {"task": env.unwrapped.task}
+    agent = make_agent(name, 12_500, 4, config, np.random.default_rng(5), **context)
+    warm_up = WARM_UP if max_steps >= 500 else 1
+    train_agent_fast(agent, env, warm_up, max_steps=max_steps, seed=1)
+    before = agent.planning_updates
+    start = time.perf_counter()
+    train_agent_fast(agent, env, episodes, max_steps=max_steps)
+    return (agent.planning_updates - before) / (time.perf_counter() - start)
+
+
+WARM_UP = 4
+
+
+def plain_arena_rate(name: str) -> float:
+    """:func:`arena_planning_rate` as plain Python: the same kernels with the JIT disabled, in a
+    subprocess, :data:`PLAIN_ARENA` (budget, steps per episode), one timed episode."""
+    budget, steps = PLAIN_ARENA
+    code = f"import bench_agents as b; print(b.arena_planning_rate({name!r}, {budget}, 1, {steps}))"
+    result = subprocess.run(
+        [sys.executable, "-c", code], env=dict(os.environ, NUMBA_DISABLE_JIT="1"),
+        capture_output=True, text=True, check=True, cwd=os.path.dirname(os.path.abspath(__file__)),
+    )  # fmt: skip
+    return float(result.stdout.strip().splitlines()[-1])
+
+
+def print_arena_rates() -> None:
+    """One line per model-based agent: fused-trainer planning rate per budget, and the ratio."""
+    budget, steps = PLAIN_ARENA
+    print(
+        "fused trainer, obstacles arena 25×25×20 (12,500 states × 4 actions), α 0.5, γ 0.95, "
+        f"ε 0.1; plain Python = same kernels, NUMBA_DISABLE_JIT=1, {budget} updates/step, "
+        f"{steps}-step episode (target >= 10 M/s)"
+    )
+    for name in ARENA_AGENTS:
+        plain = plain_arena_rate(name)
+        rates = [arena_planning_rate(name, n, ARENA_EPISODES[n]) for n in ARENA_BUDGETS]
+        figures = ", ".join(
+            f"{n} updates/step {rate / 1e6:6.2f} M/s ({rate / plain:6.0f} ×)"
+            for n, rate in zip(ARENA_BUDGETS, rates, strict=True)
+        )
+        print(f"  {name:24s} plain {plain / 1e3:6.1f} k/s; {figures}", flush=True)
+
+
 def main() -> None:
+    print_arena_rates()
     agent = trained_dyna_agent()
     compiled = compiled_rate(agent)
     plain = plain_python_rate(agent)

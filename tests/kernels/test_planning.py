@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skidnav.kernels.multinomial import EXPECTED, MOST_PROBABLE, SAMPLE, model_target
+from skidnav.kernels.multinomial import (
+    EXPECTED,
+    MOST_PROBABLE,
+    SAMPLE,
+    model_target,
+    model_target_call,
+    most_probable_target,
+)
 from skidnav.kernels.planning import dyna_planning
 from skidnav.models.multinomial import MultinomialModel
 
@@ -55,3 +62,16 @@ def test_dyna_planning_without_pairs_does_nothing() -> None:
     assert dyna_planning(q, MultinomialModel(2).arrays, 10, 0.5, 0.9, MOST_PROBABLE, rng) == 0
     assert rng.random() == np.random.default_rng(0).random()
     np.testing.assert_array_equal(q, 1.0)
+
+
+@pytest.mark.parametrize("mode", [MOST_PROBABLE, SAMPLE, EXPECTED])
+def test_the_compiled_call_and_the_inlined_target_equal_model_target(mode: int) -> None:
+    model = stochastic_model(seed=3)
+    q = np.random.default_rng(2).normal(size=(N_STATES, N_ACTIONS))
+    arrays = model.arrays
+    for pair in range(int(arrays.counters[0])):
+        for uniform in (0.0, 0.4, 0.99):
+            expected = model_target(arrays, q, pair, mode, 0.9, uniform)
+            assert model_target_call(arrays, q, pair, mode, 0.9, uniform) == expected
+            if mode == MOST_PROBABLE:
+                assert most_probable_target(q, arrays, pair, 0.9, uniform) == expected

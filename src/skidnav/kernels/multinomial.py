@@ -37,6 +37,12 @@ Storage (:class:`MultinomialArrays`), memory proportional to the number of disti
 owner reserves room first (:meth:`skidnav.models.multinomial.MultinomialModel.reserve`); one
 observation needs at most one free slot of each kind.
 
+Speed: the helpers marked inline are compiled into the planning loops, and each has **one
+exit** (no early ``return``; each array it takes is read last on the one path to its end). numba
+then prunes the reference counting of the arrays bound to the helper's parameters, the model's
+21 included; with several exits it cannot, and every call paid an atomic increment and decrement
+per array — most of the time of the prioritized-sweeping and kinematic planning loops.
+
 Planning modes (``mode`` argument): :data:`MOST_PROBABLE` (thesis default: the outcome with the
 largest count, ties broken uniformly), :data:`SAMPLE` (s′ drawn from p(·|s, a)) and
 :data:`EXPECTED` (the expectation over all outcomes). In every mode the bootstrap is weighted by
@@ -95,16 +101,15 @@ def hash_slot(key: int, mask: int) -> int:
 
 @inline_jit
 def hash_find(table: np.ndarray, keys: np.ndarray, key: int) -> int:
-    """Index ``i`` with ``keys[i] == key`` registered in ``table``, or −1."""
+    """Index ``i`` with ``keys[i] == key`` registered in ``table``, or −1 (an empty slot holds
+    −1). One exit, as every hot inlined helper here (see the module docstring)."""
     mask = table.shape[0] - 1
     slot = hash_slot(key, mask)
-    while True:
-        index = table[slot]
-        if index < 0:
-            return -1
-        if keys[index] == key:
-            return index
+    index = table[slot]
+    while index >= 0 and keys[index] != key:
         slot = (slot + 1) & mask
+        index = table[slot]
+    return index
 
 
 @jit
@@ -246,15 +251,13 @@ def _nth_with_count(
     count: int,
     index: int,
 ) -> int:
-    """The ``index``-th (0-based) outcome of ``pair`` whose count is ``count``."""
+    """The ``index``-th (0-based) outcome of ``pair`` whose count is ``count`` (−1 if none)."""
     entry = pair_head[pair]
-    while entry >= 0:
+    while entry >= 0 and (entry_count[entry] != count or index > 0):
         if entry_count[entry] == count:
-            if index == 0:
-                return entry
             index -= 1
         entry = entry_sibling[entry]
-    return -1
+    return entry
 
 
 @inline_jit
@@ -270,12 +273,10 @@ def most_probable_entry(
     """The outcome of ``pair`` with the largest count; ties broken uniformly by ``uniform``, a
     draw in [0, 1) made by the caller (the ``int(uniform · n_ties)``-th tied outcome in list
     order)."""
-    best = pair_best[pair]
-    n_ties = pair_ties[pair]
-    if n_ties == 1:
-        return best
-    index = int(uniform * n_ties)
-    return _nth_with_count(pair_head, entry_count, entry_sibling, pair, entry_count[best], index)
+    # One path (no shortcut for a unique maximum, whose index is 0): see the module docstring.
+    index = int(uniform * pair_ties[pair])
+    count = entry_count[pair_best[pair]]
+    return _nth_with_count(pair_head, entry_count, entry_sibling, pair, count, index)
 
 
 @inline_jit
@@ -286,13 +287,10 @@ def most_probable_target(
     gamma: float,
     uniform: float,
 ) -> float:
-    """TD target of the most probable outcome of ``pair`` (ties broken by ``uniform``): from the
-    cache when it is unique, else from the chosen outcome's statistics (same numbers)."""
-    if model.pair_ties[pair] == 1:
-        return td_target(
-            q, model.pair_best_reward[pair], model.pair_best_next[pair],
-            model.pair_best_continuation[pair], gamma,
-        )  # fmt: skip
+    """TD target of the most probable outcome of ``pair`` (ties broken by ``uniform``), from the
+    chosen outcome's statistics (the same numbers as the cache). One path, every use of the
+    model's arrays on it, so that the model bound to it costs no reference counting in the
+    planning loops (see the module docstring)."""
     entry = most_probable_entry(
         model.pair_best, model.pair_ties, model.pair_head, model.entry_count, model.entry_sibling,
         pair, uniform,
@@ -313,13 +311,12 @@ def sample_entry(
     uniform: float,
 ) -> int:
     """An outcome of ``pair`` drawn with probability N(s, a, s′)/N(s, a) by ``uniform`` ∈ [0, 1)."""
-    threshold = int(uniform * pair_total[pair])
+    threshold = int(uniform * pair_total[pair]) - entry_count[pair_head[pair]]
     entry = pair_head[pair]
-    while True:
-        threshold -= entry_count[entry]
-        if threshold < 0 or entry_sibling[entry] < 0:
-            return entry
+    while threshold >= 0 and entry_sibling[entry] >= 0:
         entry = entry_sibling[entry]
+        threshold -= entry_count[entry]
+    return entry
 
 
 @inline_jit
@@ -368,19 +365,22 @@ def model_target(
     ``Σ_s′ p(s′|s, a)`` times that, summed in the order of the pair's outcome list.
     """
     if mode == EXPECTED:
-        return expected_target(
+        target = expected_target(
             q, model.pair_head, model.pair_total, model.entry_count, model.entry_reward_sum,
             model.entry_terminal_count, model.entry_next_state, model.entry_sibling, pair, gamma,
         )  # fmt: skip
-    if mode != SAMPLE:
-        return most_probable_target(q, model, pair, gamma, uniform)
-    counts = model.entry_count
-    entry = sample_entry(model.pair_head, model.pair_total, counts, model.entry_sibling, pair,
-                         uniform)  # fmt: skip
-    return entry_target(
-        q, counts[entry], model.entry_reward_sum[entry], model.entry_terminal_count[entry],
-        model.entry_next_state[entry], gamma,
-    )  # fmt: skip
+    elif mode != SAMPLE:
+        target = most_probable_target(q, model, pair, gamma, uniform)
+    else:
+        entry = sample_entry(
+            model.pair_head, model.pair_total, model.entry_count, model.entry_sibling, pair,
+            uniform,
+        )  # fmt: skip
+        target = entry_target(
+            q, model.entry_count[entry], model.entry_reward_sum[entry],
+            model.entry_terminal_count[entry], model.entry_next_state[entry], gamma,
+        )  # fmt: skip
+    return target
 
 
 @inline_jit
@@ -402,6 +402,21 @@ def first_predecessor(model: MultinomialArrays, state: int) -> int:
     """First outcome entry leading to ``state`` (−1 if none); iterate with ``entry_pred_link`` and
     read the predecessor pair from ``entry_pair``."""
     target = hash_find(model.target_table, model.target_state, state)
-    if target < 0:
-        return -1
-    return model.target_head[target]
+    entry = -1
+    if target >= 0:
+        entry = model.target_head[target]
+    return entry
+
+
+@jit
+def model_target_call(
+    model: MultinomialArrays,
+    q: np.ndarray,
+    pair: int,
+    mode: int,
+    gamma: float,
+    uniform: float,
+) -> float:
+    """:func:`model_target` as a compiled call, not inlined: for the rare paths of the planning
+    loops (a call pays for its arguments only when it is made, an inlined copy on every pass)."""
+    return model_target(model, q, pair, mode, gamma, uniform)

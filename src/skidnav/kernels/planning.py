@@ -20,15 +20,16 @@ from skidnav.kernels.multinomial import (
     entry_target,
     expected_target,
     find_pair,
-    first_predecessor,
+    hash_find,
     model_observe,
     model_target,
+    model_target_call,
     most_probable_entry,
+    most_probable_target,
     pair_state_action,
     sample_entry,
-    split_key,
 )
-from skidnav.kernels.priority_queue import HeapArrays, heap_pop, heap_push
+from skidnav.kernels.priority_queue import HeapArrays, heap_push, pop, push
 from skidnav.kernels.tabular import inline_jit, td_target, update_toward
 
 
@@ -160,58 +161,46 @@ def prioritized_sweeping(
 ) -> int:
     """Prioritized sweeping (§8.4): up to ``n_steps`` times while the queue is not empty, pop the
     pair of highest priority, update it toward its model target, then queue each predecessor
-    (s̄, ā) of s whose |TD error| exceeds ``theta``. Returns the number of updates."""
+    (s̄, ā) of s whose |TD error| exceeds ``theta`` (a most-probable model draws one
+    ``rng.random()`` per predecessor, a sampling one is asked for its expected target). Returns
+    the number of updates.
+
+    Same numbers as ``heap_pop``, ``model_target``, ``update_toward`` and :func:`queue_pair` per
+    predecessor, written out over arrays bound once: an inlined helper that binds an array it
+    last uses in a branch (or binds the 21-array model) pays an atomic increment and decrement
+    per array at every call, ~75 % of the time before (see :mod:`skidnav.kernels.multinomial`).
+    The most-probable target is computed inline; the other modes' come from a compiled call."""
+    priority, item, position, size = heap.priority, heap.item, heap.position, heap.size
+    pair_table, pair_key, entry_pair = model.pair_table, model.pair_key, model.entry_pair
+    target_table, target_state = model.target_table, model.target_state
+    target_head, pred_link = model.target_head, model.entry_pred_link
+    cells = q.reshape(-1, 1)  # row s·n_actions + a is q[s, a]
+    n_actions = q.shape[1]
     updates = 0
-    n_actions = q.shape[1]
-    while updates < n_steps and heap.size[0] > 0:
-        key, _ = heap_pop(heap)
-        state = key // n_actions
-        pair = find_pair(model, state, key % n_actions)
-        target = model_target(model, q, pair, mode, gamma, rng.random())
-        update_toward(q, state, key % n_actions, target, alpha)
-        updates += 1
-        _queue_predecessors(q, model, heap, state, theta, gamma, mode, rng)
-    return updates
-
-
-@inline_jit
-def _queue_predecessors(
-    q: np.ndarray,
-    model: MultinomialArrays,
-    heap: HeapArrays,
-    state: int,
-    theta: float,
-    gamma: float,
-    mode: int,
-    rng: np.random.Generator,
-) -> None:
-    """:func:`queue_pair` for every predecessor pair of ``state`` (a most-probable model draws
-    one ``rng.random()`` per predecessor). Same numbers as calling ``queue_pair``, but the model's
-    arrays are bound once (see :func:`dyna_planning`) and a unique most-probable outcome is read
-    from the cache: binding the 21-array model per predecessor cost more than the update."""
-    pair_key, entry_pair, pred_link = model.pair_key, model.entry_pair, model.entry_pred_link
-    ties, best_next = model.pair_ties, model.pair_best_next
-    best_reward, best_continuation = model.pair_best_reward, model.pair_best_continuation
-    n_actions = q.shape[1]
-    entry = first_predecessor(model, state)
-    while entry >= 0:
-        pair = entry_pair[entry]
-        if mode != MOST_PROBABLE:
-            queue_pair(q, model, heap, pair, theta, gamma, mode, 0.0)
+    while updates < n_steps and size[0] > 0:
+        key, _ = pop(priority, item, position, size)
+        pair = hash_find(pair_table, pair_key, key)
+        uniform = rng.random()
+        if mode == MOST_PROBABLE:
+            target = most_probable_target(q, model, pair, gamma, uniform)
         else:
-            uniform = rng.random()
-            if ties[pair] == 1:
-                target = td_target(
-                    q, best_reward[pair], best_next[pair], best_continuation[pair], gamma
-                )
+            target = model_target_call(model, q, pair, mode, gamma, uniform)
+        update_toward(cells, key, 0, target, alpha)
+        updates += 1
+        slot = hash_find(target_table, target_state, key // n_actions)
+        entry = target_head[slot] if slot >= 0 else -1
+        while entry >= 0:  # queue the predecessors of the updated state
+            pair = entry_pair[entry]
+            if mode == MOST_PROBABLE:
+                target = most_probable_target(q, model, pair, gamma, rng.random())
             else:
-                target = model_target(model, q, pair, MOST_PROBABLE, gamma, uniform)
+                target = model_target_call(model, q, pair, EXPECTED, gamma, 0.0)
             key = pair_key[pair]
-            pred_state, pred_action = split_key(key, n_actions)
-            priority = abs(target - q[pred_state, pred_action])
-            if priority > theta:
-                heap_push(heap, key, priority)
-        entry = pred_link[entry]
+            value = abs(target - cells[key, 0])
+            if value > theta:
+                push(priority, item, position, size, key, value)
+            entry = pred_link[entry]
+    return updates
 
 
 @jit

@@ -11,6 +11,13 @@ the heap in their first ``size[0]`` slots (slot 0 is the maximum; the children o
 2k+1 and 2k+2); ``position`` int64 (n_items,) maps an item to its slot or −1 when not queued;
 ``size`` int64 (1,). The queue is mutated in place, so compiled planners can share it.
 
+Speed: the helpers are inlined into the compiled planners and each has **one exit**, every
+array read or written last on that one path. numba then removes the reference counting of the
+arrays bound to the helper's parameters (its LLVM pass pairs an increment with a decrement only
+when the decrement post-dominates it); with early returns it cannot, and the atomic increments
+and decrements of the four arrays at every push, pop and swap took most of prioritized
+sweeping's time.
+
 >>> queue = make_heap(5)
 >>> for item, priority in [(3, 0.5), (1, 2.0), (4, 1.0), (3, 3.0), (1, 0.1)]:
 ...     heap_push(queue, item, priority)
@@ -50,74 +57,102 @@ def make_heap(n_items: int) -> HeapArrays:
 
 
 @inline_jit
-def _swap(heap: HeapArrays, slot_a: int, slot_b: int) -> None:
-    item_a = heap.item[slot_a]
-    item_b = heap.item[slot_b]
-    priority_a = heap.priority[slot_a]
-    heap.priority[slot_a] = heap.priority[slot_b]
-    heap.priority[slot_b] = priority_a
-    heap.item[slot_a] = item_b
-    heap.item[slot_b] = item_a
-    heap.position[item_b] = slot_a
-    heap.position[item_a] = slot_b
-
-
-@inline_jit
-def _sift_up(heap: HeapArrays, slot: int) -> None:
+def sift_up(
+    priority: np.ndarray, item: np.ndarray, position: np.ndarray, slot: int, value: float, key: int
+) -> None:
+    """Place ``key`` with priority ``value`` at ``slot`` or above it: each parent of lower
+    priority moves down one level (the same final heap as swapping level by level)."""
     while slot > 0:
         parent = (slot - 1) // 2
-        if heap.priority[parent] >= heap.priority[slot]:
-            return
-        _swap(heap, slot, parent)
+        if priority[parent] >= value:
+            break
+        moved = item[parent]
+        priority[slot] = priority[parent]
+        item[slot] = moved
+        position[moved] = slot
         slot = parent
+    priority[slot] = value
+    item[slot] = key
+    position[key] = slot
 
 
 @inline_jit
-def _sift_down(heap: HeapArrays, slot: int) -> None:
-    size = heap.size[0]
+def sift_down(
+    priority: np.ndarray, item: np.ndarray, position: np.ndarray, size: int, value: float, key: int
+) -> None:
+    """Place ``key`` with priority ``value`` from the root down among the first ``size`` slots:
+    at each level the larger child (the left one on ties) moves up if it beats ``value`` (the
+    same final heap as swapping level by level)."""
+    slot = 0
     while True:
-        largest = slot
+        largest, best = slot, value
         left = 2 * slot + 1
-        right = left + 1
-        if left < size and heap.priority[left] > heap.priority[largest]:
-            largest = left
-        if right < size and heap.priority[right] > heap.priority[largest]:
-            largest = right
+        if left < size and priority[left] > best:
+            largest, best = left, priority[left]
+        if left + 1 < size and priority[left + 1] > best:
+            largest = left + 1
         if largest == slot:
-            return
-        _swap(heap, slot, largest)
+            break
+        moved = item[largest]
+        priority[slot] = priority[largest]
+        item[slot] = moved
+        position[moved] = slot
         slot = largest
+    priority[slot] = value
+    item[slot] = key
+    position[key] = slot
+
+
+@inline_jit
+def push(
+    priority: np.ndarray,
+    item: np.ndarray,
+    position: np.ndarray,
+    size: np.ndarray,
+    key: int,
+    value: float,
+) -> None:
+    """:func:`heap_push` on the heap's arrays. A queued item whose priority does not grow sifts
+    with its own priority, which moves nothing: one path, see the module docstring."""
+    slot = position[key]
+    n_queued = size[0]
+    if slot < 0:
+        slot = n_queued
+        n_queued += 1
+    elif priority[slot] >= value:
+        value = priority[slot]
+    size[0] = n_queued
+    sift_up(priority, item, position, slot, value, key)
+
+
+@inline_jit
+def pop(
+    priority: np.ndarray, item: np.ndarray, position: np.ndarray, size: np.ndarray
+) -> tuple[int, float]:
+    """:func:`heap_pop` on the heap's arrays: the last entry sifts down from the root, and the
+    freed slot keeps the popped entry (as a swap with the root would leave it)."""
+    top_item = item[0]
+    top_priority = priority[0]
+    last = size[0] - 1
+    size[0] = last
+    sift_down(priority, item, position, last, priority[last], item[last])
+    priority[last] = top_priority
+    item[last] = top_item
+    position[top_item] = -1
+    return int(top_item), float(top_priority)
 
 
 @inline_jit
 def heap_push(heap: HeapArrays, item: int, priority: float) -> None:
     """Queue ``item`` with ``priority``; if already queued, keep the larger priority."""
-    slot = heap.position[item]
-    if slot >= 0:
-        if priority > heap.priority[slot]:
-            heap.priority[slot] = priority
-            _sift_up(heap, slot)
-        return
-    slot = heap.size[0]
-    heap.size[0] = slot + 1
-    heap.priority[slot] = priority
-    heap.item[slot] = item
-    heap.position[item] = slot
-    _sift_up(heap, slot)
+    push(heap.priority, heap.item, heap.position, heap.size, item, priority)
 
 
 @inline_jit
 def heap_pop(heap: HeapArrays) -> tuple[int, float]:
     """Remove and return ``(item, priority)`` of the highest priority; the queue must not be
     empty (check ``heap.size[0] > 0``)."""
-    top_item = heap.item[0]
-    top_priority = heap.priority[0]
-    last = heap.size[0] - 1
-    _swap(heap, 0, last)
-    heap.size[0] = last
-    heap.position[top_item] = -1
-    _sift_down(heap, 0)
-    return int(top_item), float(top_priority)
+    return pop(heap.priority, heap.item, heap.position, heap.size)
 
 
 @jit
