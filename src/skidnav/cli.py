@@ -14,6 +14,7 @@ SUBCOMMAND_MODULES = (
     "skidnav.commands.map",
     "skidnav.commands.simulate",
     "skidnav.commands.run",
+    "skidnav.commands.tune",
     "skidnav.commands.report",
     "skidnav.commands.reproduce",
     "skidnav.commands.robot",

@@ -36,7 +36,7 @@ def test_cliff_walking_learns_the_cliff_path() -> None:
         "dyna-q", 48, 4, {"planning_steps": 10, "alpha": 0.5}, np.random.default_rng(1)
     )
     log = train_agent(agent, env, 60, max_steps=500, greedy_eval_env=gym.make("CliffWalking-v1"))
-    assert log.greedy_lengths[-1] == 13  # Q-learning's optimal path along the cliff
+    assert log.greedy_lengths[-1, 0] == 13  # Q-learning's optimal path along the cliff
 
 
 @pytest.mark.parametrize("name", available_agents())
@@ -50,7 +50,7 @@ def test_every_agent_learns_the_cliff_path(name: str) -> None:
         agent, gym.make("CliffWalking-v1"), 100, max_steps=500,
         greedy_eval_env=gym.make("CliffWalking-v1"), seed=0,
     )  # fmt: skip
-    assert log.greedy_lengths[-20:].tolist() == [13] * 20
+    assert log.greedy_lengths[-20:, 0].tolist() == [13] * 20
 
 
 @pytest.mark.parametrize("name", available_agents())
@@ -92,7 +92,7 @@ def test_truncation_by_max_steps_reaches_the_agent() -> None:
     log = train_agent(Recorder(), dyna_maze(), 2, max_steps=4, greedy_eval_env=dyna_maze())
     assert log.lengths.tolist() == [4, 4] and not log.successes.any()
     assert seen[:5] == [(False, False)] * 3 + [(False, True), (False, False)]
-    assert log.greedy_lengths.tolist() == [-1, -1]
+    assert log.greedy_lengths.tolist() == [[-1], [-1]]
 
 
 def test_train_for_steps_counts_cumulative_reward() -> None:

@@ -21,6 +21,9 @@ seeds = 2
 root_seed = 11
 presets = ["rough", "slippery"]
 bootstrap_samples = 200
+convergence_window = 2
+eval_rollouts = 2
+oracle_samples = 4
 
 [[maps]]
 kind = "free"

@@ -8,7 +8,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from skidnav.experiments.analysis import aggregate, compare_surfaces, compare_to_baseline
+from skidnav.experiments.analysis import (
+    aggregate,
+    compare_surfaces,
+    compare_to_baseline,
+    convergence_table,
+)
 from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec
 from skidnav.experiments.report import aggregate_table
 from skidnav.experiments.reproduction import reproduction_section
@@ -33,10 +38,8 @@ def _summaries(seed: int = 0) -> pd.DataFrame:
             for agent, factor, gain in (("Q", 1.0, 0.0), ("D", 0.25, 0.1)):
                 rows.append({
                     "agent": agent, "map": "m", "preset": preset, "seed": s,
-                    "convergence_episode": base * factor,
-                    "convergence_episode_robust": base * factor,
-                    "convergence_episode_training": base * factor,
-                    "converged": 1.0, "first_success_episode": 1.0,
+                    "convergence_episode": base * factor, "optimality_gap": 0.05,
+                    "oracle_length": 12.0, "converged": 1.0, "first_success_episode": 1.0,
                     "final_length_actions": length, "final_length_m": length * 0.04,
                     "success_rate": rate * (1 - gain) + gain, "success_rate_last10": rate,
                     "mean_return": -10.0, "collisions_per_episode": 1.0,
@@ -53,6 +56,33 @@ def test_speedup_gain_and_length_difference() -> None:
     assert row["success_gain"] == pytest.approx(0.1 * (1 - 0.8))
     assert row["length_difference"] == 0.0 and row["length_no_difference"]
     assert row["length_pairs"] == 30 and row["baseline_converged"] == 1.0
+
+
+def test_a_mostly_censored_baseline_gives_a_lower_bound() -> None:
+    summaries = _summaries()
+    base = summaries["agent"] == "Q"
+    censored = base & (summaries["seed"] >= 10)  # 20 of 30 baseline runs never converged
+    summaries.loc[censored, "converged"] = 0.0
+    summaries.loc[censored, "convergence_episode"] = 491.0
+    row = compare_to_baseline(summaries, CONFIG).iloc[0]
+    assert row["speedup_lower_bound"]
+    # The baseline's largest censoring time stands in for its (infinite) median.
+    agent_median = np.median(
+        summaries[(summaries["agent"] == "D") & (summaries["preset"] == "rough")][
+            "convergence_episode"
+        ]
+    )
+    assert row["speedup"] == pytest.approx(491.0 / agent_median, rel=0.1)
+    assert row["improvement_probability"] > 0.99
+    table = convergence_table(summaries, CONFIG)
+    q = table[(table["agent"] == "Q") & (table["preset"] == "rough")].iloc[0]
+    assert (
+        q["median"] == np.inf and q["converged"] == pytest.approx(1 / 3) and q["censored_at"] == 491
+    )
+    text = reproduction_section(
+        compare_to_baseline(summaries, CONFIG), pd.DataFrame(), summaries, CONFIG
+    )
+    assert "≥ " in text
 
 
 def test_aggregate_has_intervals_around_estimates() -> None:
@@ -104,3 +134,41 @@ def test_floor_claim_points_to_the_surfaces_config() -> None:
     )
     assert "rough floor ≈ 2×" in text and "configs/surfaces.toml" in text
     assert "not measured here" in text
+
+
+def test_budget_rows_and_figure_for_a_planning_sweep() -> None:
+    from skidnav.experiments.analysis import budget_rows
+    from skidnav.experiments.report import budget_section
+
+    config = ExperimentConfig(
+        "budget",
+        (
+            AgentSpec("q-learning", "Q"),
+            AgentSpec("dyna-q", "D10", (("planning_steps", 10),)),
+            AgentSpec("dyna-q", "D100", (("planning_steps", 100),)),
+        ),
+        (MapSpec("m", "free"),),
+        seeds=30,
+        bootstrap_samples=200,
+    )
+    rng = np.random.default_rng(1)
+    rows = []
+    for seed in range(30):
+        base = rng.uniform(800, 1200)
+        for agent, factor, wall in (("Q", 1.0, 1.0), ("D10", 0.5, 2.0), ("D100", 0.1, 9.0)):
+            rows.append({"agent": agent, "map": "m", "preset": "thesis", "seed": seed,
+                         "convergence_episode": base * factor, "converged": 1.0,
+                         "optimality_gap": 0.0, "oracle_length": 12.0, "first_success_episode": 1.0,
+                         "final_length_actions": 12.0, "final_length_m": 0.5, "success_rate": 0.9,
+                         "success_rate_last10": 1.0, "mean_return": -5.0,
+                         "collisions_per_episode": 0.0, "planning_updates": 0.0,
+                         "wall_time": wall})  # fmt: skip
+    summaries = pd.DataFrame(rows)
+    comparisons = compare_to_baseline(summaries, config)
+    aggregates = aggregate(summaries, config)
+    table = budget_rows(comparisons, aggregates, config).set_index("planning_steps")
+    assert table.loc[10, "speedup"] == pytest.approx(2.0)
+    assert table.loc[100, "speedup"] == pytest.approx(10.0)
+    assert table.loc[100, "wall_time"] == pytest.approx(9.0)
+    assert not table["lower_bound"].any()
+    assert "Planning budget" in budget_section(comparisons, aggregates, config)

@@ -19,8 +19,9 @@ from skidnav.experiments.store import EPISODE_COLUMNS, GRID_COLUMNS, ResultStore
 
 SUMMARY_COLUMNS = (
     "convergence_episode",
-    "convergence_episode_training",
     "converged",
+    "optimality_gap",
+    "oracle_length",
     "final_length_actions",
     "final_length_m",
     "success_rate",
@@ -49,9 +50,11 @@ def test_records_and_summaries(serial_results: Path) -> None:
     assert (q_rows["planning_updates"] == 0).all()
     assert (dyna_rows["planning_updates"] <= 5 * dyna_rows["length"]).all()
     assert dyna_rows["planning_updates"].sum() > 0
-    reached = episodes["greedy_success"]
+    reached = episodes["greedy_success"] > 0  # share of the evaluation's rollouts
+    assert episodes["greedy_success"].between(0, 1).all()
     assert episodes.loc[reached, "greedy_length"].between(1, 60).all()
     assert episodes.loc[~reached, "greedy_length"].isna().all()
+    assert (summaries["oracle_length"] > 1).all()
 
 
 def test_metadata_and_saved_config(serial_results: Path) -> None:
@@ -97,9 +100,9 @@ def test_report_cli_writes_one_self_contained_file(serial_results: Path, tmp_pat
     assert result.returncode == 0, result.stderr
     text = output.read_text()
     images = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', text)
-    # Per map x preset cell (2 here): learning curves, metric strips, trajectories, value maps,
-    # policy maps; plus the rough / slippery success ratio.
-    assert len(images) == 2 * 5 + 1
+    # Per map x preset cell (2 here): performance profiles, learning curves, metric strips,
+    # trajectories, value maps, policy maps; plus the rough / slippery success ratio.
+    assert len(images) == 2 * 6 + 1
     assert all(base64.b64decode(image)[:8] == b"\x89PNG\r\n\x1a\n" for image in images)
     assert 'src="http' not in text and "<script" not in text
     for needle in (

@@ -1,4 +1,4 @@
-"""Per-run metrics on hand-made curves."""
+"""Per-run metrics on hand-made evaluations: the oracle-relative, fixed-window convergence rule."""
 
 from __future__ import annotations
 
@@ -6,66 +6,75 @@ import numpy as np
 import pytest
 
 from skidnav.experiments.metrics import (
+    ConvergenceRule,
     convergence_episode,
+    evaluation_summary,
     moving_average,
     path_length,
     run_metrics,
-    training_convergence_episode,
+    within_tolerance,
 )
 
 
-def test_convergence_episode_hand_made_curves() -> None:
-    ok = np.ones(8, dtype=bool)
-    # Within 10 % of the final 20 (18..22) from episode 4 on.
-    curve = np.array([90, 60, 30, 22, 19, 21, 20, 20], dtype=float)
-    assert convergence_episode(curve, ok, 0.10) == 4
-    # A later excursion resets convergence.
-    curve = np.array([90, 20, 20, 40, 20, 20, 20, 20], dtype=float)
-    assert convergence_episode(curve, ok, 0.10) == 5
-    # A wider tolerance (±20) accepts the excursion to 40 but not the first 90.
-    assert convergence_episode(curve, ok, 1.0) == 2
-    # Constant from the start.
-    assert convergence_episode(np.full(5, 14.0), np.ones(5, bool), 0.1) == 1
+def test_evaluation_summary_means_over_the_rollouts_that_reached_the_goal() -> None:
+    lengths = np.array([[10, 12, -1], [-1, -1, -1], [9, 9, 9]])
+    mean, share = evaluation_summary(lengths)
+    assert mean[0] == 11.0 and np.isnan(mean[1]) and mean[2] == 9.0
+    assert share.tolist() == pytest.approx([2 / 3, 0.0, 1.0])
 
 
-def test_failed_evaluations_never_count_as_converged() -> None:
-    curve = np.array([np.nan, 20, np.nan, 20, 20], dtype=float)
-    reached = ~np.isnan(curve)
-    assert convergence_episode(curve, reached, 0.1) == 4
-    # Final evaluation failed: not converged, censored at N.
-    reached_last_failed = np.array([True, True, True, True, False])
-    assert convergence_episode(np.full(5, 20.0), reached_last_failed, 0.1) == 5
+def test_within_tolerance_needs_every_rollout_and_a_short_enough_mean() -> None:
+    rule = ConvergenceRule(reference=20.0, tolerance=0.1, window=3)
+    mean = np.array([21.0, 22.0, 22.1, 15.0, np.nan])
+    share = np.array([1.0, 1.0, 1.0, 0.8, 0.0])
+    # 22 = 1.1 · 20 is inside; 22.1 is not; a shorter mean with a failed rollout is not.
+    assert within_tolerance(mean, share, rule).tolist() == [True, True, False, False, False]
 
 
-def test_training_view_uses_moving_average() -> None:
-    lengths = np.concatenate([np.full(20, 100.0), np.full(40, 30.0)])
-    # window = round(60/20) = 3: the average reaches 30 exactly at episode 23.
-    assert training_convergence_episode(lengths, 0.1) == 23
-    assert moving_average(np.array([1.0, 2, 3, 4]), 2) == pytest.approx([1, 1.5, 2.5, 3.5])
+def test_convergence_needs_a_full_window() -> None:
+    within = np.array([0, 1, 1, 0, 1, 1, 1, 1, 0, 0], dtype=bool)
+    assert convergence_episode(within, 3) == (5, True)
+    assert convergence_episode(within, 4) == (5, True)
+    assert convergence_episode(within, 5) == (6, False)  # censored at N − W + 1 = 6
+    assert convergence_episode(within, 1) == (2, True)
+    assert convergence_episode(within[:2], 3) == (1, False)  # shorter than the window
 
 
-def test_path_length() -> None:
-    poses = np.array([[0, 0, 0], [0.3, 0.4, 0], [0.3, 0.4, 1.0], [0.3, 0.0, 0]])
-    assert path_length(poses) == pytest.approx(0.9)
-    assert path_length(poses[:1]) == 0.0
+def test_convergence_does_not_depend_on_the_horizon() -> None:
+    rng = np.random.default_rng(4)
+    for _ in range(200):
+        within = rng.random(60) < rng.uniform(0.3, 0.95)
+        episode, converged = convergence_episode(within, 5)
+        for horizon in range(5, 60):
+            short, short_converged = convergence_episode(within[:horizon], 5)
+            if converged and episode + 4 <= horizon:
+                assert (short, short_converged) == (episode, True)
+            else:  # not yet seen: censored where the short run could no longer confirm it
+                assert (short, short_converged) == (horizon - 4, False)
 
 
-def test_run_metrics_values() -> None:
-    n = 10
-    episodes = {
+def _episodes(greedy_length: np.ndarray, greedy_success: np.ndarray) -> dict[str, np.ndarray]:
+    n = len(greedy_length)
+    return {
         "return": np.arange(n, dtype=float),
         "length": np.full(n, 30),
         "success": np.array([0, 0, 1, 1, 1, 1, 1, 1, 1, 1], dtype=bool),
         "collisions": np.ones(n, dtype=int),
         "planning_updates": np.full(n, 5),
         "wall_time": np.full(n, 0.5),
-        "greedy_length": np.array([np.nan, 50, 40, 30, 31, 30, 29, 30, 30, 30]),
-        "greedy_success": np.array([False] + [True] * 9),
+        "greedy_length": greedy_length,
+        "greedy_success": greedy_success,
     }
+
+
+def test_run_metrics_values() -> None:
+    greedy = np.array([np.nan, 50, 40, 21, 22, 30, 21, 20, 19, 20])
+    share = np.array([0.0] + [1.0] * 9)
     poses = np.array([[0, 0, 0], [1.0, 0, 0]])
-    metrics = run_metrics(episodes, poses, True, 0.1)
-    assert metrics["convergence_episode"] == 4
+    metrics = run_metrics(_episodes(greedy, share), poses, True, ConvergenceRule(20.0, 0.1, 3))
+    assert metrics["convergence_episode"] == 7  # 21, 20, 19 from episode 7; 30 broke the first
     assert metrics["converged"] == 1.0
+    assert metrics["optimality_gap"] == pytest.approx((20 + 19 + 20) / 3 / 20 - 1)  # last W = 3
     assert metrics["first_success_episode"] == 3
     assert metrics["success_rate"] == pytest.approx(0.8)
     assert metrics["success_rate_last10"] == 1.0
@@ -73,16 +82,23 @@ def test_run_metrics_values() -> None:
     assert metrics["final_length_m"] == 1.0
     assert metrics["planning_updates"] == 50
     assert metrics["mean_return_last10"] == 9.0
-    failed = run_metrics(episodes, poses, False, 0.1)
+    failed = run_metrics(_episodes(greedy, share), poses, False, ConvergenceRule(20.0, 0.1, 3))
     assert np.isnan(failed["final_length_m"]) and np.isnan(failed["final_length_actions"])
 
 
-def test_robust_view_ignores_an_isolated_late_blip() -> None:
-    from skidnav.experiments.metrics import robust_convergence_episode, trailing_median
+def test_a_policy_that_never_gets_close_to_the_oracle_is_censored() -> None:
+    greedy, share = np.full(10, 30.0), np.ones(10)  # reaches the goal, 50 % longer than L*
+    metrics = run_metrics(
+        _episodes(greedy, share), np.zeros((1, 3)), False, ConvergenceRule(20.0, 0.1, 3)
+    )
+    assert (metrics["convergence_episode"], metrics["converged"]) == (8, 0.0)
+    assert metrics["optimality_gap"] == pytest.approx(0.5)
+    no_oracle = run_metrics(_episodes(greedy, share), np.zeros((1, 3)), False, None)
+    assert np.isnan(no_oracle["convergence_episode"]) and np.isnan(no_oracle["converged"])
 
-    curve = np.array([np.nan] * 5 + [10.0] * 30 + [np.nan] + [10.0] * 3 + [16.0] + [10.0] * 20)
-    reached = ~np.isnan(curve)
-    assert convergence_episode(curve, reached, 0.1) == 41  # strict: the blips reset it
-    # window round(60 / 20) = 3: the median is 10 from episode 7 on.
-    assert robust_convergence_episode(curve, 0.1) == 7
-    assert trailing_median(np.array([1.0, np.nan, 3.0]), 2).tolist() == [1.0, np.inf, np.inf]
+
+def test_path_length_and_moving_average() -> None:
+    poses = np.array([[0, 0, 0], [0.3, 0.4, 0], [0.3, 0.4, 1.0], [0.3, 0.0, 0]])
+    assert path_length(poses) == pytest.approx(0.9)
+    assert path_length(poses[:1]) == 0.0
+    assert moving_average(np.array([1.0, 2, 3, 4]), 2) == pytest.approx([1, 1.5, 2.5, 3.5])

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -24,7 +24,7 @@ import numpy as np
 
 from skidnav.agents.core import TabularAgent
 from skidnav.agents.dyna_kinematic import ModelBasedAgent
-from skidnav.agents.training import TrainingLog, train_agent, train_for_steps
+from skidnav.agents.training import TrainingLog, log_from_rows, train_agent, train_for_steps
 from skidnav.kernels import kinematic_planning as kp
 from skidnav.kernels import maze_trainer, trainer
 from skidnav.kernels.priority_queue import make_heap
@@ -151,6 +151,7 @@ def _fast_episode(
     """Reset ``nav``, run one fused episode, finish it in Python; returns (return, length,
     terminated, collisions, planning updates)."""
     state, _ = nav.reset(seed=seed)
+    planned_before = agent.planning_updates
     arrays = _learner_arrays(agent, min(max_steps, env_limit))
     tally = _start_tally(agent)
     settings = _settings(agent, max_steps, env_limit)
@@ -160,18 +161,18 @@ def _fast_episode(
     )  # fmt: skip
     nav.elapsed_steps = int(tally[trainer.ELAPSED])
     _absorb(agent, arrays, tally)
-    agent.end_episode()
+    agent.end_episode()  # may plan too (dyna-sweep): counted with the episode, as the plain loop
     return (
         float(total), int(tally[trainer.LENGTH]), bool(tally[trainer.TERMINATED]),
-        int(tally[trainer.COLLISIONS]), int(tally[trainer.PLANNING_UPDATES]),
+        int(tally[trainer.COLLISIONS]), agent.planning_updates - planned_before,
     )  # fmt: skip
 
 
-def _greedy(agent: TabularAgent, eval_nav: Any, limit: int, env_limit: int) -> int:
-    state, _ = eval_nav.reset()
+def _greedy(q: np.ndarray, eval_nav: Any, limit: int, env_limit: int, seed: int | None) -> int:
+    state, _ = eval_nav.reset(seed=seed)
     length, eval_nav.time = trainer.greedy_episode(
-        eval_nav.task, eval_nav.pose, int(state), float(eval_nav.time), agent.q, limit,
-        env_limit, eval_nav.np_random,
+        eval_nav.task, eval_nav.pose, int(state), float(eval_nav.time), q, limit, env_limit,
+        eval_nav.np_random,
     )  # fmt: skip
     return int(length)
 
@@ -210,11 +211,13 @@ def _fast_maze_episode(
     return total, length, terminated, 0, int(tally[trainer.PLANNING_UPDATES])
 
 
-def _maze_greedy(agent: TabularAgent, eval_maze: Any, limit: int, env_limit: int) -> int:
-    state, _ = eval_maze.reset()
+def _maze_greedy(
+    q: np.ndarray, eval_maze: Any, limit: int, env_limit: int, seed: int | None
+) -> int:
+    state, _ = eval_maze.reset(seed=seed)
     total_steps = eval_maze.progress()[2]
     length, state, taken = maze_trainer.maze_greedy(
-        eval_maze.maze_arrays(), int(state), agent.q, limit, env_limit, total_steps
+        eval_maze.maze_arrays(), int(state), q, limit, env_limit, total_steps
     )
     eval_maze.restore_progress(state, taken, total_steps + taken)
     return int(length)
@@ -228,8 +231,8 @@ def _supported_maze(agent: TabularAgent, maze: Any) -> bool:
 
 Episode = Callable[[TabularAgent, Any, int, int, int | None], tuple[float, int, bool, int, int]]
 """(agent, env, env limit, max_steps, seed) → (return, length, terminated, collisions, updates)."""
-Greedy = Callable[[TabularAgent, Any, int, int], int]
-"""(agent, evaluation env, step limit, env limit) → greedy length or −1."""
+Greedy = Callable[[np.ndarray, Any, int, int, int | None], int]
+"""(Q table, evaluation env, step limit, env limit, reset seed) → greedy length or −1."""
 
 
 def _fused_functions(
@@ -262,6 +265,7 @@ def train_agent_fast(
     max_steps: int | None = None,
     greedy_eval_env: gym.Env[Any, Any] | None = None,
     greedy_max_steps: int | None = None,
+    greedy_seeds: Sequence[int] | None = None,
     seed: int | None = None,
 ) -> TrainingLog:
     """As :func:`skidnav.agents.training.train_agent`, with compiled episodes (see module doc)."""
@@ -270,7 +274,7 @@ def train_agent_fast(
         logger.info("train_agent_fast: falling back to train_agent for %s", agent.name)
         return train_agent(
             agent, env, n_episodes, max_steps=max_steps, greedy_eval_env=greedy_eval_env,
-            greedy_max_steps=greedy_max_steps, seed=seed,
+            greedy_max_steps=greedy_max_steps, greedy_seeds=greedy_seeds, seed=seed,
         )  # fmt: skip
     if n_episodes < 0 or (max_steps is not None and max_steps < 1):
         raise ValueError(
@@ -278,22 +282,44 @@ def train_agent_fast(
         )
     episode_function, (unwrapped, env_limit), greedy_function, eval_found = fused
     limit = greedy_max_steps or max_steps or 10_000
-    rows = []
+    seeds: Sequence[int | None] = [None] if greedy_seeds is None else list(greedy_seeds)
+    columns: dict[str, list[Any]] = {name: [] for name in TrainingLog._fields}
     for episode in range(n_episodes):
         start = time.perf_counter()
         result = episode_function(
             agent, unwrapped, env_limit, max_steps or _BIG, seed if episode == 0 else None
         )
-        elapsed = time.perf_counter() - start
-        greedy = -1
+        columns["wall_time"].append(time.perf_counter() - start)
+        for name, value in zip(_EPISODE_FIELDS, result, strict=True):
+            columns[name].append(value)
+        greedy = [-1] * len(seeds)
         if eval_found is not None:
-            if episode == 0 and seed is not None:
+            if episode == 0 and seed is not None and greedy_seeds is None:
                 eval_found[0].reset(seed=seed + 1)
-            greedy = greedy_function(agent, eval_found[0], limit, eval_found[1])
-        rows.append((*result, elapsed, greedy))
-    columns = list(zip(*rows, strict=True)) if rows else [()] * 7
-    dtypes = (np.float64, np.int64, np.bool_, np.int64, np.int64, np.float64, np.int64)
-    return TrainingLog(*(np.array(c, dtype=d) for c, d in zip(columns, dtypes, strict=True)))
+            greedy = [
+                greedy_function(agent.q, eval_found[0], limit, eval_found[1], s) for s in seeds
+            ]
+        columns["greedy_lengths"].append(greedy)
+    return log_from_rows(columns, len(seeds))
+
+
+_EPISODE_FIELDS = ("returns", "lengths", "successes", "collisions", "planning_updates")
+"""TrainingLog fields of an episode function's result, in order."""
+
+
+def evaluate_q_fast(
+    q: np.ndarray, env: gym.Env[Any, Any], seeds: Sequence[int], max_steps: int
+) -> np.ndarray:
+    """Greedy rollouts of the Q table ``q`` (n_states, n_actions) on the navigation env, one per
+    seed (each from ``reset(seed=seed)``, at most ``max_steps`` actions), compiled: the
+    evaluation every agent gets after each episode. Returns the lengths, int64 (len(seeds),),
+    −1 where the goal was not reached."""
+    found = _navigation_env(env)
+    if found is None:
+        raise ValueError("expected the skid-steer navigation env with discrete observations")
+    nav, env_limit = found
+    q = np.ascontiguousarray(q, dtype=np.float64)
+    return np.array([_greedy(q, nav, max_steps, env_limit, int(s)) for s in seeds], np.int64)
 
 
 def train_for_steps_fast(

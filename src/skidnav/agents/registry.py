@@ -35,6 +35,7 @@ AGENT_MODULES: dict[str, str] = {
     "dyna-kinematic": "skidnav.agents.dyna_kinematic",
     "trajectory-prioritized": "skidnav.agents.trajectory_prioritized",
     "dyna-full": "skidnav.agents.dyna_full",
+    "dyna-sweep": "skidnav.agents.dyna_sweep",
 }
 """Registry name → module defining ``AGENT_NAME`` and ``AGENT_CLASS``."""
 

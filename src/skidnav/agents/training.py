@@ -9,6 +9,7 @@ view of Sutton & Barto (2018) Examples 8.2 and 8.3). A compiled trainer may repl
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from typing import Any, NamedTuple, Protocol
 
 import gymnasium as gym
@@ -56,8 +57,9 @@ class TrainingLog(NamedTuple):
     wall_time: np.ndarray
     """Seconds spent in the episode, greedy evaluation excluded (float64)."""
     greedy_lengths: np.ndarray
-    """Length of a greedy rollout on the evaluation env after the episode; −1 if it did not
-    terminate within the limit, or if no evaluation env was given (int64)."""
+    """Lengths of the greedy rollouts on the evaluation env after the episode, int64
+    (n_episodes, n_rollouts): one column per evaluation seed (one column without seeds); −1 where
+    a rollout did not terminate within the limit, or everywhere if no evaluation env was given."""
 
 
 def _check_discrete(env: gym.Env[Any, Any]) -> None:
@@ -67,10 +69,12 @@ def _check_discrete(env: gym.Env[Any, Any]) -> None:
         raise UserError("expected an env with Discrete observations and actions")
 
 
-def greedy_rollout(agent: Learner, env: gym.Env[Any, Any], max_steps: int) -> int:
-    """Run the greedy policy for at most ``max_steps`` actions (without learning); return the
-    number of actions if the env terminated, else −1."""
-    state, _ = env.reset()
+def greedy_rollout(
+    agent: Learner, env: gym.Env[Any, Any], max_steps: int, *, seed: int | None = None
+) -> int:
+    """Run the greedy policy for at most ``max_steps`` actions (without learning) from
+    ``env.reset(seed=seed)``; return the number of actions if the env terminated, else −1."""
+    state, _ = env.reset(seed=seed)
     for step in range(1, max_steps + 1):
         state, _, terminated, truncated, _ = env.step(agent.greedy_action(int(state)))
         if terminated:
@@ -78,6 +82,18 @@ def greedy_rollout(agent: Learner, env: gym.Env[Any, Any], max_steps: int) -> in
         if truncated:
             return -1
     return -1
+
+
+def greedy_evaluation(
+    agent: Learner, env: gym.Env[Any, Any], max_steps: int, seeds: Sequence[int] | None
+) -> list[int]:
+    """The greedy rollouts of one evaluation (:func:`greedy_rollout` each): one per seed in
+    ``seeds``, each from ``env.reset(seed=seed)`` — the same seeds at every evaluation, so every
+    evaluation meets the same slip noise (common random numbers) — or, without seeds, one rollout
+    that continues the env's own generator."""
+    if seeds is None:
+        return [greedy_rollout(agent, env, max_steps)]
+    return [greedy_rollout(agent, env, max_steps, seed=int(seed)) for seed in seeds]
 
 
 def run_episode(
@@ -110,14 +126,17 @@ def train_agent(
     max_steps: int | None = None,
     greedy_eval_env: gym.Env[Any, Any] | None = None,
     greedy_max_steps: int | None = None,
+    greedy_seeds: Sequence[int] | None = None,
     seed: int | None = None,
 ) -> TrainingLog:
     """Train ``agent`` for ``n_episodes`` episodes on ``env``.
 
     ``max_steps`` truncates each episode (the env's own time limit applies too). ``seed`` seeds the
-    first ``env.reset`` (and ``seed + 1`` the evaluation env's first reset); later resets continue
-    the env's own generator, as Gymnasium intends. The greedy rollout after each episode stops after
-    ``greedy_max_steps`` actions (default: ``max_steps``, else 10,000).
+    first ``env.reset`` (and, without ``greedy_seeds``, ``seed + 1`` the evaluation env's first
+    reset); later resets continue the env's own generator, as Gymnasium intends. After each
+    episode the greedy policy is evaluated on ``greedy_eval_env`` (:func:`greedy_evaluation`:
+    one rollout per seed of ``greedy_seeds``), each rollout stopped after ``greedy_max_steps``
+    actions (default: ``max_steps``, else 10,000).
     """
     if n_episodes < 0 or (max_steps is not None and max_steps < 1):
         raise ValueError(
@@ -137,19 +156,28 @@ def train_agent(
         columns["successes"].append(success)
         columns["collisions"].append(collisions)
         columns["planning_updates"].append(agent.planning_updates - planned_before)
-        greedy = -1
+        greedy = [-1] * (1 if greedy_seeds is None else len(greedy_seeds))
         if greedy_eval_env is not None:
-            if episode == 0 and seed is not None:
+            if episode == 0 and seed is not None and greedy_seeds is None:
                 greedy_eval_env.reset(seed=seed + 1)
-            greedy = greedy_rollout(agent, greedy_eval_env, limit)
+            greedy = greedy_evaluation(agent, greedy_eval_env, limit, greedy_seeds)
         columns["greedy_lengths"].append(greedy)
-    dtypes = (np.float64, np.int64, np.bool_, np.int64, np.int64, np.float64, np.int64)
-    return TrainingLog(
-        *(
-            np.array(columns[name], dtype=dtype)
-            for name, dtype in zip(TrainingLog._fields, dtypes, strict=True)
-        )
-    )
+    return log_from_rows(columns, 1 if greedy_seeds is None else len(greedy_seeds))
+
+
+LOG_DTYPES = (np.float64, np.int64, np.bool_, np.int64, np.int64, np.float64, np.int64)
+"""dtypes of the :class:`TrainingLog` fields, in order."""
+
+
+def log_from_rows(columns: dict[str, list[Any]], n_rollouts: int) -> TrainingLog:
+    """A :class:`TrainingLog` from per-episode lists keyed by field name (``greedy_lengths``
+    holds one list of ``n_rollouts`` lengths per episode)."""
+    arrays: list[np.ndarray] = [
+        np.array(columns[name], dtype=dtype)
+        for name, dtype in zip(TrainingLog._fields, LOG_DTYPES, strict=True)
+    ]
+    arrays[-1] = arrays[-1].reshape(-1, n_rollouts)
+    return TrainingLog(*arrays)
 
 
 def train_for_steps(

@@ -164,7 +164,7 @@ def updates_until_optimal(name: str, scale: int, seed: int, max_episodes: int = 
             agent, env, 1, greedy_eval_env=dyna_maze(scale), greedy_max_steps=4 * optimal,
             seed=seed if episode == 0 else None,
         )  # fmt: skip
-        length = int(log.greedy_lengths[0])
+        length = int(log.greedy_lengths[0, 0])
         if 0 < length <= PATH_TOLERANCE * optimal:
             real = 0 if name == "prioritized-sweeping" else agent.steps
             return real + agent.planning_updates

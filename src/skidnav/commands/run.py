@@ -22,6 +22,14 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument(
         "--out", type=Path, default=None, help="results directory (default: runs/<config name>)"
     )
+    add_backend_arguments(parser)
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--report", action="store_true", help="write report.html when done")
+    parser.set_defaults(func=run_command)
+
+
+def add_backend_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--jobs``, ``--backend`` and ``--scheduler``: how runs are executed (``run``, ``tune``)."""
     parser.add_argument(
         "--jobs", type=int, default=None, help="worker processes (default: local cores)"
     )
@@ -36,9 +44,6 @@ def add_parser(subparsers: Any) -> None:
         default=None,
         help="Dask scheduler address, e.g. tcp://127.0.0.1:8786 (with --backend dask)",
     )
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
-    parser.add_argument("--report", action="store_true", help="write report.html when done")
-    parser.set_defaults(func=run_command)
 
 
 def run_command(args: argparse.Namespace) -> int:

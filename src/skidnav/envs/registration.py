@@ -1,18 +1,31 @@
-"""Registration of skidnav's Gymnasium environments."""
+"""Registration of skidnav's Gymnasium environments.
+
+Experiment configs name environments only by these registered ids (or any other registered
+Gymnasium id, including Gymnasium's own ``module:Env-v0`` form): nothing named in a config is
+ever called (docs/experiments.md).
+"""
 
 from __future__ import annotations
 
 import gymnasium
 
 ENV_ID = "skidnav/SkidSteerNav-v0"
+MAZE_IDS = {
+    "skidnav/DynaMaze-v0": "skidnav.envs.mazes:dyna_maze",
+    "skidnav/BlockingMaze-v0": "skidnav.envs.mazes:blocking_maze",
+    "skidnav/ShortcutMaze-v0": "skidnav.envs.mazes:shortcut_maze",
+}
+"""The Sutton & Barto (2018) ch. 8 grid mazes (Examples 8.1–8.3) → their factories."""
 
 
 def register_envs() -> None:
-    """Register ``skidnav/SkidSteerNav-v0`` (idempotent)."""
-    if ENV_ID in gymnasium.registry:
-        return
-    gymnasium.register(
-        id=ENV_ID,
-        entry_point="skidnav.envs.navigation:SkidSteerNavEnv",
-        max_episode_steps=None,
-    )
+    """Register ``skidnav/SkidSteerNav-v0`` and the grid mazes (idempotent)."""
+    if ENV_ID not in gymnasium.registry:
+        gymnasium.register(
+            id=ENV_ID,
+            entry_point="skidnav.envs.navigation:SkidSteerNavEnv",
+            max_episode_steps=None,
+        )
+    for env_id, entry_point in MAZE_IDS.items():
+        if env_id not in gymnasium.registry:
+            gymnasium.register(id=env_id, entry_point=entry_point, max_episode_steps=None)

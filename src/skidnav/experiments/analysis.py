@@ -24,12 +24,13 @@ from skidnav.stats import (
     rowwise_iqm,
     rowwise_mean,
 )
+from skidnav.survival import median_interval, probability_of_improvement, speedup_interval
 
 METRICS = {
-    "convergence_episode": "convergence episode (greedy)",
-    "convergence_episode_robust": "convergence episode (greedy, robust)",
-    "convergence_episode_training": "convergence episode (training)",
+    "convergence_episode": "convergence episode (censored runs at their censoring time)",
     "converged": "converged share",
+    "optimality_gap": "optimality gap (last evaluations / oracle − 1)",
+    "oracle_length": "oracle expected length L* [actions]",
     "first_success_episode": "first successful episode",
     "final_length_actions": "final greedy length [actions]",
     "final_length_m": "final greedy length [m]",
@@ -118,11 +119,15 @@ def _paired(
 def compare_to_baseline(summaries: pd.DataFrame, config: ExperimentConfig) -> pd.DataFrame:
     """Each agent against the baseline, per (map, preset), paired by seed.
 
-    Columns: ``speedup`` (mean convergence episode of the baseline / of the agent; > 1 = faster),
-    ``speedup_robust`` and ``speedup_training`` (same, robust and training views),
+    Columns: ``speedup`` (Kaplan–Meier median convergence episode of the baseline / of the agent;
+    > 1 = faster) and ``speedup_lower_bound`` (True when more than half of the baseline's runs
+    are censored: its largest censoring time stands in for its median, so the speed-up is at
+    least the value shown), ``improvement_probability`` (Agarwal et al. (2021) probability that
+    an agent run converges before a baseline run, censoring by Gehan's scores),
     ``success_gain`` (success rate agent − baseline, absolute), ``success_gain_relative``
     (agent / baseline − 1), ``success_gain_last10``, ``length_difference`` (final greedy length
-    agent − baseline [actions], runs whose final policy reached the goal), each with ``_low`` /
+    agent − baseline [actions], runs whose final policy reached the goal), ``gap_difference``
+    (optimality gap agent − baseline: the last evaluations against the oracle), each with ``_low`` /
     ``_high`` bounds, and ``length_no_difference`` (the interval of the length difference
     contains 0), ``length_pairs`` (seeds where both reached the goal), ``baseline_converged``
     (share of the baseline's runs that converged; the others are censored at N).
@@ -138,7 +143,9 @@ def compare_to_baseline(summaries: pd.DataFrame, config: ExperimentConfig) -> pd
                 record[name] = interval.estimate
                 record[f"{name}_low"] = interval.low
                 record[f"{name}_high"] = interval.high
+            record.update(_speedup(rows, agent, base, config, map_label, preset))
             record["length_pairs"] = _length_pairs(rows, agent, base)
+            record["gap_pairs"] = _length_pairs(rows, agent, base, "optimality_gap")
             record["baseline_converged"] = float(_by_seed(rows, base, "converged").mean())
             low, high = record["length_difference_low"], record["length_difference_high"]
             record["length_no_difference"] = bool(low <= 0 <= high)  # type: ignore[operator]
@@ -146,9 +153,63 @@ def compare_to_baseline(summaries: pd.DataFrame, config: ExperimentConfig) -> pd
     return pd.DataFrame.from_records(records)
 
 
-def _length_pairs(rows: pd.DataFrame, agent: str, base: str) -> int:
-    """Seeds where both agents' final greedy trajectories reached the goal."""
-    a, b, _ = _paired(rows, agent, base, "final_length_actions")
+def survival_columns(rows: pd.DataFrame, agent: str) -> tuple[np.ndarray, np.ndarray]:
+    """(convergence episodes, converged flags) of an agent's runs, by seed (each (n,))."""
+    times = _by_seed(rows, agent, "convergence_episode").to_numpy()
+    return times, _by_seed(rows, agent, "converged").to_numpy() > 0.5
+
+
+def _speedup(
+    rows: pd.DataFrame, agent: str, base: str, config: ExperimentConfig, *cell: str
+) -> dict[str, object]:
+    """Speed-up of ``agent`` over ``base`` (ratio of Kaplan–Meier medians), paired by seed."""
+    base_times, base_seen = survival_columns(rows, base)
+    times, seen = survival_columns(rows, agent)
+    paired = list(_by_seed(rows, agent, "converged").index) == list(
+        _by_seed(rows, base, "converged").index
+    )
+    ratio = speedup_interval(
+        base_times, base_seen, times, seen, stats_rng(config, *cell, agent, "speedup"),
+        paired=paired, n_resamples=config.bootstrap_samples, confidence=config.confidence,
+    )  # fmt: skip
+    return {
+        "speedup": ratio.estimate,
+        "speedup_low": ratio.low,
+        "speedup_high": ratio.high,
+        "speedup_lower_bound": ratio.lower_bound,
+    }
+
+
+def convergence_table(summaries: pd.DataFrame, config: ExperimentConfig) -> pd.DataFrame:
+    """Per (map, preset, agent): runs, converged share, Kaplan–Meier median convergence episode
+    with its bootstrap interval (inf: more than half of the runs censored), largest censoring
+    time. Columns: map, preset, agent, n, converged, median, median_low, median_high, censored_at.
+    """
+    records = []
+    for map_label, preset, rows in cells(summaries):
+        for agent in config.agent_labels:
+            if rows[rows["agent"] == agent].empty:
+                continue
+            times, seen = survival_columns(rows, agent)
+            median = median_interval(
+                times, seen, stats_rng(config, map_label, preset, agent, "median"),
+                n_resamples=config.bootstrap_samples, confidence=config.confidence,
+            )  # fmt: skip
+            records.append({
+                "map": map_label, "preset": preset, "agent": agent,
+                "n": int(np.isfinite(times).sum()), "converged": float(np.mean(seen)),
+                "median": median.estimate, "median_low": median.low, "median_high": median.high,
+                "censored_at": float(times[~seen].max()) if (~seen).any() else float("nan"),
+            })  # fmt: skip
+    return pd.DataFrame.from_records(records)
+
+
+def _length_pairs(
+    rows: pd.DataFrame, agent: str, base: str, column: str = "final_length_actions"
+) -> int:
+    """Seeds where both agents' ``column`` is defined (e.g. both final greedy trajectories
+    reached the goal)."""
+    a, b, _ = _paired(rows, agent, base, column)
     return int((np.isfinite(a) & np.isfinite(b)).sum()) if a.size == b.size else 0
 
 
@@ -159,20 +220,17 @@ def _comparisons(
         "n_resamples": config.bootstrap_samples,
         "confidence": config.confidence,
     }
-    for name, column in (
-        ("speedup", "convergence_episode"),
-        ("speedup_robust", "convergence_episode_robust"),
-        ("speedup_training", "convergence_episode_training"),
-    ):
-        a, b, paired = _paired(rows, base, agent, column)
-        yield (
-            name,
-            ratio_interval(a, b, stats_rng(config, *cell, agent, name), paired=paired, **options),
-        )  # type: ignore[arg-type]
+    a_times, a_seen = survival_columns(rows, agent)
+    b_times, b_seen = survival_columns(rows, base)
+    yield "improvement_probability", probability_of_improvement(
+        a_times, a_seen, b_times, b_seen, stats_rng(config, *cell, agent, "improvement"),
+        **options,
+    )  # fmt: skip
     for name, column in (
         ("success_gain", "success_rate"),
         ("success_gain_last10", "success_rate_last10"),
         ("length_difference", "final_length_actions"),
+        ("gap_difference", "optimality_gap"),
     ):
         a, b, paired = _paired(rows, agent, base, column)
         yield (
@@ -227,4 +285,35 @@ def compare_surfaces(
                     "slippery": float(np.nanmean(b)),
                 }
             )
+    return pd.DataFrame.from_records(records)
+
+
+def budget_rows(
+    comparisons: pd.DataFrame, aggregates: pd.DataFrame, config: ExperimentConfig
+) -> pd.DataFrame:
+    """Speed-up and wall time against the planning budget, one row per (map, preset, agent)
+    whose parameters set ``planning_steps``: map, preset, algorithm, planning_steps, speedup,
+    speedup_low, speedup_high, lower_bound, wall_time, wall_time_low, wall_time_high (mean wall
+    time per run [s] with its interval)."""
+    steps = {
+        agent.label: (agent.name, int(agent.params_dict()["planning_steps"]))  # type: ignore[arg-type]
+        for agent in config.agents
+        if "planning_steps" in agent.params_dict()
+    }
+    records = []
+    for _, row in comparisons.iterrows():
+        if row["agent"] not in steps:
+            continue
+        wall = aggregates[
+            (aggregates["map"] == row["map"]) & (aggregates["preset"] == row["preset"])
+            & (aggregates["agent"] == row["agent"]) & (aggregates["metric"] == "wall_time")
+        ].iloc[0]  # fmt: skip
+        algorithm, planning_steps = steps[row["agent"]]
+        records.append({
+            "map": row["map"], "preset": row["preset"], "algorithm": algorithm,
+            "planning_steps": planning_steps, "speedup": row["speedup"],
+            "speedup_low": row["speedup_low"], "speedup_high": row["speedup_high"],
+            "lower_bound": bool(row["speedup_lower_bound"]), "wall_time": wall["mean"],
+            "wall_time_low": wall["mean_low"], "wall_time_high": wall["mean_high"],
+        })  # fmt: skip
     return pd.DataFrame.from_records(records)

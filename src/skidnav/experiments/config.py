@@ -137,8 +137,15 @@ class ExperimentConfig:
         root_seed: the one root seed; every run's streams are spawned from it.
         drift_amplitude: relative slip drift amplitude A ≥ 0 (``SlipField``; 0: stationary).
         drift_period: slip drift period [s] > 0.
-        convergence_tolerance: relative band around the final greedy trajectory length that
-            defines convergence, in (0, 1) (default 0.10 = 10 %).
+        convergence_tolerance: relative band above the oracle's expected length L* within which
+            an evaluation counts as converged, in (0, 1) (default 0.10 = 10 %;
+            :mod:`skidnav.experiments.metrics`).
+        convergence_window: consecutive evaluations, W, that must all be within tolerance,
+            in [1, 10,000] (default 10).
+        eval_rollouts: greedy rollouts per evaluation, R, each from its own fixed evaluation
+            seed, in [1, 100] (default 5).
+        oracle_samples: sampled poses per state (each tries every action) of the oracle's
+            transition model, in [1, 1,000] (default 64; :mod:`skidnav.experiments.oracle`).
         baseline: label of the agent every other agent is compared to (default: the first
             agent named ``q-learning``, else the first agent).
         bootstrap_samples: bootstrap resamples for every interval, ≥ 100.
@@ -161,6 +168,9 @@ class ExperimentConfig:
     drift_amplitude: float = 0.0
     drift_period: float = 600.0
     convergence_tolerance: float = 0.10
+    convergence_window: int = 10
+    eval_rollouts: int = 5
+    oracle_samples: int = 64
     baseline: str = ""
     bootstrap_samples: int = 2000
     confidence: float = 0.95
@@ -211,6 +221,9 @@ class ExperimentConfig:
         _check_range(
             "convergence_tolerance", self.convergence_tolerance, 1e-6, 0.999, integer=False
         )
+        _check_range("convergence_window", self.convergence_window, 1, 10_000, integer=True)
+        _check_range("eval_rollouts", self.eval_rollouts, 1, 100, integer=True)
+        _check_range("oracle_samples", self.oracle_samples, 1, 1_000, integer=True)
         _check_range("bootstrap_samples", self.bootstrap_samples, 100, inf, integer=True)
         _check_range("confidence", self.confidence, 0.5, 0.999, integer=False)
         if not isinstance(self.greedy_eval, bool):
@@ -247,6 +260,9 @@ def config_to_dict(config: ExperimentConfig) -> dict[str, Any]:
         "drift_amplitude": config.drift_amplitude,
         "drift_period": config.drift_period,
         "convergence_tolerance": config.convergence_tolerance,
+        "convergence_window": config.convergence_window,
+        "eval_rollouts": config.eval_rollouts,
+        "oracle_samples": config.oracle_samples,
         "baseline": config.baseline,
         "bootstrap_samples": config.bootstrap_samples,
         "confidence": config.confidence,

@@ -24,7 +24,7 @@ from skidnav.experiments.config import (
     freeze_params,
 )
 
-TOP_KEYS = ("experiment", "env", "maps", "agents")
+TOP_KEYS = ("experiment", "env", "maps", "agents", "tune")  # [tune]: experiments/tuneconfig.py
 EXPERIMENT_KEYS = (
     "name",
     "description",
@@ -37,6 +37,9 @@ EXPERIMENT_KEYS = (
     "drift_amplitude",
     "drift_period",
     "convergence_tolerance",
+    "convergence_window",
+    "eval_rollouts",
+    "oracle_samples",
     "baseline",
     "bootstrap_samples",
     "confidence",

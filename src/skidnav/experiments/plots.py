@@ -140,8 +140,8 @@ def metric_strips(
     cell = summaries[(summaries["map"] == map_label) & (summaries["preset"] == preset)]
     aggs = aggregates[(aggregates["map"] == map_label) & (aggregates["preset"] == preset)]
     panels = (
-        ("convergence_episode", f"convergence episode (tol {config.convergence_tolerance:.0%})"),
-        ("convergence_episode_robust", "convergence episode (robust)"),
+        ("convergence_episode", "convergence episode (censored: at censoring time)"),
+        ("optimality_gap", "optimality gap, last evaluations"),
         ("success_rate", "success rate, all episodes"),
         ("success_rate_last10", "success rate, last 10 %"),
         ("final_length_actions", "final greedy length [actions]"),
@@ -319,4 +319,100 @@ def surface_bars(surfaces: pd.DataFrame) -> bytes:
     axes.set_xticks(positions, labels, fontsize=8)
     axes.set_ylabel("success rate rough / slippery")
     axes.legend(fontsize=8)
+    return to_png(figure)
+
+
+def performance_profiles(
+    profiles: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
+    horizon: int,
+    title: str,
+) -> bytes:
+    """Share of runs converged by each episode (Agarwal et al. (2021) performance profiles over
+    convergence episodes), one step curve with its bootstrap band per agent.
+
+    Args:
+        profiles: agent label → (episodes, share, low, high), shape (k,) each, e.g. from
+            :func:`skidnav.survival.performance_profile` and :func:`~skidnav.survival.profile_band`.
+        horizon: the last episode of the runs (the dashed line; censored runs stop there).
+        title: figure title.
+    """
+    figure, axes = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
+    colors = _colors(list(profiles))
+    for label, (episodes, share, low, high) in profiles.items():
+        color = colors[label]
+        axes.step(episodes, share, where="post", color=color, label=label, linewidth=1.4)
+        axes.fill_between(episodes, low, high, step="post", color=color, alpha=0.2, linewidth=0)
+    axes.axvline(horizon, color="grey", linewidth=1, linestyle="--", label="horizon")
+    axes.set_xscale("log")
+    axes.set_xlim(1, horizon * 1.05)
+    axes.set_ylim(-0.02, 1.02)
+    axes.set_xlabel("episode")
+    axes.set_ylabel("share of runs converged")
+    axes.legend(fontsize=8, loc="upper left")
+    axes.set_title(title, fontsize=10)
+    return to_png(figure)
+
+
+def _error(center: pd.Series, low: pd.Series, high: pd.Series) -> np.ndarray:
+    """Asymmetric error bars, shape (2, n), never negative (NaN bounds draw no bar)."""
+    below = (center - low).to_numpy(float)
+    above = (high - center).to_numpy(float)
+    return np.clip(np.vstack([below, above]), 0.0, None)
+
+
+def _speedup_panel(axes: Axes, rows: pd.DataFrame, color: tuple[float, ...], label: str) -> None:
+    axes.errorbar(
+        rows["planning_steps"],
+        rows["speedup"],
+        yerr=_error(rows["speedup"], rows["speedup_low"], rows["speedup_high"]),
+        color=color,
+        label=label,
+        capsize=3,
+        marker="",
+    )
+    flags = rows["lower_bound"].to_numpy(bool)
+    for marks, marker, size in ((~flags, "o", 5), (flags, "^", 9)):
+        axes.plot(
+            rows["planning_steps"][marks], rows["speedup"][marks], marker, color=color, ms=size
+        )
+
+
+def speedup_vs_budget(rows: pd.DataFrame) -> bytes:
+    """Speed-up over the baseline (left) and mean wall time per run (right) against planning steps
+    per real step, one line per algorithm.
+
+    Args:
+        rows: one row per algorithm × planning steps, columns ``algorithm``, ``planning_steps``,
+            ``speedup``, ``speedup_low``, ``speedup_high``, ``lower_bound`` (bool: the speed-up
+            is a lower bound, drawn ▲), ``wall_time``, ``wall_time_low``, ``wall_time_high`` [s].
+
+    The x axes are symmetric-log so that 0 planning steps (model-free) shows at 0.
+    """
+    figure, (left, right) = plt.subplots(1, 2, figsize=(12, 4.2), layout="constrained")
+    labels = list(dict.fromkeys(rows["algorithm"]))
+    colors = _colors(labels)
+    for label in labels:
+        part = rows[rows["algorithm"] == label].sort_values("planning_steps")
+        _speedup_panel(left, part, colors[label], label)
+        right.errorbar(
+            part["planning_steps"],
+            part["wall_time"],
+            yerr=_error(part["wall_time"], part["wall_time_low"], part["wall_time_high"]),
+            color=colors[label],
+            label=label,
+            capsize=3,
+            marker="o",
+            ms=4,
+        )
+    left.axhline(1.0, color="grey", linewidth=1)
+    left.set_ylabel("speed-up over the baseline")
+    left.set_title("KM-median convergence episode, baseline / agent (▲ lower bound)", fontsize=10)
+    right.set_ylabel("mean wall time per run [s]")
+    right.set_title("wall time per run", fontsize=10)
+    for axes in (left, right):
+        axes.set_yscale("log")
+        axes.set_xscale("symlog", linthresh=1.0)
+        axes.set_xlim(-0.5, max(1.0, float(rows["planning_steps"].max())) * 1.6)
+        axes.set_xlabel("planning steps per real step")
+    left.legend(fontsize=8)
     return to_png(figure)

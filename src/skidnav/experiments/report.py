@@ -15,20 +15,26 @@ import json
 import logging
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from skidnav.experiments import plots
 from skidnav.experiments.analysis import (
     METRICS,
     aggregate,
+    budget_rows,
     cells,
     compare_surfaces,
     compare_to_baseline,
+    convergence_table,
+    stats_rng,
+    survival_columns,
 )
 from skidnav.experiments.config import ExperimentConfig, config_to_dict
 from skidnav.experiments.provenance import CODE_KEYS, describe_code
 from skidnav.experiments.reproduction import reproduction_section
 from skidnav.experiments.store import ResultStore
+from skidnav.survival import performance_profile, profile_band
 
 logger = logging.getLogger(__name__)
 
@@ -84,19 +90,30 @@ def aggregate_table(aggregates: pd.DataFrame, map_label: str, preset: str) -> st
 
 
 def definitions(config: ExperimentConfig) -> str:
-    """The metric definitions, with this experiment's tolerance and interval settings."""
-    tol = config.convergence_tolerance
+    """The metric definitions, with this experiment's tolerance, window and interval settings."""
+    tol, window, rollouts = (
+        config.convergence_tolerance, config.convergence_window, config.eval_rollouts
+    )  # fmt: skip
     return f"""<ul class="note">
-<li><b>Convergence episode (greedy, primary)</b>: after every training episode the greedy policy
-is run once; the convergence episode is the first episode after which its trajectory length stays
-within <b>{tol:.0%}</b> of its final value until the end of training. A run whose final greedy
-policy does not reach the goal is not converged and counts as episode {config.episodes}
-(censored), so speed-ups against a baseline that often fails to converge are understated.</li>
-<li><b>Convergence episode (greedy, robust)</b>: the same rule on the trailing median
-(window {max(1, round(config.episodes / 20))} evaluations; a failed evaluation counts as infinitely
-long), so one isolated bad evaluation late in training does not reset convergence.</li>
-<li><b>Convergence episode (training view)</b>: the same rule on the moving average
-(window {max(1, round(config.episodes / 20))} episodes) of the training episodes' lengths.</li>
+<li><b>Oracle</b> L*: the expected number of actions from the start under the best policy of the
+true transition model of the discretized MDP, estimated from the simulator itself
+({config.oracle_samples} sampled poses per state and action) and solved by value iteration.</li>
+<li><b>Evaluation</b>: after every training episode the greedy policy is rolled out
+<b>{rollouts}</b> times from the start, each from a reset with one of {rollouts} fixed evaluation
+seeds (the same after every episode and for every agent of a world).</li>
+<li><b>Convergence episode</b>: the first episode e such that the evaluations after episodes
+e … e + {window - 1} (a window of <b>{window}</b>) all reach the goal in every rollout with a
+mean length within <b>{tol:.0%}</b> above L*. It does not depend on how long the run lasts.
+A run with no such window is <b>censored</b> at episode {config.episodes} − {window} + 1: medians
+are Kaplan–Meier estimates, and a median shown as ∞ means more than half of the runs never
+converged. Speed-up: KM median of the baseline / KM median of the agent; when more than half of
+the baseline's runs are censored its largest censoring time stands in for its median and the
+speed-up is a <b>lower bound</b> (marked ≥). Probability of improvement (Agarwal et al. 2021):
+the chance that a run of the agent converges before a run of the baseline, censored pairs scored
+by Gehan's rule. The mean and IQM of the convergence episode below count censored runs at their
+censoring time (biased low); use the medians for claims.</li>
+<li><b>Optimality gap</b>: mean greedy length over the last {window} evaluations (rollouts that
+reached the goal) / L* − 1.</li>
 <li><b>Final greedy length</b>: actions (and metres travelled) of one greedy rollout from the start
 after the last episode (the trajectory drawn below); only runs where it reached the goal, and
 comparisons only over seeds where both agents' rollouts did.</li>
@@ -107,6 +124,93 @@ comparisons only over seeds where both agents' rollouts did.</li>
 Comparisons with the baseline <b>{html.escape(config.baseline)}</b> are paired by seed (every agent
 meets the same maps and floors). "No significant difference" means the interval of the difference
 contains 0; its width tells how large a difference could have gone unnoticed.</li></ul>"""
+
+
+def convergence_section(
+    summaries: pd.DataFrame, comparisons: pd.DataFrame, config: ExperimentConfig
+) -> str:
+    """Per cell: converged share and KM median of every agent, and its speed-up over the
+    baseline with the censoring stated; then the performance profiles."""
+    table_rows = convergence_table(summaries, config)
+    records = []
+    for _, row in table_rows.iterrows():
+        match = comparisons[
+            (comparisons["map"] == row["map"]) & (comparisons["preset"] == row["preset"])
+            & (comparisons["agent"] == row["agent"])
+        ] if not comparisons.empty else comparisons  # fmt: skip
+        speedup, improvement = "baseline", ""
+        if not match.empty:
+            first = match.iloc[0]
+            speedup = speedup_text(first)
+            improvement = interval_text(
+                float(first["improvement_probability"]),
+                float(first["improvement_probability_low"]),
+                float(first["improvement_probability_high"]),
+            )
+        records.append({
+            "map · preset": html.escape(f"{row['map']} · {row['preset']}"),
+            "agent": html.escape(str(row["agent"])),
+            "converged": f"{round(row['converged'] * row['n'])} / {row['n']}",
+            "median convergence episode": interval_text(
+                row["median"], row["median_low"], row["median_high"], 0
+            ),
+            "speed-up": speedup, "P(improvement)": improvement,
+        })  # fmt: skip
+    frame = pd.DataFrame.from_records(records)
+    return "<h2>Convergence</h2>" + frame.to_html(index=False, escape=False, border=0)
+
+
+def performance_profiles(summaries: pd.DataFrame, config: ExperimentConfig) -> str:
+    """Per cell, the share of runs converged by each episode, per agent, with bootstrap bands."""
+    parts = []
+    horizon = config.episodes
+    episodes = np.unique(np.geomspace(1, horizon, 200).round())
+    for map_label, preset, rows in cells(summaries):
+        profiles = {}
+        for agent in config.agent_labels:
+            if rows[rows["agent"] == agent].empty:
+                continue
+            times, seen = survival_columns(rows, agent)
+            rng = stats_rng(config, map_label, preset, agent, "profile")
+            low, high = profile_band(
+                times, seen, episodes, rng, n_resamples=config.bootstrap_samples,
+                confidence=config.confidence,
+            )  # fmt: skip
+            profiles[agent] = (episodes, performance_profile(times, seen, episodes), low, high)
+        title = f"converged by episode e · {map_label} · {preset}"
+        parts.append(image(plots.performance_profiles(profiles, horizon, title), title))
+    return "".join(parts)
+
+
+def budget_section(
+    comparisons: pd.DataFrame, aggregates: pd.DataFrame, config: ExperimentConfig
+) -> str:
+    """The speed-up against the planning budget with the wall time it costs, when some
+    algorithm was run at two budgets or more; else nothing."""
+    rows = budget_rows(comparisons, aggregates, config) if not comparisons.empty else None
+    if (
+        rows is None
+        or rows.empty
+        or rows.groupby("algorithm")["planning_steps"].nunique().max() < 2
+    ):
+        return ""
+    parts = ["<h2>Planning budget</h2>"]
+    for (map_label, preset), part in rows.groupby(["map", "preset"], sort=False):
+        parts.append(f"<h3>{html.escape(f'{map_label} · {preset}')}</h3>")
+        parts.append(image(plots.speedup_vs_budget(part), f"speed-up vs budget {map_label}"))
+    return "".join(parts)
+
+
+def speedup_text(row: pd.Series) -> str:
+    """``"≥ 12.3 [8.1, 20.0]"`` (lower bound) or ``"12.3 [8.1, 20.0]"``, with a colour class:
+    green when the interval excludes 1 from above."""
+    text = interval_text(
+        float(row["speedup"]), float(row["speedup_low"]), float(row["speedup_high"]), 1
+    )
+    if row["speedup_lower_bound"]:
+        text = "≥ " + text
+    faster = float(row["speedup_low"]) > 1.0
+    return f"<span class='{'yes' if faster else 'no'}'>{html.escape(text)}</span>"
 
 
 def setup(config: ExperimentConfig, metadata: dict[str, object], n_runs: int) -> str:
@@ -213,6 +317,9 @@ def build_report(run_dir: Path | str) -> str:
         setup(config, metadata, len(summaries)),
         "<h2>Definitions</h2>",
         definitions(config),
+        convergence_section(summaries, comparisons, config),
+        performance_profiles(summaries, config),
+        budget_section(comparisons, aggregates, config),
         reproduction_section(comparisons, surfaces, summaries, config),
     ]
     if not surfaces.empty:

@@ -22,6 +22,7 @@ import dataclasses
 import importlib
 import inspect
 import logging
+import math
 from pathlib import Path
 from typing import Any
 
@@ -31,7 +32,8 @@ import numpy as np
 from skidnav.agents.registry import agent_class, make_agent, make_config
 from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig, MapSpec
-from skidnav.experiments.metrics import run_metrics
+from skidnav.experiments.metrics import ConvergenceRule, evaluation_summary, run_metrics
+from skidnav.experiments.oracle import Oracle, compute_oracle, load_or_compute_oracle
 from skidnav.experiments.runs import RunSpec, expand_runs
 from skidnav.experiments.store import EPISODE_COLUMNS, TrialResult
 from skidnav.world.discretization import heading_bin
@@ -64,9 +66,10 @@ def build_map(spec: MapSpec, rng: np.random.Generator) -> GridMap:
 def make_env(spec: RunSpec, grid_map: GridMap, slip_seed: int) -> gymnasium.Env[Any, Any]:
     """The environment of a run (unwrapped: the trainer enforces the action limit).
 
-    ``env_id`` is a registered Gymnasium id, or ``package.module:function`` naming a factory
-    called with the ``[env]`` options (e.g. ``skidnav.envs.mazes:dyna_maze``). Only the
-    skid-steer env receives the map, slip preset and drift of the run.
+    ``env_id`` is a registered Gymnasium id (e.g. ``skidnav/DynaMaze-v0``; Gymnasium's
+    ``module:Env-v0`` form imports ``module`` for its registrations first), made with the
+    ``[env]`` options: nothing named in a config is called. Only the skid-steer env receives the
+    map, slip preset and drift of the run.
     """
     config = spec.config
     options: dict[str, Any] = dict(config.env_options)
@@ -80,15 +83,10 @@ def make_env(spec: RunSpec, grid_map: GridMap, slip_seed: int) -> gymnasium.Env[
         )
         if config.max_steps is not None:
             options["max_episode_steps"] = config.max_steps
-    if ":" in config.env_id:
-        module_name, _, factory = config.env_id.partition(":")
-        try:
-            function = getattr(importlib.import_module(module_name), factory)
-        except (ImportError, AttributeError):
-            raise UserError(f"environment factory {config.env_id!r} not found") from None
-        env: gymnasium.Env[Any, Any] = function(**options)
-        return env.unwrapped
-    return gymnasium.make(config.env_id, **options).unwrapped
+    try:
+        return gymnasium.make(config.env_id, **options).unwrapped
+    except ModuleNotFoundError as error:
+        raise UserError(f"environment {config.env_id!r}: no module {error.name!r}") from None
 
 
 def _agent_context(name: str, env: gymnasium.Env[Any, Any]) -> dict[str, Any]:
@@ -186,10 +184,9 @@ def _world_arrays(
 
 
 def _episode_arrays(log: Any) -> dict[str, np.ndarray]:
-    """The TrainingLog as record columns; a failed greedy evaluation (−1) becomes NaN."""
-    greedy = np.asarray(log.greedy_lengths, dtype=np.float64)
-    reached = greedy > 0
-    greedy[~reached] = np.nan
+    """The TrainingLog as record columns: each evaluation's R rollouts become their mean length
+    over those that reached the goal (NaN if none) and the share that did."""
+    greedy, reached = evaluation_summary(log.greedy_lengths)
     arrays = {
         "return": np.asarray(log.returns, dtype=np.float64),
         "length": np.asarray(log.lengths, dtype=np.int64),
@@ -249,10 +246,12 @@ def warm_up(spec: RunSpec) -> None:
             1,
             max_steps=limit,
             greedy_eval_env=eval_env if spec.config.greedy_eval else None,
+            greedy_seeds=[2, 3],
         )
     greedy_rollout(agent, eval_env, 2, max(WARM_UP_LIMITS))
     if grid_map is not None:
         _world_arrays(agent.q, grid_map, env)
+        compute_oracle(eval_env, 1, 0, [2], max(WARM_UP_LIMITS))
     _warmed_up.add(key)
 
 
@@ -264,24 +263,35 @@ def run_trial(spec: RunSpec) -> TrialResult:
 
 def measure_trial(spec: RunSpec) -> TrialResult:
     """:func:`run_trial` without the warm-up: the first call in a process also times numba's
-    compilation of the kernels."""
+    compilation of the kernels.
+
+    Seeds: the world stream gives the map, the slip field, the evaluation seeds and the oracle's
+    sampling seed (so every agent of a world meets the same evaluations: common random numbers);
+    the run stream gives the agent and the training episodes."""
     config = spec.config
-    map_seed, slip_seed = spec.world_seed.sequence().spawn(2)
-    agent_seed, episode_seed, eval_seed = spec.run_seed.sequence().spawn(3)
+    map_seed, slip_seed, evaluation_seed, oracle_seed = spec.world_seed.sequence().spawn(4)
+    agent_seed, episode_seed, _ = spec.run_seed.sequence().spawn(3)
     grid_map, env, eval_env = _world(spec, np.random.default_rng(map_seed), _seed_int(slip_seed))
+    eval_seeds = [_seed_int(s) for s in evaluation_seed.spawn(config.eval_rollouts)]
     env.reset(seed=_seed_int(episode_seed))
-    eval_env.reset(seed=_seed_int(eval_seed))
     agent = _agent(spec, env, np.random.default_rng(agent_seed))
     max_steps = config.max_steps or int(getattr(env, "max_episode_steps", None) or 10_000)
+    oracle = None
+    if grid_map is not None:
+        oracle = load_or_compute_oracle(
+            eval_env, config.oracle_samples, _seed_int(oracle_seed), eval_seeds, max_steps
+        )
+    reference = _reference_length(oracle, eval_env)
     log = _trainer(env)(
         agent,
         env,
         config.episodes,
         max_steps=max_steps,
         greedy_eval_env=eval_env if config.greedy_eval else None,
+        greedy_seeds=eval_seeds,
     )
     episodes = _episode_arrays(log)
-    poses, reached = greedy_rollout(agent, eval_env, _seed_int(eval_seed), max_steps)
+    poses, reached = greedy_rollout(agent, eval_env, eval_seeds[0], max_steps)
     arrays = {"greedy_poses": poses}
     if grid_map is not None:
         arrays.update(_world_arrays(agent.q, grid_map, env))
@@ -292,9 +302,24 @@ def measure_trial(spec: RunSpec) -> TrialResult:
         "preset": spec.preset,
         "seed": spec.seed,
     }
-    summary = run_metrics(episodes, poses, reached, config.convergence_tolerance)
+    rule = None
+    if math.isfinite(reference) and config.greedy_eval:
+        rule = ConvergenceRule(reference, config.convergence_tolerance, config.convergence_window)
+    summary = run_metrics(episodes, poses, reached, rule)
     summary["action_limit"] = float(max_steps)
+    summary["oracle_length"] = reference
+    summary["oracle_rollout_length"] = oracle.rollout_mean if oracle is not None else float("nan")
     return TrialResult(spec.run_id, coordinates, episodes, summary, arrays)
+
+
+def _reference_length(oracle: Oracle | None, env: gymnasium.Env[Any, Any]) -> float:
+    """L* of a run: the oracle's V*(start) on the skid-steer env; on a deterministic grid maze
+    its breadth-first shortest path (``shortest_path_length``, exact there); else NaN."""
+    if oracle is not None:
+        return oracle.start_value
+    shortest = getattr(env.unwrapped, "shortest_path_length", None)
+    length = int(shortest()) if callable(shortest) else -1
+    return float(length) if length > 0 else float("nan")
 
 
 def check_config(config: ExperimentConfig, path: Path | str | None = None) -> None:

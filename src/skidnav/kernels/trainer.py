@@ -38,6 +38,7 @@ AGENT_KINDS = {
     "dyna-kinematic": MODEL_BASED,
     "trajectory-prioritized": MODEL_BASED,
     "dyna-full": MODEL_BASED,
+    "dyna-sweep": MODEL_BASED,
 }
 """Agent registry name → the learning step the fused loop runs."""
 

@@ -1,0 +1,79 @@
+"""``skidnav tune CONFIG``: hyperparameter search with Optuna on tuning maps; resumable."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import logging
+from pathlib import Path
+from typing import Any
+
+import optuna
+
+from skidnav.commands.run import add_backend_arguments
+from skidnav.errors import UserError
+from skidnav.experiments.tuneconfig import load_tune_config
+from skidnav.experiments.tuning import tune_experiment
+
+
+def add_parser(subparsers: Any) -> None:
+    """Add the ``tune`` subcommand."""
+    parser = subparsers.add_parser(
+        "tune",
+        help="tune the agents' hyperparameters on tuning maps (Optuna); resumable",
+        description="Search the hyperparameters of every agent with a [tune.space.<label>] "
+        "table of CONFIG, on tuning maps kept apart from the evaluation maps, and write the "
+        "best ones to DIR/tuned.toml (an experiment config). Started again on the same --out "
+        "directory it continues each study up to its trial count (docs/tuning.md).",
+    )
+    parser.add_argument("config", type=Path, help="experiment config with a [tune] table (TOML)")
+    parser.add_argument(
+        "--out", type=Path, default=None, help="study directory (default: runs/<config name>)"
+    )
+    parser.add_argument(
+        "--trials",
+        type=int,
+        default=None,
+        help="finished trials per agent, instead of [tune] trials (e.g. a small budget)",
+    )
+    add_backend_arguments(parser)
+    parser.set_defaults(func=tune_command)
+
+
+def _print_trial(label: str, trial: Any, finished: int, target: int) -> None:
+    value = "" if trial.value is None else f" {trial.value:.1f}"
+    params = ", ".join(
+        f"{key}={value:.4g}" if isinstance(value, float) else f"{key}={value}"
+        for key, value in trial.params.items()
+    )
+    state = trial.state.name.lower()
+    print(f"{label}: trial {trial.number} {state}{value} ({params}) [{finished}/{target}]")
+
+
+def tune_command(args: argparse.Namespace) -> int:
+    """Run the search; print each trial and where tuned.toml is."""
+    if not args.verbose:
+        optuna.logging.set_verbosity(logging.WARNING)
+    config, tune = load_tune_config(args.config)
+    if args.trials is not None:
+        try:
+            tune = dataclasses.replace(tune, trials=args.trials)
+        except ValueError as error:
+            raise UserError(f"--trials: {error}") from None
+    outcome = tune_experiment(
+        config,
+        tune,
+        args.out if args.out is not None else Path("runs") / config.name,
+        backend=args.backend,
+        jobs=args.jobs,
+        scheduler=args.scheduler,
+        source_text=args.config.read_text(encoding="utf-8"),
+        config_path=args.config,
+        on_trial=_print_trial,
+    )
+    counts = ", ".join(f"{label} {count}" for label, count in outcome.finished.items())
+    print(
+        f"tuned hyperparameters: {outcome.tuned} ({outcome.executed} trials run now; finished: "
+        f"{counts}) in {outcome.wall_time:.1f} s"
+    )
+    return 0

@@ -1,0 +1,154 @@
+"""The oracle of a world: the best expected trajectory length under the true simulator, so that
+"optimal length", "optimality gap" and "converged" have an absolute meaning (SPEC §5).
+
+For a skid-steer world (map, slip field, robot, discretization) the oracle
+
+1. estimates the true transition model of the discretized MDP from the simulator itself,
+   ``n_samples`` poses per state and action (:func:`skidnav.kernels.oracle.sample_outcomes`);
+2. solves it for the expected number of actions to the goal by value iteration
+   (:func:`skidnav.kernels.oracle.expected_actions`): ``start_value`` is that expectation from the
+   start state;
+3. takes V*(start), the expected actions from the exact start pose, as the **reference length**
+   L* that convergence is measured against;
+4. for information, rolls its greedy policy out in the simulator from the start, once per
+   evaluation seed — the evaluation every agent gets after each of its episodes
+   (:func:`skidnav.agents.fast_training.evaluate_q_fast`). A greedy policy over cells can loop
+   from one exact pose (an action that works on average over a cell fails from that point), so
+   these rollouts are a diagnostic, not the reference.
+
+Results are cached on disk (``$SKIDNAV_CACHE_DIR``, default ``~/.cache/skidnav``) under a hash of
+everything they depend on (the task's arrays, the start pose, the sample count and seed, the
+evaluation seeds and limit, :data:`ORACLE_VERSION`), written atomically, so the runs of every
+agent on one world compute it once, in any process. The slip field is sampled at time 0: with a
+drifting floor the oracle is that of the initial floor.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from skidnav.agents.fast_training import evaluate_q_fast
+from skidnav.kernels.oracle import (
+    UNREACHABLE,
+    expected_actions,
+    oracle_q,
+    sample_outcomes,
+    start_costs,
+)
+
+logger = logging.getLogger(__name__)
+
+ORACLE_VERSION = 1
+"""Bumped whenever the oracle's procedure changes (part of the cache key)."""
+MAX_SWEEPS = 100_000
+"""Value-iteration sweeps before giving up (the tolerance is reached in a few hundred)."""
+SWEEP_TOLERANCE = 1e-9
+"""Value iteration stops when no value moves by more than this [actions]."""
+
+
+class Oracle(NamedTuple):
+    """The oracle of one world.
+
+    Attributes:
+        q: float64 (n_states, n_actions), minus the expected actions to the goal after each action.
+        start_value: expected actions from the start pose under the sampled model, V*(start)
+            (its first action simulated from the exact start pose; inf when the goal is
+            unreachable): the **reference length** L* of convergence.
+        rollout_lengths: int64 (n_seeds,), lengths of the greedy rollouts of the oracle policy in
+            the simulator, one per evaluation seed (−1: goal not reached).
+        rollout_mean: mean of ``rollout_lengths`` [actions]; NaN if any rollout failed (the
+            greedy policy of a model over cells can loop from one exact pose: a diagnostic, not
+            the reference).
+        sweeps: value-iteration sweeps made.
+    """
+
+    q: np.ndarray
+    start_value: float
+    rollout_lengths: np.ndarray
+    rollout_mean: float
+    sweeps: int
+
+
+def cache_dir() -> Path:
+    """Where oracles are cached: ``$SKIDNAV_CACHE_DIR`` or ``~/.cache/skidnav``."""
+    return Path(os.environ.get("SKIDNAV_CACHE_DIR") or Path.home() / ".cache" / "skidnav")
+
+
+def _key(nav: Any, n_samples: int, seed: int, seeds: Sequence[int], max_steps: int) -> str:
+    """Hex digest of everything the oracle of ``nav`` depends on."""
+    digest = hashlib.sha256(f"oracle-v{ORACLE_VERSION}".encode())
+    task = nav.task
+    for part in (task.robot, task.grid, task.goal_i, task.goal_j, task.drift_amplitude,
+                 task.drift_period, task.rewards, nav.max_episode_steps):  # fmt: skip
+        digest.update(repr(part).encode())
+    for array in (task.occupancy, task.eta, task.x_icr, task.drift_phase, nav.start_pose()):
+        digest.update(np.ascontiguousarray(array).tobytes())
+    digest.update(repr((n_samples, seed, [int(s) for s in seeds], max_steps)).encode())
+    return digest.hexdigest()[:32]
+
+
+def compute_oracle(
+    env: Any, n_samples: int, seed: int, seeds: Sequence[int], max_steps: int
+) -> Oracle:
+    """The oracle of ``env``'s world (module docs), without the cache.
+
+    Args:
+        env: a ``skidnav/SkidSteerNav-v0`` env (wrapped or not); its evaluation resets are used
+            for the rollouts.
+        n_samples: sampled poses per state (each tries every action), ≥ 1.
+        seed: seed of the sampling generator.
+        seeds: evaluation seeds (one rollout each).
+        max_steps: action limit of each rollout.
+    """
+    if n_samples < 1:
+        raise ValueError(f"expected n_samples >= 1, got {n_samples}")
+    nav = env.unwrapped
+    n_states, n_actions = int(nav.observation_space.n), int(nav.action_space.n)
+    outcomes = np.empty((n_states, n_actions, n_samples), dtype=np.int32)
+    rng = np.random.default_rng(seed)
+    sample_outcomes(nav.task, n_samples, rng, outcomes)
+    values, sweeps = expected_actions(outcomes, MAX_SWEEPS, SWEEP_TOLERANCE)
+    q = oracle_q(outcomes, values)
+    costs = start_costs(nav.task, nav.start_pose(), values, n_samples, rng)
+    start_value = float(costs.min()) if costs.min() < UNREACHABLE / 2 else float("inf")
+    lengths = evaluate_q_fast(q, env, seeds, max_steps)
+    rollout_mean = float(lengths.mean()) if (lengths > 0).all() else float("nan")
+    return Oracle(q, start_value, lengths, rollout_mean, int(sweeps))
+
+
+def load_or_compute_oracle(
+    env: Any, n_samples: int, seed: int, seeds: Sequence[int], max_steps: int
+) -> Oracle:
+    """:func:`compute_oracle`, read from the on-disk cache when it holds this world's oracle."""
+    path = cache_dir() / "oracles" / f"{_key(env.unwrapped, n_samples, seed, seeds, max_steps)}.npz"
+    if path.is_file():
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                return Oracle(
+                    data["q"], float(data["start_value"]), data["rollout_lengths"],
+                    float(data["rollout_mean"]), int(data["sweeps"]),
+                )  # fmt: skip
+        except (OSError, KeyError, ValueError) as error:
+            logger.warning("oracle cache %s unreadable (%s): computing it again", path, error)
+    oracle = compute_oracle(env, n_samples, seed, seeds, max_steps)
+    _save(path, oracle)
+    return oracle
+
+
+def _save(path: Path, oracle: Oracle) -> None:
+    """Write ``oracle`` to ``path`` atomically (a failure to cache is only logged)."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        temporary = path.with_suffix(f".{os.getpid()}.tmp")
+        with temporary.open("wb") as handle:
+            np.savez(handle, **oracle._asdict())
+        os.replace(temporary, path)
+    except OSError as error:
+        logger.warning("could not cache the oracle in %s: %s", path, error)
