@@ -23,6 +23,9 @@ from typing import Any, TypeVar
 
 from skidnav.kernels.multinomial import PLANNING_MODES
 
+MAX_PLANNING_STEPS = 10_000_000
+"""Most planning updates per real step (10 M: about a second of compiled planning)."""
+
 C = TypeVar("C", bound="QLearningConfig")
 
 
@@ -84,8 +87,8 @@ class DynaQConfig(QLearningConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         _check(
-            isinstance(self.planning_steps, int) and self.planning_steps >= 0,
-            "an integer planning_steps >= 0",
+            isinstance(self.planning_steps, int) and 0 <= self.planning_steps <= MAX_PLANNING_STEPS,
+            f"an integer planning_steps in [0, {MAX_PLANNING_STEPS:,}]",
             self.planning_steps,
         )
         _check(

@@ -38,6 +38,18 @@ _SCALARS = (bool, int, float, str)
 
 DEFAULT_ENV_ID = "skidnav/SkidSteerNav-v0"
 
+MAX_SEEDS = 10_000
+"""Most seeds per cell."""
+MAX_EPISODES = 10_000_000
+"""Most training episodes per run."""
+MAX_STEPS = 1_000_000
+"""Largest action limit per episode."""
+MAX_BOOTSTRAP = 1_000_000
+"""Most bootstrap resamples per interval."""
+MAX_TOTAL_EPISODES = 1_000_000_000
+"""Most episodes of a whole experiment (runs × episodes): beyond it the work is absurd for any
+machine this runs on, and the config is refused before a run starts."""
+
 
 def _check_params(name: str, params: Params) -> None:
     for key, value in params:
@@ -210,24 +222,29 @@ class ExperimentConfig:
                 raise ValueError(f"expected unique {what}, got {labels}")
 
     def _check_numbers(self) -> None:
-        inf = math.inf
-        _check_range("seeds", self.seeds, 1, inf, integer=True)
-        _check_range("episodes", self.episodes, 2, inf, integer=True)
+        _check_range("seeds", self.seeds, 1, MAX_SEEDS, integer=True)
+        _check_range("episodes", self.episodes, 2, MAX_EPISODES, integer=True)
         if self.max_steps is not None:
-            _check_range("max_steps", self.max_steps, 1, inf, integer=True)
-        _check_range("root_seed", self.root_seed, 0, inf, integer=True)
-        _check_range("drift_amplitude", self.drift_amplitude, 0.0, inf, integer=False)
-        _check_range("drift_period", self.drift_period, 1e-9, inf, integer=False)
+            _check_range("max_steps", self.max_steps, 1, MAX_STEPS, integer=True)
+        _check_range("root_seed", self.root_seed, 0, 2**63 - 1, integer=True)
+        _check_range("drift_amplitude", self.drift_amplitude, 0.0, 100.0, integer=False)
+        _check_range("drift_period", self.drift_period, 1e-9, 1e12, integer=False)
         _check_range(
             "convergence_tolerance", self.convergence_tolerance, 1e-6, 0.999, integer=False
         )
         _check_range("convergence_window", self.convergence_window, 1, 10_000, integer=True)
         _check_range("eval_rollouts", self.eval_rollouts, 1, 100, integer=True)
         _check_range("oracle_samples", self.oracle_samples, 1, 1_000, integer=True)
-        _check_range("bootstrap_samples", self.bootstrap_samples, 100, inf, integer=True)
+        _check_range("bootstrap_samples", self.bootstrap_samples, 100, MAX_BOOTSTRAP, integer=True)
         _check_range("confidence", self.confidence, 0.5, 0.999, integer=False)
         if not isinstance(self.greedy_eval, bool):
             raise ValueError(f"expected greedy_eval to be true or false, got {self.greedy_eval!r}")
+        episodes = self.n_runs * self.episodes
+        if episodes > MAX_TOTAL_EPISODES:
+            raise ValueError(
+                f"expected at most {MAX_TOTAL_EPISODES:,} episodes in all (runs × episodes), "
+                f"got {episodes:,}"
+            )
 
     @property
     def agent_labels(self) -> list[str]:

@@ -24,6 +24,8 @@ from skidnav.experiments.config import (
     freeze_params,
 )
 
+MAX_CONFIG_CHARS = 1_000_000
+"""Longest config text accepted (a config is a few kilobytes)."""
 TOP_KEYS = ("experiment", "env", "maps", "agents", "tune")  # [tune]: experiments/tuneconfig.py
 EXPERIMENT_KEYS = (
     "name",
@@ -69,10 +71,15 @@ def load_config(path: Path | str) -> ExperimentConfig:
 
 def parse_config(text: str, path: Path | str = "<string>") -> ExperimentConfig:
     """Validate config text; map files are resolved relative to ``path``'s folder."""
+    if len(text) > MAX_CONFIG_CHARS:
+        raise UserError(f"{path}: config of {len(text):,} characters, expected at most "
+                        f"{MAX_CONFIG_CHARS:,}")  # fmt: skip
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise UserError(_toml_error(path, error)) from None
+    except RecursionError:
+        raise UserError(f"{path}: malformed TOML: nested too deeply") from None
     try:
         return _build(data, Path(path))
     except (ValueError, TypeError) as error:
