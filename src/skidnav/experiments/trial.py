@@ -307,9 +307,14 @@ def measure_trial(spec: RunSpec) -> TrialResult:
         rule = ConvergenceRule(reference, config.convergence_tolerance, config.convergence_window)
     summary = run_metrics(episodes, poses, reached, rule)
     summary["action_limit"] = float(max_steps)
-    summary["oracle_length"] = reference
-    summary["oracle_rollout_length"] = oracle.rollout_mean if oracle is not None else float("nan")
+    summary.update(_oracle_columns(reference, oracle))
     return TrialResult(spec.run_id, coordinates, episodes, summary, arrays)
+
+
+def _oracle_columns(reference: float, oracle: Oracle | None) -> dict[str, float]:
+    """The summary columns of the run's reference: L* and the oracle's own rollout mean."""
+    rollout = oracle.rollout_mean if oracle is not None else float("nan")
+    return {"oracle_length": reference, "oracle_rollout_length": rollout}
 
 
 def _reference_length(oracle: Oracle | None, env: gymnasium.Env[Any, Any]) -> float:

@@ -14,7 +14,7 @@ One planner (:class:`PlannerArrays`) serves ``dyna-kinematic``, ``trajectory-pri
 * **replay** — Dyna-Q's uniform replay of a visited pair (:mod:`skidnav.kernels.planning`).
 
 A chosen pair that was visited is answered by the multinomial model; one never visited by the
-kinematic model's table (:func:`kinematic_target`), or skipped when the agent has none.
+kinematic model's table (:func:`kinematic_value`), or skipped when the agent has none.
 """
 
 from __future__ import annotations
@@ -124,18 +124,7 @@ def _mean_reward(stats: np.ndarray, row: int) -> float:
 
 
 @jit
-def kinematic_target(
-    q: np.ndarray, planner: PlannerArrays, state: int, action: int, gamma: float, grid: GridShape
-) -> float:
-    """TD target of a pair from the kinematic table; rewards are the learned means of
-    ``reward_stats`` (goal arrival: terminal)."""
-    means = _mean_rewards(planner.reward_stats)
-    return _kinematic_value(q, planner.pred_next, planner.pred_outcome, means, state, action,
-                            gamma, grid)  # fmt: skip
-
-
-@jit
-def _mean_rewards(stats: np.ndarray) -> np.ndarray:
+def mean_rewards(stats: np.ndarray) -> np.ndarray:
     """:func:`_mean_reward` of every row of ``reward_stats``, float64 (n_regions + 2,): they do not
     change while planning, so a planning call computes them once."""
     means = np.empty(stats.shape[0])
@@ -145,7 +134,7 @@ def _mean_rewards(stats: np.ndarray) -> np.ndarray:
 
 
 @inline_jit
-def _kinematic_value(
+def kinematic_value(
     q: np.ndarray,
     pred_next: np.ndarray,
     pred_outcome: np.ndarray,
@@ -155,7 +144,8 @@ def _kinematic_value(
     gamma: float,
     grid: GridShape,
 ) -> float:
-    """:func:`kinematic_target` from the table and the mean rewards (``_mean_rewards``). One path
+    """TD target of a pair from the kinematic table ``pred_next`` / ``pred_outcome`` with the
+    learned mean rewards ``means`` (:func:`mean_rewards`; a goal arrival is terminal). One path
     for the arrays (a goal arrival is the target with continuation 0, i.e. its mean reward), so
     numba prunes their reference counts in the planning loop."""
     next_state = pred_next[state, action]
@@ -204,7 +194,7 @@ def combined_planning(
     counters, pair_key, pair_table = planner.counters, model.pair_key, model.pair_table
     pred_next, pred_outcome, walls = planner.pred_next, planner.pred_outcome, planner.walls
     trajectory_keys, neighbour_keys = planner.trajectory_keys, planner.neighbour_keys
-    means = _mean_rewards(planner.reward_stats)
+    means = mean_rewards(planner.reward_stats)
     cells = q.reshape(-1, 1)  # row s·n_actions + a is q[s, a]
     n_actions, use_kinematic = model.n_actions, counters[USE_KINEMATIC] != 0
     share = shares.trajectory_share if counters[N_TRAJECTORY] > 0 else 0.0
@@ -233,7 +223,7 @@ def combined_planning(
                 target = model_target_call(model, q, pair, shares.mode, shares.gamma, rng.random())
         elif use_kinematic and not walls[state // grid.n_headings // grid.n_y,
                                          state // grid.n_headings % grid.n_y]:  # fmt: skip
-            target = _kinematic_value(q, pred_next, pred_outcome, means, state, action,
+            target = kinematic_value(q, pred_next, pred_outcome, means, state, action,
                                       shares.gamma, grid)  # fmt: skip
         else:
             continue

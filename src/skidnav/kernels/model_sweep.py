@@ -6,7 +6,7 @@ One sweep updates every pair (s, a) of every state outside the known wall cells,
 * a pair seen in reality: the multinomial model's expected target Σ p(s′|s, a)(r̄ + γ (1 − β)
   max_a′ Q(s′, a′)) (:func:`skidnav.kernels.multinomial.expected_target`);
 * a pair never seen: the kinematic table's predicted outcome with the learned mean rewards
-  (:func:`skidnav.kernels.kinematic_planning.kinematic_target`), walls found by collisions
+  (:func:`skidnav.kernels.kinematic_planning.kinematic_value`), walls found by collisions
   respected — the optimistic "unknown cells are free" model that makes the agent try the
   shortest predicted path and learn the walls it meets.
 
@@ -18,7 +18,12 @@ from __future__ import annotations
 import numpy as np
 
 from skidnav._jit import jit
-from skidnav.kernels.kinematic_planning import USE_KINEMATIC, PlannerArrays, kinematic_target
+from skidnav.kernels.kinematic_planning import (
+    USE_KINEMATIC,
+    PlannerArrays,
+    kinematic_value,
+    mean_rewards,
+)
 from skidnav.kernels.multinomial import MultinomialArrays, expected_target
 from skidnav.world.discretization import GridShape
 
@@ -39,10 +44,12 @@ def _sweep_once(
     model: MultinomialArrays,
     planner: PlannerArrays,
     slots: np.ndarray,
+    means: np.ndarray,
     gamma: float,
     grid: GridShape,
 ) -> tuple[float, int]:
-    """One Gauss–Seidel sweep; returns (largest change of a value, values updated)."""
+    """One Gauss–Seidel sweep (``means``: the learned mean rewards, :func:`mean_rewards`);
+    returns (largest change of a value, values updated)."""
     n_states, n_actions = q.shape
     head, total, counts = model.pair_head, model.pair_total, model.entry_count
     sums, terminals = model.entry_reward_sum, model.entry_terminal_count
@@ -60,7 +67,9 @@ def _sweep_once(
                     q, head, total, counts, sums, terminals, next_states, siblings, pair, gamma
                 )
             elif kinematic:
-                target = kinematic_target(q, planner, state, action, gamma, grid)
+                target = kinematic_value(
+                    q, planner.pred_next, planner.pred_outcome, means, state, action, gamma, grid
+                )
             else:
                 continue
             change = max(change, abs(target - q[state, action]))
@@ -82,9 +91,10 @@ def model_value_iteration(
     """Sweep (module docs) until the largest change is ≤ ``tolerance`` or after ``max_sweeps``;
     ``q`` float64 (n_states, n_actions) is updated in place. Returns (sweeps, value updates)."""
     slots = pair_slots(model, q.shape[0], q.shape[1])
+    means = mean_rewards(planner.reward_stats)  # real rewards do not change while solving
     updates = 0
     for sweep in range(1, max_sweeps + 1):
-        change, made = _sweep_once(q, model, planner, slots, gamma, grid)
+        change, made = _sweep_once(q, model, planner, slots, means, gamma, grid)
         updates += made
         if change <= tolerance:
             return sweep, updates
