@@ -92,3 +92,64 @@ def test_user_errors_are_one_line_and_exit_2(args, message, tmp_path):
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0] and "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["simulate", "--actions-file", "/dev/zero"], "action file larger than 2,097,152 bytes"),
+        (["simulate", "--actions-file", "{tmp}/none"], "none: no such action file"),
+        (["simulate", "--actions-file", "{long}"], "100,001 actions, expected at most 100,000"),
+        (["simulate", "--actions", "f " + "x" * 10**5], "unknown action 'xxxxxxxxx"),
+        (["simulate", "--random", "100001"], "expected --random >= 1 and <= 100,000"),
+        (["map", "show", "/dev/zero"], "/dev/zero: map file larger than 4,194,304 bytes"),
+        (["simulate", "--map", "/dev/zero", "--actions", "f"], "map file larger than"),
+    ],
+)
+def test_arguments_naming_endless_or_huge_inputs_are_one_line(args, message, tmp_path, capsys):
+    long_script = tmp_path / "long.txt"
+    long_script.write_text("f " * 100_001)
+    assert main([arg.format(tmp=tmp_path, long=long_script) for arg in args]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0] and len(lines[0]) < 200, lines
+
+
+def test_a_map_file_naming_the_environment_does_not_print_it():
+    # The variable comes first in the child's environment and its name is 41 characters long:
+    # the 40 quoted characters show part of the name, never a value.
+    env = {"SKIDNAV_TEST_VARIABLE_WITH_A_LONG_NAME_XY": "never-printed"}
+    result = subprocess.run(
+        [sys.executable, "-m", "skidnav.cli", "map", "show", "/proc/self/environ"],
+        env={**env, **os.environ, "PYTHONPATH": SRC},
+        capture_output=True,
+        text=True,
+    )
+    assert result.returncode == 2
+    assert result.stderr == (
+        "skidnav: error: /proc/self/environ:1: expected first line 'skidnav-map 1', got "
+        "'SKIDNAV_TEST_VARIABLE_WITH_A_LONG_NAME_X'…\n"
+    )
+
+
+def test_a_script_runs_to_its_end_past_the_episode_limit(tmp_path, capsys):
+    script = tmp_path / "script.txt"
+    script.write_text("l r " * 300)  # 600 turns in place: never the goal, past the 500 limit
+    table = tmp_path / "t.csv"
+    args = ["simulate", "--map-kind", "free", "--actions-file", str(script)]
+    assert main([*args, "--out", str(tmp_path / "t.png"), "--csv", str(table)]) == 0
+    assert capsys.readouterr().out.startswith("600 actions,")
+    assert len(table.read_text().splitlines()) == 1 + 601
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["script.txt", "t.csv", "t.png"]
+
+
+def test_a_script_that_reaches_the_goal_says_what_it_did_not_run(tmp_path, capsys):
+    room = tmp_path / "room.txt"
+    room.write_text("skidnav-map 1\nwidth 8\nheight 5\nmap\n" + "########\n" * 2
+                    + "#S.G...#\n" + "########\n" * 2)  # fmt: skip
+    code = main(
+        ["simulate", "--map", str(room), "--actions", "f " * 20, "--out", str(tmp_path / "r.png")]
+    )
+    out = capsys.readouterr().out
+    assert code == 0 and "reached the goal (the episode ended there: " in out
+    ran = int(out.split(" actions,")[0])
+    assert f"{20 - ran} actions of the script not run" in out and ran < 20

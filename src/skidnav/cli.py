@@ -2,34 +2,45 @@
 
 from __future__ import annotations
 
-import argparse
 import importlib
 import logging
 import sys
 from collections.abc import Sequence
 
+from skidnav.commands.parsing import OneLineParser
 from skidnav.errors import UserError
 
-SUBCOMMAND_MODULES = (
-    "skidnav.commands.map",
-    "skidnav.commands.simulate",
-    "skidnav.commands.run",
-    "skidnav.commands.tune",
-    "skidnav.commands.report",
-    "skidnav.commands.reproduce",
-    "skidnav.commands.robot",
-    "skidnav.commands.camera",
-)
+SUBCOMMAND_MODULES = {
+    "map": "skidnav.commands.map",
+    "simulate": "skidnav.commands.simulate",
+    "run": "skidnav.commands.run",
+    "tune": "skidnav.commands.tune",
+    "report": "skidnav.commands.report",
+    "reproduce": "skidnav.commands.reproduce",
+    "robot": "skidnav.commands.robot",
+    "camera": "skidnav.commands.camera",
+}
+"""Subcommand name → the module that adds it (``add_parser(subparsers)``)."""
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The full argument parser with every installed subcommand."""
-    parser = argparse.ArgumentParser(
+def requested_modules(argv: Sequence[str]) -> list[str]:
+    """The subcommand modules to import for ``argv``: only the named subcommand's, so that e.g.
+    ``skidnav robot sim-server`` does not import OpenCV or scikit-learn; all of them when no
+    known subcommand is named (``--help``, a typo), so argparse can list them."""
+    words = [word for word in argv if not word.startswith("-")]
+    if words and words[0] in SUBCOMMAND_MODULES:
+        return [SUBCOMMAND_MODULES[words[0]]]
+    return list(SUBCOMMAND_MODULES.values())
+
+
+def build_parser(modules: Sequence[str] = tuple(SUBCOMMAND_MODULES.values())) -> OneLineParser:
+    """The argument parser with the subcommands of ``modules`` (default: every installed one)."""
+    parser = OneLineParser(
         prog="skidnav", description="Model-based RL navigation for skid-steer robots."
     )
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
     subparsers = parser.add_subparsers(dest="command", required=True)
-    for module_name in SUBCOMMAND_MODULES:
+    for module_name in modules:
         try:
             module = importlib.import_module(module_name)
         except ModuleNotFoundError as error:
@@ -42,8 +53,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the process exit code (0 ok, 2 user error, 130 interrupted)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    arguments = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(requested_modules(arguments))
+    args = parser.parse_args(arguments)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,
         format="%(levelname)s %(name)s: %(message)s",

@@ -1,5 +1,8 @@
 """Errors a user can cause. The CLI prints them as one line and exits with code 2."""
 
+EXCERPT_CHARS = 40
+"""Most characters of a file's contents an error message quotes."""
+
 
 class UserError(Exception):
     """Bad input from the user (a config, map file, saved file, wire message, argument).
@@ -10,3 +13,33 @@ class UserError(Exception):
 
 class CorruptFileError(UserError):
     """A saved file that is truncated, corrupt, or from an incompatible version."""
+
+
+def excerpt(text: str | bytes, limit: int = EXCERPT_CHARS) -> str:
+    """A short, safe quotation of untrusted text for an error message: its first ``limit``
+    characters, ``repr``-escaped (so control characters, NUL bytes and newlines show as escapes
+    and the message stays one line), with ``…`` when cut.
+
+    >>> print(excerpt("PATH=/usr/bin\\x00HOME=/root\\x00SECRET=" + "x" * 100))
+    'PATH=/usr/bin\\x00HOME=/root\\x00SECRET=xxxxxxxx'…
+    >>> print(excerpt(b"ab\\ncd"))
+    'ab\\ncd'
+    """
+    if isinstance(text, bytes):
+        text = text[: limit * 4].decode("utf-8", errors="replace")
+    cut = len(text) > limit
+    return repr(text[:limit]) + ("…" if cut else "")
+
+
+def first_line(error: BaseException, limit: int = 200) -> str:
+    """The first line of an error's message, control characters escaped and cut to ``limit``
+    characters (messages may quote a file), or the error's type when it has no message.
+
+    >>> first_line(ValueError("bad value 'x\\x00y'\\nsecond line"))
+    "bad value 'x\\\\x00y'"
+    """
+    text = str(error)
+    if not text:
+        return type(error).__name__
+    line = repr(text.splitlines()[0])[1:-1]
+    return line[:limit] + ("…" if len(line) > limit else "")

@@ -1,6 +1,9 @@
-"""The Dyna-Q planning loop (skidnav.kernels.planning.dyna_planning) against its definition."""
+"""The planning loops of skidnav.kernels.planning (Dyna-Q, prioritized sweeping) against their
+definitions written from the model's and the queue's parts."""
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 import pytest
@@ -9,11 +12,13 @@ from skidnav.kernels.multinomial import (
     EXPECTED,
     MOST_PROBABLE,
     SAMPLE,
+    find_pair,
     model_target,
     model_target_call,
     most_probable_target,
 )
-from skidnav.kernels.planning import dyna_planning
+from skidnav.kernels.planning import dyna_planning, prioritized_sweeping
+from skidnav.kernels.priority_queue import heap_pop, heap_push, make_heap
 from skidnav.models.multinomial import MultinomialModel
 
 N_STATES, N_ACTIONS = 30, 3
@@ -75,3 +80,51 @@ def test_the_compiled_call_and_the_inlined_target_equal_model_target(mode: int) 
             assert model_target_call(arrays, q, pair, mode, 0.9, uniform) == expected
             if mode == MOST_PROBABLE:
                 assert most_probable_target(q, arrays, pair, 0.9, uniform) == expected
+
+
+def reference_sweeping(
+    q: np.ndarray, model: MultinomialModel, queue: Any, n_steps: int, mode: int, rng: Any
+) -> int:
+    """Prioritized sweeping from its parts: pop, ``model_target``, update, then each predecessor
+    (newest first) queued at |target − q| > θ, its target expected for a sampling model."""
+    arrays, updates = model.arrays, 0
+    while updates < n_steps and queue.size[0] > 0:
+        key, _ = heap_pop(queue)
+        state, action = divmod(key, N_ACTIONS)
+        target = model_target(arrays, q, find_pair(arrays, state, action), mode, 0.9, rng.random())
+        q[state, action] += 0.5 * (target - q[state, action])
+        updates += 1
+        for before, taken in model.predecessors(state):
+            pair = find_pair(arrays, before, taken)
+            uniform, asked = (rng.random(), mode) if mode == MOST_PROBABLE else (0.0, EXPECTED)
+            priority = abs(model_target(arrays, q, pair, asked, 0.9, uniform) - q[before, taken])
+            if priority > 1e-3:
+                heap_push(queue, before * N_ACTIONS + taken, priority)
+    return updates
+
+
+@pytest.mark.parametrize("mode", [MOST_PROBABLE, SAMPLE, EXPECTED])
+def test_prioritized_sweeping_equals_its_definition(mode: int) -> None:
+    model = stochastic_model(seed=4 + mode)
+    start = np.random.default_rng(6).normal(size=(N_STATES, N_ACTIONS))
+    tables, queues, generators = [start.copy(), start.copy()], [], []
+    for _ in range(2):
+        queue = make_heap(N_STATES * N_ACTIONS)
+        for key in model.visited_pairs()[::7].tolist():
+            heap_push(queue, int(key), 1.0 + key % 5)  # equal priorities: order by heap layout
+        queues.append(queue)
+        generators.append(np.random.default_rng(8))
+    fast = prioritized_sweeping(
+        tables[0], model.arrays, queues[0], 400, 1e-3, 0.5, 0.9, mode, generators[0]
+    )
+    assert fast == reference_sweeping(tables[1], model, queues[1], 400, mode, generators[1])
+    assert fast == 400
+    np.testing.assert_array_equal(tables[0], tables[1])
+    assert not np.array_equal(tables[0], start)
+    size = int(queues[0].size[0])
+    assert size == int(queues[1].size[0]) > 0
+    for name in ("item", "priority"):
+        np.testing.assert_array_equal(
+            getattr(queues[0], name)[:size], getattr(queues[1], name)[:size]
+        )
+    assert generators[0].random() == generators[1].random()  # the same number of draws

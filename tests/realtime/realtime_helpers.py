@@ -15,11 +15,17 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from skidnav.realtime import protocol as pr
-from skidnav.realtime.sim_robot import SimRobotConfig, build_robot, warm_up
-from skidnav.realtime.sim_server import EventLog, ServerOptions, SimServer, bind_listener
+from skidnav.realtime.config import ServerOptions
+from skidnav.realtime.records import EventLog
+from skidnav.realtime.sim_robot import SimRobot, SimRobotConfig, build_robot, warm_up
+from skidnav.realtime.sim_server import SimServer, bind_listener
+from skidnav.robot.params import RobotParams
+from skidnav.robot.slip import make_slip_field
+from skidnav.world.discretization import Discretization
 
 SRC = str(Path(__file__).resolve().parents[2] / "src")
 
@@ -56,7 +62,8 @@ def wait_for(predicate: Callable[[], bool], timeout: float, what: str) -> None:
 
 class ServerThread:
     """A :class:`SimServer` serving TCP on a loopback port (a free one by default) in a
-    background thread, optionally logging to ``log`` and injecting ``faults``."""
+    background thread, optionally logging to ``log``, injecting ``faults``, with other
+    :class:`ServerOptions` from ``options``."""
 
     def __init__(
         self,
@@ -66,6 +73,7 @@ class ServerThread:
         faults: tuple[str, ...] = (),
         map_spec: str = "free",
         port: int = 0,
+        options: dict[str, Any] | None = None,
         **robot_options: Any,
     ) -> None:
         config = SimRobotConfig(**robot_options)
@@ -75,8 +83,8 @@ class ServerThread:
         warm_up(self.robot)
         self.log = log
         self._stream = log.open("a", encoding="utf-8") if log else None
-        options = ServerOptions(time_scale=time_scale, faults=faults)
-        self.server = SimServer(self.robot, options, EventLog(self._stream))
+        settings = ServerOptions(time_scale=time_scale, faults=faults, **(options or {}))
+        self.server = SimServer(self.robot, settings, EventLog(self._stream))
         self.listener = bind_listener("127.0.0.1", port)
         self.port = int(self.listener.getsockname()[1])
         self.thread = threading.Thread(target=self.server.serve_tcp, args=(self.listener,))
@@ -110,6 +118,20 @@ class RawClient:
         self.sock.sendall(pr.encode(build(seq)))
         self.seq += 1
         return seq
+
+    def command(self, left: float, right: float, *, ttl: float = 1.0, age: float = 0.0) -> int:
+        """Send a ``cmd`` stamped ``age`` seconds ago on this machine's monotonic clock."""
+        stamp = time.monotonic() - age
+        return self.send(
+            lambda s: pr.Command(seq=s, omega_left=left, omega_right=right, stamp=stamp, ttl=ttl)
+        )
+
+    def hello(self) -> pr.Hello:
+        """Shake hands; the robot's ``hello``."""
+        self.send(lambda seq: pr.Hello(seq=seq, name="test"))
+        reply = self.receive_until(pr.Hello)
+        assert isinstance(reply, pr.Hello)
+        return reply
 
     def receive_until(self, kind: type[pr.Message], timeout: float = 2.0) -> pr.Message:
         """The next message of type ``kind`` (others are skipped)."""
@@ -186,3 +208,20 @@ def write_config(tmp_path: Path, text: str) -> Path:
     path = tmp_path / "realtime.toml"
     path.write_text(text, encoding="utf-8")
     return path
+
+
+def bench_robot(slip: str = "rough", slip_free: bool = False) -> SimRobot:
+    """A simulated robot at (0.3 m, 0.25 m, heading 0) on ``slip`` (no slip at all when
+    ``slip_free``), without a server: for tests of the firmware on its own."""
+    field = make_slip_field(slip, np.random.default_rng(0))
+    if slip_free:
+        field = type(field)(eta=np.zeros((7, 7)), x_icr=field.x_icr)
+    return SimRobot(
+        RobotParams(),
+        field,
+        None,
+        Discretization(),
+        SimRobotConfig(),
+        np.random.default_rng(1),
+        (0.3, 0.25, 0.0),
+    )

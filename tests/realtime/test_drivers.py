@@ -23,6 +23,8 @@ def test_line_drivers_take_their_tables() -> None:
     serial = make_driver("serial", config)
     assert isinstance(serial, LineClient) and isinstance(serial.link, SerialLink)
     assert (serial.link.url, serial.link.baudrate) == ("loop://", 9600)
+    # every command is valid for as long as the host waits for a pose before tripping
+    assert tcp.command_ttl == serial.command_ttl == config.run.pose_timeout
 
 
 def test_sim_driver_passes_the_run_to_the_server() -> None:

@@ -12,6 +12,7 @@ from realtime_helpers import ServerThread, wait_for
 
 from skidnav.realtime import protocol as pr
 from skidnav.realtime.line_client import LineClient, SerialLink, TcpLink
+from skidnav.realtime.safety import SafetyLimits, SafetyMonitor
 from skidnav.realtime.sim_server import FdChannel
 
 
@@ -104,3 +105,101 @@ def test_serial_client_over_a_pty_pair() -> None:
             server.shutdown.set()
             thread.join(timeout=5)
             os.close(slave)
+
+
+class ScriptedRobot:
+    """A robot on a loopback socket that answers ``hello``, sends ``lines`` once, and answers
+    each ``stop`` with ``stopped`` once ``answer_after`` seconds have passed since the first
+    (never, if None). Counts the stops it read."""
+
+    def __init__(self, lines: list[bytes], answer_after: float | None = 0.0) -> None:
+        self.lines, self.answer_after = lines, answer_after
+        self.stops = 0
+        self.listener = socket.create_server(("127.0.0.1", 0))
+        self.port = self.listener.getsockname()[1]
+        self.done = threading.Event()
+        self.thread = threading.Thread(target=self._serve)
+        self.thread.start()
+
+    def _serve(self) -> None:
+        conn, _ = self.listener.accept()
+        conn.settimeout(0.01)
+        buffer, first_stop, seq = pr.LineBuffer(), None, 0
+        with conn:
+            while not self.done.is_set():
+                try:
+                    data = conn.recv(4096)
+                except TimeoutError:
+                    continue
+                if not data:
+                    return
+                buffer.feed(data)
+                for line in buffer.lines():
+                    message = pr.decode(line)
+                    replies: list[bytes] = []
+                    if isinstance(message, pr.Hello):
+                        replies = [pr.encode(pr.Hello(seq=0, name="scripted", period=0.1))]
+                        replies += self.lines
+                    elif isinstance(message, pr.Stop):
+                        self.stops += 1
+                        first_stop = first_stop or time.monotonic()
+                        late = time.monotonic() - first_stop
+                        if self.answer_after is not None and late >= self.answer_after:
+                            seq += 1
+                            replies = [pr.encode(pr.Stopped(seq=seq, ack=message.seq))]
+                    for reply in replies:
+                        conn.sendall(reply)
+
+    def close(self) -> None:
+        self.done.set()
+        self.thread.join(timeout=5)
+        self.listener.close()
+
+
+HUGE_POSE = (
+    b'{"v":2,"type":"pose","seq":1,"stamp":0.1,"x":' + b"9" * 400 + b',"y":0.2,"heading":0}\n'
+)
+
+
+def test_a_malformed_line_trips_and_the_reader_still_confirms_the_stop() -> None:
+    robot = ScriptedRobot([HUGE_POSE])
+    client = LineClient(TcpLink("127.0.0.1", robot.port))
+    monitor = SafetyMonitor(client, SafetyLimits(pose_timeout=5.0, check_interval=0.005))
+    monitor.start()
+    try:
+        client.connect()
+        wait_for(monitor.stop_done.is_set, 5.0, "the emergency stop")
+        assert monitor.reason is not None and monitor.reason.startswith("malformed message")
+        assert monitor.stop_confirmed  # the reader lived on to read the robot's stopped
+        assert client._thread is not None and client._thread.is_alive()
+    finally:
+        monitor.close()
+        client.close()
+        robot.close()
+
+
+def test_the_stop_is_resent_until_a_stalled_robot_confirms() -> None:
+    robot = ScriptedRobot([], answer_after=0.3)
+    client = LineClient(TcpLink("127.0.0.1", robot.port), stop_timeout=0.05, dead_timeout=5.0)
+    try:
+        client.connect()
+        started = time.monotonic()
+        assert client.stop() is True
+        assert time.monotonic() - started >= 0.3
+        assert robot.stops >= 3  # re-sent every stop_timeout / 2 meanwhile
+    finally:
+        client.close()
+        robot.close()
+
+
+def test_the_stop_gives_up_once_the_robot_is_silent_for_the_dead_timeout() -> None:
+    robot = ScriptedRobot([], answer_after=None)
+    client = LineClient(TcpLink("127.0.0.1", robot.port), stop_timeout=0.05, dead_timeout=0.3)
+    try:
+        client.connect()
+        started = time.monotonic()
+        assert client.stop() is False
+        assert 0.3 <= time.monotonic() - started < 3.0
+    finally:
+        client.close()
+        robot.close()

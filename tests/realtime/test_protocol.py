@@ -14,7 +14,7 @@ from skidnav.realtime import protocol as pr
 EXAMPLES = [
     pr.Hello(seq=0, name="skidnav"),
     pr.Hello(seq=1, name="robot-7", period=0.1),
-    pr.Command(seq=2, omega_left=1.7, omega_right=-1.7),
+    pr.Command(seq=2, omega_left=1.7, omega_right=-1.7, stamp=812.5, ttl=0.1),
     pr.Ack(seq=3, ack=2),
     pr.PoseReport(seq=4, stamp=12.5, x=0.31, y=0.2, heading=-3.0),
     pr.Stop(seq=5),
@@ -33,10 +33,20 @@ def test_every_message_round_trips(message: pr.Message) -> None:
     assert body["v"] == pr.PROTOCOL_VERSION and body["type"] == message.TYPE
 
 
+CMD = '{"v":2,"type":"cmd","seq":1,"stamp":5,"ttl":0.5,'
+
+
 def test_integers_are_accepted_as_floats() -> None:
-    message = pr.decode(b'{"v":1,"type":"cmd","seq":1,"omega_left":0,"omega_right":2}')
-    assert message == pr.Command(seq=1, omega_left=0.0, omega_right=2.0)
+    message = pr.decode((CMD + '"omega_left":0,"omega_right":2}').encode())
+    assert message == pr.Command(seq=1, omega_left=0.0, omega_right=2.0, stamp=5.0, ttl=0.5)
     assert isinstance(message, pr.Command) and isinstance(message.omega_left, float)
+
+
+def test_version_1_lines_are_refused_naming_both_versions() -> None:
+    with pytest.raises(pr.ProtocolError) as caught:
+        pr.decode(b'{"v":1,"type":"cmd","seq":1,"omega_left":0,"omega_right":2}')
+    assert caught.value.code == "version"
+    assert str(caught.value) == "expected protocol version 2, got 1"
 
 
 @pytest.mark.parametrize(
@@ -45,21 +55,27 @@ def test_integers_are_accepted_as_floats() -> None:
         (b"\xff\xfe{}", "encoding"),
         (b"not json", "json"),
         (b"[1, 2]", "json"),
-        (b'{"v":1,"type":"stop","seq":1', "json"),
-        (b'{"v":2,"type":"stop","seq":1}', "version"),
+        (b'{"v":2,"type":"stop","seq":1', "json"),
+        (b'{"v":1,"type":"stop","seq":1}', "version"),
+        (b'{"v":2.0,"type":"stop","seq":1}', "version"),
         (b'{"v":true,"type":"stop","seq":1}', "version"),
         (b'{"type":"stop","seq":1}', "version"),
-        (b'{"v":1,"type":"fly","seq":1}', "unknown_type"),
-        (b'{"v":1,"type":7,"seq":1}', "unknown_type"),
-        (b'{"v":1,"type":"stop"}', "field"),
-        (b'{"v":1,"type":"stop","seq":-1}', "field"),
-        (b'{"v":1,"type":"stop","seq":1.5}', "field"),
-        (b'{"v":1,"type":"cmd","seq":1,"omega_left":1}', "field"),
-        (b'{"v":1,"type":"cmd","seq":1,"omega_left":true,"omega_right":1}', "field"),
-        (b'{"v":1,"type":"cmd","seq":1,"omega_left":NaN,"omega_right":1}', "json"),
-        (b'{"v":1,"type":"cmd","seq":1,"omega_left":1e999,"omega_right":1}', "field"),
-        (b'{"v":1,"type":"cmd","seq":1,"omega_left":"1","omega_right":1}', "field"),
-        (b'{"v":1,"type":"error","seq":1,"code":3,"message":"x"}', "field"),
+        (b'{"v":2,"type":"fly","seq":1}', "unknown_type"),
+        (b'{"v":2,"type":7,"seq":1}', "unknown_type"),
+        (b'{"v":2,"type":"stop"}', "field"),
+        (b'{"v":2,"type":"stop","seq":-1}', "field"),
+        (b'{"v":2,"type":"stop","seq":1.5}', "field"),
+        (b'{"v":2,"type":"stop","seq":9223372036854775808}', "field"),
+        ((CMD + '"omega_left":1}').encode(), "field"),
+        ((CMD + '"omega_left":true,"omega_right":1}').encode(), "field"),
+        ((CMD + '"omega_left":NaN,"omega_right":1}').encode(), "json"),
+        ((CMD + '"omega_left":1e999,"omega_right":1}').encode(), "field"),
+        ((CMD + '"omega_left":' + "9" * 400 + ',"omega_right":1}').encode(), "field"),
+        ((CMD + '"omega_left":"1","omega_right":1}').encode(), "field"),
+        (b'{"v":2,"type":"cmd","seq":1,"omega_left":0,"omega_right":0}', "field"),
+        (b'{"v":2,"type":"cmd","seq":1,"stamp":0,"ttl":0,"omega_left":0,"omega_right":0}', "field"),
+        (b'{"v":2,"type":"error","seq":1,"code":3,"message":"x"}', "field"),
+        (b'{"v":2,"type":"error","seq":1,"code":"\\ud800","message":"x"}', "field"),
         (b"[" * 1000, "json"),
         (b"{" + b" " * pr.MAX_LINE_BYTES + b"}", "oversized"),
     ],
@@ -75,7 +91,7 @@ def test_encode_refuses_oversized_and_non_finite() -> None:
         pr.encode(pr.Error(seq=0, code="x", message="m" * pr.MAX_LINE_BYTES))
     assert caught.value.code == "oversized"
     with pytest.raises(pr.ProtocolError):
-        pr.encode(pr.Command(seq=0, omega_left=float("nan"), omega_right=0.0))
+        pr.encode(pr.Command(seq=0, omega_left=float("nan"), omega_right=0.0, stamp=0, ttl=1))
 
 
 def test_line_buffer_joins_split_lines_and_resyncs_after_oversized() -> None:

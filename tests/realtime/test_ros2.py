@@ -20,9 +20,8 @@ from typing import Any
 import pytest
 from websockets.asyncio.server import ServerConnection, serve
 
-from skidnav.realtime.ros2 import (
-    Ros2Config,
-    Ros2Driver,
+from skidnav.realtime.ros2 import Ros2Config, Ros2Driver
+from skidnav.realtime.ros2_messages import (
     compose,
     heading_from_quaternion,
     pose_from_message,
@@ -130,23 +129,32 @@ def server():
 TOPIC_NUMBERS = itertools.count()
 
 
-def make_driver(server: RosbridgeStub, **kwargs: Any) -> Ros2Driver:
-    """A connected driver on topics no other test uses (the stub is shared by the module)."""
+def make_driver(
+    server: RosbridgeStub,
+    *,
+    monotonic: Callable[[], float] = time.monotonic,
+    wall_clock: Callable[[], float] = time.time,
+    **kwargs: Any,
+) -> Ros2Driver:
+    """A connected driver on topics no other test uses (the stub is shared by the module), with
+    the given monotonic and wall clocks and config fields; waits until it has subscribed."""
     number = next(TOPIC_NUMBERS)
     topics = {"cmd_vel_topic": f"/cmd_vel_{number}", "pose_topic": f"/odom_{number}"}
     config = Ros2Config(port=server.port, connect_timeout=5.0, **{**topics, **kwargs})
-    driver = Ros2Driver(config, PARAMS)
+    driver = Ros2Driver(config, PARAMS, clock=monotonic, wall_clock=wall_clock)
     driver.connect()
+    wait_for(lambda: server.ops("subscribe", config.pose_topic))
     return driver
 
 
-def odometry(x: float, y: float, heading: float) -> dict[str, Any]:
+def odometry(x: float, y: float, heading: float, stamp: tuple[int, int] = (0, 0)) -> dict[str, Any]:
+    """A ``nav_msgs/Odometry`` dict at (x [m], y [m], heading [rad]), stamped (sec, nanosec)."""
     pose = {
         "position": {"x": x, "y": y, "z": 0.0},
         "orientation": {"x": 0.0, "y": 0.0, "z": math.sin(heading / 2), "w": math.cos(heading / 2)},
     }
     return {
-        "header": {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": "odom"},
+        "header": {"stamp": {"sec": stamp[0], "nanosec": stamp[1]}, "frame_id": "odom"},
         "child_frame_id": "base_link",
         "pose": {"pose": pose, "covariance": [0.0] * 36},
         "twist": {"twist": {}, "covariance": [0.0] * 36},
@@ -158,8 +166,8 @@ def pose_stamped(x: float, y: float, heading: float) -> dict[str, Any]:
 
 
 @pytest.mark.parametrize(("left", "right"), [(1.7, 1.7), (-1.7, 1.7), (1.7, -1.7), (0.5, 1.2)])
-def test_wheel_speeds_reach_the_server_as_twists(server, left, right) -> None:
-    driver = make_driver(server)
+def test_wheel_speeds_reach_the_server_as_unstamped_twists_for_humble(server, left, right) -> None:
+    driver = make_driver(server, distro="humble")
     topic = driver.config.cmd_vel_topic
     try:
         driver.command(left, right)
@@ -167,6 +175,7 @@ def test_wheel_speeds_reach_the_server_as_twists(server, left, right) -> None:
     finally:
         driver.close()
     r, c = PARAMS.wheel_radius, PARAMS.half_track
+    assert set(message) == {"linear", "angular"}  # a bare Twist: no header
     assert message["linear"]["x"] == pytest.approx(r * (right + left) / 2)
     assert message["angular"]["z"] == pytest.approx(r * (right - left) / (2 * c))
     assert message["linear"]["y"] == message["angular"]["x"] == 0.0
@@ -184,8 +193,7 @@ def test_published_poses_reach_latest_pose(server, topic, pose_type, make_messag
     driver = make_driver(server, pose_topic=topic, pose_type=pose_type)
     try:
         assert driver.latest_pose() is None
-        subscribed = wait_for(lambda: server.ops("subscribe", topic))
-        assert subscribed[0]["type"] == pose_type
+        assert server.ops("subscribe", topic)[0]["type"] == pose_type
         before = time.monotonic()
         for x, y, heading in [(0.1, 0.2, 0.3), (0.31, 0.22, -2.9)]:
             server.publish(topic, make_message(x, y, heading))
@@ -199,7 +207,6 @@ def test_published_poses_reach_latest_pose(server, topic, pose_type, make_messag
 def test_frame_offset_places_odometry_in_the_arena(server) -> None:
     driver = make_driver(server, frame_offset=(0.1, 0.05, math.pi / 2))
     try:
-        wait_for(lambda: server.ops("subscribe", driver.config.pose_topic))
         server.publish(driver.config.pose_topic, odometry(0.2, 0.0, 0.0))
         pose = wait_for(driver.latest_pose)
     finally:
@@ -207,11 +214,12 @@ def test_frame_offset_places_odometry_in_the_arena(server) -> None:
     assert (pose.x, pose.y, pose.heading) == pytest.approx((0.1, 0.25, math.pi / 2))
 
 
-def test_malformed_pose_messages_are_ignored(server) -> None:
+def test_malformed_pose_messages_are_refused_and_trip(server) -> None:
     driver = make_driver(server)
+    reasons: list[str] = []
+    driver.on_fault = reasons.append
     try:
         topic = driver.config.pose_topic
-        wait_for(lambda: server.ops("subscribe", topic))
         server.publish(topic, odometry(0.4, 0.3, 1.0))
         good = wait_for(driver.latest_pose)
         server.publish(topic, {"pose": {"position": {}}})
@@ -220,6 +228,8 @@ def test_malformed_pose_messages_are_ignored(server) -> None:
         server.publish(topic, bad)
         wait_for(lambda: driver.malformed_messages == 2)
         assert driver.latest_pose() == good
+        assert "missing field pose.pose" in reasons[0] and "quaternion" in reasons[1]
+        assert driver.fault == reasons[0]
     finally:
         driver.close()
 
@@ -231,16 +241,17 @@ def test_stop_sends_zero_twist_and_close_stops_then_disconnects(server) -> None:
     assert driver.stop() is True
     # stop() returns once sent: the zero twist is on the wire, so it arrives without a new send.
     sent = wait_for(lambda: len(server.ops("publish", topic)) == 2 and server.ops("publish", topic))
-    assert sent[0]["msg"]["linear"]["x"] > 0
-    assert sent[1]["msg"] == wheel_speeds_to_twist(0.0, 0.0, PARAMS)
+    zero = wheel_speeds_to_twist(0.0, 0.0, PARAMS)
+    assert sent[0]["msg"]["twist"]["linear"]["x"] > 0
+    assert sent[1]["msg"]["twist"] == zero  # Jazzy by default: TwistStamped
     driver.command(-1.7, 1.7)
     driver.close()
     assert not driver.connected and driver.stop() is False
     wait_for(lambda: server.closed == server.opened)
     sent = server.ops("publish", topic)
     assert len(sent) == 4
-    assert sent[2]["msg"]["angular"]["z"] > 0
-    assert sent[3]["msg"] == wheel_speeds_to_twist(0.0, 0.0, PARAMS)
+    assert sent[2]["msg"]["twist"]["angular"]["z"] > 0
+    assert sent[3]["msg"]["twist"] == zero
     assert server.ops("unadvertise", topic) and server.ops("unsubscribe", driver.config.pose_topic)
     with pytest.raises(ConnectionError, match="not connected"):
         driver.command(1.0, 1.0)

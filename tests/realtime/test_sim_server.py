@@ -90,10 +90,7 @@ def test_build_robot_starts_on_the_map_start() -> None:
 
 
 def handshake(client: RawClient) -> pr.Hello:
-    client.send(lambda seq: pr.Hello(seq=seq, name="test"))
-    reply = client.receive_until(pr.Hello)
-    assert isinstance(reply, pr.Hello)
-    return reply
+    return client.hello()
 
 
 def test_server_handshake_command_ack_pose_and_stop(server_thread: ServerThread) -> None:
@@ -101,7 +98,7 @@ def test_server_handshake_command_ack_pose_and_stop(server_thread: ServerThread)
     assert handshake(client).period == pytest.approx(0.1)
     first = client.receive_until(pr.PoseReport)
     assert isinstance(first, pr.PoseReport)
-    seq = client.send(lambda s: pr.Command(seq=s, omega_left=-1.7, omega_right=-1.7))
+    seq = client.command(-1.7, -1.7)
     ack = client.receive_until(pr.Ack)
     assert isinstance(ack, pr.Ack) and ack.ack == seq
     time.sleep(0.15)  # 1.5 s of robot time at time scale 10
@@ -115,14 +112,14 @@ def test_server_handshake_command_ack_pose_and_stop(server_thread: ServerThread)
 
 
 @pytest.mark.parametrize(
-    "junk", [b"\x00\xffgarbage\n", b"{" + b"x" * 5000 + b"}\n", b'{"v":1,"type":"cmd","seq":1}\n']
+    "junk", [b"\x00\xffgarbage\n", b"{" + b"x" * 5000 + b"}\n", b'{"v":2,"type":"cmd","seq":1}\n']
 )
 def test_server_answers_junk_with_error_stops_and_keeps_serving(
     server_thread: ServerThread, junk: bytes
 ) -> None:
     client = RawClient(server_thread.port)
     handshake(client)
-    client.send(lambda s: pr.Command(seq=s, omega_left=1.7, omega_right=1.7))
+    client.command(1.7, 1.7)
     client.receive_until(pr.Ack)
     client.sock.sendall(junk)
     assert isinstance(client.receive_until(pr.Error), pr.Error)
@@ -135,7 +132,7 @@ def test_server_answers_junk_with_error_stops_and_keeps_serving(
 
 def test_server_requires_hello_and_refuses_a_second_client(server_thread: ServerThread) -> None:
     client = RawClient(server_thread.port)
-    client.send(lambda s: pr.Command(seq=s, omega_left=1.0, omega_right=1.0))
+    client.command(1.0, 1.0)
     error = client.receive_until(pr.Error)
     assert isinstance(error, pr.Error) and error.code == "state"
     other = RawClient(server_thread.port)
@@ -150,13 +147,12 @@ def test_server_requires_hello_and_refuses_a_second_client(server_thread: Server
 
 
 def test_server_stops_the_wheels_when_the_client_goes_quiet() -> None:
-    with ServerThread(time_scale=10.0) as server:
-        server.server.options = type(server.server.options)(time_scale=10.0, link_timeout=0.1)
+    with ServerThread(time_scale=10.0, options={"link_timeout": 0.1}) as server:
         client = RawClient(server.port)
         handshake(client)
-        client.send(lambda s: pr.Command(seq=s, omega_left=1.7, omega_right=1.7))
+        client.command(1.7, 1.7)
         client.receive_until(pr.Ack)
-        assert server.robot.wheels != (0.0, 0.0) or server.robot._queue
+        assert server.robot.moving
         time.sleep(0.3)
         assert server.robot.wheels == (0.0, 0.0)
         client.close()

@@ -5,7 +5,14 @@ import pytest
 
 from skidnav.errors import UserError
 from skidnav.world.grid import GridMap, generate_map
-from skidnav.world.mapfile import MapFileError, format_map, load_map, parse_map, save_map
+from skidnav.world.mapfile import (
+    MAX_MAP_BYTES,
+    MapFileError,
+    format_map,
+    load_map,
+    parse_map,
+    save_map,
+)
 
 SMALL = """skidnav-map 1
 # a small test arena
@@ -119,3 +126,60 @@ def test_grid_map_validation():
     with pytest.raises(ValueError, match="goal off the last column and the top row"):
         GridMap(occupancy, start=(1, 1), goal=(1, 4))
     assert GridMap(occupancy, start=(3, 3), goal=(0, 0)).start == (3, 3)
+
+
+def test_errors_quote_at_most_a_short_escaped_excerpt_of_the_file(tmp_path):
+    secret = "TOKEN=" + "s" * 200
+    path = tmp_path / "environ"
+    path.write_bytes(f"PATH=/usr/bin\0HOME=/root\0{secret}\0".encode())
+    with pytest.raises(MapFileError) as caught:
+        load_map(path)
+    message = str(caught.value)
+    assert message == (
+        f"{path}:1: expected first line 'skidnav-map 1', got "
+        "'PATH=/usr/bin\\x00HOME=/root\\x00TOKEN=sssssssss'…"  # 40 characters
+    )
+    with pytest.raises(MapFileError, match=r"got 'wide\\tgarbage'$"):
+        parse_map("skidnav-map 1\nwide\tgarbage\nmap\n", "f.txt")
+
+
+def test_map_files_longer_than_the_limit_are_refused_without_reading_them_whole(tmp_path):
+    path = tmp_path / "huge.txt"
+    path.write_text(SMALL + "# " + "x" * MAX_MAP_BYTES)
+    with pytest.raises(MapFileError, match=f"map file larger than {MAX_MAP_BYTES:,} bytes"):
+        load_map(path)
+    with pytest.raises(MapFileError, match="map file larger than"):
+        load_map("/dev/zero")
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"max_tries": 10**12}, r"max_tries to be an integer in \[1, 10,000\], got 1000000000000"),
+        ({"max_tries": 0}, "max_tries to be an integer"),
+        ({"max_tries": 2.5}, "max_tries to be an integer"),
+        ({"max_tries": True}, "max_tries to be an integer"),
+        ({"shape": (10**6, 25)}, r"each side of shape to be an integer in \[3, 1,000\]"),
+        ({"shape": (25,)}, "expected shape to be two integers"),
+        ({"min_distance": 0}, "min_distance to be an integer"),
+        ({"min_distance": 10**9}, "min_distance to be an integer in"),
+    ],
+)
+def test_generation_options_are_bounded(options, message):
+    with pytest.raises(ValueError, match=message):
+        generate_map("obstacles", np.random.default_rng(0), **options)
+
+
+def test_a_config_map_option_out_of_range_is_one_line(tmp_path, capsys):
+    from skidnav.cli import main
+
+    config = tmp_path / "c.toml"
+    config.write_text(
+        '[experiment]\nname = "x"\nepisodes = 2\n[[maps]]\nkind = "free"\n'
+        "options = { max_tries = 1000000000000000 }\n"
+        '[[agents]]\nname = "q-learning"\n'
+    )
+    assert main(["run", str(config), "--out", str(tmp_path / "out")]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "max_tries to be an integer in [1, 10,000]" in lines[0]
+    assert not (tmp_path / "out").exists()

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from skidnav.kernels.multinomial import PLANNING_MODES
+from skidnav.savedfile import shown
 
 MAX_PLANNING_STEPS = 10_000_000
 """Most planning updates per real step (10 M: about a second of compiled planning)."""
@@ -31,7 +32,7 @@ C = TypeVar("C", bound="QLearningConfig")
 
 def _check(condition: bool, expected: str, value: object) -> None:
     if not condition:
-        raise ValueError(f"expected {expected}, got {value!r}")
+        raise ValueError(f"expected {expected}, got {shown(value)}")
 
 
 @dataclass(frozen=True)
@@ -67,11 +68,15 @@ class QLearningConfig:
 
     @classmethod
     def from_mapping(cls: type[C], values: Mapping[str, Any]) -> C:
-        """Build from a mapping (e.g. a TOML table); unknown keys raise ValueError."""
+        """Build from a mapping (e.g. a TOML table or a saved agent's JSON); unknown keys raise
+        ValueError. Messages quote at most :data:`~skidnav.errors.EXCERPT_CHARS` characters of a
+        value or key (:func:`~skidnav.savedfile.shown`)."""
         known = {field.name for field in dataclasses.fields(cls)}
         unknown = sorted(set(values) - known)
         if unknown:
-            raise ValueError(f"expected options among {sorted(known)}, got unknown {unknown}")
+            raise ValueError(
+                f"expected options among {sorted(known)}, got unknown {shown(unknown)}"
+            )
         return cls(**dict(values))
 
 

@@ -24,8 +24,10 @@ from typing import Any, ClassVar
 import numpy as np
 
 from skidnav.agents.config import QLearningConfig
+from skidnav.atomicfile import write_atomic, write_npz_atomic
 from skidnav.errors import CorruptFileError
 from skidnav.kernels.tabular import epsilon_at, epsilon_greedy, greedy_first
+from skidnav.savedfile import shown
 
 logger = logging.getLogger(__name__)
 
@@ -47,15 +49,22 @@ def generator_state(rng: np.random.Generator) -> dict[str, Any]:
 
 
 def generator_from_state(state: Mapping[str, Any]) -> np.random.Generator:
-    """A generator restored from :func:`generator_state`; ValueError if unusable."""
+    """A generator restored from :func:`generator_state`; ValueError if unusable (the message
+    quotes at most :data:`~skidnav.errors.EXCERPT_CHARS` characters of the saved state)."""
     name = state.get("bit_generator")
     bit_generator_class = getattr(np.random, str(name), None)
     if not isinstance(bit_generator_class, type) or not issubclass(
         bit_generator_class, np.random.BitGenerator
     ):
-        raise ValueError(f"unknown bit generator {name!r}")
+        raise ValueError(f"unknown bit generator {shown(name)}")
     bit_generator = bit_generator_class()
-    bit_generator.state = dict(state)
+    try:
+        bit_generator.state = dict(state)
+    except (ValueError, TypeError, OverflowError, IndexError) as error:
+        # NumPy's messages may quote the saved values whole: name only the kind of problem.
+        raise ValueError(
+            f"unusable {bit_generator_class.__name__} state ({type(error).__name__})"
+        ) from None
     return np.random.Generator(bit_generator)
 
 
@@ -149,10 +158,12 @@ class TabularAgent:
 
     def save(self, path: str | Path) -> tuple[Path, Path]:
         """Write ``path.npz`` (Q and model arrays) and ``path.json`` (name, config, counters,
-        generator state); returns both paths."""
+        generator state), each atomically (:func:`~skidnav.atomicfile.write_npz_atomic`,
+        :func:`~skidnav.atomicfile.write_atomic`): a failure or a kill leaves the old file, never
+        a torn one. Returns both paths."""
         npz_path, json_path = save_paths(path)
         npz_path.parent.mkdir(parents=True, exist_ok=True)
-        np.savez_compressed(npz_path, q=self.q, **self._state_arrays())  # type: ignore[arg-type]
+        write_npz_atomic(npz_path, {"q": self.q, **self._state_arrays()}, compress=True)
         meta = {
             "format": SAVE_FORMAT,
             "version": SAVE_VERSION,
@@ -167,7 +178,7 @@ class TabularAgent:
             },
             "rng": generator_state(self.rng),
         }
-        json_path.write_text(json.dumps(meta, indent=1))
+        write_atomic(json_path, json.dumps(meta, indent=1).encode("utf-8"))
         logger.info("saved agent %s to %s", self.name, npz_path)
         return npz_path, json_path
 
@@ -186,7 +197,9 @@ class TabularAgent:
         for name in ("steps", "episodes", "planning_updates"):
             value = counters[name]
             if not isinstance(value, int) or value < 0:
-                raise CorruptFileError(f"saved counter {name} is {value!r}, expected an int >= 0")
+                raise CorruptFileError(
+                    f"saved counter {name} is {shown(value)}, expected an int >= 0"
+                )
             setattr(self, name, value)
         self.rng = generator_from_state(rng_state)
         self._restore_state_arrays(arrays)

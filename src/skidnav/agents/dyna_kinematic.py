@@ -314,7 +314,9 @@ class ModelBasedAgent(DynaQAgent):
 
     def _restore_state_arrays(self, arrays: Mapping[str, np.ndarray]) -> None:
         super()._restore_state_arrays(arrays)
-        self._set_geometry(*_geometry_from_array(arrays["geometry"]))
+        robot, grid = geometry_from_array(arrays["geometry"])
+        self._check_saved_geometry(grid, arrays)
+        self._set_geometry(robot, grid)
         planner = self.planner
         for name in ("walls", "goals", "stale", "reward_stats", "counters"):
             saved = np.asarray(arrays[f"planner_{name}"])
@@ -341,6 +343,33 @@ class ModelBasedAgent(DynaQAgent):
         if self.kinematic is not None:
             self.kinematic.load_arrays(dict(arrays))
             self._refresh_table()
+
+    def _check_saved_geometry(
+        self, grid: Discretization | None, arrays: Mapping[str, np.ndarray]
+    ) -> None:
+        """ValueError unless the saved arrays have the shapes the saved geometry implies, checked
+        before :meth:`_set_geometry` allocates them: a geometry cannot ask for more memory than
+        the file holds (cells: the planner's walls; slip regions: its reward statistics and the
+        kinematic model's data, present exactly when this agent keeps one on a geometry)."""
+        expected: dict[str, tuple[int, ...] | None] = {"kinematic_data": None}
+        if grid is not None:
+            config: Any = self.config  # has kinematic_config() when uses_kinematic
+            expected = {
+                "planner_walls": (grid.n_x, grid.n_y),
+                "planner_reward_stats": (grid.n_regions + 2, 2),
+                "kinematic_data": (
+                    (grid.n_regions, config.kinematic_config().window, 5)
+                    if self.uses_kinematic
+                    else None
+                ),
+            }
+        for name, shape in expected.items():
+            saved = np.shape(arrays[name]) if name in arrays else None
+            if saved != shape:
+                raise ValueError(
+                    f"saved {name} of shape {saved} disagrees with the saved geometry "
+                    f"(expected {shape})"
+                )
 
 
 def _saved_keys(arrays: Mapping[str, np.ndarray], name: str, n_keys: int) -> np.ndarray:
@@ -399,7 +428,10 @@ def _geometry_array(robot: RobotParams, grid: Discretization | None) -> np.ndarr
     return np.array([*values, grid.arena_width, grid.arena_height])
 
 
-def _geometry_from_array(values: np.ndarray) -> tuple[RobotParams, Discretization | None]:
+def geometry_from_array(values: np.ndarray) -> tuple[RobotParams, Discretization | None]:
+    """The robot and discretization (None: no geometry) of a saved ``geometry`` array, float64
+    (19,) as :meth:`ModelBasedAgent._state_arrays` writes it; ValueError if it is not one (the
+    dataclasses validate every field)."""
     values = np.asarray(values, dtype=np.float64)
     if values.shape != (19,):
         raise ValueError(f"expected a geometry of 19 values, got shape {values.shape}")

@@ -14,18 +14,16 @@ names to module paths and imports a module only when its agent is asked for.
 from __future__ import annotations
 
 import importlib
-import json
-import zipfile
-import zlib
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from skidnav.agents.config import QLearningConfig
 from skidnav.agents.core import SAVE_FORMAT, SAVE_VERSION, TabularAgent, save_paths
-from skidnav.errors import CorruptFileError, UserError
+from skidnav.errors import CorruptFileError, UserError, first_line
+from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, read_json, shown, up_to
 
 AGENT_MODULES: dict[str, str] = {
     "q-learning": "skidnav.agents.q_learning",
@@ -44,7 +42,7 @@ def agent_class(name: str) -> type[TabularAgent]:
     """The agent class registered as ``name``; UserError if unknown or not installed."""
     module_name = AGENT_MODULES.get(name)
     if module_name is None:
-        raise UserError(f"unknown agent {name!r}; expected one of {', '.join(AGENT_MODULES)}")
+        raise UserError(f"unknown agent {shown(name)}; expected one of {', '.join(AGENT_MODULES)}")
     try:
         module = importlib.import_module(module_name)
     except ModuleNotFoundError as error:
@@ -104,54 +102,145 @@ def make_agent(
     return cls(n_states, n_actions, make_config(name, config), rng, **context)
 
 
+MAX_TABLE_ENTRIES = 2**26
+"""Largest Q table a saved agent may declare, n_states × n_actions (512 MiB of float64; the
+thesis arena has 12,500 × 4)."""
+MAX_COUNTER = 2**62
+"""Largest step, episode or planning-update count a saved agent may declare."""
+MAX_AGENT_JSON_BYTES = 2**20
+"""Largest ``.json`` of a saved agent [bytes] (they are a few kilobytes)."""
+_LOAD_ERRORS = (*READ_ERRORS, IndexError, UserError)
+"""What restoring from damaged arrays can raise (a CorruptFileError is a UserError)."""
+_GEOMETRY_CONTEXT = ("task", "robot", "discretization")
+
+
 def load_agent(path: str | Path, **context: Any) -> TabularAgent:
     """Read an agent written by ``agent.save(path)``; CorruptFileError naming the file if either
-    file is missing, damaged or inconsistent (checked before any kernel touches the arrays)."""
+    file is missing, damaged, inconsistent or larger than its metadata allow.
+
+    Nothing in the files is trusted before it is checked (docs/agents/core.md, "Saved files"):
+    the JSON (size, nesting, integer sizes and counters within bounds, the config validated as
+    a new one) before any array is allocated; the archive's member names against the arrays a
+    new agent of that metadata saves, and each array's header (dtype, shape) and stored size
+    against them, before any data is read; the Q table finite; then the agent's own checks.
+    """
     npz_path, json_path = save_paths(path)
-    meta = _read_meta(json_path)
+    saved = _read_meta(json_path)
     try:
-        name = str(meta["agent"])
-        config = agent_class(name).config_class.from_mapping(_mapping(meta, "config"))
-        agent = agent_class(name)(
-            int(meta["n_states"]), int(meta["n_actions"]), config, None, **context
-        )
-        with np.load(npz_path, allow_pickle=False) as archive:
-            arrays = {key: archive[key] for key in archive.files}
-        agent._restore(meta, arrays)
+        with SavedArchive(npz_path) as archive:
+            agent = _fresh_agent(saved, archive, context)
+            arrays = archive.read_all(_expected_arrays(agent, saved.steps))
+        if not np.isfinite(arrays["q"]).all():
+            raise CorruptFileError("the Q table holds NaN or infinite values")
+        agent._restore(saved.meta, arrays)
     except KeyError as error:
         raise CorruptFileError(
             f"{npz_path}: cannot load agent: missing {error.args[0]!r}"
         ) from None
     except _LOAD_ERRORS as error:
-        raise CorruptFileError(f"{npz_path}: cannot load agent: {_first_line(error)}") from None
+        if isinstance(error, CorruptFileError) and str(error).startswith(f"{npz_path}: "):
+            raise
+        raise CorruptFileError(f"{npz_path}: cannot load agent: {first_line(error)}") from None
     return agent
 
 
-_LOAD_ERRORS = (
-    OSError, ValueError, TypeError, IndexError, EOFError, zipfile.BadZipFile, zlib.error,
-    NotImplementedError, UserError,
-)  # fmt: skip
-"""What reading a damaged file can raise (a CorruptFileError is a UserError; zipfile raises
-NotImplementedError for a damaged compression-method field)."""
+class _SavedMeta(NamedTuple):
+    """The checked JSON of a saved agent."""
+
+    meta: dict[str, Any]
+    cls: type[TabularAgent]
+    n_states: int
+    n_actions: int
+    config: QLearningConfig
+    steps: int
 
 
-def _first_line(error: BaseException) -> str:
-    return str(error).splitlines()[0] if str(error) else type(error).__name__
-
-
-def _read_meta(json_path: Path) -> dict[str, Any]:
-    """The JSON object of a saved agent; CorruptFileError naming the file otherwise."""
-    try:
-        meta = json.loads(json_path.read_text())
-    except (OSError, ValueError) as error:
-        raise CorruptFileError(f"{json_path}: cannot load agent: {_first_line(error)}") from None
-    if not isinstance(meta, dict):
-        raise CorruptFileError(
-            f"{json_path}: cannot load agent: expected a JSON object, got {type(meta).__name__}"
-        )
+def _read_meta(json_path: Path) -> _SavedMeta:
+    """The JSON of a saved agent, checked (no array allocated yet); CorruptFileError naming the
+    file otherwise."""
+    meta = read_json(json_path, max_bytes=MAX_AGENT_JSON_BYTES, what="agent file")
     if meta.get("format") != SAVE_FORMAT or meta.get("version") != SAVE_VERSION:
         raise CorruptFileError(f"{json_path}: not a skidnav agent file of version {SAVE_VERSION}")
-    return meta
+    try:
+        cls = agent_class(_string(meta, "agent"))
+        n_states = _integer(meta, "n_states", 1, MAX_TABLE_ENTRIES)
+        n_actions = _integer(meta, "n_actions", 1, MAX_TABLE_ENTRIES // n_states)
+        config = cls.config_class.from_mapping(_mapping(meta, "config"))
+        counters = _mapping(meta, "counters")
+        steps = _integer(counters, "steps", 0, MAX_COUNTER, "counter ")
+        for name in ("episodes", "planning_updates"):
+            _integer(counters, name, 0, MAX_COUNTER, "counter ")
+        _mapping(meta, "rng")
+    except KeyError as error:
+        raise CorruptFileError(
+            f"{json_path}: cannot load agent: missing {error.args[0]!r}"
+        ) from None
+    except (ValueError, TypeError, UserError) as error:
+        raise CorruptFileError(f"{json_path}: cannot load agent: {first_line(error)}") from None
+    return _SavedMeta(meta, cls, n_states, n_actions, config, steps)
+
+
+def _integer(values: Mapping[str, Any], key: str, low: int, high: int, what: str = "") -> int:
+    """``values[key]`` if it is an integer (not a bool, not 12500.7) in [low, high]."""
+    value = values[key]
+    if not (isinstance(value, int) and not isinstance(value, bool) and low <= value <= high):
+        raise ValueError(
+            f"expected {what}{key} to be an integer in [{low}, {high:,}], got {shown(value)}"
+        )
+    return value
+
+
+def _string(values: Mapping[str, Any], key: str) -> str:
+    value = values[key]
+    if not isinstance(value, str):
+        raise ValueError(f"expected {key!r} to be a string, got {type(value).__name__}")
+    return value
+
+
+def _fresh_agent(
+    saved: _SavedMeta, archive: SavedArchive, context: Mapping[str, Any]
+) -> TabularAgent:
+    """A new agent of the saved metadata (and the saved geometry, when the file holds one), built
+    only once the archive's Q table is known to have the declared shape."""
+    archive.header("q", ArraySpec((saved.n_states, saved.n_actions), "<f8"))
+    if "geometry" in archive.names:
+        from skidnav.agents.dyna_kinematic import ModelBasedAgent
+
+        if issubclass(saved.cls, ModelBasedAgent):
+            kept = {key: value for key, value in context.items() if key not in _GEOMETRY_CONTEXT}
+            context = {**kept, **_saved_geometry(saved, archive)}
+    return saved.cls(saved.n_states, saved.n_actions, saved.config, None, **context)
+
+
+def _saved_geometry(saved: _SavedMeta, archive: SavedArchive) -> dict[str, Any]:
+    """The robot and discretization a model-based agent saved, checked so that the agent built
+    from them allocates no more than its metadata declare."""
+    from skidnav.agents.dyna_kinematic import geometry_from_array
+    from skidnav.models.kinematic import KinematicModel
+
+    robot, grid = geometry_from_array(archive.read("geometry", ArraySpec((up_to(64),), "<f8")))
+    if grid is None:
+        return {"robot": robot}
+    if grid.n_states != saved.n_states:
+        raise ValueError(f"saved geometry has {grid.n_states} states, expected {saved.n_states}")
+    kinematic_config = getattr(saved.config, "kinematic_config", None)
+    if callable(kinematic_config):
+        KinematicModel.check_size(grid, kinematic_config())
+    return {"robot": robot, "discretization": grid}
+
+
+def _expected_arrays(agent: TabularAgent, steps: int) -> dict[str, ArraySpec]:
+    """What the archive of ``agent`` may hold: the arrays a new agent saves, with their dtypes
+    and shapes; the lists that are empty in a new agent (model entries, queues, trajectories,
+    visited states) hold at most one item per state-action pair or per real step."""
+    rows = up_to(max(agent.q.size, steps, 3))
+    specs = {}
+    for name, array in {"q": agent.q, **agent._state_arrays()}.items():
+        shape: tuple[int | range, ...] = tuple(array.shape)
+        if array.ndim >= 1 and array.shape[0] == 0:
+            shape = (rows, *array.shape[1:])
+        specs[name] = ArraySpec(shape, array.dtype.str)
+    return specs
 
 
 def _mapping(meta: Mapping[str, Any], key: str) -> Mapping[str, Any]:

@@ -15,7 +15,8 @@ def add_parser(subparsers: Any) -> None:
         "report",
         help="write one self-contained HTML report of a results directory",
         description="Aggregate a results directory written by 'skidnav run' into one HTML file "
-        "(tables, embedded figures, the config).",
+        "(tables, embedded figures, the config), written atomically: an interrupted report "
+        "leaves the previous one or none.",
     )
     parser.add_argument("run_dir", type=Path, help="results directory")
     parser.add_argument(

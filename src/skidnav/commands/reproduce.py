@@ -1,6 +1,7 @@
 """``skidnav reproduce sutton-barto``: the textbook checks of Sutton & Barto (2018) ch. 8.
 
-Writes per-episode (or per-step) CSV files and PNG plots to ``--out`` and prints a summary:
+Writes per-episode (or per-step) CSV files and PNG plots to ``--out``, each atomically, and prints
+a summary:
 
 * ``dyna_maze.csv/.png`` — Example 8.1: steps per episode of Dyna-Q with n = 0, 5, 50 planning
   steps (γ = 0.95, α = 0.1, ε = 0.1), ``--runs`` runs of 50 episodes;
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import time
 from collections.abc import Sequence
 from pathlib import Path
@@ -23,6 +25,7 @@ import numpy as np
 
 from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
 from skidnav.agents.registry import make_agent
+from skidnav.atomicfile import write_user_file
 from skidnav.envs.mazes import GridMazeEnv, blocking_maze, dyna_maze, shortcut_maze
 from skidnav.errors import UserError
 
@@ -43,17 +46,17 @@ def add_parser(subparsers: Any) -> None:
 
 
 def _write_csv(path: Path, header: Sequence[str], rows: list[Sequence[Any]]) -> None:
-    with path.open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(header)
-        writer.writerows(rows)
+    text = io.StringIO()
+    writer = csv.writer(text)
+    writer.writerow(header)
+    writer.writerows(rows)
+    write_user_file(path, text.getvalue().encode("utf-8"), "CSV file")
 
 
 def _plot(path: Path, curves: dict[str, np.ndarray], xlabel: str, ylabel: str, x0: int = 1) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    from skidnav.experiments.plots import to_png  # the Agg backend; PNG bytes in memory
 
     figure, axes = plt.subplots(figsize=(6, 4))
     for label, values in curves.items():
@@ -62,8 +65,7 @@ def _plot(path: Path, curves: dict[str, np.ndarray], xlabel: str, ylabel: str, x
     axes.set_ylabel(ylabel)
     axes.legend()
     figure.tight_layout()
-    figure.savefig(path, dpi=100)
-    plt.close(figure)
+    write_user_file(path, to_png(figure, dpi=100), "plot")
 
 
 PLANNING_STEPS = (0, 5, 50)
@@ -231,7 +233,10 @@ def run(args: argparse.Namespace) -> int:
     if args.runs < 1:
         raise UserError(f"expected --runs >= 1, got {args.runs}")
     out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise UserError(f"{out}: cannot create the folder ({error.strerror or error})") from None
     start = time.perf_counter()
     _report_dyna_maze(args.runs, out)
     _report_changing_mazes(args.runs, out)

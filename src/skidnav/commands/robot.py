@@ -9,17 +9,29 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import signal
 import sys
 from pathlib import Path
 from types import FrameType
-from typing import Any
+from typing import IO, Any
 
 from skidnav.errors import UserError
 
 
+def port_number(text: str) -> int:
+    """A TCP port for argparse: an integer in [0, 65535] (0: pick a free one)."""
+    try:
+        port = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a port number, got {text!r}") from None
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"expected a port in [0, 65535], got {port}")
+    return port
+
+
 def add_parser(subparsers: Any) -> None:
-    """Add ``robot`` with its ``sim-server`` and ``run`` subcommands."""
+    """Add ``robot`` with its ``sim-server``, ``run`` and ``study`` subcommands."""
     robot = subparsers.add_parser("robot", help="run agents in real time on a robot or sim server")
     commands = robot.add_subparsers(dest="robot_command", required=True)
     _add_sim_server(commands)
@@ -29,7 +41,9 @@ def add_parser(subparsers: Any) -> None:
 
 def _add_sim_server(commands: Any) -> None:
     server = commands.add_parser("sim-server", help="simulated robot speaking the line protocol")
-    server.add_argument("--port", type=int, required=True, help="TCP port (0: pick a free one)")
+    server.add_argument(
+        "--port", type=port_number, required=True, help="TCP port (0: pick a free one)"
+    )
     server.add_argument("--host", default="127.0.0.1", help="bind address (default 127.0.0.1)")
     server.add_argument("--time-scale", type=float, default=1.0, help="robot s per wall s")
     server.add_argument("--slip", default="rough", help="slip preset: thesis, slippery, rough")
@@ -43,6 +57,14 @@ def _add_sim_server(commands: Any) -> None:
     server.add_argument("--log", type=Path, help="JSON-lines log of received commands")
     server.add_argument("--link-timeout", type=float, default=0.5, help="quiet link stop [s]")
     server.add_argument(
+        "--idle-timeout", type=float, default=2.0, help="drop a client quiet this long [s]"
+    )
+    server.add_argument(
+        "--exit-with-stdin",
+        action="store_true",
+        help="exit when standard input ends (the parent's pipe: the server never outlives it)",
+    )
+    server.add_argument(
         "--fault", default="", help="comma-separated faults injected by successive SIGUSR1s"
     )
     server.set_defaults(func=_run_sim_server)
@@ -50,13 +72,16 @@ def _add_sim_server(commands: Any) -> None:
 
 def _run_sim_server(args: argparse.Namespace) -> int:
     from skidnav.realtime import sim_server as ss
+    from skidnav.realtime.config import ServerOptions
+    from skidnav.realtime.records import EventLog
     from skidnav.realtime.sim_robot import SimRobotConfig, build_robot, warm_up
 
     try:
         config = SimRobotConfig(latency=args.latency, pose_noise=args.pose_noise, drop=args.drop)
-        options = ss.ServerOptions(
+        options = ServerOptions(
             time_scale=args.time_scale,
             link_timeout=args.link_timeout,
+            idle_timeout=args.idle_timeout,
             faults=tuple(fault for fault in args.fault.split(",") if fault),
         )
     except ValueError as error:
@@ -70,13 +95,14 @@ def _run_sim_server(args: argparse.Namespace) -> int:
         config=config,
     )
     warm_up(robot)
-    try:
-        listener = ss.bind_listener(args.host, args.port)
-    except OSError as error:
-        raise UserError(f"cannot listen on {args.host}:{args.port}: {error}") from None
     with contextlib.ExitStack() as stack:
-        stream = stack.enter_context(args.log.open("a", encoding="utf-8")) if args.log else None
-        server = ss.SimServer(robot, options, ss.EventLog(stream))
+        try:
+            listener = stack.enter_context(ss.bind_listener(args.host, args.port))
+        except OSError as error:
+            raise UserError(f"cannot listen on {args.host}:{args.port}: {error}") from None
+        stream = stack.enter_context(_open_log(args.log)) if args.log else None
+        watch = sys.stdin.fileno() if args.exit_with_stdin else None
+        server = ss.SimServer(robot, options, EventLog(stream), watch_fd=watch)
 
         def on_signal(signum: int, frame: FrameType | None) -> None:
             if signum == signal.SIGUSR1:
@@ -87,12 +113,18 @@ def _run_sim_server(args: argparse.Namespace) -> int:
         for signum in (signal.SIGUSR1, signal.SIGTERM, signal.SIGINT):
             signal.signal(signum, on_signal)
         host, port = listener.getsockname()[:2]
+        server.events.write("listening", host=host, port=port, pid=os.getpid())
         print(f"listening on {host}:{port}", flush=True)
-        try:
-            server.serve_tcp(listener)
-        finally:
-            listener.close()
+        server.serve_tcp(listener)
     return 0
+
+
+def _open_log(path: Path) -> IO[str]:
+    """``path`` opened for appending; UserError naming it if that is impossible."""
+    try:
+        return path.open("a", encoding="utf-8")
+    except OSError as error:
+        raise UserError(f"cannot write the log {path}: {error.strerror or error}") from None
 
 
 def _add_run(commands: Any) -> None:

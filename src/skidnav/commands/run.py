@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from skidnav.experiments.configfile import load_config
+from skidnav.experiments.configfile import load_config_and_text
 from skidnav.experiments.runner import BACKENDS, run_experiment
 
 
@@ -16,7 +16,8 @@ def add_parser(subparsers: Any) -> None:
         "run",
         help="run an experiment config (agents × maps × presets × seeds); resumable",
         description="Run every run of an experiment config. Started again on the same --out "
-        "directory it skips the runs already finished.",
+        "directory it skips the runs already finished; a second run on a directory in use is "
+        "refused.",
     )
     parser.add_argument("config", type=Path, help="experiment config (TOML)")
     parser.add_argument(
@@ -48,7 +49,7 @@ def add_backend_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run_command(args: argparse.Namespace) -> int:
     """Run the experiment; print where the results are."""
-    config = load_config(args.config)
+    config, text = load_config_and_text(args.config)
     out = args.out if args.out is not None else Path("runs") / config.name
     outcome = run_experiment(
         config,
@@ -56,7 +57,7 @@ def run_command(args: argparse.Namespace) -> int:
         backend=args.backend,
         jobs=args.jobs,
         scheduler=args.scheduler,
-        source_text=args.config.read_text(encoding="utf-8"),
+        source_text=text,
         config_path=args.config,
         progress=not args.no_progress,
     )

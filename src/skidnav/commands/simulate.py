@@ -1,24 +1,37 @@
 """``skidnav simulate``: drive the simulated robot with an action script or a random policy, and
-draw its trajectory (PNG) and optionally save it as CSV."""
+draw its trajectory (PNG) and optionally save it as CSV.
+
+A script runs to its last action (the env's usual 500-action episode limit does not cut it), or
+until the robot reaches the goal, which ends the episode: the summary then says how many of the
+script's actions ran. Scripts and ``--random`` hold at most :data:`MAX_ACTIONS` actions, an
+action file at most :data:`MAX_ACTIONS_FILE_BYTES` bytes; longer ones are refused in one line.
+"""
 
 from __future__ import annotations
 
 import argparse
 import csv
+import io
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from skidnav.errors import UserError
+from skidnav.atomicfile import write_atomic
+from skidnav.errors import UserError, excerpt
 from skidnav.robot.kinematics import ACTION_NAMES
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SLIP_PRESETS
+from skidnav.savedfile import read_limited
 from skidnav.world.grid import MAP_KINDS
 
 ACTION_ALIASES = {name: index for index, name in enumerate(ACTION_NAMES)} | {
     name[0]: index for index, name in enumerate(ACTION_NAMES)
 }
+MAX_ACTIONS = 100_000
+"""Most actions one ``simulate`` runs (a script or ``--random N``)."""
+MAX_ACTIONS_FILE_BYTES = 2 * 2**20
+"""Longest ``--actions-file`` read [bytes]."""
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -57,10 +70,12 @@ def parse_actions(text: str, where: str = "--actions") -> list[int]:
             actions.append(int(key))
         else:
             raise UserError(
-                f"{where}: unknown action {token!r} (use 0-3 or forward/backward/left/right)"
+                f"{where}: unknown action {excerpt(token)} (use 0-3 or forward/backward/left/right)"
             )
     if not actions:
         raise UserError(f"{where}: no actions given")
+    if len(actions) > MAX_ACTIONS:
+        raise UserError(f"{where}: {len(actions):,} actions, expected at most {MAX_ACTIONS:,}")
     return actions
 
 
@@ -68,26 +83,28 @@ def _script(args: argparse.Namespace) -> list[int] | None:
     if args.actions is not None:
         return parse_actions(args.actions)
     if args.actions_file is not None:
+        data = read_limited(args.actions_file, MAX_ACTIONS_FILE_BYTES, "action file", UserError)
         try:
-            text = args.actions_file.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError):
+            text = data.decode("utf-8")
+        except UnicodeDecodeError:
             raise UserError(f"{args.actions_file}: cannot read the action file") from None
         return parse_actions(text, str(args.actions_file))
-    if args.random < 1:
-        raise UserError(f"expected --random >= 1, got {args.random}")
+    if not 1 <= args.random <= MAX_ACTIONS:
+        raise UserError(f"expected --random >= 1 and <= {MAX_ACTIONS:,}, got {args.random}")
     return None
 
 
 def _make_env(args: argparse.Namespace, max_steps: int) -> Any:
-    """The env of the arguments; a bad value (negative drift, seed, …) raises UserError."""
-    import gymnasium
+    """The env of the arguments, truncating after ``max_steps`` actions (built directly:
+    ``gymnasium.make`` would keep the env's own 500-action limit); a bad value (negative drift,
+    seed, …) raises UserError."""
+    from skidnav.envs.navigation import SkidSteerNavEnv
 
     for option, seed in (("--world-seed", args.world_seed), ("--seed", args.seed)):
         if seed < 0:
             raise UserError(f"expected {option} >= 0, got {seed}")
     try:
-        return gymnasium.make(
-            "skidnav/SkidSteerNav-v0",
+        return SkidSteerNavEnv(
             render_mode="rgb_array",
             map_file=args.map,
             map_kind=args.map_kind,
@@ -102,11 +119,13 @@ def _make_env(args: argparse.Namespace, max_steps: int) -> Any:
 
 
 def _write_csv(path: Path, rows: list[tuple[Any, ...]]) -> None:
+    """Write the trajectory table atomically (all rows or, on failure, the old file)."""
+    text = io.StringIO()
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow(["step", "action", "x", "y", "heading", "reward", "collision"])
+    writer.writerows(rows)
     try:
-        with path.open("w", newline="", encoding="utf-8") as handle:
-            writer = csv.writer(handle, lineterminator="\n")
-            writer.writerow(["step", "action", "x", "y", "heading", "reward", "collision"])
-            writer.writerows(rows)
+        write_atomic(path, text.getvalue().encode("utf-8"))
     except OSError as error:
         raise UserError(f"{path}: cannot write the CSV file ({error.strerror or error})") from None
 
@@ -132,6 +151,8 @@ def _simulate(args: argparse.Namespace) -> int:
         _write_csv(args.csv, rows)
     collisions = sum(1 for row in rows if row[-1])
     outcome = "reached the goal" if terminated else "did not reach the goal"
+    if terminated and script is not None and step < len(script):
+        outcome += f" (the episode ended there: {len(script) - step} actions of the script not run)"
     print(
         f"{step} actions, return {total:.2f}, {collisions} collisions, {outcome}; wrote {args.out}"
     )

@@ -10,9 +10,11 @@ from typing import Any
 
 import optuna
 
+from skidnav.atomicfile import remove_stale_temporaries
 from skidnav.commands.run import add_backend_arguments
 from skidnav.errors import UserError
-from skidnav.experiments.tuneconfig import load_tune_config
+from skidnav.experiments.store import directory_lock
+from skidnav.experiments.tuneconfig import load_tune_config_and_text
 from skidnav.experiments.tuning import tune_experiment
 
 
@@ -24,7 +26,8 @@ def add_parser(subparsers: Any) -> None:
         description="Search the hyperparameters of every agent with a [tune.space.<label>] "
         "table of CONFIG, on tuning maps kept apart from the evaluation maps, and write the "
         "best ones to DIR/tuned.toml (an experiment config). Started again on the same --out "
-        "directory it continues each study up to its trial count (docs/tuning.md).",
+        "directory it continues each study up to its trial count (docs/tuning.md); a second "
+        "search on a directory in use is refused.",
     )
     parser.add_argument("config", type=Path, help="experiment config with a [tune] table (TOML)")
     parser.add_argument(
@@ -54,23 +57,26 @@ def tune_command(args: argparse.Namespace) -> int:
     """Run the search; print each trial and where tuned.toml is."""
     if not args.verbose:
         optuna.logging.set_verbosity(logging.WARNING)
-    config, tune = load_tune_config(args.config)
+    config, tune, text = load_tune_config_and_text(args.config)
     if args.trials is not None:
         try:
             tune = dataclasses.replace(tune, trials=args.trials)
         except ValueError as error:
             raise UserError(f"--trials: {error}") from None
-    outcome = tune_experiment(
-        config,
-        tune,
-        args.out if args.out is not None else Path("runs") / config.name,
-        backend=args.backend,
-        jobs=args.jobs,
-        scheduler=args.scheduler,
-        source_text=args.config.read_text(encoding="utf-8"),
-        config_path=args.config,
-        on_trial=_print_trial,
-    )
+    out = args.out if args.out is not None else Path("runs") / config.name
+    with directory_lock(out):  # one search per directory; removed again if nothing was written
+        remove_stale_temporaries(out)
+        outcome = tune_experiment(
+            config,
+            tune,
+            out,
+            backend=args.backend,
+            jobs=args.jobs,
+            scheduler=args.scheduler,
+            source_text=text,
+            config_path=args.config,
+            on_trial=_print_trial,
+        )
     counts = ", ".join(f"{label} {count}" for label, count in outcome.finished.items())
     print(
         f"tuned hyperparameters: {outcome.tuned} ({outcome.executed} trials run now; finished: "

@@ -8,6 +8,7 @@ the start, the trail and the robot with its heading.
 
 from __future__ import annotations
 
+import io
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -15,6 +16,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw
 
+from skidnav.atomicfile import write_user_file
 from skidnav.errors import UserError
 from skidnav.robot.slip import SlipField
 from skidnav.world.discretization import Discretization
@@ -107,18 +109,23 @@ def rgb_frame(
 
 
 def save_frame(frame: np.ndarray, path: Path | str) -> None:
-    """Write an RGB frame (H, W, 3) uint8 as a picture, its format chosen by the file suffix.
+    """Write an RGB frame (H, W, 3) uint8 as a picture, its format chosen by the file suffix
+    (e.g. ``.png``), all-or-nothing: the picture is encoded in memory, then written with
+    :func:`~skidnav.atomicfile.write_user_file`, so a failed write leaves the old file, if any.
 
     Raises:
-        UserError: the path cannot be written (missing directory, no permission) or its suffix
-            names no picture format.
+        UserError: the path cannot be written (missing directory, no permission, disk full) or
+            its suffix names no picture format.
     """
+    picture_format = Image.registered_extensions().get(Path(path).suffix.lower())
+    if picture_format is None:
+        raise UserError(f"{path}: unknown picture format (use e.g. .png)")
+    buffer = io.BytesIO()
     try:
-        Image.fromarray(np.asarray(frame, dtype=np.uint8)).save(path)
-    except ValueError:
-        raise UserError(f"{path}: unknown picture format (use e.g. .png)") from None
-    except OSError as error:
-        raise UserError(f"{path}: cannot write the picture ({error.strerror or error})") from None
+        Image.fromarray(np.asarray(frame, dtype=np.uint8)).save(buffer, format=picture_format)
+    except (ValueError, KeyError, OSError):  # a format PIL reads but cannot write (e.g. .eps)
+        raise UserError(f"{path}: cannot write {picture_format} pictures (use e.g. .png)") from None
+    write_user_file(path, buffer.getvalue(), "picture")
 
 
 def ansi_frame(grid_map: GridMap, disc: Discretization, pose: np.ndarray) -> str:

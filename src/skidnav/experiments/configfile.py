@@ -10,8 +10,6 @@ config file. Agent names and hyperparameters are checked against the agents pack
 from __future__ import annotations
 
 import itertools
-import re
-import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -23,9 +21,10 @@ from skidnav.experiments.config import (
     MapSpec,
     freeze_params,
 )
+from skidnav.savedfile import MAX_CONFIG_BYTES, parse_toml, read_config_text, shown
 
-MAX_CONFIG_CHARS = 1_000_000
-"""Longest config text accepted (a config is a few kilobytes)."""
+MAX_CONFIG_CHARS = MAX_CONFIG_BYTES // 4
+"""Longest config text accepted [characters] (a config is a few kilobytes)."""
 TOP_KEYS = ("experiment", "env", "maps", "agents", "tune")  # [tune]: experiments/tuneconfig.py
 EXPERIMENT_KEYS = (
     "name",
@@ -49,59 +48,60 @@ EXPERIMENT_KEYS = (
 )
 AGENT_KEYS = ("name", "label", "params", "sweep")
 MAP_KEYS = ("kind", "file", "label", "options")
-_TOML_POSITION = re.compile(r"^(?P<message>.*) \(at line (?P<line>\d+), column (?P<column>\d+)\)$")
 
 
 def load_config(path: Path | str) -> ExperimentConfig:
-    """Read and validate an experiment config file.
+    """Read and validate an experiment config file (at most
+    :data:`~skidnav.savedfile.MAX_CONFIG_BYTES`; a device or a pipe ends at that limit).
 
     Raises:
-        UserError: missing or unreadable file, malformed TOML (with line and column), unknown
-            key, wrong type or out-of-range value, missing map file.
+        UserError: missing, unreadable or too long file, malformed TOML (with line and column),
+            unknown key, wrong type or out-of-range value, missing map file.
     """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise UserError(f"{path}: no such config file") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise UserError(f"{path}: cannot read config ({error.__class__.__name__})") from None
-    return parse_config(text, path)
+    return load_config_and_text(path)[0]
+
+
+def load_config_and_text(path: Path | str) -> tuple[ExperimentConfig, str]:
+    """(:func:`load_config`, the file's text): the file is read once, so the text saved beside
+    the results is the one the config came from."""
+    text = read_config_text(path)
+    return parse_config(text, path), text
 
 
 def parse_config(text: str, path: Path | str = "<string>") -> ExperimentConfig:
     """Validate config text; map files are resolved relative to ``path``'s folder."""
+    return config_from_tables(parse_tables(text, path), path)
+
+
+def parse_tables(text: str, path: Path | str = "<string>") -> dict[str, Any]:
+    """The TOML tables of config text of at most :data:`MAX_CONFIG_CHARS` characters; UserError
+    naming ``path`` (with line and column) when it is longer, malformed or nested too deeply."""
     if len(text) > MAX_CONFIG_CHARS:
         raise UserError(f"{path}: config of {len(text):,} characters, expected at most "
                         f"{MAX_CONFIG_CHARS:,}")  # fmt: skip
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise UserError(_toml_error(path, error)) from None
-    except RecursionError:
-        raise UserError(f"{path}: malformed TOML: nested too deeply") from None
+    return parse_toml(text, path)
+
+
+def config_from_tables(data: dict[str, Any], path: Path | str) -> ExperimentConfig:
+    """The experiment config of parsed TOML tables (map files relative to ``path``'s folder);
+    UserError naming ``path`` and the key."""
     try:
         return _build(data, Path(path))
     except (ValueError, TypeError) as error:
         raise UserError(f"{path}: {error}") from None
 
 
-def _toml_error(path: Path | str, error: tomllib.TOMLDecodeError) -> str:
-    match = _TOML_POSITION.match(str(error))
-    if match is None:
-        return f"{path}: malformed TOML: {error}"
-    return f"{path}:{match['line']}:{match['column']}: malformed TOML: {match['message']}"
-
-
 def _check_keys(table: dict[str, Any], allowed: tuple[str, ...], where: str) -> None:
     for key in table:
         if key not in allowed:
-            raise ValueError(f"{where} unknown key {key!r} (expected one of {', '.join(allowed)})")
+            raise ValueError(
+                f"{where} unknown key {shown(key)} (expected one of {', '.join(allowed)})"
+            )
 
 
 def _table(value: Any, where: str) -> dict[str, Any]:
     if not isinstance(value, dict):
-        raise ValueError(f"{where} expected a table, got {value!r}")
+        raise ValueError(f"{where} expected a table, got {shown(value)}")
     return value
 
 
@@ -116,7 +116,7 @@ def _string(table: dict[str, Any], key: str, where: str, default: str | None = N
     if value is None:
         raise ValueError(f"{where} missing key {key!r}")
     if not isinstance(value, str):
-        raise ValueError(f"{where} {key}: expected a string, got {value!r}")
+        raise ValueError(f"{where} {key}: expected a string, got {shown(value)}")
     return value
 
 
@@ -132,7 +132,7 @@ def _build(data: dict[str, Any], path: Path) -> ExperimentConfig:
         values["name"] = path.stem
     presets = values.get("presets", ["thesis"])
     if not isinstance(presets, list) or not all(isinstance(p, str) for p in presets):
-        raise ValueError(f"[experiment] presets: expected a list of strings, got {presets!r}")
+        raise ValueError(f"[experiment] presets: expected a list of strings, got {shown(presets)}")
     values["presets"] = tuple(presets)
     agents = tuple(
         itertools.chain.from_iterable(
@@ -157,9 +157,11 @@ def _agents(table: dict[str, Any], where: str) -> list[AgentSpec]:
     sweep = _table(table.get("sweep", {}), f"{where} sweep:")
     for key, values in sweep.items():
         if not isinstance(values, list) or not values:
-            raise ValueError(f"{where} sweep.{key}: expected a non-empty list, got {values!r}")
+            raise ValueError(
+                f"{where} sweep.{shown(key)}: expected a non-empty list, got {shown(values)}"
+            )
         if key in params:
-            raise ValueError(f"{where} {key!r} is both in params and in sweep")
+            raise ValueError(f"{where} {shown(key)} is both in params and in sweep")
     keys = sorted(sweep)
     agents = []
     for combination in itertools.product(*(sweep[key] for key in keys)):
@@ -188,8 +190,8 @@ def _map(table: dict[str, Any], where: str, folder: Path) -> MapSpec:
     file = _string(table, "file", where, default="")
     if file:
         resolved = (folder / file).resolve()
-        if not resolved.is_file():
-            raise ValueError(f"{where} file: no such map file {file!r} (looked at {resolved})")
+        if not _is_file(resolved):
+            raise ValueError(f"{where} file: no such map file {shown(file)} in {folder.resolve()}")
         file = str(resolved)
     label = _string(table, "label", where, default=kind or Path(file).stem)
     options = freeze_params(_table(table.get("options", {}), f"{where} options:"))
@@ -197,3 +199,11 @@ def _map(table: dict[str, Any], where: str, folder: Path) -> MapSpec:
         return MapSpec(label=label, kind=kind, file=file, options=options)
     except ValueError as error:
         raise ValueError(f"{where} {error}") from None
+
+
+def _is_file(path: Path) -> bool:
+    """Whether ``path`` is a file; False also for a name the system refuses (too long)."""
+    try:
+        return path.is_file()
+    except OSError:
+        return False

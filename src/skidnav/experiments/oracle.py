@@ -18,14 +18,16 @@ For a skid-steer world (map, slip field, robot, discretization) the oracle
 
 Results are cached on disk (``$SKIDNAV_CACHE_DIR``, default ``~/.cache/skidnav``) under a hash of
 everything they depend on (the task's arrays, the start pose, the sample count and seed, the
-evaluation seeds and limit, :data:`ORACLE_VERSION`), written atomically, so the runs of every
-agent on one world compute it once, in any process. The slip field is sampled at time 0: with a
-drifting floor the oracle is that of the initial floor.
+evaluation seeds and limit, :data:`ORACLE_VERSION`), written atomically and read back only
+after its arrays are checked against the world (a damaged file is computed again), so the runs
+of every agent on one world compute it once, in any process. The slip field is sampled at time
+0: with a drifting floor the oracle is that of the initial floor.
 """
 
 from __future__ import annotations
 
 import hashlib
+import io
 import logging
 import os
 from collections.abc import Sequence
@@ -35,6 +37,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from skidnav.agents.fast_training import evaluate_q_fast
+from skidnav.atomicfile import remove_stale_temporaries, write_atomic
+from skidnav.errors import CorruptFileError
 from skidnav.kernels.oracle import (
     UNREACHABLE,
     expected_actions,
@@ -42,6 +46,7 @@ from skidnav.kernels.oracle import (
     sample_outcomes,
     start_costs,
 )
+from skidnav.savedfile import ArraySpec, SavedArchive
 
 logger = logging.getLogger(__name__)
 
@@ -126,29 +131,48 @@ def compute_oracle(
 def load_or_compute_oracle(
     env: Any, n_samples: int, seed: int, seeds: Sequence[int], max_steps: int
 ) -> Oracle:
-    """:func:`compute_oracle`, read from the on-disk cache when it holds this world's oracle."""
+    """:func:`compute_oracle`, read from the on-disk cache when it holds this world's oracle (a
+    damaged cache file is logged and computed again)."""
     path = cache_dir() / "oracles" / f"{_key(env.unwrapped, n_samples, seed, seeds, max_steps)}.npz"
+    nav = env.unwrapped
+    shape = (int(nav.observation_space.n), int(nav.action_space.n))
     if path.is_file():
         try:
-            with np.load(path, allow_pickle=False) as data:
-                return Oracle(
-                    data["q"], float(data["start_value"]), data["rollout_lengths"],
-                    float(data["rollout_mean"]), int(data["sweeps"]),
-                )  # fmt: skip
-        except (OSError, KeyError, ValueError) as error:
-            logger.warning("oracle cache %s unreadable (%s): computing it again", path, error)
+            return _load(path, shape, len(seeds))
+        except CorruptFileError as error:
+            logger.warning("oracle cache unreadable, computing it again: %s", error)
     oracle = compute_oracle(env, n_samples, seed, seeds, max_steps)
     _save(path, oracle)
     return oracle
 
 
+def _load(path: Path, shape: tuple[int, int], n_seeds: int) -> Oracle:
+    """The cached oracle at ``path``, its arrays checked against the world's ``shape``
+    (n_states, n_actions) and the ``n_seeds`` evaluation seeds before they are read."""
+    scalar = ArraySpec((), "<f8")
+    specs = {
+        "q": ArraySpec(shape, "<f8"),
+        "start_value": scalar,
+        "rollout_lengths": ArraySpec((n_seeds,), "<i8"),
+        "rollout_mean": scalar,
+        "sweeps": ArraySpec((), "<i8"),
+    }
+    with SavedArchive(path) as archive:
+        data = archive.read_all(specs)
+    return Oracle(
+        data["q"], float(data["start_value"]), data["rollout_lengths"],
+        float(data["rollout_mean"]), int(data["sweeps"]),
+    )  # fmt: skip
+
+
 def _save(path: Path, oracle: Oracle) -> None:
-    """Write ``oracle`` to ``path`` atomically (a failure to cache is only logged)."""
+    """Write ``oracle`` to ``path`` atomically (a failure to cache is only logged); first remove
+    the temporaries of cache writers that died."""
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        temporary = path.with_suffix(f".{os.getpid()}.tmp")
-        with temporary.open("wb") as handle:
-            np.savez(handle, **oracle._asdict())
-        os.replace(temporary, path)
+        remove_stale_temporaries(path.parent)
+        buffer = io.BytesIO()
+        np.savez(buffer, **oracle._asdict())
+        write_atomic(path, buffer.getvalue())
     except OSError as error:
         logger.warning("could not cache the oracle in %s: %s", path, error)

@@ -29,11 +29,15 @@ ARENA = (0.62, 0.505)
 DPI = 90
 
 
-def to_png(figure: Figure) -> bytes:
-    """Render and close ``figure``; returns the PNG bytes."""
+def to_png(figure: Figure, dpi: int = DPI) -> bytes:
+    """Render ``figure`` in memory at ``dpi`` [pixels per inch] and close it (also when rendering
+    fails); returns the PNG bytes. Nothing here writes a file: callers write the bytes with
+    :func:`~skidnav.atomicfile.write_atomic` (the report embeds them)."""
     buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=DPI)
-    plt.close(figure)
+    try:
+        figure.savefig(buffer, format="png", dpi=dpi)
+    finally:
+        plt.close(figure)
     return buffer.getvalue()
 
 

@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from skidnav.atomicfile import remove_stale_temporaries, write_atomic
+from skidnav.errors import UserError
 from skidnav.experiments import plots
 from skidnav.experiments.analysis import (
     METRICS,
@@ -346,8 +348,18 @@ def build_report(run_dir: Path | str) -> str:
 
 
 def write_report(run_dir: Path | str, output: Path | str | None = None) -> Path:
-    """Write the report of ``run_dir`` (default ``RUN_DIR/report.html``); returns its path."""
+    """Write the report of ``run_dir`` (default ``RUN_DIR/report.html``) atomically, so a kill
+    leaves the previous report or none, never part of one; returns its path. Temporaries left
+    beside it by report writers that died are removed first.
+
+    Raises:
+        UserError: the results are missing or damaged, or the report cannot be written there.
+    """
     path = Path(output) if output is not None else Path(run_dir) / "report.html"
     text = build_report(run_dir)
-    path.write_text(text, encoding="utf-8")
+    remove_stale_temporaries(path.parent, path.name)
+    try:
+        write_atomic(path, text.encode("utf-8"))
+    except OSError as error:
+        raise UserError(f"{path}: cannot write the report ({error.strerror or error})") from None
     return path

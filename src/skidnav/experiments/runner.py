@@ -11,7 +11,9 @@ Backends (all give identical numbers, since a run is a pure function of its spec
   results directory is created, so a scheduler that cannot be reached leaves nothing behind.
 
 Workers only compute; this process writes every finished run atomically as it arrives
-(:class:`~skidnav.experiments.store.ResultStore`), with the version of the code that produced it.
+(:class:`~skidnav.experiments.store.ResultStore`), with the version of the code that produced it,
+holding the directory's lock (:func:`~skidnav.experiments.store.directory_lock`): a second run on
+the same directory is refused while the first lives.
 Started again on the same directory, the runner skips the runs already written, so a sweep killed
 by Ctrl-C or SIGKILL resumes with none lost and none duplicated; finished runs produced by other
 code are reused with a warning (:mod:`skidnav.experiments.sessions`). At the end the tidy tables
@@ -41,7 +43,7 @@ from skidnav.experiments.config import ExperimentConfig, config_to_dict
 from skidnav.experiments.provenance import CODE_KEYS, code_version, package_versions
 from skidnav.experiments.runs import RunSpec, expand_runs
 from skidnav.experiments.sessions import mixed_code_message, other_code, update_sessions
-from skidnav.experiments.store import ResultStore, TrialResult
+from skidnav.experiments.store import ResultStore, TrialResult, directory_lock
 from skidnav.experiments.workers import init_worker
 
 logger = logging.getLogger(__name__)
@@ -209,27 +211,45 @@ def run_experiment(
     started = time.time()
     runs = expand_runs(config)
     ResultStore(out_dir).check(config)
-    with contextlib.ExitStack() as stack:
-        client = None
-        if backend == "dask" and len(ResultStore(out_dir).finished()) < len(runs):
-            client = stack.enter_context(dask_client(jobs, scheduler))
-        store = ResultStore.open(out_dir, config, source_text)
-        session = _session(started, backend, jobs, scheduler)
-        records = _resume_records(store, session)
-        pending = [spec for spec in runs if spec.run_id not in records]
-        logger.info("%d runs, %d already done, %d to run", len(runs), len(records), len(pending))
-        stamp = {key: session[key] for key in CODE_KEYS} | {"session": session["started"]}
-        with _progress(config, len(runs), len(runs) - len(pending), progress) as bar:
-            for result in execute(pending, trial, backend, jobs, client):
-                store.write_run(result, stamp)
-                records[result.run_id] = stamp
-                bar.update(1)
-    store.consolidate()
-    wall_time = time.time() - started
-    session.update(wall_time_s=wall_time, completed=True)
-    sessions = update_sessions(_previous_sessions(store.metadata()), records, session)
-    store.write_metadata(_metadata(config, runs, session, sessions))
+    with contextlib.ExitStack() as locked:
+        with contextlib.ExitStack() as stack:
+            client = None
+            if backend == "dask" and len(ResultStore(out_dir).finished()) < len(runs):
+                client = stack.enter_context(dask_client(jobs, scheduler))
+            locked.enter_context(directory_lock(out_dir))  # held until the metadata is written
+            store = ResultStore.open(out_dir, config, source_text)
+            session = _session(started, backend, jobs, scheduler)
+            records = _resume_records(store, session)
+            pending = [spec for spec in runs if spec.run_id not in records]
+            execution = (trial, backend, jobs, client)
+            _run_pending(store, config, pending, records, session, execution, progress)
+        store.consolidate()
+        wall_time = time.time() - started
+        session.update(wall_time_s=wall_time, completed=True)
+        sessions = update_sessions(_previous_sessions(store.metadata()), records, session)
+        store.write_metadata(_metadata(config, runs, session, sessions))
     return RunOutcome(store.root, len(runs), len(runs) - len(pending), len(pending), wall_time)
+
+
+def _run_pending(
+    store: ResultStore,
+    config: ExperimentConfig,
+    pending: list[RunSpec],
+    records: dict[str, dict[str, Any]],
+    session: dict[str, Any],
+    execution: tuple[TrialFunction, str, int, Any],
+    progress: bool,
+) -> None:
+    """Run ``pending`` on ``execution`` (trial, backend, jobs, Dask client), writing each result
+    as it arrives and noting its code record in ``records``."""
+    total = len(pending) + len(records)
+    logger.info("%d runs, %d already done, %d to run", total, len(records), len(pending))
+    stamp = {key: session[key] for key in CODE_KEYS} | {"session": session["started"]}
+    with _progress(config, total, len(records), progress) as bar:
+        for result in execute(pending, *execution):
+            store.write_run(result, stamp)
+            records[result.run_id] = stamp
+            bar.update(1)
 
 
 def _progress(config: ExperimentConfig, total: int, done: int, show: bool) -> tqdm[Any]:

@@ -11,26 +11,40 @@ Layout of a results directory::
     metadata.json        config, package versions, git commit, seeds, every session (start,
                          code, runs done)
 
-A run file is written to a temporary name, synced and moved into place with ``os.replace``, so a
-run is either completely there or absent: after a kill, the runs already written are skipped and
-the rest are run again (none lost, none duplicated). Nothing is pickled (``.npz`` is loaded with
-``allow_pickle=False``).
+    .skidnav.lock        held (``flock``) by the process writing here, its pid inside
+
+Every file is written to a temporary name, synced and moved into place with ``os.replace``
+(:func:`skidnav.atomicfile.write_atomic`), so a run is either completely there or absent: after a
+kill, the runs already written are skipped and the rest are run again (none lost, none
+duplicated), and reopening removes the temporaries of writers that died. One process at a time
+writes a directory (:func:`directory_lock`). Run files are read as
+:class:`~skidnav.savedfile.SavedArchive` with the arrays and sizes the config allows; nothing is
+pickled.
 """
 
 from __future__ import annotations
 
-import io
+import contextlib
+import fcntl
 import json
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
 import pandas as pd
 
+from skidnav.atomicfile import remove_stale_temporaries, write_atomic, write_npz_atomic
 from skidnav.errors import CorruptFileError, UserError
-from skidnav.experiments.config import ExperimentConfig, config_from_dict, config_to_dict
+from skidnav.experiments.config import (
+    MAX_STEPS,
+    ExperimentConfig,
+    config_from_dict,
+    config_to_dict,
+)
+from skidnav.savedfile import ArraySpec, SavedArchive, parse_json, read_json, up_to
+from skidnav.world.grid import MAX_SIZE
 
 EPISODE_COLUMNS = (
     "return",
@@ -69,14 +83,82 @@ class TrialResult(NamedTuple):
     arrays: dict[str, np.ndarray]
 
 
-def write_atomic(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` all-or-nothing (temporary file, fsync, ``os.replace``)."""
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(temporary, "wb") as handle:
-        handle.write(data)
-        handle.flush()
-        os.fsync(handle.fileno())
-    os.replace(temporary, path)
+LOCK_FILE = ".skidnav.lock"
+"""The lock file of a results or study directory."""
+_WORLD_ARRAYS = {
+    "value_map": "f", "heading_map": "i", "policy_map": "i", "occupancy": "b", "slip_eta": "f",
+}  # fmt: skip
+"""The (n_x, n_y) or (regions_x, regions_y) arrays of a skid-steer run, by dtype kind."""
+
+
+def run_file_specs(config: ExperimentConfig) -> dict[str, ArraySpec]:
+    """What a run file of ``config`` may hold (:class:`TrialResult`): the summary document,
+    every episode column (at most ``episodes`` long), the greedy poses (at most one per action
+    plus the start) and, on the skid-steer env, the maps (at most the largest map's cells)."""
+    episodes = up_to(config.episodes)
+    poses = up_to((config.max_steps or MAX_STEPS) + 1)
+    cells = up_to(MAX_SIZE)
+    specs = {"document": ArraySpec((), kinds="U")}
+    for key in EPISODE_COLUMNS:
+        specs[f"episode.{key}"] = ArraySpec((episodes,), kinds="fiub")
+    specs["array.greedy_poses"] = ArraySpec((poses, 3), "<f8")
+    for key, kind in _WORLD_ARRAYS.items():
+        specs[f"array.{key}"] = ArraySpec((cells, cells), kinds=kind)
+    specs["array.start_heading"] = ArraySpec((), "<f8")
+    specs["array.start"] = specs["array.goal"] = ArraySpec((2,), kinds="i")
+    return specs
+
+
+OPTIONAL_ARRAYS = frozenset(
+    f"array.{key}" for key in (*_WORLD_ARRAYS, "start_heading", "start", "goal")
+)
+"""Members of a run file only a skid-steer run has."""
+
+
+@contextlib.contextmanager
+def directory_lock(root: Path | str) -> Iterator[Path]:
+    """Hold ``root``'s lock (``fcntl.flock`` on :data:`LOCK_FILE`, our pid written inside) while
+    writing there; creates ``root``. The kernel releases the lock when its holder dies (even by
+    SIGKILL), so a later process takes it over. A directory this call created is removed again
+    on the way out if nothing but the lock was written in it.
+
+    Raises:
+        UserError: ``root`` is not a directory, or another process holds the lock (named by pid).
+    """
+    root = Path(root)
+    created = not root.exists()
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        descriptor = os.open(root / LOCK_FILE, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+    except (FileExistsError, NotADirectoryError):
+        raise UserError(f"{root}: not a directory; choose another --out") from None
+    except OSError as error:
+        raise UserError(f"{root}: cannot write there ({error.strerror or error})") from None
+    try:
+        try:
+            fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise UserError(
+                f"{root}: in use by another skidnav process{_holder(descriptor)}; wait for it "
+                "to finish or choose another --out"
+            ) from None
+        os.ftruncate(descriptor, 0)
+        os.pwrite(descriptor, f"{os.getpid()}\n".encode(), 0)
+        try:
+            yield root
+        finally:
+            os.ftruncate(descriptor, 0)
+            if created and [entry.name for entry in root.iterdir()] == [LOCK_FILE]:
+                (root / LOCK_FILE).unlink()
+                root.rmdir()
+    finally:
+        os.close(descriptor)
+
+
+def _holder(descriptor: int) -> str:
+    """`` (pid N)`` of the lock's holder as written in the lock file (empty if unreadable)."""
+    text = os.pread(descriptor, 24, 0).decode("ascii", errors="replace").strip()
+    return f" (pid {text})" if text.isdigit() else ""
 
 
 class ResultStore:
@@ -85,6 +167,7 @@ class ResultStore:
     def __init__(self, root: Path | str) -> None:
         self.root = Path(root)
         self.runs_dir = self.root / "runs"
+        self._specs: dict[str, ArraySpec] | None = None
 
     def check(self, config: ExperimentConfig) -> bool:
         """True if the directory already holds results of ``config``, False if it holds none
@@ -93,6 +176,8 @@ class ResultStore:
         Raises:
             UserError: the directory holds results of a different config.
         """
+        if self.root.exists() and not self.root.is_dir():
+            raise UserError(f"{self.root}: not a directory; choose another --out")
         config_path = self.root / "config.json"
         if not config_path.exists():
             return False
@@ -112,8 +197,8 @@ class ResultStore:
         store = cls(root)
         exists = store.check(config)
         store.runs_dir.mkdir(parents=True, exist_ok=True)
-        for stale in store.runs_dir.glob(".*.tmp"):
-            stale.unlink(missing_ok=True)
+        for directory in (store.root, store.runs_dir):
+            remove_stale_temporaries(directory)
         if exists:
             return store
         config_path = store.root / "config.json"
@@ -124,15 +209,9 @@ class ResultStore:
         return store
 
     def _read_json(self, path: Path) -> dict[str, Any]:
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise UserError(f"{path}: missing; is {self.root} a results directory?") from None
-        except (OSError, ValueError) as error:
-            raise CorruptFileError(f"{path}: unreadable ({error.__class__.__name__})") from None
-        if not isinstance(data, dict):
-            raise CorruptFileError(f"{path}: expected a JSON object")
-        return data
+        if not path.is_file():
+            raise UserError(f"{path}: missing; is {self.root} a results directory?")
+        return read_json(path, allow_nonfinite=True)
 
     def config(self) -> ExperimentConfig:
         """The config these results belong to."""
@@ -165,19 +244,19 @@ class ResultStore:
             "code": code or {},
         }
         payload["document"] = np.array(json.dumps(document))
-        buffer = io.BytesIO()
-        np.savez_compressed(buffer, **payload)  # type: ignore[arg-type]
-        write_atomic(self.run_path(result.run_id), buffer.getvalue())
+        write_npz_atomic(self.run_path(result.run_id), payload, compress=True)
+
+    def _run_specs(self) -> dict[str, ArraySpec]:
+        if self._specs is None:
+            self._specs = run_file_specs(self.config())
+        return self._specs
 
     def read_run(self, run_id: str) -> TrialResult:
-        """Load one run file."""
+        """Load one run file (CorruptFileError naming it when damaged or too large)."""
         path = self.run_path(run_id)
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                arrays = {key: data[key] for key in data.files}
-            document = json.loads(str(arrays.pop("document")))
-        except (OSError, ValueError, KeyError) as error:
-            raise CorruptFileError(f"{path}: unreadable run file ({error})") from None
+        with SavedArchive(path) as archive:
+            arrays = archive.read_all(self._run_specs(), OPTIONAL_ARRAYS)
+        document = _run_document(path, arrays.pop("document"))
         episodes = {k.split(".", 1)[1]: v for k, v in arrays.items() if k.startswith("episode.")}
         others = {k.split(".", 1)[1]: v for k, v in arrays.items() if k.startswith("array.")}
         return TrialResult(run_id, document["coordinates"], episodes, document["summary"], others)
@@ -185,11 +264,10 @@ class ResultStore:
     def run_code(self, run_id: str) -> dict[str, Any]:
         """The record of the code that produced run ``run_id`` (empty if it was not recorded)."""
         path = self.run_path(run_id)
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                document = json.loads(str(data["document"]))
-        except (OSError, ValueError, KeyError) as error:
-            raise CorruptFileError(f"{path}: unreadable run file ({error})") from None
+        specs = self._run_specs()
+        with SavedArchive(path) as archive:
+            archive.check_names(specs, OPTIONAL_ARRAYS)
+            document = _run_document(path, archive.read("document", specs["document"]))
         code = document.get("code", {})
         return code if isinstance(code, dict) else {}
 
@@ -235,3 +313,13 @@ class ResultStore:
         """``metadata.json`` (empty when missing)."""
         path = self.root / "metadata.json"
         return self._read_json(path) if path.exists() else {}
+
+
+def _run_document(path: Path, text: np.ndarray) -> dict[str, Any]:
+    """The summary document of a run file: coordinates, summary and code record (NaN and inf
+    are legitimate summary values)."""
+    document = parse_json(str(text[()]), path, allow_nonfinite=True)
+    for key, kind in (("coordinates", dict), ("summary", dict)):
+        if not isinstance(document.get(key), kind):
+            raise CorruptFileError(f"{path}: run document without {key!r}")
+    return document

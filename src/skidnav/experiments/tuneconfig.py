@@ -30,7 +30,6 @@ import dataclasses
 import json
 import logging
 import math
-import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,7 +40,15 @@ from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec, _ch
 
 # The [[maps]] schema and its table helpers live in configfile; reusing them keeps [[tune.maps]]
 # and [[maps]] one schema, with the same messages.
-from skidnav.experiments.configfile import _check_keys, _map, _table, _tables, load_config
+from skidnav.experiments.configfile import (
+    _check_keys,
+    _map,
+    _table,
+    _tables,
+    config_from_tables,
+    parse_tables,
+)
+from skidnav.savedfile import read_config_text, shown
 
 if TYPE_CHECKING:
     import optuna
@@ -108,23 +115,27 @@ class ParamRange:
         if not all(isinstance(choice, Choice) for choice in self.choices):
             raise ValueError(f"{self.name}: expected choices of numbers, strings or booleans")
         if len({(type(c), c) for c in self.choices}) != len(self.choices):
-            raise ValueError(f"{self.name}: expected distinct choices, got {list(self.choices)}")
+            raise ValueError(
+                f"{self.name}: expected distinct choices, got {shown(list(self.choices))}"
+            )
 
     def _check_bounds(self) -> None:
         low, high = self.low, self.high
         if not (_is_number(low) and _is_number(high)):
-            raise ValueError(f"{self.name}: expected numbers low and high, got {low!r}, {high!r}")
+            raise ValueError(
+                f"{self.name}: expected numbers low and high, got {shown(low)}, {shown(high)}"
+            )
         assert low is not None and high is not None
         if not (math.isfinite(low) and math.isfinite(high) and low < high):
             raise ValueError(f"{self.name}: expected low < high, got low = {low}, high = {high}")
         if not isinstance(self.log, bool):
-            raise ValueError(f"{self.name}: expected log = true or false, got {self.log!r}")
+            raise ValueError(f"{self.name}: expected log = true or false, got {shown(self.log)}")
         if self.log and low <= 0:
             raise ValueError(f"{self.name}: expected low > 0 with log = true, got {low}")
         if self.step is not None:
             if not _is_number(self.step) or not 0 < self.step <= high - low:
                 raise ValueError(
-                    f"{self.name}: expected a step in (0, high - low], got {self.step!r}"
+                    f"{self.name}: expected a step in (0, high - low], got {shown(self.step)}"
                 )
             if self.log:
                 raise ValueError(f"{self.name}: expected either log or step, not both")
@@ -225,7 +236,7 @@ class TuneConfig:
             ("pruner", self.pruner, PRUNERS),
         ):
             if value not in allowed:
-                raise ValueError(f"expected {name} one of {', '.join(allowed)}, got {value!r}")
+                raise ValueError(f"expected {name} one of {', '.join(allowed)}, got {shown(value)}")
         _check_range("startup_trials", self.startup_trials, 0, MAX_TRIALS, integer=True)
         _check_range(
             "pruner_startup_trials", self.pruner_startup_trials, 0, MAX_TRIALS, integer=True
@@ -260,18 +271,26 @@ class TuneConfig:
 
 
 def load_tune_config(path: Path | str) -> tuple[ExperimentConfig, TuneConfig]:
-    """Read an experiment config and its ``[tune]`` table.
+    """Read an experiment config and its ``[tune]`` table (the file read once, with the limits
+    of :func:`~skidnav.experiments.configfile.load_config`).
 
     Raises:
         UserError: anything :func:`~skidnav.experiments.configfile.load_config` refuses, a
             missing ``[tune]`` table, or a bad key or value in it (one line, naming the file).
     """
-    config = load_config(path)  # the file is readable, valid TOML and a valid experiment
-    data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    config, tune, _ = load_tune_config_and_text(path)
+    return config, tune
+
+
+def load_tune_config_and_text(path: Path | str) -> tuple[ExperimentConfig, TuneConfig, str]:
+    """(config, ``[tune]`` table, the file's text) of :func:`load_tune_config`."""
+    text = read_config_text(path)
+    data = parse_tables(text, path)
+    config = config_from_tables(data, path)
     if "tune" not in data:
         raise UserError(f"{path}: no [tune] table (see docs/tuning.md)")
     try:
-        return config, parse_tune(data["tune"], config, Path(path))
+        return config, parse_tune(data["tune"], config, Path(path)), text
     except (ValueError, TypeError) as error:
         raise UserError(f"{path}: {error}") from None
 
@@ -298,7 +317,7 @@ def parse_tune(table: Any, config: ExperimentConfig, path: Path) -> TuneConfig:
     for label, _ in spaces:
         if label not in config.agent_labels:
             raise ValueError(
-                f"[tune.space] unknown agent label {label!r} "
+                f"[tune.space] unknown agent label {shown(label)} "
                 f"(expected one of {', '.join(config.agent_labels)})"
             )
     values = {key: table[key] for key in TUNE_KEYS if key in table and key not in {"maps", "space"}}
@@ -343,9 +362,8 @@ def check_tuning(config: ExperimentConfig, tune: TuneConfig, path: Path | str | 
                 try:
                     make_config(agent.name, {**agent.params_dict(), param.name: corner})
                 except UserError as error:
-                    raise UserError(
-                        f"{prefix}[tune.space.{agent.label}] {param.name} = {corner!r}: {error}"
-                    ) from None
+                    where = f"{prefix}[tune.space.{agent.label}] {param.name}"
+                    raise UserError(f"{where} = {shown(corner)}: {error}") from None
 
 
 def default_point(agent: AgentSpec, space: Sequence[ParamRange]) -> dict[str, Any] | None:

@@ -20,6 +20,7 @@ from typing import Any
 import optuna
 from optuna.trial import TrialState
 
+from skidnav.atomicfile import write_atomic
 from skidnav.experiments.config import (
     DEFAULT_ENV_ID,
     AgentSpec,
@@ -30,7 +31,6 @@ from skidnav.experiments.config import (
 )
 from skidnav.experiments.configfile import EXPERIMENT_KEYS
 from skidnav.experiments.provenance import code_version
-from skidnav.experiments.store import write_atomic
 from skidnav.experiments.tuneconfig import TuneConfig
 
 TUNED = "tuned.toml"

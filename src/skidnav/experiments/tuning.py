@@ -41,6 +41,7 @@ import numpy as np
 import optuna
 from optuna.trial import FrozenTrial, TrialState
 
+from skidnav.atomicfile import write_atomic
 from skidnav.errors import CorruptFileError, UserError
 from skidnav.experiments.config import (
     DEFAULT_ENV_ID,
@@ -52,7 +53,7 @@ from skidnav.experiments.config import (
 from skidnav.experiments.runner import TrialFunction, _check_backend, dask_client, default_jobs
 from skidnav.experiments.runner import execute as execute_runs
 from skidnav.experiments.runs import RunSpec, SeedKey, expand_runs
-from skidnav.experiments.store import TrialResult, write_atomic
+from skidnav.experiments.store import TrialResult
 from skidnav.experiments.tuneconfig import ParamRange, TuneConfig, check_tuning, default_point
 from skidnav.experiments.tunedfile import write_tuned
 from skidnav.stats import iqm

@@ -41,7 +41,10 @@ Speed: the helpers marked inline are compiled into the planning loops, and each 
 exit** (no early ``return``; each array it takes is read last on the one path to its end). numba
 then prunes the reference counting of the arrays bound to the helper's parameters, the model's
 21 included; with several exits it cannot, and every call paid an atomic increment and decrement
-per array — most of the time of the prioritized-sweeping and kinematic planning loops.
+per array — most of the time of the prioritized-sweeping and kinematic planning loops. Slots
+and entries read from the arrays are non-negative where they index, and index through
+:func:`unsigned_index`: numba wraps a signed index (as for ``a[-1]``) at every access, not an
+unsigned one.
 
 Planning modes (``mode`` argument): :data:`MOST_PROBABLE` (thesis default: the outcome with the
 largest count, ties broken uniformly), :data:`SAMPLE` (s′ drawn from p(·|s, a)) and
@@ -63,6 +66,14 @@ SAMPLE = 1
 EXPECTED = 2
 PLANNING_MODES = {"most-probable": MOST_PROBABLE, "sample": SAMPLE, "expected": EXPECTED}
 """Planning-mode names (as in configs) → the integer codes the kernels take."""
+
+
+@inline_jit
+def unsigned_index(index: int) -> int:
+    """``index`` (non-negative) as ``np.uint64``, for indexing: numba wraps a signed index (as for
+    ``a[-1]``) at every access, not an unsigned one. Same value compiled or not; typed ``int``
+    for the helpers of :mod:`skidnav.kernels.tabular` that take it."""
+    return np.uint64(index)  # type: ignore[return-value]
 
 
 class MultinomialArrays(NamedTuple):
@@ -105,10 +116,10 @@ def hash_find(table: np.ndarray, keys: np.ndarray, key: int) -> int:
     −1). One exit, as every hot inlined helper here (see the module docstring)."""
     mask = table.shape[0] - 1
     slot = hash_slot(key, mask)
-    index = table[slot]
-    while index >= 0 and keys[index] != key:
+    index = table[unsigned_index(slot)]
+    while index >= 0 and keys[unsigned_index(index)] != key:
         slot = (slot + 1) & mask
-        index = table[slot]
+        index = table[unsigned_index(slot)]
     return index
 
 
@@ -252,11 +263,11 @@ def _nth_with_count(
     index: int,
 ) -> int:
     """The ``index``-th (0-based) outcome of ``pair`` whose count is ``count`` (−1 if none)."""
-    entry = pair_head[pair]
-    while entry >= 0 and (entry_count[entry] != count or index > 0):
-        if entry_count[entry] == count:
+    entry = pair_head[unsigned_index(pair)]
+    while entry >= 0 and (entry_count[unsigned_index(entry)] != count or index > 0):
+        if entry_count[unsigned_index(entry)] == count:
             index -= 1
-        entry = entry_sibling[entry]
+        entry = entry_sibling[unsigned_index(entry)]
     return entry
 
 
@@ -274,8 +285,8 @@ def most_probable_entry(
     draw in [0, 1) made by the caller (the ``int(uniform · n_ties)``-th tied outcome in list
     order)."""
     # One path (no shortcut for a unique maximum, whose index is 0): see the module docstring.
-    index = int(uniform * pair_ties[pair])
-    count = entry_count[pair_best[pair]]
+    index = int(uniform * pair_ties[unsigned_index(pair)])
+    count = entry_count[unsigned_index(pair_best[unsigned_index(pair)])]
     return _nth_with_count(pair_head, entry_count, entry_sibling, pair, count, index)
 
 
@@ -295,9 +306,10 @@ def most_probable_target(
         model.pair_best, model.pair_ties, model.pair_head, model.entry_count, model.entry_sibling,
         pair, uniform,
     )  # fmt: skip
+    at = unsigned_index(entry)
     return entry_target(
-        q, model.entry_count[entry], model.entry_reward_sum[entry],
-        model.entry_terminal_count[entry], model.entry_next_state[entry], gamma,
+        q, model.entry_count[at], model.entry_reward_sum[at], model.entry_terminal_count[at],
+        unsigned_index(model.entry_next_state[at]), gamma,
     )  # fmt: skip
 
 

@@ -28,6 +28,7 @@ from skidnav.kernels.multinomial import (
     most_probable_target,
     pair_state_action,
     sample_entry,
+    unsigned_index,
 )
 from skidnav.kernels.priority_queue import HeapArrays, heap_push, pop, push
 from skidnav.kernels.tabular import inline_jit, td_target, update_toward
@@ -163,40 +164,59 @@ def prioritized_sweeping(
     pair of highest priority, update it toward its model target, then queue each predecessor
     (s̄, ā) of s whose |TD error| exceeds ``theta`` (a most-probable model draws one
     ``rng.random()`` per predecessor, a sampling one is asked for its expected target). Returns
-    the number of updates.
+    the number of updates (popped pairs; the predecessors' priorities are not counted).
 
     Same numbers as ``heap_pop``, ``model_target``, ``update_toward`` and :func:`queue_pair` per
     predecessor, written out over arrays bound once: an inlined helper that binds an array it
     last uses in a branch (or binds the 21-array model) pays an atomic increment and decrement
     per array at every call, ~75 % of the time before (see :mod:`skidnav.kernels.multinomial`).
-    The most-probable target is computed inline; the other modes' come from a compiled call."""
+    The most-probable target of a pair whose most probable outcome is unique comes from the
+    model's cache, as in :func:`dyna_planning` (its tie draw is still made, so that the stream
+    is the same); the other modes' come from a compiled call. Pair slots and keys index
+    through ``unsigned_index`` (no wrap of negative indices)."""
     priority, item, position, size = heap.priority, heap.item, heap.position, heap.size
     pair_table, pair_key, entry_pair = model.pair_table, model.pair_key, model.entry_pair
     target_table, target_state = model.target_table, model.target_state
     target_head, pred_link = model.target_head, model.entry_pred_link
+    ties, best_next = model.pair_ties, model.pair_best_next
+    best_reward, best_continuation = model.pair_best_reward, model.pair_best_continuation
     cells = q.reshape(-1, 1)  # row s·n_actions + a is q[s, a]
     n_actions = q.shape[1]
     updates = 0
     while updates < n_steps and size[0] > 0:
         key, _ = pop(priority, item, position, size)
         pair = hash_find(pair_table, pair_key, key)
+        index = unsigned_index(pair)
         uniform = rng.random()
-        if mode == MOST_PROBABLE:
-            target = most_probable_target(q, model, pair, gamma, uniform)
-        else:
+        if mode != MOST_PROBABLE:
             target = model_target_call(model, q, pair, mode, gamma, uniform)
-        update_toward(cells, key, 0, target, alpha)
+        elif ties[index] == 1:  # a unique most probable outcome: read the model's cache
+            target = td_target(
+                q, best_reward[index], unsigned_index(best_next[index]), best_continuation[index],
+                gamma,
+            )  # fmt: skip
+        else:
+            target = most_probable_target(q, model, pair, gamma, uniform)
+        update_toward(cells, unsigned_index(key), 0, target, alpha)
         updates += 1
         slot = hash_find(target_table, target_state, key // n_actions)
         entry = target_head[slot] if slot >= 0 else -1
         while entry >= 0:  # queue the predecessors of the updated state
             pair = entry_pair[entry]
-            if mode == MOST_PROBABLE:
-                target = most_probable_target(q, model, pair, gamma, rng.random())
-            else:
+            index = unsigned_index(pair)
+            if mode != MOST_PROBABLE:
                 target = model_target_call(model, q, pair, EXPECTED, gamma, 0.0)
-            key = pair_key[pair]
-            value = abs(target - cells[key, 0])
+            else:
+                uniform = rng.random()  # drawn for every predecessor, tied or not
+                if ties[index] == 1:
+                    target = td_target(
+                        q, best_reward[index], unsigned_index(best_next[index]),
+                        best_continuation[index], gamma,
+                    )  # fmt: skip
+                else:
+                    target = most_probable_target(q, model, pair, gamma, uniform)
+            key = pair_key[index]
+            value = abs(target - cells[unsigned_index(key), 0])
             if value > theta:
                 push(priority, item, position, size, key, value)
             entry = pred_link[entry]

@@ -35,11 +35,13 @@ import json
 import logging
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from sklearn.linear_model import BayesianRidge
 
-from skidnav.errors import CorruptFileError
+from skidnav.atomicfile import write_atomic, write_npz_atomic
+from skidnav.errors import CorruptFileError, first_line
 from skidnav.kernels.kinematic_prediction import (
     action_velocities,
     feed_rows,
@@ -48,6 +50,7 @@ from skidnav.kernels.kinematic_prediction import (
 )
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
+from skidnav.savedfile import MAX_ARCHIVE_BYTES, READ_ERRORS, ArraySpec, SavedArchive, read_json
 from skidnav.world.discretization import Discretization
 
 logger = logging.getLogger(__name__)
@@ -328,27 +331,59 @@ class KinematicModel:
             "grid": asdict(self.grid),
         }
 
+    @staticmethod
+    def check_size(grid: Discretization, config: KinematicModelConfig) -> None:
+        """ValueError unless a model of ``grid`` and ``config`` is one a saved file may describe:
+        no more slip regions than cells, and its arrays (per region the ``window × 5`` samples,
+        2 counts, 8 coefficients, 12 velocities, float64 or int64) within
+        :data:`~skidnav.savedfile.MAX_ARCHIVE_BYTES`. Checked before a loader allocates one."""
+        n_bytes = grid.n_regions * (config.window * 5 + 22) * 8
+        if grid.n_regions > grid.n_x * grid.n_y or n_bytes > MAX_ARCHIVE_BYTES:
+            raise ValueError(
+                f"a kinematic model of {grid.n_regions:,} slip regions on {grid.n_x} × "
+                f"{grid.n_y} cells with a window of {config.window:,} samples is too large"
+            )
+
     def save(self, path: str | Path) -> None:
-        """Write ``<path>.npz`` (arrays) and ``<path>.json`` (config); never pickle."""
+        """Write ``<path>.npz`` (arrays) and ``<path>.json`` (config), each atomically; never
+        pickle."""
         base = Path(path).with_suffix("")
-        np.savez(base.with_suffix(".npz"), **self.state_arrays())  # type: ignore[arg-type]
-        base.with_suffix(".json").write_text(json.dumps(self.metadata(), indent=2))
+        write_npz_atomic(base.with_suffix(".npz"), self.state_arrays())
+        write_atomic(base.with_suffix(".json"), json.dumps(self.metadata(), indent=2).encode())
 
     @classmethod
     def load(cls, path: str | Path) -> KinematicModel:
-        """Read a model written by :meth:`save`."""
+        """Read a model written by :meth:`save`; CorruptFileError (one line naming the file)
+        when a file is missing, damaged or inconsistent. The JSON is checked (size, nesting,
+        every field validated, :meth:`check_size`) before the model is allocated, the archive's
+        member names, dtypes and shapes against that model before any array is read."""
         base = Path(path).with_suffix("")
+        meta = read_json(base.with_suffix(".json"), max_bytes=2**20, what="kinematic model file")
         try:
-            meta = json.loads(base.with_suffix(".json").read_text())
             if meta.get("format_version") != _FORMAT_VERSION:
-                raise CorruptFileError(f"{base}.json: unsupported format version")
-            model = cls(
-                RobotParams(**meta["robot"]),
-                Discretization(**meta["grid"]),
-                KinematicModelConfig(**meta["config"]),
-            )
-            with np.load(base.with_suffix(".npz"), allow_pickle=False) as arrays:
-                model.load_arrays(dict(arrays))
-        except (OSError, KeyError, TypeError, ValueError, json.JSONDecodeError) as error:
-            raise CorruptFileError(f"{base}: cannot load kinematic model ({error})") from error
+                raise ValueError("unsupported format version")
+            grid = Discretization(**_table(meta, "grid"))
+            config = KinematicModelConfig(**_table(meta, "config"))
+            cls.check_size(grid, config)
+            model = cls(RobotParams(**_table(meta, "robot")), grid, config)
+            specs = {
+                name: ArraySpec(array.shape, array.dtype.str)
+                for name, array in model.state_arrays().items()
+            }
+            with SavedArchive(base.with_suffix(".npz")) as archive:
+                model.load_arrays(archive.read_all(specs))
+        except (*READ_ERRORS, KeyError, CorruptFileError) as error:
+            if isinstance(error, CorruptFileError) and str(error).startswith(f"{base}."):
+                raise
+            raise CorruptFileError(
+                f"{base}: cannot load kinematic model ({first_line(error)})"
+            ) from None
         return model
+
+
+def _table(meta: dict[str, Any], key: str) -> dict[str, Any]:
+    """``meta[key]`` if it is a JSON object (TypeError otherwise)."""
+    value = meta[key]
+    if not isinstance(value, dict):
+        raise TypeError(f"expected {key!r} to be a JSON object, got {type(value).__name__}")
+    return value

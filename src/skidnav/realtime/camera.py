@@ -1,34 +1,47 @@
 """Robot pose from an overhead camera tracking ArUco markers (docs/camera.md).
 
 :class:`CameraPoseSource` turns frames (from :func:`open_frames`) and a floor calibration (from
-:func:`calibrate` or :func:`load_calibration`) into :class:`~skidnav.realtime.driver.Pose`
-measurements, either frame by frame (:meth:`CameraPoseSource.process`) or continuously in a
-background thread (:meth:`CameraPoseSource.start`) for the real-time loop.
+:func:`calibrate` or :func:`load_calibration`, optionally made with the lens model of
+:func:`calibrate_intrinsics` / :func:`load_intrinsics`) into
+:class:`~skidnav.realtime.driver.Pose` measurements, either frame by frame
+(:meth:`CameraPoseSource.process`) or continuously in a background thread
+(:meth:`CameraPoseSource.start`) for the real-time loop.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable, Iterable
 
 from skidnav.errors import UserError
 from skidnav.realtime.camera_calibration import FloorCalibration, calibrate, load_calibration
-from skidnav.realtime.camera_markers import ArenaLayout, MarkerDetector, floor_pose
+from skidnav.realtime.camera_intrinsics import (
+    CameraIntrinsics,
+    CharucoBoardSpec,
+    calibrate_intrinsics,
+    load_intrinsics,
+)
+from skidnav.realtime.camera_markers import ArenaLayout, MarkerDetector
 from skidnav.realtime.camera_sources import Frame, FrameSource, open_frames
 from skidnav.realtime.driver import Pose, RobotDriver
 
 __all__ = [
     "ArenaLayout",
+    "CameraIntrinsics",
     "CameraPoseSource",
     "CameraPosedDriver",
+    "CharucoBoardSpec",
     "FloorCalibration",
     "Frame",
     "FrameSource",
     "MarkerDetector",
     "calibrate",
+    "calibrate_intrinsics",
     "load_calibration",
+    "load_intrinsics",
     "open_frames",
 ]
 
@@ -44,9 +57,12 @@ class CameraPoseSource:
 
     Args:
         frames: the frames to read (a :class:`FrameSource` is closed by :meth:`close`).
-        calibration: the floor calibration; its ``layout.robot_id`` is the marker tracked.
+        calibration: the floor calibration; its ``layout.robot_id`` is the marker tracked, and
+            its lens model (if any) undistorts the marker's corners.
         max_age: how old [s] a pose may be before it counts as lost.
         clock: monotonic clock [s] used to stamp poses (the driver clock of ``Pose.stamp``).
+        marker_height: height [m] of the robot marker above the corner-marker plane; a non-zero
+            height is corrected for and needs a calibration made with intrinsics.
 
     Thread safety: :meth:`latest_pose` may be called from any thread while the background thread
     runs.
@@ -59,11 +75,15 @@ class CameraPoseSource:
         *,
         max_age: float = 0.5,
         clock: Callable[[], float] = time.monotonic,
+        marker_height: float = 0.0,
     ) -> None:
         if not max_age > 0:
             raise ValueError(f"expected max_age > 0 s, got {max_age}")
+        if marker_height != 0.0:
+            _check_marker_height(calibration, marker_height)
         self.calibration = calibration
         self.max_age = max_age
+        self.marker_height = marker_height
         self.frames_processed = 0
         self.frames_with_robot = 0
         self.error: Exception | None = None
@@ -91,7 +111,7 @@ class CameraPoseSource:
         corners = self._detector.detect(frame.image).get(self.calibration.layout.robot_id)
         pose = None
         if corners is not None:
-            x, y, heading = floor_pose(self.calibration.homography, corners)
+            x, y, heading = self.calibration.marker_pose(corners, self.marker_height)
             pose = Pose(stamp, x, y, heading)
         with self._lock:
             self._latest = pose
@@ -151,6 +171,20 @@ class CameraPoseSource:
 
     def __exit__(self, *exc_info: object) -> None:
         self.close()
+
+
+def _check_marker_height(calibration: FloorCalibration, marker_height: float) -> None:
+    """Raise ``ValueError`` unless ``calibration`` can correct for ``marker_height`` [m]."""
+    if not math.isfinite(marker_height):
+        raise ValueError(f"expected a finite marker height [m], got {marker_height}")
+    pose = calibration.camera_pose
+    if pose is None:
+        raise ValueError("a marker height needs a floor calibration made with intrinsics")
+    if not marker_height < pose.position[2]:
+        raise ValueError(
+            f"expected a marker height below the camera ({pose.position[2]:.3f} m up), "
+            f"got {marker_height} m"
+        )
 
 
 class CameraPosedDriver:

@@ -1,22 +1,28 @@
-"""Where camera frames come from: a live camera, a video file, or a folder of images.
+"""Where camera frames and files come from: a live camera, a video file, images, JSON files.
 
 :func:`open_frames` takes the user's ``--source`` (``"0"`` for camera 0, a video path, or a folder)
 and returns one :class:`FrameSource` that yields :class:`Frame` objects with timestamps.
+:func:`read_images` reads a still set of images (the board views of a lens calibration), and
+:func:`read_json_file` / :func:`write_json_file` the camera's JSON files (calibration,
+intrinsics), each failure in one line.
 """
 
 from __future__ import annotations
 
+import json
 import logging
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from skidnav.atomicfile import write_atomic
 from skidnav.errors import UserError
+from skidnav.savedfile import read_json
 
 LOGGER = logging.getLogger(__name__)
 
@@ -63,11 +69,7 @@ class FrameSource:
             return
         path = Path(source)
         if path.is_dir():
-            self._files = sorted(p for p in path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
-            if not self._files:
-                raise UserError(
-                    f"{path}: no images ({', '.join(sorted(IMAGE_SUFFIXES))}) in folder"
-                )
+            self._files = image_files(path)
         elif path.is_file():
             self._open_capture(str(path))
         else:
@@ -126,3 +128,67 @@ class FrameSource:
 def open_frames(source: int | str | Path, fps: float = 30.0) -> FrameSource:
     """A :class:`FrameSource` for ``source`` (see there); raises ``UserError`` if unusable."""
     return FrameSource(source, fps=fps)
+
+
+def image_files(folder: Path) -> list[Path]:
+    """The image files (by suffix, :data:`IMAGE_SUFFIXES`) in ``folder``, sorted by name.
+
+    Raises:
+        UserError: the folder holds no image.
+    """
+    files = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    if not files:
+        raise UserError(f"{folder}: no images ({', '.join(sorted(IMAGE_SUFFIXES))}) in folder")
+    return files
+
+
+def read_images(paths: Sequence[str | Path]) -> list[tuple[str, NDArray[np.uint8]]]:
+    """Read image files and folders (each folder's images in name order) as (name, BGR image).
+
+    Unlike a :class:`FrameSource`, which skips an unreadable frame of a recording, a still set is
+    all or nothing: every image was chosen by the user.
+
+    Raises:
+        UserError: a path that does not exist, a folder without images, or an unreadable image.
+    """
+    files: list[Path] = []
+    for path in map(Path, paths):
+        if path.is_dir():
+            files.extend(image_files(path))
+        elif path.is_file():
+            files.append(path)
+        else:
+            raise UserError(f"{path}: no such image file or folder")
+    images = []
+    for file in files:
+        image = cv2.imread(str(file), cv2.IMREAD_COLOR)
+        if image is None:
+            raise UserError(f"{file}: unreadable image")
+        images.append((str(file), np.asarray(image, dtype=np.uint8)))
+    return images
+
+
+def read_json_file(path: str | Path, what: str) -> dict[str, Any]:
+    """The JSON object in the file ``path``, read by :func:`skidnav.savedfile.read_json` (size
+    and nesting limits, no NaN or Infinity); ``what`` names the kind of file in errors.
+
+    Raises:
+        UserError: the file does not exist. CorruptFileError: unreadable, or not a JSON object.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise UserError(f"{path}: {what} file not found")
+    return read_json(path, what=f"{what} file")
+
+
+def write_json_file(path: str | Path, data: dict[str, Any], what: str) -> None:
+    """Write ``data`` as indented JSON to ``path`` all-or-nothing (``savedfile.write_atomic``).
+
+    Raises:
+        UserError: the file cannot be written (e.g. its folder does not exist).
+    """
+    text = json.dumps(data, indent=2, allow_nan=False) + "\n"
+    try:
+        write_atomic(path, text.encode("utf-8"))
+    except OSError as error:
+        raise UserError(f"{path}: cannot write {what} ({error.strerror or error})") from None

@@ -6,33 +6,46 @@ Layout under ``OUT/checkpoints/``::
     ep-00004/loop.json               the loop state (episode results, wheel-speed statistics, …)
     latest.json                      {"episode": 4, "directory": "ep-00004"}
 
-A checkpoint directory is complete before ``latest.json`` (replaced atomically with
-``os.replace``) points to it; the newest ``keep`` directories are kept.
+Every file is written with :func:`~skidnav.atomicfile.write_atomic` and a checkpoint directory
+is complete before ``latest.json`` points to it; the newest ``keep`` directories are kept, and
+the temporaries of a writer that was killed are removed at the next checkpoint.
+
+Reading trusts neither JSON file (:func:`~skidnav.savedfile.read_json`: size, nesting, no
+``NaN``): ``latest.json`` must name the checkpoint directory of its episode (nothing outside
+``checkpoints/``), and ``loop.json`` hold episode results and statistics the loop can restore.
 """
 
 from __future__ import annotations
 
 import json
 import logging
-import os
 import shutil
 from pathlib import Path
 from typing import Any
 
-from skidnav.errors import CorruptFileError
+import numpy as np
+
+from skidnav.atomicfile import remove_stale_temporaries, write_atomic
+from skidnav.errors import CorruptFileError, first_line
+from skidnav.realtime.records import EpisodeResult
+from skidnav.savedfile import read_json, shown
 
 log = logging.getLogger(__name__)
 
 LATEST = "latest.json"
+MAX_POINTER_BYTES = 4096
+"""Largest ``latest.json`` read [bytes] (it is about 40)."""
+MAX_LOOP_STATE_BYTES = 64 * 2**20
+"""Largest ``loop.json`` read [bytes] (about 200 per episode plus 30 per slip region)."""
 
 
-def _write_json_atomic(path: Path, data: Any) -> None:
-    temporary = path.with_name(path.name + ".tmp")
-    with temporary.open("w", encoding="utf-8") as stream:
-        json.dump(data, stream, indent=1)
-        stream.flush()
-        os.fsync(stream.fileno())
-    os.replace(temporary, path)
+def _write_json(path: Path, data: Any) -> None:
+    write_atomic(path, json.dumps(data, indent=1).encode("utf-8"))
+
+
+def directory_name(episode: int) -> str:
+    """The checkpoint directory of ``episode`` (0-based), e.g. ``ep-00004``."""
+    return f"ep-{episode:05d}"
 
 
 class Checkpoints:
@@ -44,14 +57,15 @@ class Checkpoints:
 
     def save(self, episode: int, agent: Any, loop_state: dict[str, Any]) -> Path:
         """Write the checkpoint after ``episode`` (0-based) and point ``latest.json`` to it."""
-        name = f"ep-{episode:05d}"
+        name = directory_name(episode)
         directory = self.root / name
         if directory.exists():
             shutil.rmtree(directory)
         directory.mkdir(parents=True)
+        remove_stale_temporaries(self.root, LATEST)
         agent.save(directory / "agent")
-        _write_json_atomic(directory / "loop.json", loop_state)
-        _write_json_atomic(self.root / LATEST, {"episode": episode, "directory": name})
+        _write_json(directory / "loop.json", loop_state)
+        _write_json(self.root / LATEST, {"episode": episode, "directory": name})
         self._prune(name)
         log.info("checkpoint %s written", directory)
         return directory
@@ -66,15 +80,56 @@ class Checkpoints:
         """(episode, directory, loop state) of the newest checkpoint, or None if there is none.
 
         Raises:
-            CorruptFileError: ``latest.json`` or ``loop.json`` unreadable.
+            CorruptFileError: ``latest.json`` or ``loop.json`` unreadable or not what a
+                checkpoint writes (one line naming the file).
         """
         pointer = self.root / LATEST
         if not pointer.exists():
             return None
-        try:
-            latest = json.loads(pointer.read_text(encoding="utf-8"))
-            directory = self.root / str(latest["directory"])
-            state = json.loads((directory / "loop.json").read_text(encoding="utf-8"))
-            return int(latest["episode"]), directory, state
-        except (OSError, ValueError, KeyError, TypeError) as error:
-            raise CorruptFileError(f"{pointer}: unreadable checkpoint: {error}") from None
+        latest = read_json(pointer, max_bytes=MAX_POINTER_BYTES, what="checkpoint pointer")
+        episode, name = latest.get("episode"), latest.get("directory")
+        if not (isinstance(episode, int) and not isinstance(episode, bool) and episode >= 0):
+            raise CorruptFileError(f"{pointer}: expected an episode >= 0, got {shown(episode)}")
+        if name != directory_name(episode):
+            raise CorruptFileError(
+                f"{pointer}: expected directory {directory_name(episode)!r} for episode "
+                f"{episode}, got {shown(name)}"
+            )
+        directory = self.root / directory_name(episode)
+        state_path = directory / "loop.json"
+        state = read_json(state_path, max_bytes=MAX_LOOP_STATE_BYTES, what="checkpoint file")
+        problem = _loop_state_problem(state)
+        if problem is not None:
+            raise CorruptFileError(f"{state_path}: {problem}")
+        return episode, directory, state
+
+
+def _loop_state_problem(state: dict[str, Any]) -> str | None:
+    """What keeps the loop from restoring ``state`` (None if nothing): episode results it
+    cannot rebuild, statistics that are not tables of finite numbers."""
+    results = state.get("results", [])
+    if not isinstance(results, list) or not all(isinstance(r, dict) for r in results):
+        return "expected 'results' to be a list of episode results"
+    fields = set(EpisodeResult.__dataclass_fields__)
+    try:
+        for result in results:
+            unknown = sorted(set(result) - fields)
+            if unknown:
+                raise ValueError(f"unexpected episode result field {shown(unknown[0])}")
+            EpisodeResult(**result)
+        for key in ("wheel_speed_stats", "icr_sums"):
+            if key in state:
+                _finite_table(state[key], key)
+    except (ValueError, TypeError) as error:
+        return f"unusable loop state ({first_line(error, 120)})"
+    return None
+
+
+def _finite_table(value: Any, key: str) -> None:
+    """ValueError (quoting nothing of the file) unless ``value`` is a table of finite numbers."""
+    try:
+        values = np.asarray(value, dtype=np.float64)
+    except (ValueError, TypeError):
+        values = np.full(1, np.nan)
+    if values.ndim > 2 or not np.isfinite(values).all():
+        raise ValueError(f"{key} is not a table of finite numbers")

@@ -2,23 +2,31 @@
 
 Tables: ``[run]`` (:class:`RunSettings`), ``[sim]`` (:class:`SimSettings`), ``[tcp]``,
 ``[serial]``, ``[ros2]`` (driver options), ``[agents.NAME]`` (the agent's hyperparameters) and
-``[presets.NAME]`` (tables merged over the others when the preset is chosen).
+``[presets.NAME]`` (tables merged over the others when the preset is chosen). The sim server's
+own options (:class:`ServerOptions`, from ``skidnav robot sim-server``) are here too.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import tomllib
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
 from skidnav.errors import UserError
+from skidnav.realtime.protocol import MAX_LINE_BYTES
 from skidnav.robot.slip import SLIP_PRESETS
+from skidnav.savedfile import parse_toml, read_config_text, shown
 from skidnav.world.grid import MAP_KINDS
 
 T = TypeVar("T")
+
+DRIVER_TABLES = ("tcp", "serial", "ros2")
+"""The tables of driver options."""
+FAULTS = ("silence", "garbage", "oversized", "escape", "hangup")
+"""Faults the sim server can inject for tests (realtime/sim_server.py)."""
 
 
 @dataclass(frozen=True)
@@ -67,20 +75,20 @@ class RunSettings:
         for name in ("episodes", "max_actions", "substeps", "pose_timeout_periods"):
             value = getattr(self, name)
             if not (isinstance(value, int) and value >= 1):
-                raise ValueError(f"expected {name} to be an integer >= 1, got {value!r}")
+                raise ValueError(f"expected {name} to be an integer >= 1, got {shown(value)}")
         for name in ("time_scale", "period", "homing_tolerance", "homing_timeout"):
             if not getattr(self, name) > 0:
-                raise ValueError(f"expected {name} > 0, got {getattr(self, name)}")
+                raise ValueError(f"expected {name} > 0, got {shown(getattr(self, name))}")
         for name in ("arena_margin", "reconnect_timeout", "pose_timeout_min"):
             if not getattr(self, name) >= 0:
-                raise ValueError(f"expected {name} >= 0, got {getattr(self, name)}")
+                raise ValueError(f"expected {name} >= 0, got {shown(getattr(self, name))}")
         settle = self.settle_periods
         if not (isinstance(settle, int) and 0 <= settle < self.substeps):
-            raise ValueError(f"expected settle_periods in [0, substeps), got {settle!r}")
+            raise ValueError(f"expected settle_periods in [0, substeps), got {shown(settle)}")
         if self.reset not in ("auto", "manual"):
-            raise ValueError(f"expected reset 'auto' or 'manual', got {self.reset!r}")
+            raise ValueError(f"expected reset 'auto' or 'manual', got {shown(self.reset)}")
         if not (isinstance(self.keep_checkpoints, int) and self.keep_checkpoints >= 1):
-            raise ValueError(f"expected keep_checkpoints >= 1, got {self.keep_checkpoints!r}")
+            raise ValueError(f"expected keep_checkpoints >= 1, got {shown(self.keep_checkpoints)}")
 
     @property
     def period_wall(self) -> float:
@@ -101,6 +109,7 @@ class SimSettings:
         slip: slip preset. drift: relative drift amplitude. drift_period: [s].
         latency: command latency [s]. pose_noise: σ of x, y [m]. drop: pose drop probability.
         link_timeout: the server stops the wheels after this quiet time [s wall].
+        idle_timeout: the server drops a client after this quiet time [s wall].
     """
 
     slip: str = "rough"
@@ -110,15 +119,22 @@ class SimSettings:
     pose_noise: float = 0.0
     drop: float = 0.0
     link_timeout: float = 0.5
+    idle_timeout: float = 2.0
 
     def __post_init__(self) -> None:
         if self.slip not in SLIP_PRESETS:
-            raise ValueError(f"expected slip one of {', '.join(SLIP_PRESETS)}, got {self.slip!r}")
+            raise ValueError(
+                f"expected slip one of {', '.join(SLIP_PRESETS)}, got {shown(self.slip)}"
+            )
         for name in ("drift", "latency", "pose_noise", "drop"):
             if not getattr(self, name) >= 0:
-                raise ValueError(f"expected {name} >= 0, got {getattr(self, name)}")
+                raise ValueError(f"expected {name} >= 0, got {shown(getattr(self, name))}")
         if not (self.drift_period > 0 and self.link_timeout > 0 and self.drop < 1):
             raise ValueError("expected drift_period > 0, link_timeout > 0 and drop < 1")
+        if not self.idle_timeout >= self.link_timeout:
+            raise ValueError(
+                f"expected idle_timeout >= link_timeout, got {shown(self.idle_timeout)}"
+            )
 
     def server_arguments(self) -> list[str]:
         """The matching ``skidnav robot sim-server`` options."""
@@ -137,7 +153,48 @@ class SimSettings:
             str(self.drop),
             "--link-timeout",
             str(self.link_timeout),
+            "--idle-timeout",
+            str(self.idle_timeout),
         ]
+
+
+@dataclass(frozen=True)
+class ServerOptions:
+    """Timing and behaviour of the server, validated on construction.
+
+    Attributes:
+        time_scale: robot seconds per wall second (> 0); 10 runs ten times faster than real time.
+        link_timeout: wall seconds without a valid message from the client before the wheels
+            stop.
+        idle_timeout: wall seconds without a valid message before the client is dropped
+            (≥ ``link_timeout``).
+        send_limit: bytes queued for a client that does not read before it is dropped.
+        faults: the faults successive SIGUSR1s inject, in order (each one of :data:`FAULTS`).
+        name: robot name sent in ``hello``.
+    """
+
+    time_scale: float = 1.0
+    link_timeout: float = 0.5
+    idle_timeout: float = 2.0
+    send_limit: int = 64 * 1024
+    faults: tuple[str, ...] = ()
+    name: str = "skidnav-sim"
+
+    def __post_init__(self) -> None:
+        if not 0 < self.time_scale < math.inf:
+            raise ValueError(f"expected a finite time_scale > 0, got {self.time_scale}")
+        if not self.link_timeout > 0:
+            raise ValueError(f"expected link_timeout > 0 s, got {self.link_timeout}")
+        if not self.idle_timeout >= self.link_timeout:
+            raise ValueError(
+                f"expected idle_timeout >= link_timeout ({self.link_timeout} s), "
+                f"got {self.idle_timeout}"
+            )
+        if not self.send_limit >= MAX_LINE_BYTES:
+            raise ValueError(f"expected send_limit >= {MAX_LINE_BYTES}, got {self.send_limit}")
+        for fault in self.faults:
+            if fault not in FAULTS:
+                raise ValueError(f"expected faults among {', '.join(FAULTS)}, got {fault!r}")
 
 
 @dataclass(frozen=True)
@@ -161,46 +218,57 @@ def _merge(base: dict[str, Any], override: Mapping[str, Any]) -> dict[str, Any]:
     return merged
 
 
-def _build(cls: type[T], table: Mapping[str, Any], where: str) -> T:
+def _build(cls: type[T], table: Any, where: str) -> T:
+    table = _table(table, where)
     known = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
     unknown = sorted(set(table) - known)
     if unknown:
-        raise UserError(f"{where}: unknown option(s) {', '.join(unknown)}")
+        raise UserError(f"{where}: unknown option(s) {shown(', '.join(unknown))}")
     try:
         return cls(**table)
     except (ValueError, TypeError) as error:
         raise UserError(f"{where}: {error}") from None
 
 
+def _table(value: Any, where: str) -> dict[str, Any]:
+    """``value`` if it is a TOML table; UserError naming ``where`` otherwise."""
+    if not isinstance(value, dict):
+        raise UserError(f"{where}: expected a table, got {shown(value)}")
+    return value
+
+
 def config_from_mapping(data: Mapping[str, Any], preset: str | None = None) -> RealtimeConfig:
     """A config from parsed TOML, with ``[presets.NAME]`` merged over it if ``preset`` is given."""
     tables = {key: value for key, value in data.items() if key != "presets"}
     if preset is not None:
-        presets = data.get("presets", {})
+        presets = _table(data.get("presets", {}), "[presets]")
         if preset not in presets:
-            raise UserError(f"unknown preset {preset!r}; expected one of {', '.join(presets)}")
-        tables = _merge(tables, presets[preset])
-    unknown = sorted(set(tables) - {"run", "sim", "tcp", "serial", "ros2", "agents", "study"})
+            names = shown(", ".join(presets))
+            raise UserError(f"unknown preset {preset!r}; expected one of {names}")
+        tables = _merge(tables, _table(presets[preset], f"[presets.{preset}]"))
+    unknown = sorted(set(tables) - {"run", "sim", *DRIVER_TABLES, "agents", "study"})
     if unknown:
-        raise UserError(f"unknown config table(s) {', '.join(unknown)}")
+        raise UserError(f"unknown config table(s) {shown(', '.join(unknown))}")
+    agents = _table(tables.get("agents", {}), "[agents]")
     return RealtimeConfig(
         run=_build(RunSettings, tables.get("run", {}), "[run]"),
         sim=_build(SimSettings, tables.get("sim", {}), "[sim]"),
-        drivers={name: dict(tables.get(name, {})) for name in ("tcp", "serial", "ros2")},
-        agents={name: dict(value) for name, value in tables.get("agents", {}).items()},
+        drivers={name: dict(_table(tables.get(name, {}), f"[{name}]")) for name in DRIVER_TABLES},
+        agents={name: dict(_table(value, f"[agents.{name}]")) for name, value in agents.items()},
     )
 
 
 def read_tables(path: Path) -> dict[str, Any]:
-    """The TOML tables of a config file, with every relative map file path (``[run] map`` and
-    ``[presets.NAME.run] map``, when not a map kind) made relative to the file's folder;
-    UserError if unreadable."""
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, tomllib.TOMLDecodeError) as error:
-        raise UserError(f"{path}: {error}") from None
+    """The TOML tables of a config file (read by :func:`~skidnav.savedfile.read_config_text`:
+    at most :data:`~skidnav.savedfile.MAX_CONFIG_BYTES`, a device or a pipe ends at that limit;
+    nested at most :data:`~skidnav.savedfile.MAX_JSON_DEPTH` levels), with every relative map
+    file path (``[run] map`` and ``[presets.NAME.run] map``, when not a map kind) made relative
+    to the file's folder; UserError (one line naming the file) if unreadable or malformed."""
+    data = parse_toml(read_config_text(path), path)
     presets = data.get("presets", {})
-    runs = [data.get("run")] + [p.get("run") for p in presets.values() if isinstance(p, dict)]
+    runs = [data.get("run")]
+    if isinstance(presets, dict):
+        runs += [p.get("run") for p in presets.values() if isinstance(p, dict)]
     for run in runs:
         if not isinstance(run, dict):
             continue

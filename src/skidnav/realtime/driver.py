@@ -39,7 +39,8 @@ class RobotDriver(Protocol):
         """The newest pose received, or None if none yet."""
 
     def stop(self) -> bool:
-        """Command zero wheel speeds; True once the robot confirmed the stop."""
+        """Command zero wheel speeds, retrying until the robot confirms (True) or the link is
+        found dead (False); returns within :data:`skidnav.realtime.safety.STOP_WAIT`."""
 
     def close(self) -> None:
         """Stop the wheels (best effort) and release the link."""

@@ -2,8 +2,10 @@
 
 ``sim`` starts ``skidnav robot sim-server`` as a child process on a free loopback port (with the
 run's map, seed, time scale and ``[sim]`` settings) and talks to it over TCP; reconnecting after
-a fault restarts the server if it died. ``ros2`` is built by ``skidnav.realtime.ros2`` when that
-module is installed.
+a fault restarts the server if it died. The child's standard input is a pipe from this process
+and the server exits at its end of stream (``--exit-with-stdin``): when this process ends in any
+way, SIGKILL included, the kernel closes the pipe and the server follows. ``ros2`` is built by
+``skidnav.realtime.ros2`` when that module is installed.
 """
 
 from __future__ import annotations
@@ -41,13 +43,15 @@ class SimServerProcess:
         if self.process is not None and self.process.poll() is None:
             return self.port
         command = [sys.executable, "-m", "skidnav.cli", "robot", "sim-server", "--port", "0"]
-        command += self.arguments
+        command += ["--exit-with-stdin", *self.arguments]
         if self.log_path is not None:
             command += ["--log", str(self.log_path)]
         env = dict(os.environ)
         src = str(Path(__file__).resolve().parents[2])
         env["PYTHONPATH"] = os.pathsep.join(filter(None, [src, env.get("PYTHONPATH")]))
-        self.process = subprocess.Popen(command, stdout=subprocess.PIPE, text=True, env=env)
+        self.process = subprocess.Popen(
+            command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env
+        )
         assert self.process.stdout is not None
         line = self.process.stdout.readline()
         if not line.startswith("listening on "):
@@ -67,8 +71,9 @@ class SimServerProcess:
             except subprocess.TimeoutExpired:
                 self.process.kill()
                 self.process.wait()
-        if self.process.stdout is not None:
-            self.process.stdout.close()
+        for stream in (self.process.stdin, self.process.stdout):
+            if stream is not None:
+                stream.close()
         self.process = None
 
 
@@ -96,7 +101,10 @@ def make_driver(name: str, config: RealtimeConfig, server_log: Path | None = Non
     """The driver ``name`` configured from ``config`` (``[tcp]``, ``[serial]``, ``[ros2]``,
     ``[sim]`` and ``[run]``); ``server_log`` is the sim server's command log (sim only)."""
     options = config.drivers.get(name, {})
-    client = {"stop_timeout": max(0.05, 2 * config.run.period_wall)}
+    client = {
+        "stop_timeout": max(0.05, 2 * config.run.period_wall),
+        "command_ttl": config.run.pose_timeout,  # a command lives as long as a pose may lag
+    }
     if name == "sim":
         run = config.run
         arguments = [

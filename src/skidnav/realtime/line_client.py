@@ -11,6 +11,7 @@ passed at once to the fault callback (the safety monitor's trip).
 from __future__ import annotations
 
 import logging
+import math
 import socket
 import threading
 import time
@@ -123,8 +124,11 @@ class LineClient:
     Args:
         link: the byte stream.
         handshake_timeout: wait for the robot's ``hello`` [s].
-        stop_timeout: wait for ``stopped`` [s]; the stop is sent again once halfway.
+        stop_timeout: the stop is re-sent every ``stop_timeout / 2`` until confirmed [s].
         heartbeat_interval: idle time before a ``heartbeat`` is sent [s].
+        command_ttl: validity of each ``cmd`` after it was sent [s] (the robot's lease).
+        dead_timeout: a robot from which nothing at all arrived for this long is declared
+            lost, and :meth:`stop` gives up [s].
     """
 
     def __init__(
@@ -134,11 +138,17 @@ class LineClient:
         handshake_timeout: float = 2.0,
         stop_timeout: float = 0.1,
         heartbeat_interval: float = 0.05,
+        command_ttl: float = 0.5,
+        dead_timeout: float = 2.0,
     ) -> None:
+        if not (stop_timeout > 0 and command_ttl > 0 and dead_timeout > 0):
+            raise ValueError("expected stop_timeout, command_ttl and dead_timeout > 0 s")
         self.link = link
         self.handshake_timeout = handshake_timeout
         self.stop_timeout = stop_timeout
         self.heartbeat_interval = heartbeat_interval
+        self.command_ttl = command_ttl
+        self.dead_timeout = dead_timeout
         self.robot_period: float | None = None
         self.fault: str | None = None
         self.on_fault: Callable[[str], None] | None = None
@@ -147,10 +157,11 @@ class LineClient:
         self._measurement: tuple[Pose, float] | None = None
         self._seq = 0
         self._last_tx = 0.0
+        self._last_rx = 0.0
         self._write_lock = threading.Lock()
         self._reply = threading.Condition()
         self._hello = threading.Event()
-        self._stopped_acks: set[int] = set()
+        self._stopped_up_to = -1  # the largest seq a ``stopped`` acknowledged
         self._running = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -162,19 +173,32 @@ class LineClient:
         self._pose = None
         self._measurement = None
         self._hello.clear()
+        self._stopped_up_to = -1
         self.link.open()
+        self._last_rx = time.monotonic()
         self._running.set()
         self._thread = threading.Thread(target=self._read_loop, name="line-client", daemon=True)
         self._thread.start()
         self._send(lambda seq: pr.Hello(seq=seq, name="skidnav"))
-        if not self._hello.wait(self.handshake_timeout):
-            reason = self.fault or "no hello from the robot"
-            self.close()
-            raise ConnectionError(reason)
+        deadline = time.monotonic() + self.handshake_timeout
+        while not self._hello.wait(READ_POLL):  # an error reply (busy, version) ends the wait
+            if self.fault is not None or time.monotonic() >= deadline:
+                reason = self.fault or "no hello from the robot"
+                self.close()
+                raise ConnectionError(reason)
 
     def command(self, omega_left: float, omega_right: float) -> None:
-        """Send wheel speeds [rad/s]; a link error becomes a fault, not an exception."""
-        self._send(lambda seq: pr.Command(seq=seq, omega_left=omega_left, omega_right=omega_right))
+        """Send wheel speeds [rad/s], valid for ``command_ttl`` from now; a link error becomes
+        a fault, not an exception."""
+        self._send(
+            lambda seq: pr.Command(
+                seq=seq,
+                omega_left=omega_left,
+                omega_right=omega_right,
+                stamp=time.monotonic(),
+                ttl=self.command_ttl,
+            )
+        )
 
     def latest_pose(self) -> Pose | None:
         """The newest pose, stamped on this process's monotonic clock at receipt."""
@@ -185,33 +209,43 @@ class LineClient:
         return self._measurement
 
     def stop(self) -> bool:
-        """Send ``stop`` (again once halfway through the wait); True once ``stopped`` came."""
-        deadline = time.monotonic() + self.stop_timeout
-        for attempt in range(2):
-            seq = self._send(lambda seq: pr.Stop(seq=seq))
-            if seq is None:
-                return False
-            wait_until = deadline if attempt else time.monotonic() + self.stop_timeout / 2
-            with self._reply:
-                while seq not in self._stopped_acks:
-                    remaining = wait_until - time.monotonic()
-                    if remaining <= 0 or not self._running.is_set():
-                        break
-                    self._reply.wait(remaining)
-                if seq in self._stopped_acks:
-                    return True
-        return False
+        """Send ``stop`` and re-send it every ``stop_timeout / 2`` until a ``stopped`` answers
+        one of them (True), or until the link is dead (False): the connection failed, or
+        nothing at all arrived from the robot for ``dead_timeout``. A stalled robot that
+        resumes reads them all and confirms."""
+        return self._stop_until(math.inf)
 
     def close(self) -> None:
-        """Stop the wheels (best effort), end the reader and close the link."""
+        """Stop the wheels (best effort, one ``stop_timeout``), end the reader, close the link."""
         if self._thread is None:
             return
         if self._running.is_set():
-            self.stop()
+            self._stop_until(time.monotonic() + self.stop_timeout)
         self._running.clear()
         self._thread.join(timeout=1.0)
         self._thread = None
         self.link.close()
+
+    def _stop_until(self, give_up: float) -> bool:
+        """:meth:`stop`, giving up at ``give_up`` (monotonic [s]) at the latest."""
+        first: int | None = None
+        while True:
+            seq = self._send(lambda seq: pr.Stop(seq=seq))
+            if seq is None:
+                return False
+            first = seq if first is None else first
+            wait_until = min(give_up, time.monotonic() + self.stop_timeout / 2)
+            with self._reply:
+                while self._stopped_up_to < first and self._running.is_set():
+                    remaining = wait_until - time.monotonic()
+                    if remaining <= 0:
+                        break
+                    self._reply.wait(remaining)
+                if self._stopped_up_to >= first:  # a stopped for a later stop counts too
+                    return True
+            silent = time.monotonic() - self._last_rx > self.dead_timeout
+            if silent or not self._running.is_set() or time.monotonic() >= give_up:
+                return False
 
     # --- internals -----------------------------------------------------------------------
     def _send(self, build: Callable[[int], pr.Message]) -> int | None:
@@ -243,6 +277,7 @@ class LineClient:
                 self._report(f"link lost: {error}")
                 break
             if data:
+                self._last_rx = time.monotonic()
                 buffer.feed(data)
                 self._drain(buffer)
             if time.monotonic() - self._last_tx > self.heartbeat_interval:
@@ -255,10 +290,23 @@ class LineClient:
         while True:
             try:
                 for line in buffer.lines():
-                    self._handle(pr.decode(line))
+                    self._handle_line(line)
                 return
-            except pr.ProtocolError as error:
+            except pr.ProtocolError as error:  # an oversized line; the buffer resynchronizes
                 self._report(f"malformed message ({error.code}): {error}")
+
+    def _handle_line(self, line: bytes) -> None:
+        """Decode and dispatch one line; nothing in it can end the reader."""
+        try:
+            message = pr.decode(line)
+        except pr.ProtocolError as error:
+            self._report(f"malformed message ({error.code}): {error}")
+            return
+        try:
+            self._handle(message)
+        except Exception as error:  # a failing callback must not stop stops being confirmed
+            log.exception("handling a %s message failed", message.TYPE)
+            self._report(f"handling a {message.TYPE} message failed: {error}")
 
     def _handle(self, message: pr.Message) -> None:
         if isinstance(message, pr.PoseReport):
@@ -269,7 +317,7 @@ class LineClient:
                 self.on_pose(pose, message.stamp)
         elif isinstance(message, pr.Stopped):
             with self._reply:
-                self._stopped_acks.add(message.ack)
+                self._stopped_up_to = max(self._stopped_up_to, message.ack)
                 self._reply.notify_all()
         elif isinstance(message, pr.Hello):
             self.robot_period = message.period

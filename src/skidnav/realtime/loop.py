@@ -33,7 +33,7 @@ from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.driver import Pose, RobotDriver
 from skidnav.realtime.homing import HomingController
 from skidnav.realtime.records import EpisodeResult, RunLog
-from skidnav.realtime.safety import SafetyLimits, SafetyMonitor
+from skidnav.realtime.safety import STOP_WAIT, SafetyLimits, SafetyMonitor
 from skidnav.realtime.transition import IcrEstimates, WheelSpeedStats, log_row, reward_of
 from skidnav.robot.kinematics import body_velocities, commanded_wheel_speeds, euler_step
 from skidnav.robot.params import RobotParams
@@ -340,7 +340,7 @@ class RealtimeLoop:
 
     def _recover(self) -> bool:
         """After a trip: reconnect and clear it, or False if the run must end."""
-        self.monitor.stop_done.wait(timeout=2.0)
+        self.monitor.stop_done.wait(timeout=STOP_WAIT)
         reason = self.monitor.reason or ""
         if self.interrupted or reason.startswith("robot outside"):
             return False

@@ -1,4 +1,4 @@
-"""The skidnav robot line protocol, version 1 (docs/protocol.md).
+"""The skidnav robot line protocol, version 2 (docs/protocol.md).
 
 One message is one JSON object on one UTF-8 line ending in ``\\n``, at most :data:`MAX_LINE_BYTES`
 bytes including the newline. Every message carries ``"v"`` (protocol version), ``"type"`` and
@@ -12,7 +12,8 @@ Message types and their fields (units SI):
 type            direction  fields besides v, type, seq
 ==============  =========  ==========================================================
 ``hello``       both       ``name`` (str), ``period`` (s, robot → host; 0 from host)
-``cmd``         host→robot ``omega_left``, ``omega_right`` (rad/s)
+``cmd``         host→robot ``omega_left``, ``omega_right`` (rad/s), ``stamp`` (host clock, s),
+                           ``ttl`` (s > 0): valid until host time ``stamp + ttl``
 ``ack``         robot→host ``ack`` (seq of the acknowledged ``cmd``)
 ``pose``        robot→host ``stamp`` (robot clock, s), ``x``, ``y`` (m), ``heading`` (rad)
 ``stop``        host→robot (none): zero both wheels now
@@ -22,8 +23,12 @@ type            direction  fields besides v, type, seq
 ==============  =========  ==========================================================
 
 Any line that is not valid UTF-8 JSON, is too long, lacks a field, has a field of the wrong type,
-a non-finite number, another version or an unknown type raises :class:`ProtocolError` — the only
-exception :func:`decode` and :class:`LineBuffer` raise.
+a number that is not finite or out of range, another version or an unknown type raises
+:class:`ProtocolError` — the only exception :func:`decode` and :class:`LineBuffer` raise.
+
+:class:`HostClock` is the robot's half of the stall rule (docs/protocol.md, "Stale commands"): it
+maps the host's ``stamp`` onto the robot's own clock, so a command that waited in a buffer while
+either side stalled is recognised as expired however late it is read.
 """
 
 from __future__ import annotations
@@ -36,9 +41,11 @@ from typing import Any, ClassVar
 
 from skidnav.errors import UserError
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2
 MAX_LINE_BYTES = 1024
 """Longest accepted line [bytes], the terminating newline included."""
+MAX_INTEGER = 2**63 - 1
+"""Largest accepted integer field (``seq``, ``ack``): what a signed 64-bit counter holds."""
 
 
 class ProtocolError(UserError):
@@ -47,6 +54,8 @@ class ProtocolError(UserError):
     Attributes:
         code: ``"oversized"``, ``"encoding"``, ``"json"``, ``"field"``, ``"version"`` or
             ``"unknown_type"`` — the ``code`` of the ``error`` reply a peer may send back.
+            (Robots also send ``"state"``, ``"busy"``, ``"range"`` and ``"expired"``; see
+            :class:`Error`.)
     """
 
     def __init__(self, code: str, message: str) -> None:
@@ -78,12 +87,19 @@ class Hello(Message):
 
 @dataclass(frozen=True)
 class Command(Message):
-    """Wheel angular speeds [rad/s] to hold until the next command."""
+    """Wheel angular speeds [rad/s] to hold until the next command, for at most ``ttl`` [s]
+    after ``stamp`` [s, the host's clock at sending]; ``ttl`` > 0 (ProtocolError otherwise)."""
 
     TYPE: ClassVar[str] = "cmd"
-    FLOATS: ClassVar[tuple[str, ...]] = ("omega_left", "omega_right")
+    FLOATS: ClassVar[tuple[str, ...]] = ("omega_left", "omega_right", "stamp", "ttl")
     omega_left: float
     omega_right: float
+    stamp: float
+    ttl: float
+
+    def __post_init__(self) -> None:
+        if not self.ttl > 0:
+            raise ProtocolError("field", f"field 'ttl' must be > 0 s, got {self.ttl}")
 
 
 @dataclass(frozen=True)
@@ -134,7 +150,9 @@ class Heartbeat(Message):
 
 @dataclass(frozen=True)
 class Error(Message):
-    """A problem report; ``code`` as :attr:`ProtocolError.code` or ``"busy"``, ``"state"``."""
+    """A problem report; ``code`` as :attr:`ProtocolError.code`, or from a robot ``"state"``
+    (a message at the wrong time), ``"busy"`` (another host is connected), ``"range"`` (a
+    command beyond the wheel-speed limit) or ``"expired"`` (a command read after its deadline)."""
 
     TYPE: ClassVar[str] = "error"
     STRS: ClassVar[tuple[str, ...]] = ("code", "message")
@@ -153,16 +171,16 @@ def encode(message: Message) -> bytes:
     Raises ProtocolError if the result would exceed :data:`MAX_LINE_BYTES` or holds a
     non-finite number.
 
-    >>> encode(Command(seq=3, omega_left=1.7, omega_right=-1.7))
-    b'{"v":1,"type":"cmd","seq":3,"omega_left":1.7,"omega_right":-1.7}\\n'
+    >>> encode(Command(seq=3, omega_left=1.7, omega_right=-1.7, stamp=52.5, ttl=0.5))
+    b'{"v":2,"type":"cmd","seq":3,"omega_left":1.7,"omega_right":-1.7,"stamp":52.5,"ttl":0.5}\\n'
     """
     body: dict[str, Any] = {"v": PROTOCOL_VERSION, "type": message.TYPE}
     body.update(asdict(message))
     try:
         text = json.dumps(body, separators=(",", ":"), ensure_ascii=False, allow_nan=False)
-    except ValueError as error:
+        line = text.encode("utf-8") + b"\n"
+    except ValueError as error:  # a non-finite number, or a lone surrogate in a string
         raise ProtocolError("field", f"cannot encode {message.TYPE}: {error}") from None
-    line = text.encode("utf-8") + b"\n"
     if len(line) > MAX_LINE_BYTES:
         raise ProtocolError("oversized", f"{message.TYPE} line of {len(line)} bytes")
     return line
@@ -190,35 +208,62 @@ def _reject_constant(name: str) -> float:
 
 
 def _field(body: dict[str, Any], name: str, kind: str) -> Any:
-    """Field ``name`` checked as ``kind`` ("float", "int" or "str")."""
+    """Field ``name`` checked as ``kind``: "float" (a finite JSON number, as float), "int" (an
+    integer in [0, :data:`MAX_INTEGER`]) or "str" (text without lone surrogates)."""
     if name not in body:
         raise ProtocolError("field", f"{body.get('type')} lacks field {name!r}")
     value = body[name]
-    if kind == "str":
-        ok = isinstance(value, str)
-    elif kind == "int":
-        ok = isinstance(value, int) and not isinstance(value, bool) and value >= 0
-    else:
-        ok = isinstance(value, int | float) and not isinstance(value, bool)
-        ok = ok and math.isfinite(value)
-        value = float(value) if ok else value
-    if not ok:
+    checked = {"str": _as_str, "int": _as_int}.get(kind, _as_float)(value)
+    if checked is None:
         raise ProtocolError("field", f"field {name!r} is not a valid {kind}")
+    return checked
+
+
+def _as_float(value: Any) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    try:
+        number = float(value)  # an integer beyond ±1.8e308 overflows
+    except OverflowError:
+        return None
+    return number if math.isfinite(number) else None
+
+
+def _as_int(value: Any) -> int | None:
+    ok = isinstance(value, int) and not isinstance(value, bool) and 0 <= value <= MAX_INTEGER
+    return value if ok else None
+
+
+def _as_str(value: Any) -> str | None:
+    if not isinstance(value, str):
+        return None
+    try:
+        value.encode("utf-8")  # JSON escapes can spell lone surrogates, which UTF-8 cannot
+    except UnicodeEncodeError:
+        return None
     return value
+
+
+def _brief(value: Any) -> str:
+    """``value`` as JSON, cut to 20 characters (for error messages)."""
+    text = json.dumps(value, ensure_ascii=True)
+    return text if len(text) <= 20 else text[:17] + "..."
 
 
 def decode(line: bytes) -> Message:
     """Parse one line (with or without its newline) into a message.
 
     Raises:
-        ProtocolError: for anything that is not a valid version-1 message; never anything else.
+        ProtocolError: for anything that is not a valid version-2 message; never anything else.
 
-    >>> decode(b'{"v":1,"type":"stop","seq":7}\\n')
+    >>> decode(b'{"v":2,"type":"stop","seq":7}\\n')
     Stop(seq=7)
     """
     body = _parse_json(line.rstrip(b"\n"))
-    if body.get("v") != PROTOCOL_VERSION or isinstance(body.get("v"), bool):
-        raise ProtocolError("version", f"expected protocol version {PROTOCOL_VERSION}")
+    version = body.get("v")
+    if type(version) is not int or version != PROTOCOL_VERSION:
+        seen = "none" if version is None else _brief(version)
+        raise ProtocolError("version", f"expected protocol version {PROTOCOL_VERSION}, got {seen}")
     kind = body.get("type")
     cls = MESSAGE_TYPES.get(kind) if isinstance(kind, str) else None
     if cls is None:
@@ -229,7 +274,7 @@ def decode(line: bytes) -> Message:
             if name == "period" and name not in body:
                 continue
             fields[name] = _field(body, name, kind_name)
-    return cls(**fields)
+    return cls(**fields)  # may raise ProtocolError (Command.ttl)
 
 
 class LineBuffer:
@@ -274,3 +319,46 @@ class LineBuffer:
             if end + 1 > self._max_line:
                 raise ProtocolError("oversized", f"line longer than {self._max_line} bytes")
             yield line
+
+
+class HostClock:
+    """The robot's estimate of the host's clock, for the stall rule (docs/protocol.md).
+
+    Every stamped message from the host (``cmd``, ``heartbeat``) gives a sample
+    ``receipt − stamp`` = clock offset + transport delay (both in seconds, the receipt on the
+    robot's own running clock). Delays are never negative, so the smallest sample is the best
+    offset estimate; the estimate may rise by at most ``drift`` seconds per second so that it
+    follows clocks that run at slightly different rates. A message that sat in a buffer while
+    either side stalled gives a large sample and leaves the estimate alone.
+
+    Args:
+        drift: largest tolerated rate difference of the two clocks [s/s] (1e-3 = 1000 ppm).
+
+    >>> clock = HostClock()
+    >>> clock.observe(stamp=100.0, now=4.0)    # offset -96 s (+ a delay)
+    >>> clock.deadline(stamp=100.25, ttl=0.5)  # host time 100.75 s on the robot's clock
+    4.75
+    >>> clock.observe(stamp=100.5, now=5.5)    # read 1 s late: a stall, not a new offset
+    >>> clock.deadline(stamp=100.5, ttl=0.5) < 5.5   # so that command has expired
+    True
+    """
+
+    def __init__(self, drift: float = 1e-3) -> None:
+        self.drift = drift
+        self.offset: float | None = None
+        self._updated = 0.0
+
+    def observe(self, stamp: float, now: float) -> None:
+        """One host message with ``stamp`` [s, host clock] read at ``now`` [s, robot clock]."""
+        sample = now - stamp
+        if self.offset is None:
+            self.offset = sample
+        else:
+            relaxed = self.offset + self.drift * max(0.0, now - self._updated)
+            self.offset = min(sample, relaxed)
+        self._updated = now
+
+    def deadline(self, stamp: float, ttl: float) -> float:
+        """Host time ``stamp + ttl`` on the robot's clock [s] (call :meth:`observe` first)."""
+        assert self.offset is not None, "observe a host stamp first"
+        return stamp + ttl + self.offset

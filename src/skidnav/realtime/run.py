@@ -123,36 +123,49 @@ def run_from_args(
     )
     robot, grid = RobotParams(), Discretization()
     grid_map = build_map(config.run.map, config.run.seed, grid)
-    out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_directory(args.out)
     context = agent_context(args.agent, robot, grid)
     agent, first_episode, state = _make_or_resume_agent(args, config, context, grid)
     warm_up_agent(args.agent, config, context, grid.n_states)
     driver = make_driver(args.driver, config, server_log=out / "sim-server.jsonl")
+    shutdown = getattr(driver, "shutdown", driver.close)
     try:
         driver.connect()
     except ConnectionError as error:
-        getattr(driver, "shutdown", driver.close)()
+        shutdown()
         raise UserError(f"cannot connect to the robot ({args.driver}): {error}") from None
-    loop = RealtimeLoop(
-        driver,
-        agent,
-        grid_map,
-        config,
-        out,
-        robot=robot,
-        grid=grid,
-        progress=progress,
-        wait_for_operator=wait_for_operator,
-    )
-    if state is not None:
-        loop.restore(state)
     try:
+        loop = RealtimeLoop(
+            driver,
+            agent,
+            grid_map,
+            config,
+            out,
+            robot=robot,
+            grid=grid,
+            progress=progress,
+            wait_for_operator=wait_for_operator,
+        )
+        if state is not None:
+            loop.restore(state)
         with interrupt_handlers(loop):
             code = loop.run(first_episode)
     finally:
-        getattr(driver, "shutdown", driver.close)()
+        shutdown()
     return code, _summarize(loop, out, code)
+
+
+def output_directory(path: Path) -> Path:
+    """``path`` created if needed, with a probe file written and removed; UserError naming it
+    if it cannot hold the run's files."""
+    probe = path / ".skidnav-write-test"
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as error:
+        raise UserError(f"cannot write to {path}: {error.strerror or error}") from None
+    return path
 
 
 def _summarize(loop: RealtimeLoop, out: Path, code: int) -> str:

@@ -4,8 +4,9 @@ Trip conditions (SPEC §6): the pose goes stale (no new pose for ``pose_timeout`
 while armed), the link drops or a malformed message arrives (the driver's fault callback), the
 robot leaves the arena (by more than ``arena_margin``), or SIGINT/SIGTERM (the loop's signal
 handler calls :meth:`SafetyMonitor.trip`). On a trip the watchdog, within one check interval (at
-most a quarter control period), lets any command in flight finish, then sends ``stop`` and waits
-for its confirmation; from the trip on no further command passes :meth:`SafetyMonitor.command`
+most a quarter control period), lets any command in flight finish, then calls the driver's
+``stop``, which re-sends it until the robot confirms or the link is declared dead (at most
+:data:`STOP_WAIT`); from the trip on no further command passes :meth:`SafetyMonitor.command`
 until :meth:`SafetyMonitor.reset`. :meth:`trip` takes no lock, so it is safe from a signal handler
 and from the driver's reader thread.
 """
@@ -22,6 +23,10 @@ from dataclasses import dataclass
 from skidnav.realtime.driver import Pose, RobotDriver
 
 log = logging.getLogger(__name__)
+
+STOP_WAIT = 10.0
+"""Longest wait for an emergency stop to end [s wall]; drivers bound their own retries below
+it (the line client gives up when the robot has been silent for its ``dead_timeout``)."""
 
 
 @dataclass(frozen=True)
@@ -118,7 +123,7 @@ class SafetyMonitor:
 
     def reset(self) -> None:
         """Clear a trip once it has been handled (waits for the stop to finish)."""
-        self.stop_done.wait(timeout=2.0)
+        self.stop_done.wait(timeout=STOP_WAIT)
         if self._armed_since is not None:  # a fresh link: pose age counts from now
             self._armed_since = time.monotonic()
         self.reason = None

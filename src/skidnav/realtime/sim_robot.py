@@ -10,18 +10,28 @@ time t (the same model as kernels/navigation.py, but driven by arbitrary wheel-s
 4. a step that would end in a wall cell does not happen: walls physically block the robot
    (its heading still turns, as in the kernels).
 
-The measured pose adds Gaussian noise (σ [m] on x and y, σ/0.1 [rad] on the heading).
+The measured pose adds Gaussian noise (σ [m] on x and y, σ/0.1 [rad] on the heading). Wheel
+commands saturate at ±``RobotParams.wheel_speed`` (the motors' limit).
+
+:class:`Firmware` is the robot's side of the line protocol on one connection (docs/protocol.md,
+"What a robot must do"): the reference a microcontroller port follows, written against its
+own clock (the wall clock of the server, which keeps running while the process is stalled).
 """
 
 from __future__ import annotations
 
+import math
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from skidnav.errors import UserError
+from skidnav.realtime import protocol as pr
 from skidnav.realtime.arena import build_map, seed_streams, start_pose
+from skidnav.realtime.config import ServerOptions
+from skidnav.realtime.records import EventLog
 from skidnav.robot.kinematics import apply_slip, body_velocities, euler_step
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
@@ -86,13 +96,23 @@ class SimRobot:
         self._queue: deque[tuple[float, float, float]] = deque()
 
     def command(self, omega_left: float, omega_right: float) -> None:
-        """Queue wheel speeds [rad/s] to take effect after the latency."""
-        self._queue.append((self.time + self.config.latency, omega_left, omega_right))
+        """Queue wheel speeds [rad/s] to take effect after the latency; each saturates at
+        ±``wheel_speed``. ValueError if one is not finite."""
+        if not (math.isfinite(omega_left) and math.isfinite(omega_right)):
+            raise ValueError(f"expected finite wheel speeds, got {omega_left}, {omega_right}")
+        limit = self.robot.wheel_speed
+        left, right = (min(max(omega, -limit), limit) for omega in (omega_left, omega_right))
+        self._queue.append((self.time + self.config.latency, left, right))
 
     def stop(self) -> None:
         """Zero the wheels now and drop every queued command."""
         self._queue.clear()
         self.wheels = (0.0, 0.0)
+
+    @property
+    def moving(self) -> bool:
+        """True while a wheel turns or a command waits out its latency."""
+        return self.wheels != (0.0, 0.0) or bool(self._queue)
 
     def blocked(self, x: float, y: float) -> bool:
         """True if position (x, y) [m] lies in a wall cell."""
@@ -187,3 +207,136 @@ def warm_up(robot: SimRobot) -> None:
     apply_slip(0.0, 0.0)
     robot.grid.cell(0.0, 0.0)
     robot.grid.region(0.0, 0.0)
+
+
+class Firmware:
+    """The robot's side of the line protocol on one connection (docs/protocol.md).
+
+    :meth:`receive` answers one batch of messages — everything read at once — and applies only
+    its newest motion message (``cmd``, ``stop``, or a malformed line, which stops), so a robot
+    that stalled never replays the commands that queued up meanwhile; every ``stop`` is
+    answered. A ``cmd`` beyond the wheel-speed limit is refused (``range``), one read after its
+    deadline (``stamp + ttl`` of the host's clock, mapped by :class:`~skidnav.realtime.protocol.
+    HostClock`) is refused (``expired``); both stop the wheels. :meth:`watch`, called every
+    period, stops the wheels when the newest command's deadline passes (the lease) or when no
+    valid message came for ``link_timeout``, and declares the client idle after
+    ``idle_timeout``. Times are the robot's own clock [s].
+
+    Args:
+        robot: the robot. options: the timeouts and the robot's name. events: the log.
+        reply: queues one message for the host (called with a builder taking the ``seq``).
+        now: the time of connection.
+    """
+
+    def __init__(
+        self,
+        robot: SimRobot,
+        options: ServerOptions,
+        events: EventLog,
+        reply: Callable[[Callable[[int], pr.Message]], None],
+        now: float,
+    ) -> None:
+        self.robot, self.options, self.events, self.reply = robot, options, events, reply
+        self.greeted = False
+        self.closed = False  # the connection is gone: nothing more is applied
+        self.clock = pr.HostClock()
+        self.last_valid = now
+        self.lease: float | None = None
+
+    def stop(self) -> None:
+        """Zero the wheels and end the lease."""
+        self.robot.stop()
+        self.lease = None
+
+    def reject(self, code: str, text: str) -> None:
+        """Bad input: stop the wheels and report it with an ``error``."""
+        self.stop()
+        self.events.write("error", code=code, message=text)
+        self.reply(lambda seq: pr.Error(seq=seq, code=code, message=text[:200]))
+
+    def receive(self, items: list[pr.Message | pr.ProtocolError], now: float) -> None:
+        """Answer the messages (or line errors) read at ``now``, in order (see class doc)."""
+        motions = [i for i, item in enumerate(items) if isinstance(item, _MOTION)]
+        newest = motions[-1] if motions else -1
+        for index, item in enumerate(items):
+            if self.closed:
+                return
+            if isinstance(item, pr.ProtocolError):
+                self.reject(item.code, str(item))
+            elif isinstance(item, pr.Hello):
+                self._hello(item, now)
+            elif not self.greeted:
+                self.reject("state", f"{item.TYPE} before hello")
+            else:
+                self.last_valid = now
+                self._handle(item, now, superseded=index < newest)
+
+    def _hello(self, message: pr.Hello, now: float) -> None:
+        self.greeted, self.last_valid = True, now
+        self.events.write("hello", name=message.name)
+        period, name = self.robot.robot.dt, self.options.name
+        self.reply(lambda seq: pr.Hello(seq=seq, name=name, period=period))
+
+    def _handle(self, message: pr.Message, now: float, superseded: bool) -> None:
+        if isinstance(message, pr.Command | pr.Heartbeat):
+            self.clock.observe(message.stamp, now)
+        if isinstance(message, pr.Command):
+            self._command(message, now, superseded)
+        elif isinstance(message, pr.Stop):
+            self.stop()
+            self.events.write("stop", seq=message.seq, robot_time=self.robot.time)
+            self.reply(lambda seq: pr.Stopped(seq=seq, ack=message.seq))
+        elif isinstance(message, pr.Heartbeat):
+            stamp = self.robot.time
+            self.reply(lambda seq: pr.Heartbeat(seq=seq, stamp=stamp))
+        elif isinstance(message, pr.Error):
+            self.events.write("peer_error", code=message.code, message=message.message)
+        else:
+            self.reject("state", f"unexpected {message.TYPE} from host")
+
+    def _command(self, message: pr.Command, now: float, superseded: bool) -> None:
+        """Apply a ``cmd`` unless superseded, beyond the limit or expired."""
+        if superseded:
+            self.events.write("superseded", seq=message.seq, stamp=message.stamp)
+            return
+        limit = self.robot.robot.wheel_speed
+        if max(abs(message.omega_left), abs(message.omega_right)) > limit:
+            self.reject("range", f"cmd {message.seq}: a wheel speed beyond ±{limit} rad/s")
+            return
+        deadline = self.clock.deadline(message.stamp, message.ttl)
+        if now >= deadline:
+            late = now - deadline
+            self.reject("expired", f"cmd {message.seq} read {late:.3f} s after its deadline")
+            return
+        self.robot.command(message.omega_left, message.omega_right)
+        self.lease = deadline
+        self.events.write(
+            "cmd",
+            seq=message.seq,
+            omega_left=message.omega_left,
+            omega_right=message.omega_right,
+            stamp=message.stamp,
+            valid_for=deadline - now,
+            robot_time=self.robot.time,
+        )
+        self.reply(lambda seq: pr.Ack(seq=seq, ack=message.seq))
+
+    def watch(self, now: float) -> str | None:
+        """The robot's own safety at ``now``: the lease and the quiet link stop the wheels;
+        returns why the client is idle (to be dropped), or None."""
+        if self.lease is not None and now >= self.lease:
+            if self.robot.moving:
+                self.events.write("lease", late=now - self.lease, robot_time=self.robot.time)
+            self.stop()
+        quiet = now - self.last_valid
+        if quiet > self.options.idle_timeout:
+            return f"no valid message for {quiet:.3f} s"
+        if quiet > self.options.link_timeout:
+            if self.robot.moving:
+                self.events.write("watchdog", robot_time=self.robot.time)
+            self.stop()
+        return None
+
+
+_MOTION = (pr.Command, pr.Stop, pr.ProtocolError)
+"""What sets the wheels: a ``cmd``, a ``stop``, or a malformed line (which stops them)."""

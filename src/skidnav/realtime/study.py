@@ -14,15 +14,18 @@ model-based ≈ +12 % success; the rough floor about doubles the success of the 
 from __future__ import annotations
 
 import csv
+import io
 import json
 import logging
+import math
 import shutil
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from skidnav.errors import UserError
+from skidnav.atomicfile import remove_stale_temporaries, write_user_file
+from skidnav.errors import UserError, first_line
 from skidnav.realtime.arena import build_map, seed_streams
 from skidnav.realtime.config import (
     RealtimeConfig,
@@ -36,11 +39,15 @@ from skidnav.realtime.run import agent_context, interrupt_handlers, warm_up_agen
 from skidnav.realtime.study_report import CSV_FIELDS, markdown_report
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
+from skidnav.savedfile import read_json, shown
 from skidnav.world.discretization import Discretization
 
 log = logging.getLogger(__name__)
 
 __all__ = ["CSV_FIELDS", "RunRecord", "StudySettings", "load_study", "run_study"]
+
+MAX_RECORD_BYTES = 2**16
+"""Largest ``result.json`` read [bytes] (one is about 300)."""
 
 
 @dataclass(frozen=True)
@@ -67,15 +74,17 @@ class StudySettings:
 
     def __post_init__(self) -> None:
         if not self.agents or not self.presets:
-            raise ValueError(f"expected agents and presets, got {self.agents!r}, {self.presets!r}")
+            raise ValueError(
+                f"expected agents and presets, got {shown(self.agents)}, {shown(self.presets)}"
+            )
         if not (isinstance(self.seeds, int) and self.seeds >= 1):
-            raise ValueError(f"expected seeds to be an integer >= 1, got {self.seeds!r}")
+            raise ValueError(f"expected seeds to be an integer >= 1, got {shown(self.seeds)}")
         if self.episodes is not None and not (
             isinstance(self.episodes, int) and self.episodes >= 1
         ):
-            raise ValueError(f"expected episodes to be an integer >= 1, got {self.episodes!r}")
+            raise ValueError(f"expected episodes to be an integer >= 1, got {shown(self.episodes)}")
         if self.time_scale is not None and not self.time_scale > 0:
-            raise ValueError(f"expected time_scale > 0, got {self.time_scale!r}")
+            raise ValueError(f"expected time_scale > 0, got {shown(self.time_scale)}")
 
 
 @dataclass(frozen=True)
@@ -83,7 +92,8 @@ class RunRecord:
     """Outcome of one run (a row of ``study.csv``); ``mean_episode_actions`` is over all its
     episodes (goal, truncated at ``max_actions`` or aborted alike); ``late_episodes`` and
     ``late_successes`` count the last half of the episodes (the odd middle one included), where
-    the agent has learned the most."""
+    the agent has learned the most. Validated on construction, so a ``result.json`` read back
+    with wrong fields is refused."""
 
     agent: str
     preset: str
@@ -96,12 +106,27 @@ class RunRecord:
     late_episodes: int
     late_successes: int
 
+    def __post_init__(self) -> None:
+        counts = ("seed", "episodes", "successes", "aborted", "late_episodes", "late_successes")
+        rates = (self.success_rate, self.mean_episode_actions)
+        if not (isinstance(self.agent, str) and isinstance(self.preset, str)):
+            raise ValueError("expected agent and preset to be strings")
+        for name in counts:
+            value = getattr(self, name)
+            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 0):
+                raise ValueError(f"expected {name} to be an integer >= 0, got {shown(value)}")
+        if not all(isinstance(v, int | float) and 0 <= v < math.inf for v in rates):
+            raise ValueError(f"expected finite rates >= 0, got {shown(rates)}")
+
 
 def load_study(path: Path, overrides: Mapping[str, Any]) -> tuple[dict[str, Any], StudySettings]:
     """(TOML tables without ``[study]``, settings from ``[study]`` with ``overrides`` — keys of
     :class:`StudySettings`, None values ignored — on top); UserError if unreadable or invalid."""
     data = read_tables(path)
-    table = dict(data.pop("study", {}))
+    study = data.pop("study", {})
+    if not isinstance(study, dict):
+        raise UserError(f"{path}: [study]: expected a table, got {shown(study)}")
+    table = dict(study)
     table.update({key: value for key, value in overrides.items() if value is not None})
     for key in ("agents", "presets"):
         if isinstance(table.get(key), str):
@@ -186,13 +211,28 @@ def record_of(agent: str, preset: str, seed: int, results: Sequence[Any]) -> Run
 
 
 def _read_record(path: Path) -> RunRecord | None:
+    """The record of a finished run, or None (logged) when it is absent or unreadable (too
+    large, not JSON, nested too deeply, wrong fields): the run is then repeated."""
     if not path.is_file():
         return None
     try:
-        return RunRecord(**json.loads(path.read_text(encoding="utf-8")))
-    except (OSError, ValueError, TypeError):
-        log.warning("%s: unreadable, the run is repeated", path)
-        return None
+        data = read_json(path, max_bytes=MAX_RECORD_BYTES, what="run record")
+        unknown = sorted(set(data) - set(RunRecord.__dataclass_fields__))
+        if unknown:
+            raise ValueError(f"unexpected field {shown(unknown[0])}")
+        return RunRecord(**data)
+    except UserError as error:  # names the file
+        problem = first_line(error, len(str(path)) + 120)
+    except (ValueError, TypeError) as error:
+        problem = f"{path}: {first_line(error, 120)}"
+    log.warning("%s; the run is repeated", problem)
+    return None
+
+
+def _write_record(path: Path, record: RunRecord) -> None:
+    """Write ``result.json`` atomically: a run killed while writing it is repeated, never half
+    recorded."""
+    write_user_file(path, json.dumps(asdict(record), indent=1).encode("utf-8"), "run record")
 
 
 def run_study(
@@ -233,7 +273,7 @@ def run_study(
             if code == EXIT_INTERRUPTED:
                 break
             record = record_of(agent, preset, seed, results)
-            (run_dir / "result.json").write_text(json.dumps(asdict(record), indent=1))
+            _write_record(run_dir / "result.json", record)
             announce(
                 f"{agent} {preset} seed {seed}: {record.successes}/{record.episodes} goals, "
                 f"{record.mean_episode_actions:.1f} actions/episode, {record.aborted} aborted"
@@ -248,18 +288,25 @@ def run_study(
 def write_outputs(
     records: Sequence[RunRecord], configs: Mapping[tuple[str, int], RealtimeConfig], out: Path
 ) -> None:
-    """``study.csv`` (one row per run) and ``study.md`` (see :func:`markdown_report`)."""
-    out.mkdir(parents=True, exist_ok=True)
-    with (out / "study.csv").open("w", encoding="utf-8", newline="") as stream:
-        writer = csv.DictWriter(stream, fieldnames=CSV_FIELDS)
-        writer.writeheader()
-        for record in records:
-            row = asdict(record)
-            row["success_rate"] = f"{record.success_rate:.4f}"
-            row["mean_episode_actions"] = f"{record.mean_episode_actions:.2f}"
-            writer.writerow(row)
+    """``study.csv`` (one row per run) and ``study.md`` (see :func:`markdown_report`), each
+    written atomically (:func:`~skidnav.atomicfile.write_atomic`): a kill leaves the old table or
+    the new one, and the next call removes its temporary."""
+    table = io.StringIO()
+    writer = csv.DictWriter(table, fieldnames=CSV_FIELDS)
+    writer.writeheader()
+    for record in records:
+        row = asdict(record)
+        row["success_rate"] = f"{record.success_rate:.4f}"
+        row["mean_episode_actions"] = f"{record.mean_episode_actions:.2f}"
+        writer.writerow(row)
     conditions = {
         preset: (config.sim.slip, config.sim.drift > 0) for (preset, _), config in configs.items()
     }
     rows = [asdict(record) for record in records]
-    (out / "study.md").write_text(markdown_report(rows, conditions), encoding="utf-8")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise UserError(f"{out}: cannot create the folder ({error.strerror or error})") from None
+    remove_stale_temporaries(out)  # of a study killed while writing its tables
+    write_user_file(out / "study.csv", table.getvalue().encode("utf-8"), "study table")
+    write_user_file(out / "study.md", markdown_report(rows, conditions).encode("utf-8"), "report")

@@ -23,6 +23,11 @@ import numpy as np
 MAP_KINDS = ("free", "obstacles", "maze")
 MAZE_CORRIDOR = 3
 """Width of maze corridors [cells]."""
+MIN_SIZE = 3
+MAX_SIZE = 1000
+"""Least and greatest map side [cells] (map files and generated maps)."""
+MAX_TRIES = 10_000
+"""Most layouts :func:`generate_map` may be asked to draw before giving up."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -214,17 +219,29 @@ def generate_map(
         kind: one of :data:`MAP_KINDS`.
         rng: the only source of randomness.
         shape: (n_x, n_y) cells.
-        min_distance: least start→goal path length [cells]; default half the larger side.
-        max_tries: layouts to draw before giving up.
+        min_distance: least start→goal path length [cells], at least 1; default half the
+            larger side.
+        max_tries: layouts to draw before giving up, 1 to :data:`MAX_TRIES`.
+
+    Raises:
+        ValueError: an unknown kind, or an option out of range (a side outside
+            [:data:`MIN_SIZE`, :data:`MAX_SIZE`], a count that is not an integer).
 
     >>> m = generate_map("obstacles", np.random.default_rng(0))
     >>> m.shape, m.connected()
     ((25, 25), True)
+    >>> generate_map("free", np.random.default_rng(0), max_tries=10**12)
+    Traceback (most recent call last):
+    ...
+    ValueError: expected max_tries to be an integer in [1, 10,000], got 1000000000000
     """
     if kind not in MAP_KINDS:
         raise ValueError(f"expected map kind one of {', '.join(MAP_KINDS)}, got {kind!r}")
+    shape = _check_shape(shape)
     if min_distance is None:
         min_distance = max(shape) // 2
+    _check_integer("min_distance", min_distance, 1, shape[0] * shape[1])
+    _check_integer("max_tries", max_tries, 1, MAX_TRIES)
     for _ in range(max_tries):
         if kind == "free":
             occupancy = border_walls(shape)
@@ -236,3 +253,17 @@ def generate_map(
         if placed is not None:
             return GridMap(occupancy=occupancy, start=placed[0], goal=placed[1])
     raise ValueError(f"could not place a connected start and goal on a {kind} map of {shape}")
+
+
+def _check_integer(name: str, value: object, low: int, high: int) -> None:
+    if not (isinstance(value, int) and not isinstance(value, bool) and low <= value <= high):
+        raise ValueError(f"expected {name} to be an integer in [{low}, {high:,}], got {value!r}")
+
+
+def _check_shape(shape: object) -> tuple[int, int]:
+    """``shape`` as (n_x, n_y) if it is two integer sides in [MIN_SIZE, MAX_SIZE]."""
+    if not (isinstance(shape, tuple | list) and len(shape) == 2):
+        raise ValueError(f"expected shape to be two integers [n_x, n_y], got {shape!r}")
+    for side in shape:
+        _check_integer("each side of shape", side, MIN_SIZE, MAX_SIZE)
+    return (int(shape[0]), int(shape[1]))

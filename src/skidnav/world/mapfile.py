@@ -17,6 +17,7 @@ Characters: ``#`` or ``@`` wall, ``.`` free, ``S`` start (free), ``G`` goal (fre
 and one G, and the goal must be reachable from the start (4-neighbour). Each of ``width`` and
 ``height`` (3 to :data:`MAX_SIZE`) is given once. S and G may not lie in the last column nor in the
 top row: those are zero-width cells on the arena's far edge (see :mod:`skidnav.world.grid`).
+A file is at most :data:`MAX_MAP_BYTES` long; errors quote at most a short excerpt of it.
 """
 
 from __future__ import annotations
@@ -25,13 +26,14 @@ from pathlib import Path
 
 import numpy as np
 
-from skidnav.errors import UserError
-from skidnav.world.grid import GridMap, on_far_edge
+from skidnav.atomicfile import write_atomic
+from skidnav.errors import UserError, excerpt
+from skidnav.savedfile import read_limited
+from skidnav.world.grid import MAX_SIZE, MIN_SIZE, GridMap, on_far_edge
 
 MAGIC = "skidnav-map 1"
-MIN_SIZE = 3
-MAX_SIZE = 1000
-"""Least and greatest ``width`` and ``height`` [cells]."""
+MAX_MAP_BYTES = 4 * 2**20
+"""Longest map file read [bytes] (a 1000 × 1000 map takes about 1 MB)."""
 WALL_CHARS = "#@"
 FREE_CHARS = ".SG"
 
@@ -48,8 +50,8 @@ def _fail(path: Path | str, line: int, message: str, column: int | None = None) 
 def _read_header(path: Path | str, lines: list[str]) -> tuple[int, int, int]:
     """Parse the header; returns (width, height, index of the first grid line)."""
     if not lines or lines[0].strip() != MAGIC:
-        return_line = lines[0].strip() if lines else ""
-        raise _fail(path, 1, f"expected first line {MAGIC!r}, got {return_line!r}")
+        first = lines[0].strip() if lines else ""
+        raise _fail(path, 1, f"expected first line {MAGIC!r}, got {excerpt(first)}")
     sizes: dict[str, int] = {}
     given_on: dict[str, int] = {}
     for number, raw in enumerate(lines[1:], start=2):
@@ -63,14 +65,18 @@ def _read_header(path: Path | str, lines: list[str]) -> tuple[int, int, int]:
             return sizes["width"], sizes["height"], number
         key, _, value = text.partition(" ")
         if key not in ("width", "height"):
-            raise _fail(path, number, f"expected 'width N', 'height N' or 'map', got {text!r}")
+            raise _fail(
+                path, number, f"expected 'width N', 'height N' or 'map', got {excerpt(text)}"
+            )
         if key in given_on:
             raise _fail(path, number, f"repeated {key} (first given on line {given_on[key]})")
         given_on[key] = number
         try:
             sizes[key] = int(value)
         except ValueError:
-            raise _fail(path, number, f"expected an integer {key}, got {value.strip()!r}") from None
+            raise _fail(
+                path, number, f"expected an integer {key}, got {excerpt(value.strip())}"
+            ) from None
         if not MIN_SIZE <= sizes[key] <= MAX_SIZE:
             raise _fail(
                 path, number, f"expected {key} between {MIN_SIZE} and {MAX_SIZE}, got {sizes[key]}"
@@ -159,16 +165,15 @@ def format_map(grid: GridMap) -> str:
 
 
 def load_map(path: Path | str) -> GridMap:
-    """Read a map file; a missing, undecodable or malformed file raises :class:`MapFileError`."""
+    """Read a map file; a missing, undecodable, too long (more than :data:`MAX_MAP_BYTES`) or
+    malformed file raises :class:`MapFileError`."""
     try:
-        text = Path(path).read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise MapFileError(f"{path}: no such map file") from None
-    except (OSError, UnicodeDecodeError) as error:
+        text = read_limited(path, MAX_MAP_BYTES, "map file", MapFileError).decode("utf-8")
+    except UnicodeDecodeError as error:
         raise MapFileError(f"{path}: cannot read map file ({error.__class__.__name__})") from None
     return parse_map(text, path)
 
 
 def save_map(grid: GridMap, path: Path | str) -> None:
-    """Write a map file (format version 1)."""
-    Path(path).write_text(format_map(grid), encoding="utf-8")
+    """Write a map file (format version 1) atomically."""
+    write_atomic(Path(path), format_map(grid).encode("utf-8"))

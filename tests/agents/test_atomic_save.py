@@ -1,0 +1,241 @@
+"""Saved agents and kinematic models, and the pictures and tables of ``map show --png`` and
+``reproduce``, are written all-or-nothing (a full disk leaves the previous files); restored
+geometries are checked before they allocate; messages about a saved agent quote at most 40
+characters of it, through the command line too."""
+
+from __future__ import annotations
+
+import csv
+import json
+import re
+import tracemalloc
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from saved_file_support import (
+    arrays_of,
+    listing,
+    run_with_full_disk,
+    skidnav_with_full_disk,
+    write_checkpoint,
+)
+from skidnav.agents.registry import load_agent, make_agent
+from skidnav.cli import main
+from skidnav.commands.reproduce import dyna_maze_runs
+from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+from skidnav.robot.params import RobotParams
+from skidnav.world.discretization import Discretization
+
+REALTIME = Path(__file__).resolve().parents[2] / "configs" / "realtime.toml"
+SMALL_GRID = Discretization(n_x=6, n_y=5, n_headings=4, regions_x=2, regions_y=2)
+
+SAVE_ON_FULL_DISK = """
+import sys
+import numpy as np
+
+rng = np.random.default_rng(1)
+if sys.argv[1] == "agent":
+    from skidnav.agents.registry import make_agent
+
+    saved = make_agent("dyna-q", 5400, 4, {}, rng)
+    saved.q[:] = rng.random(saved.q.shape)  # incompressible: far past the limit
+else:
+    from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+    from skidnav.robot.params import RobotParams
+    from skidnav.world.discretization import Discretization
+
+    saved = KinematicModel(RobotParams(), Discretization(), KinematicModelConfig(window=400))
+    saved.data[:] = rng.random(saved.data.shape)
+try:
+    saved.save(sys.argv[2])
+except OSError as error:
+    print(error.strerror)
+    sys.exit(3)
+"""
+
+
+def _old_agent(path: Path) -> None:
+    agent = make_agent("dyna-q", 54, 4, {}, np.random.default_rng(0))
+    agent.q[:] = 1.0
+    agent.save(path)
+
+
+def _old_model(path: Path) -> None:
+    KinematicModel(RobotParams(), Discretization(), KinematicModelConfig(window=16)).save(path)
+
+
+@pytest.mark.parametrize("kind", ["agent", "model"])
+def test_a_save_on_a_full_disk_leaves_the_previous_files(kind: str, tmp_path: Path) -> None:
+    path = tmp_path / "saved"
+    (_old_agent if kind == "agent" else _old_model)(path)
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    assert sorted(before) == ["saved.json", "saved.npz"]
+    limit = 2 * max(len(data) for data in before.values())
+    result = run_with_full_disk(["-c", SAVE_ON_FULL_DISK, kind, str(path)], max_file_bytes=limit)
+    assert result.returncode == 3 and result.stdout.strip() == "File too large", result.stderr
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before  # no torn file, no tmp
+    if kind == "agent":
+        assert np.all(load_agent(path).q == 1.0)
+    else:
+        assert KinematicModel.load(path).config.window == 16
+
+
+def _kinematic_agent(window: int = 16) -> Any:
+    return make_agent(
+        "dyna-kinematic", SMALL_GRID.n_states, 4, {"kinematic_window": window},
+        np.random.default_rng(0), discretization=SMALL_GRID,
+    )  # fmt: skip
+
+
+def _huge_regions(arrays: dict[str, np.ndarray]) -> None:
+    arrays["geometry"] = arrays["geometry"].copy()
+    arrays["geometry"][15:17] = 10**6  # regions_x, regions_y: 10^12 regions
+
+
+def _no_geometry(arrays: dict[str, np.ndarray]) -> None:
+    arrays["geometry"] = arrays["geometry"].copy()
+    arrays["geometry"][12:] = np.nan
+
+
+def _other_window(arrays: dict[str, np.ndarray]) -> None:
+    arrays["kinematic_data"] = np.zeros((4, 32, 5))
+
+
+GEOMETRY_CASES: dict[str, tuple[Callable[[dict[str, np.ndarray]], None], str]] = {
+    "huge regions": (_huge_regions, "saved planner_reward_stats of shape (6, 2) disagrees"),
+    "no geometry, kinematic data": (_no_geometry, "saved kinematic_data of shape (4, 16, 5)"),
+    "other window": (_other_window, "saved kinematic_data of shape (4, 32, 5) disagrees"),
+}
+
+
+@pytest.mark.parametrize("case", GEOMETRY_CASES)
+def test_a_restored_geometry_is_checked_before_it_allocates(case: str, tmp_path: Path) -> None:
+    npz_path, _ = _kinematic_agent().save(tmp_path / "k")
+    arrays = arrays_of(npz_path)
+    change, message = GEOMETRY_CASES[case]
+    change(arrays)
+    agent = _kinematic_agent()
+    tracemalloc.start()
+    try:
+        with pytest.raises(ValueError, match=re.escape(message)) as caught:
+            agent._restore_state_arrays(arrays)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 2**20 and "\n" not in str(caught.value)  # refused before any table is built
+    assert agent.kinematic is not None and agent.kinematic.data.shape == (4, 16, 5)
+
+
+def test_a_saved_geometry_that_fits_is_restored(tmp_path: Path) -> None:
+    agent = _kinematic_agent()
+    agent.kinematic.data[:] = 0.25
+    agent.save(tmp_path / "k")
+    restored = load_agent(tmp_path / "k")
+    assert restored.discretization == SMALL_GRID and np.all(restored.kinematic.data == 0.25)
+
+
+LONG = "v" * 10_000
+
+
+def _config(key: str, value: Any) -> Callable[[dict[str, Any]], None]:
+    def change(meta: dict[str, Any]) -> None:
+        meta["config"] = {**meta["config"], key: value}
+
+    return change
+
+
+def _rng(state: dict[str, Any]) -> Callable[[dict[str, Any]], None]:
+    def change(meta: dict[str, Any]) -> None:
+        meta["rng"] = state
+
+    return change
+
+
+def _counter(meta: dict[str, Any]) -> None:
+    meta["counters"] = {**meta["counters"], "episodes": LONG}
+
+
+QUOTING_CASES: dict[str, tuple[Callable[[dict[str, Any]], None], str]] = {
+    "long planning mode": (_config("planning_mode", LONG), "expected planning_mode in"),
+    "long alpha": (_config("alpha", LONG), "'<' not supported"),
+    "long unknown option": (_config(LONG, 1), "got unknown"),
+    "long bit generator": (_rng({"bit_generator": LONG}), "unknown bit generator"),
+    "text in the generator state": (
+        _rng({"bit_generator": "SFC64", "state": {"state": [LONG] * 4, "counter": 0}}),
+        "unusable SFC64 state (ValueError)",
+    ),
+    "long counter": (_counter, "counter episodes to be an integer in [0, "),
+}
+
+
+@pytest.fixture(scope="module")
+def saved_dyna_q(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], Any]:
+    agent = make_agent("dyna-q", 54, 4, {"planning_steps": 3}, np.random.default_rng(0))
+    npz_path, json_path = agent.save(tmp_path_factory.mktemp("agent") / "agent")
+    return json.loads(json_path.read_text()), arrays_of(npz_path)
+
+
+@pytest.mark.parametrize("case", QUOTING_CASES)
+def test_messages_about_a_saved_agent_quote_at_most_40_characters(
+    case: str,
+    saved_dyna_q: tuple[dict[str, Any], Any],
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    change, message = QUOTING_CASES[case]
+    meta = json.loads(json.dumps(saved_dyna_q[0]))
+    change(meta)
+    out = tmp_path / "run"
+    directory = write_checkpoint(out, agent=(json.dumps(meta), saved_dyna_q[1]))
+    before = listing(out)
+    args = ["robot", "run", "--quiet", "--driver", "sim", "--agent", "dyna-q", "--resume"]
+    code = main([*args, "--config", str(REALTIME), "--out", str(out)])
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(lines) == 1, lines
+    assert lines[0].startswith(f"skidnav: error: {directory / 'agent.'}"), lines
+    assert message in lines[0], lines
+    assert "v" * 41 not in lines[0]  # at most an excerpt of the long value
+    assert listing(out) == before
+
+
+def _error_line(stderr: str) -> str:
+    """The one line of ``stderr``: a ``skidnav: error:`` line, no traceback."""
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("skidnav: error: "), stderr[-2000:]
+    return lines[0]
+
+
+def test_a_picture_on_a_full_disk_leaves_the_previous_one(tmp_path: Path) -> None:
+    room, picture = tmp_path / "room.txt", tmp_path / "room.png"
+    assert main(["map", "generate", "--kind", "maze", "--out", str(room)]) == 0
+    assert main(["map", "show", str(room), "--png", str(picture)]) == 0
+    size = picture.stat().st_size
+    picture.write_bytes(b"the previous picture")
+    result = skidnav_with_full_disk(["map", "show", str(room), "--png", str(picture)], size // 2)
+    assert result.returncode == 2
+    assert _error_line(result.stderr) == (
+        f"skidnav: error: {picture}: cannot write the picture (File too large)"
+    )
+    assert picture.read_bytes() == b"the previous picture"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["room.png", "room.txt"]
+
+
+def test_reproduce_on_a_full_disk_keeps_whole_files(tmp_path: Path) -> None:
+    dyna_maze_runs(1, planning_steps=(5,))  # compiled and cached before the disk fills
+    (tmp_path / "dyna_maze.png").write_bytes(b"the previous plot")
+    args = ["reproduce", "sutton-barto", "--runs", "1", "--out", str(tmp_path)]
+    result = skidnav_with_full_disk(args, max_file_bytes=8000)  # the CSV fits, the plot not
+    assert result.returncode == 2
+    plot = tmp_path / "dyna_maze.png"
+    assert _error_line(result.stderr) == (
+        f"skidnav: error: {plot}: cannot write the plot (File too large)"
+    )
+    assert plot.read_bytes() == b"the previous plot"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dyna_maze.csv", "dyna_maze.png"]
+    with (tmp_path / "dyna_maze.csv").open(newline="") as stream:
+        rows = list(csv.reader(stream))
+    assert rows[0] == ["planning_steps", "run", "episode", "steps"] and len(rows) == 1 + 3 * 50

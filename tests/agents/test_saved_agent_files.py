@@ -1,0 +1,244 @@
+"""Hostile saved agents: each refused in one line, through the command line too, before any
+array it announces is allocated or decompressed."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from saved_file_support import (
+    arrays_of,
+    forged_header_length,
+    forged_npy,
+    npy_bytes,
+    write_npz,
+)
+from skidnav.agents.registry import load_agent, make_agent
+from skidnav.agents.training import train_agent
+from skidnav.cli import main
+from skidnav.envs.mazes import dyna_maze
+from skidnav.errors import CorruptFileError
+from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+from skidnav.robot.params import RobotParams
+from skidnav.savedfile import SavedArchive
+from skidnav.world.discretization import Discretization
+
+REALTIME = Path(__file__).resolve().parents[2] / "configs" / "realtime.toml"
+Files = tuple[dict[str, Any], dict[str, Any]]
+"""(JSON metadata, npz members) of a saved agent, changed by a case and written back."""
+
+
+@pytest.fixture(scope="module")
+def saved_dyna_q(tmp_path_factory: pytest.TempPathFactory) -> Files:
+    """The two files of a Dyna-Q agent trained for 2 episodes on the Dyna Maze."""
+    agent = make_agent("dyna-q", 54, 4, {"planning_steps": 3}, np.random.default_rng(0))
+    train_agent(agent, dyna_maze(), 2, seed=0)
+    npz_path, json_path = agent.save(tmp_path_factory.mktemp("agent") / "agent")
+    return json.loads(json_path.read_text()), arrays_of(npz_path)
+
+
+def _set(key: str, value: Any) -> Callable[[Files], None]:
+    def change(files: Files) -> None:
+        files[0][key] = value
+
+    return change
+
+
+def _member(name: str, value: Any) -> Callable[[Files], None]:
+    def change(files: Files) -> None:
+        files[1][name] = value
+
+    return change
+
+
+def _nan_q(files: Files) -> None:
+    files[1]["q"] = files[1]["q"].copy()
+    files[1]["q"][3, 1] = np.nan
+
+
+def _without_pair_keys(files: Files) -> None:
+    del files[1]["model.pair_key"]
+
+
+def _counter(name: str, value: Any) -> Callable[[Files], None]:
+    def change(files: Files) -> None:
+        files[0]["counters"] = {**files[0]["counters"], name: value}
+
+    return change
+
+
+def _config(name: str, value: Any) -> Callable[[Files], None]:
+    def change(files: Files) -> None:
+        files[0]["config"] = {**files[0]["config"], name: value}
+
+    return change
+
+
+NESTED = "[" * 100_000 + "]" * 100_000
+"""Deeper than any recursive parser survives."""
+
+CASES: dict[str, tuple[Callable[[Files], None], str, str]] = {
+    # name: (change, raw JSON text replacement "old=>new" or "", message)
+    "zip bomb in q": (_member("q", "bomb"), "", "bytes stored, its header announces"),
+    "unknown member": (_member("payload", np.zeros(3)), "", "unexpected array 'payload'"),
+    "unknown bomb member": (_member("payload", "bomb"), "", "unexpected array 'payload'"),
+    "huge header shape": (
+        _member("q", forged_npy((10**12, 4))),
+        "",
+        r"is float64 of shape (1000000000000, 4)",
+    ),
+    "huge header length": (_member("q", forged_header_length(2**31)), "", "header of"),
+    "object dtype": (_member("q", forged_npy((54, 4), "|O")), "", "is object of shape"),
+    "missing member": (_without_pair_keys, "", "missing model array 'model.pair_key'"),
+    "NaN in Q": (_nan_q, "", "Q table holds NaN"),
+    "fractional n_states": (_set("n_states", 54.7), "", "n_states to be an integer"),
+    "boolean n_actions": (_set("n_actions", True), "", "n_actions to be an integer"),
+    "huge n_states": (_set("n_states", 10**12), "", "n_states to be an integer in [1, "),
+    "1e400": (_set("n_states", "X"), '"X"=>1e400', "out of range"),
+    "NaN constant": (_config("alpha", "X"), '"X"=>NaN', "non-finite number NaN"),
+    "nested JSON": (_set("extra", "X"), f'"X"=>{NESTED}', "JSON nested 100001 deep"),
+    "planning_steps 1e15": (_config("planning_steps", 10**15), "", "planning_steps in [0, "),
+    "huge counter": (_counter("steps", 2**70), "", "counter steps to be an integer"),
+    "boolean counter": (_counter("episodes", False), "", "counter episodes to be an integer"),
+}
+
+
+def _write(directory: Path, files: Files, change: Callable[[Files], None], raw: str) -> Path:
+    """Write the changed files as ``directory/agent.{json,npz}``; returns the npz path."""
+    meta, members = json.loads(json.dumps(files[0])), dict(files[1])
+    change((meta, members))
+    text = json.dumps(meta)
+    if raw:
+        old, new = raw.split("=>")
+        text = text.replace(old, new)
+    directory.mkdir(parents=True, exist_ok=True)
+    (directory / "agent.json").write_text(text)
+    bomb = next((name for name, value in members.items() if isinstance(value, str)), "")
+    if bomb:
+        members[bomb] = npy_bytes(files[1].get(bomb, np.zeros((54, 4))))
+    write_npz(directory / "agent.npz", members, bomb=bomb)
+    return directory / "agent.npz"
+
+
+def _checkpoint(out: Path, files: Files, change: Callable[[Files], None], raw: str) -> Path:
+    """A real-time run directory whose latest checkpoint holds the changed agent."""
+    checkpoints = out / "checkpoints"
+    npz_path = _write(checkpoints / "ep-00000", files, change, raw)
+    (checkpoints / "ep-00000" / "loop.json").write_text("{}")
+    (checkpoints / "latest.json").write_text('{"episode": 0, "directory": "ep-00000"}')
+    return npz_path
+
+
+def _listing(root: Path) -> list[tuple[str, int]]:
+    return sorted((str(p.relative_to(root)), p.stat().st_size) for p in root.rglob("*"))
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_a_hostile_agent_file_ends_the_resume_in_one_line(
+    case: str, saved_dyna_q: Files, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    change, raw, message = CASES[case]
+    out = tmp_path / "run"
+    npz_path = _checkpoint(out, saved_dyna_q, change, raw)
+    before = _listing(out)
+    args = ["robot", "run", "--quiet", "--driver", "sim", "--agent", "dyna-q"]
+    code = main([*args, "--config", str(REALTIME), "--resume", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("skidnav: error: "), err[:500]
+    assert message in lines[0] and str(npz_path.parent / "agent.") in lines[0]
+    assert len(lines[0]) < 400
+    assert _listing(out) == before  # nothing written, nothing left behind
+
+
+def test_the_intact_checkpoint_files_load(saved_dyna_q: Files, tmp_path: Path) -> None:
+    npz_path = _write(tmp_path / "a", saved_dyna_q, lambda files: None, "")
+    agent = load_agent(npz_path)
+    assert np.array_equal(agent.q, saved_dyna_q[1]["q"])
+    assert agent.steps == saved_dyna_q[0]["counters"]["steps"]
+
+
+def test_no_data_is_read_before_every_member_is_checked(
+    saved_dyna_q: Files, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    read: list[str] = []
+    original = SavedArchive._data
+
+    def spy(self: SavedArchive, name: str, header: Any) -> np.ndarray:
+        read.append(name)
+        return original(self, name, header)
+
+    monkeypatch.setattr(SavedArchive, "_data", spy)
+    for change in (_member("payload", "bomb"), _member("model.entry_count", "bomb")):
+        read.clear()
+        with pytest.raises(CorruptFileError):
+            load_agent(_write(tmp_path / "b", saved_dyna_q, change, ""))
+        assert read == []  # refused from the zip directory and the headers alone
+
+
+def test_json_through_a_device_is_cut_at_its_limit(saved_dyna_q: Files, tmp_path: Path) -> None:
+    npz_path = _write(tmp_path / "c", saved_dyna_q, lambda files: None, "")
+    json_path = npz_path.with_suffix(".json")
+    json_path.unlink()
+    json_path.symlink_to("/dev/zero")
+    with pytest.raises(CorruptFileError, match="agent file larger than 1,048,576 bytes"):
+        load_agent(npz_path)
+
+
+def test_a_saved_geometry_cannot_ask_for_huge_region_tables(tmp_path: Path) -> None:
+    grid = Discretization(n_x=6, n_y=5, n_headings=4, regions_x=2, regions_y=2)
+    agent = make_agent("dyna-kinematic", grid.n_states, 4, {}, discretization=grid)
+    npz_path, _ = agent.save(tmp_path / "k")
+    members = arrays_of(npz_path)
+    assert load_agent(npz_path).kinematic is not None
+    geometry = members["geometry"].copy()
+    geometry[15:17] = 10**6  # regions_x, regions_y
+    write_npz(npz_path, {**members, "geometry": geometry})
+    with pytest.raises(CorruptFileError, match="kinematic model of 1,000,000,000,000 slip"):
+        load_agent(npz_path)
+    geometry[15:17] = 2
+    geometry[12] = 10**9  # n_x: the states no longer match the metadata
+    write_npz(npz_path, {**members, "geometry": geometry})
+    with pytest.raises(CorruptFileError, match="saved geometry has"):
+        load_agent(npz_path)
+
+
+@pytest.mark.parametrize(
+    ("section", "key", "value", "message"),
+    [
+        ("grid", "regions_x", 10**7, "kinematic model of 70,000,000 slip regions"),
+        ("config", "window", 10**12, "window of 1,000,000,000,000 samples is too large"),
+        ("grid", "n_x", 12500.7, "n_x to be an integer"),
+        ("robot", "unknown", 1, "unexpected keyword argument 'unknown'"),
+    ],
+)
+def test_a_kinematic_model_file_is_checked_before_allocation(
+    tmp_path: Path, section: str, key: str, value: Any, message: str
+) -> None:
+    model = KinematicModel(RobotParams(), Discretization(), KinematicModelConfig(window=16))
+    model.save(tmp_path / "kin")
+    assert KinematicModel.load(tmp_path / "kin").config.window == 16
+    meta = json.loads((tmp_path / "kin.json").read_text())
+    meta[section][key] = value
+    (tmp_path / "kin.json").write_text(json.dumps(meta))
+    with pytest.raises(CorruptFileError, match=message) as caught:
+        KinematicModel.load(tmp_path / "kin")
+    assert str(caught.value).startswith(str(tmp_path / "kin")) and "\n" not in str(caught.value)
+
+
+def test_a_kinematic_model_archive_with_a_stranger_is_refused(tmp_path: Path) -> None:
+    model = KinematicModel(RobotParams(), Discretization(), KinematicModelConfig(window=16))
+    model.save(tmp_path / "kin")
+    members = arrays_of(tmp_path / "kin.npz")
+    write_npz(tmp_path / "kin.npz", {**members, "extra": np.zeros(2)})
+    with pytest.raises(CorruptFileError, match="unexpected array 'extra'"):
+        KinematicModel.load(tmp_path / "kin")
+    write_npz(tmp_path / "kin.npz", {**members, "kinematic_data": forged_npy((49, 10**9, 5))})
+    with pytest.raises(CorruptFileError, match="kinematic_data' is float64 of shape"):
+        KinematicModel.load(tmp_path / "kin")

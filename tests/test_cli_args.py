@@ -1,0 +1,48 @@
+"""Arguments of ``skidnav run``, ``tune`` and ``report`` that name the wrong thing: one line,
+exit code 2, nothing written."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from skidnav.cli import main
+from skidnav.experiments import report as report_module
+
+
+@pytest.mark.parametrize("command", ["run", "tune"])
+def test_a_config_that_never_ends_is_refused_at_its_limit(
+    command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "out"
+    assert main([command, "/dev/zero", "--out", str(out), "--backend", "serial"]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines == ["skidnav: error: /dev/zero: config file larger than 4,000,000 bytes"]
+    assert not out.exists()
+
+
+def test_a_config_that_is_not_text_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    config = tmp_path / "binary.toml"
+    config.write_bytes(b"\xff\xfe\x00[experiment]")
+    assert main(["run", str(config), "--out", str(tmp_path / "out")]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines == [f"skidnav: error: {config}: cannot read config (UnicodeDecodeError)"]
+
+
+def test_a_report_into_a_missing_folder_is_one_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setattr(report_module, "build_report", lambda run_dir: "<p>report</p>")
+    target = tmp_path / "missing" / "r.html"
+    assert main(["report", str(tmp_path), "-o", str(target)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines == [
+        f"skidnav: error: {target}: cannot write the report (No such file or directory)"
+    ]
+    assert sorted(tmp_path.iterdir()) == []
+    assert main(["report", str(tmp_path), "-o", str(tmp_path)]) == 2  # a directory
+    assert "cannot write the report" in capsys.readouterr().err
+    assert sorted(tmp_path.iterdir()) == []

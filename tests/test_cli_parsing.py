@@ -1,0 +1,58 @@
+"""The command line's own parsing: every argument error is one line with exit code 2, and a
+subcommand imports only its own module."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from skidnav.cli import SUBCOMMAND_MODULES, main, requested_modules
+
+
+@pytest.mark.parametrize(
+    ("argv", "line"),
+    [
+        ([], "skidnav: error: the following arguments are required: command"),
+        (["nosuch"], "skidnav: error: argument command: invalid choice: 'nosuch'"),
+        (["run"], "skidnav: error: run: the following arguments are required: config"),
+        (["run", "c.toml", "--jobs", "two"], "skidnav: error: run: argument --jobs"),
+        (["map", "generate", "--kind", "nope"], "skidnav: error: map generate: argument --kind"),
+        (["robot", "run", "--bogus"], "skidnav: error: robot run: "),
+        (["camera"], "skidnav: error: camera: the following arguments are required"),
+    ],
+)
+def test_an_argument_error_is_one_line(
+    argv: list[str], line: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as leave:
+        main(argv)
+    assert leave.value.code == 2
+    captured = capsys.readouterr()
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(line), captured.err
+    assert captured.out == ""
+
+
+def test_only_the_named_subcommand_is_imported() -> None:
+    assert requested_modules(["-v", "robot", "sim-server"]) == ["skidnav.commands.robot"]
+    assert requested_modules(["--help"]) == list(SUBCOMMAND_MODULES.values())
+    assert requested_modules(["nosuch"]) == list(SUBCOMMAND_MODULES.values())
+    probe = (
+        "import sys; from skidnav.cli import build_parser, requested_modules;"
+        "build_parser(requested_modules(['robot', 'sim-server']));"
+        "print(sorted(m for m in ('cv2', 'sklearn', 'matplotlib') if m in sys.modules))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, check=True, timeout=120
+    )
+    assert result.stdout.strip() == "[]"
+
+
+def test_help_still_lists_every_subcommand(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as leave:
+        main(["--help"])
+    assert leave.value.code == 0
+    listing = capsys.readouterr().out
+    assert all(name in listing for name in SUBCOMMAND_MODULES)
