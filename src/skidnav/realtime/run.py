@@ -17,6 +17,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
+from skidnav.atomicfile import write_user_file
 from skidnav.errors import UserError
 from skidnav.realtime.arena import build_map, seed_streams
 from skidnav.realtime.checkpoint import Checkpoints
@@ -178,7 +179,7 @@ def _summarize(loop: RealtimeLoop, out: Path, code: int) -> str:
         "actions": sum(r.actions for r in results),
         "last_abort_reason": next((r.reason for r in reversed(results) if r.aborted), None),
     }
-    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    write_user_file(out / "summary.json", json.dumps(summary, indent=1).encode(), "run summary")
     return (
         f"{summary['episodes']} episodes, {summary['goals']} reached the goal, "
         f"{summary['aborted']} aborted; results in {out}"
