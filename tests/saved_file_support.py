@@ -97,7 +97,7 @@ POINTER = '{"episode": 0, "directory": "ep-00000"}'
 def write_checkpoint(
     out: Path,
     agent: tuple[str, Mapping[str, np.ndarray]] | None = None,
-    loop_state: str = '{"results": []}',
+    loop_state: str = '{"results": [], "wheel_speed_stats": []}',
     pointer: str = POINTER,
 ) -> Path:
     """A real-time run directory ``out`` whose ``checkpoints/latest.json`` is ``pointer`` and

@@ -31,6 +31,17 @@ def excerpt(text: str | bytes, limit: int = EXCERPT_CHARS) -> str:
     return repr(text[:limit]) + ("…" if cut else "")
 
 
+def shown(value: object) -> str:
+    """``repr(value)`` of a value read from a file, for an error message: whole up to
+    :data:`EXCERPT_CHARS` characters, else cut by :func:`excerpt`.
+
+    >>> shown(1.5), shown("x" * 100)
+    ('1.5', '"\\'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx"…')
+    """
+    text = repr(value)
+    return text if len(text) <= EXCERPT_CHARS else excerpt(text)
+
+
 def first_line(error: BaseException, limit: int = 200) -> str:
     """The first line of an error's message, control characters escaped and cut to ``limit``
     characters (messages may quote a file), or the error's type when it has no message.

@@ -38,7 +38,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.lib import format as npy_format
 
-from skidnav.errors import EXCERPT_CHARS, CorruptFileError, UserError, excerpt, first_line
+from skidnav.errors import CorruptFileError, UserError, excerpt, first_line
 
 MAX_JSON_BYTES = 64 * 2**20
 """Largest JSON file read [bytes] (an agent's is a few kilobytes, metadata a few megabytes)."""
@@ -150,17 +150,6 @@ def read_json(
     except UnicodeDecodeError:
         raise CorruptFileError(f"{path}: not UTF-8 text") from None
     return parse_json(text, path, max_depth=max_depth, allow_nonfinite=allow_nonfinite)
-
-
-def shown(value: object) -> str:
-    """``repr(value)`` of a value read from a file, for an error message: whole up to
-    :data:`~skidnav.errors.EXCERPT_CHARS` characters, else cut by :func:`~skidnav.errors.excerpt`.
-
-    >>> shown(1.5), shown("x" * 100)
-    ('1.5', '"\\'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx"…')
-    """
-    text = repr(value)
-    return text if len(text) <= EXCERPT_CHARS else excerpt(text)
 
 
 def nesting_depth(value: object) -> int:

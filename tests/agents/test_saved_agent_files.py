@@ -15,7 +15,9 @@ from saved_file_support import (
     arrays_of,
     forged_header_length,
     forged_npy,
+    listing,
     npy_bytes,
+    write_checkpoint,
     write_npz,
 )
 from skidnav.agents.registry import load_agent, make_agent
@@ -125,27 +127,14 @@ def _write(directory: Path, files: Files, change: Callable[[Files], None], raw: 
     return directory / "agent.npz"
 
 
-def _checkpoint(out: Path, files: Files, change: Callable[[Files], None], raw: str) -> Path:
-    """A real-time run directory whose latest checkpoint holds the changed agent."""
-    checkpoints = out / "checkpoints"
-    npz_path = _write(checkpoints / "ep-00000", files, change, raw)
-    (checkpoints / "ep-00000" / "loop.json").write_text("{}")
-    (checkpoints / "latest.json").write_text('{"episode": 0, "directory": "ep-00000"}')
-    return npz_path
-
-
-def _listing(root: Path) -> list[tuple[str, int]]:
-    return sorted((str(p.relative_to(root)), p.stat().st_size) for p in root.rglob("*"))
-
-
 @pytest.mark.parametrize("case", CASES)
 def test_a_hostile_agent_file_ends_the_resume_in_one_line(
     case: str, saved_dyna_q: Files, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     change, raw, message = CASES[case]
     out = tmp_path / "run"
-    npz_path = _checkpoint(out, saved_dyna_q, change, raw)
-    before = _listing(out)
+    npz_path = _write(write_checkpoint(out), saved_dyna_q, change, raw)
+    before = listing(out)
     args = ["robot", "run", "--quiet", "--driver", "sim", "--agent", "dyna-q"]
     code = main([*args, "--config", str(REALTIME), "--resume", "--out", str(out)])
     err = capsys.readouterr().err
@@ -154,7 +143,7 @@ def test_a_hostile_agent_file_ends_the_resume_in_one_line(
     assert len(lines) == 1 and lines[0].startswith("skidnav: error: "), err[:500]
     assert message in lines[0] and str(npz_path.parent / "agent.") in lines[0]
     assert len(lines[0]) < 400
-    assert _listing(out) == before  # nothing written, nothing left behind
+    assert listing(out) == before  # nothing written, nothing left behind
 
 
 def test_the_intact_checkpoint_files_load(saved_dyna_q: Files, tmp_path: Path) -> None:

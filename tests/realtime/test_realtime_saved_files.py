@@ -162,9 +162,19 @@ CHECKPOINT_CASES: dict[str, tuple[dict[str, str], str, str]] = {
         "wheel_speed_stats is not a table of finite numbers",
     ),
     "text statistics": (
-        {"loop_state": '{"results": [], "icr_sums": ["' + "s" * 10_000 + '"]}'},
+        {
+            "loop_state": '{"results": [], "wheel_speed_stats": [], "icr_sums": ["'
+            + "s" * 10_000
+            + '"]}'
+        },
         "loop.json",
         "icr_sums is not a table of finite numbers",
+    ),
+    "empty loop state": ({"loop_state": "{}"}, "loop.json", "unusable loop state (no 'results')"),
+    "no statistics": (
+        {"loop_state": '{"results": []}'},
+        "loop.json",
+        "unusable loop state (no 'wheel_speed_stats')",
     ),
     "results not a list": (
         {"loop_state": '{"results": {"episode": 0}}'},
@@ -221,7 +231,7 @@ def test_a_failed_checkpoint_leaves_the_previous_one(
     checkpoints = Checkpoints(tmp_path / "checkpoints", keep=3)
     agent = make_agent("q-learning", 54, 4, {}, np.random.default_rng(0))
     agent.q[:] = 1.0
-    checkpoints.save(0, agent, {"results": [], "episodes_done": 1})
+    checkpoints.save(0, agent, {"results": [], "wheel_speed_stats": [], "episodes_done": 1})
     stale = checkpoints.root / f".{LATEST}.{_dead_pid()}-0123abcd.tmp"
     stale.write_text("left by a killed run")
     replace = os.replace
@@ -234,7 +244,7 @@ def test_a_failed_checkpoint_leaves_the_previous_one(
     monkeypatch.setattr(os, "replace", disk_full_at_the_pointer)
     agent.q[:] = 2.0
     with pytest.raises(OSError, match="No space left"):
-        checkpoints.save(1, agent, {"results": [], "episodes_done": 2})
+        checkpoints.save(1, agent, {"results": [], "wheel_speed_stats": [], "episodes_done": 2})
     monkeypatch.undo()
     latest = checkpoints.latest()
     assert latest is not None and latest[0] == 0 and latest[2]["episodes_done"] == 1
@@ -242,7 +252,7 @@ def test_a_failed_checkpoint_leaves_the_previous_one(
     names = sorted(p.name for p in checkpoints.root.iterdir())
     assert names == ["ep-00000", "ep-00001", LATEST]  # stale temporary gone, no new one
     assert not [p for p in checkpoints.root.rglob("*.tmp")]
-    checkpoints.save(1, agent, {"results": [], "episodes_done": 2})
+    checkpoints.save(1, agent, {"results": [], "wheel_speed_stats": [], "episodes_done": 2})
     latest = checkpoints.latest()
     assert latest is not None and latest[0] == 1 and np.all(load_agent(latest[1] / "agent").q == 2)
 

@@ -21,8 +21,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
+from skidnav.errors import shown
 from skidnav.kernels.multinomial import PLANNING_MODES
-from skidnav.savedfile import shown
 
 MAX_PLANNING_STEPS = 10_000_000
 """Most planning updates per real step (10 M: about a second of compiled planning)."""

@@ -25,9 +25,8 @@ import numpy as np
 
 from skidnav.agents.config import QLearningConfig
 from skidnav.atomicfile import write_atomic, write_npz_atomic
-from skidnav.errors import CorruptFileError
+from skidnav.errors import CorruptFileError, shown
 from skidnav.kernels.tabular import epsilon_at, epsilon_greedy, greedy_first
-from skidnav.savedfile import shown
 
 logger = logging.getLogger(__name__)
 

@@ -22,8 +22,8 @@ import numpy as np
 
 from skidnav.agents.config import QLearningConfig
 from skidnav.agents.core import SAVE_FORMAT, SAVE_VERSION, TabularAgent, save_paths
-from skidnav.errors import CorruptFileError, UserError, first_line
-from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, read_json, shown, up_to
+from skidnav.errors import CorruptFileError, UserError, first_line, shown
+from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, read_json, up_to
 
 AGENT_MODULES: dict[str, str] = {
     "q-learning": "skidnav.agents.q_learning",

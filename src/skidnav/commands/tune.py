@@ -10,10 +10,8 @@ from typing import Any
 
 import optuna
 
-from skidnav.atomicfile import remove_stale_temporaries
 from skidnav.commands.run import add_backend_arguments
 from skidnav.errors import UserError
-from skidnav.experiments.store import directory_lock
 from skidnav.experiments.tuneconfig import load_tune_config_and_text
 from skidnav.experiments.tuning import tune_experiment
 
@@ -64,19 +62,17 @@ def tune_command(args: argparse.Namespace) -> int:
         except ValueError as error:
             raise UserError(f"--trials: {error}") from None
     out = args.out if args.out is not None else Path("runs") / config.name
-    with directory_lock(out):  # one search per directory; removed again if nothing was written
-        remove_stale_temporaries(out)
-        outcome = tune_experiment(
-            config,
-            tune,
-            out,
-            backend=args.backend,
-            jobs=args.jobs,
-            scheduler=args.scheduler,
-            source_text=text,
-            config_path=args.config,
-            on_trial=_print_trial,
-        )
+    outcome = tune_experiment(
+        config,
+        tune,
+        out,
+        backend=args.backend,
+        jobs=args.jobs,
+        scheduler=args.scheduler,
+        source_text=text,
+        config_path=args.config,
+        on_trial=_print_trial,
+    )
     counts = ", ".join(f"{label} {count}" for label, count in outcome.finished.items())
     print(
         f"tuned hyperparameters: {outcome.tuned} ({outcome.executed} trials run now; finished: "

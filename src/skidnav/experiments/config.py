@@ -28,6 +28,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from skidnav.errors import shown
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.world.grid import MAP_KINDS
 
@@ -54,10 +55,12 @@ machine this runs on, and the config is refused before a run starts."""
 def _check_params(name: str, params: Params) -> None:
     for key, value in params:
         if not isinstance(key, str) or not key:
-            raise ValueError(f"expected {name} keys to be non-empty strings, got {key!r}")
+            raise ValueError(f"expected {name} keys to be non-empty strings, got {shown(key)}")
         items = value if isinstance(value, tuple) else (value,)
         if not all(isinstance(item, _SCALARS) for item in items):
-            raise ValueError(f"expected {name}.{key} to be a number, string or bool, got {value!r}")
+            raise ValueError(
+                f"expected {name}.{key} to be a number, string or bool, got {shown(value)}"
+            )
 
 
 def freeze_params(mapping: dict[str, Any] | Params | None) -> Params:
@@ -88,10 +91,10 @@ class AgentSpec:
 
     def __post_init__(self) -> None:
         if not self.name:
-            raise ValueError(f"expected a non-empty agent name, got {self.name!r}")
+            raise ValueError(f"expected a non-empty agent name, got {shown(self.name)}")
         if not self.label:
-            raise ValueError(f"expected a non-empty agent label, got {self.label!r}")
-        _check_params(f"agent {self.label!r} params", self.params)
+            raise ValueError(f"expected a non-empty agent label, got {shown(self.label)}")
+        _check_params(f"agent {shown(self.label)} params", self.params)
 
     def params_dict(self) -> dict[str, Scalar]:
         """The hyperparameters as a fresh dict."""
@@ -118,12 +121,14 @@ class MapSpec:
         if bool(self.kind) == bool(self.file):
             raise ValueError("expected exactly one of kind or file in a map")
         if self.kind and self.kind not in MAP_KINDS:
-            raise ValueError(f"expected map kind one of {', '.join(MAP_KINDS)}, got {self.kind!r}")
+            raise ValueError(
+                f"expected map kind one of {', '.join(MAP_KINDS)}, got {shown(self.kind)}"
+            )
         if self.file and self.options:
             raise ValueError("expected no options for a map file")
         if not self.label:
             raise ValueError("expected a non-empty map label")
-        _check_params(f"map {self.label!r} options", self.options)
+        _check_params(f"map {shown(self.label)} options", self.options)
 
 
 def _check_range(name: str, value: float, low: float, high: float, *, integer: bool) -> None:
@@ -131,7 +136,7 @@ def _check_range(name: str, value: float, low: float, high: float, *, integer: b
     ok_type = isinstance(value, int) if integer else isinstance(value, int | float)
     if isinstance(value, bool) or not ok_type or not (low <= value <= high):
         bounds = f"in [{low}, {high}]" if math.isfinite(high) else f">= {low}"
-        raise ValueError(f"expected {name} to be {kind} {bounds}, got {value!r}")
+        raise ValueError(f"expected {name} to be {kind} {bounds}, got {shown(value)}")
 
 
 @dataclass(frozen=True)
@@ -200,7 +205,7 @@ class ExperimentConfig:
             names = [agent.label for agent in self.agents if agent.name == "q-learning"]
             object.__setattr__(self, "baseline", (names or [self.agents[0].label])[0])
         if self.baseline not in self.agent_labels:
-            raise ValueError(f"expected baseline to be an agent label, got {self.baseline!r}")
+            raise ValueError(f"expected baseline to be an agent label, got {shown(self.baseline)}")
         _check_params("env", self.env_options)
 
     def _check_members(self) -> None:
@@ -212,7 +217,9 @@ class ExperimentConfig:
             raise ValueError("expected at least one slip preset")
         for preset in self.presets:
             if preset not in SLIP_PRESETS:
-                raise ValueError(f"expected presets from {', '.join(SLIP_PRESETS)}, got {preset!r}")
+                raise ValueError(
+                    f"expected presets from {', '.join(SLIP_PRESETS)}, got {shown(preset)}"
+                )
         for what, labels in (
             ("agent labels", self.agent_labels),
             ("map labels", [m.label for m in self.maps]),
@@ -238,7 +245,9 @@ class ExperimentConfig:
         _check_range("bootstrap_samples", self.bootstrap_samples, 100, MAX_BOOTSTRAP, integer=True)
         _check_range("confidence", self.confidence, 0.5, 0.999, integer=False)
         if not isinstance(self.greedy_eval, bool):
-            raise ValueError(f"expected greedy_eval to be true or false, got {self.greedy_eval!r}")
+            raise ValueError(
+                f"expected greedy_eval to be true or false, got {shown(self.greedy_eval)}"
+            )
         episodes = self.n_runs * self.episodes
         if episodes > MAX_TOTAL_EPISODES:
             raise ValueError(

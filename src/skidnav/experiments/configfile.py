@@ -13,7 +13,7 @@ import itertools
 from pathlib import Path
 from typing import Any
 
-from skidnav.errors import UserError
+from skidnav.errors import UserError, shown
 from skidnav.experiments.config import (
     DEFAULT_ENV_ID,
     AgentSpec,
@@ -21,7 +21,7 @@ from skidnav.experiments.config import (
     MapSpec,
     freeze_params,
 )
-from skidnav.savedfile import MAX_CONFIG_BYTES, parse_toml, read_config_text, shown
+from skidnav.savedfile import MAX_CONFIG_BYTES, parse_toml, read_config_text
 
 MAX_CONFIG_CHARS = MAX_CONFIG_BYTES // 4
 """Longest config text accepted [characters] (a config is a few kilobytes)."""

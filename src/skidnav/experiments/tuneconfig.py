@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from skidnav.errors import UserError
+from skidnav.errors import UserError, shown
 from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec, _check_range
 
 # The [[maps]] schema and its table helpers live in configfile; reusing them keeps [[tune.maps]]
@@ -48,7 +48,7 @@ from skidnav.experiments.configfile import (
     config_from_tables,
     parse_tables,
 )
-from skidnav.savedfile import read_config_text, shown
+from skidnav.savedfile import read_config_text
 
 if TYPE_CHECKING:
     import optuna

@@ -41,7 +41,7 @@ import numpy as np
 import optuna
 from optuna.trial import FrozenTrial, TrialState
 
-from skidnav.atomicfile import write_atomic
+from skidnav.atomicfile import remove_stale_temporaries, write_atomic
 from skidnav.errors import CorruptFileError, UserError
 from skidnav.experiments.config import (
     DEFAULT_ENV_ID,
@@ -53,7 +53,7 @@ from skidnav.experiments.config import (
 from skidnav.experiments.runner import TrialFunction, _check_backend, dask_client, default_jobs
 from skidnav.experiments.runner import execute as execute_runs
 from skidnav.experiments.runs import RunSpec, SeedKey, expand_runs
-from skidnav.experiments.store import TrialResult
+from skidnav.experiments.store import TrialResult, directory_lock
 from skidnav.experiments.tuneconfig import ParamRange, TuneConfig, check_tuning, default_point
 from skidnav.experiments.tunedfile import write_tuned
 from skidnav.stats import iqm
@@ -437,6 +437,8 @@ def tune_experiment(
         client = None
         if backend == "dask" and _needs_work(out / JOURNAL, plans, tune.trials):
             client = stack.enter_context(dask_client(jobs, scheduler))
+        stack.enter_context(directory_lock(out))  # one search per directory
+        remove_stale_temporaries(out)
         studies = _open_studies(out, plans, tune, source_text)
         context = _Context(config, tune, trial, backend, jobs, client)
         deadline = None if tune.timeout_s is None else started + tune.timeout_s

@@ -26,9 +26,9 @@ from typing import Any
 import numpy as np
 
 from skidnav.atomicfile import remove_stale_temporaries, write_atomic
-from skidnav.errors import CorruptFileError, first_line
+from skidnav.errors import CorruptFileError, first_line, shown
 from skidnav.realtime.records import EpisodeResult
-from skidnav.savedfile import read_json, shown
+from skidnav.savedfile import read_json
 
 log = logging.getLogger(__name__)
 
@@ -104,9 +104,15 @@ class Checkpoints:
         return episode, directory, state
 
 
+REQUIRED_LOOP_KEYS = ("results", "wheel_speed_stats")
+"""Keys of ``loop.json`` the loop cannot restore without (``icr_sums`` is optional: older
+checkpoints lack it)."""
+
+
 def _loop_state_problem(state: dict[str, Any]) -> str | None:
     """What keeps the loop from restoring ``state`` (None if nothing): episode results it
-    cannot rebuild, statistics that are not tables of finite numbers."""
+    cannot rebuild, statistics that are not tables of finite numbers, a key the loop needs
+    missing."""
     results = state.get("results", [])
     if not isinstance(results, list) or not all(isinstance(r, dict) for r in results):
         return "expected 'results' to be a list of episode results"
@@ -122,7 +128,8 @@ def _loop_state_problem(state: dict[str, Any]) -> str | None:
                 _finite_table(state[key], key)
     except (ValueError, TypeError) as error:
         return f"unusable loop state ({first_line(error, 120)})"
-    return None
+    missing = [key for key in REQUIRED_LOOP_KEYS if key not in state]
+    return f"unusable loop state (no {missing[0]!r})" if missing else None
 
 
 def _finite_table(value: Any, key: str) -> None:

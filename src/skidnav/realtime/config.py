@@ -15,10 +15,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
-from skidnav.errors import UserError
+from skidnav.errors import UserError, shown
 from skidnav.realtime.protocol import MAX_LINE_BYTES
 from skidnav.robot.slip import SLIP_PRESETS
-from skidnav.savedfile import parse_toml, read_config_text, shown
+from skidnav.savedfile import parse_toml, read_config_text
 from skidnav.world.grid import MAP_KINDS
 
 T = TypeVar("T")

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
-from skidnav.savedfile import shown
+from skidnav.errors import shown
 
 
 @dataclass

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from skidnav.atomicfile import remove_stale_temporaries, write_user_file
-from skidnav.errors import UserError, first_line
+from skidnav.errors import UserError, first_line, shown
 from skidnav.realtime.arena import build_map, seed_streams
 from skidnav.realtime.config import (
     RealtimeConfig,
@@ -39,7 +39,7 @@ from skidnav.realtime.run import agent_context, interrupt_handlers, warm_up_agen
 from skidnav.realtime.study_report import CSV_FIELDS, markdown_report
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
-from skidnav.savedfile import read_json, shown
+from skidnav.savedfile import read_json
 from skidnav.world.discretization import Discretization
 
 log = logging.getLogger(__name__)
