@@ -11,6 +11,7 @@ from collections.abc import Callable
 from typing import Any, TypeVar
 
 import numba
+from numba.extending import overload
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -19,6 +20,54 @@ def jit(function: F) -> F:
     """Compile ``function`` in nopython mode with an on-disk cache (no fastmath: results must match
     the interpreter bit for bit)."""
     return numba.njit(cache=True, nogil=True)(function)  # type: ignore[return-value]
+
+
+def inline_jit(function: F) -> F:
+    """Like :func:`jit`, but inlined into compiled callers at the numba IR level.
+
+    Used for the small helpers of the hot loops: a non-inlined call that receives arrays (or a
+    Generator) costs ~30–300 ns in numba 0.68 (reference counting of every array argument), more
+    than the helper's work. Inlining does not remove all of it: every array (or tuple of arrays)
+    bound to a helper parameter, and every view such as ``q[state]``, is still reference-counted
+    each call unless numba can prune the pair. Hot helpers therefore index ``q[state, action]``
+    (no row views) and take only the few arrays they read. Called from Python it behaves like
+    any compiled function, and with ``NUMBA_DISABLE_JIT=1`` it is the plain function.
+    """
+    return numba.njit(inline="always", cache=True, nogil=True)(function)  # type: ignore[return-value]
+
+
+def dispatch_on_type(registry: dict[type, Any]) -> Callable[[F], F]:
+    """Decorator for a generic function ``generic(first, *rest)`` that calls
+    ``registry[type(first)](first, *rest)`` (``first`` a NamedTuple, the values compiled
+    functions): called from Python it is that lookup; called from compiled code numba makes the
+    choice while compiling, from the NamedTuple class of ``first``, so the compiled caller takes
+    no function as an argument and caches on disk like any other. The small glue compiled for
+    each class is not cached itself (its index would name classes of any module)."""
+
+    def decorate(generic: F) -> F:
+        def typing(first: Any, *rest: Any) -> Any:
+            kernel = registry.get(getattr(first, "instance_class", type(None)))
+            if kernel is None:
+                return None  # numba reports the missing implementation
+
+            def implementation(first: Any, *rest: Any) -> Any:
+                return kernel(first, *rest)
+
+            return implementation
+
+        overload(generic, jit_options={"nogil": True})(typing)
+        return generic
+
+    return decorate
+
+
+def uncached(function: Any) -> Any:
+    """A second compiled version of a :func:`jit` function, without the disk cache, for
+    arguments of types defined outside skidnav (an agent in a test or a notebook): numba's cache
+    index pickles the types of every signature it holds, so one such entry would make the index
+    unreadable to every process that cannot import that type's module."""
+    python_function = getattr(function, "py_func", function)
+    return numba.njit(cache=False, nogil=True)(python_function)
 
 
 def jit_disabled() -> bool:

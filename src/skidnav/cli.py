@@ -34,20 +34,14 @@ def requested_modules(argv: Sequence[str]) -> list[str]:
 
 
 def build_parser(modules: Sequence[str] = tuple(SUBCOMMAND_MODULES.values())) -> OneLineParser:
-    """The argument parser with the subcommands of ``modules`` (default: every installed one)."""
+    """The argument parser with the subcommands of ``modules`` (default: every one)."""
     parser = OneLineParser(
         prog="skidnav", description="Model-based RL navigation for skid-steer robots."
     )
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
     subparsers = parser.add_subparsers(dest="command", required=True)
     for module_name in modules:
-        try:
-            module = importlib.import_module(module_name)
-        except ModuleNotFoundError as error:
-            if error.name == module_name:
-                continue
-            raise
-        module.add_parser(subparsers)
+        importlib.import_module(module_name).add_parser(subparsers)
     return parser
 
 

@@ -372,7 +372,9 @@ def performance_profile(times: ArrayLike, observed: ArrayLike, episodes: ArrayLi
     points = np.asarray(episodes, dtype=np.float64).ravel()
     if sample.times.size == 0:
         return np.full(points.size, np.nan)
-    return _profile_rows(sample, np.arange(sample.times.size)[None, :], points)[0]
+    rows: np.ndarray = _profile_rows(sample, np.arange(sample.times.size)[None, :], points)
+    first: np.ndarray = rows[0]
+    return first
 
 
 def profile_band(

@@ -88,7 +88,7 @@ def test_collision_stops_the_robot_at_its_last_free_cell():
 
 
 def test_goal_terminates_with_plus_ten_and_truncation_is_separate():
-    env = make_env(max_episode_steps=50)
+    env = make_env()
     env.reset(seed=0)
     rewards, terminated = [], False
     while not terminated:
@@ -97,10 +97,39 @@ def test_goal_terminates_with_plus_ten_and_truncation_is_separate():
         assert not truncated
     assert rewards[-1] == 10.0 and all(r == -1.0 for r in rewards[:-1])
     assert info["cell"][:2] == env.grid_map.goal
-    short = make_env(max_episode_steps=3)
+    short = gymnasium.wrappers.TimeLimit(make_env(), 3)
     short.reset(seed=0)
     outcomes = [short.step(1)[2:4] for _ in range(3)]
     assert outcomes == [(False, False), (False, False), (False, True)]
+
+
+def test_the_env_itself_never_truncates():
+    env = make_env()
+    env.reset(seed=0)
+    flags = [env.step(1)[2:4] for _ in range(700)]  # backwards into the wall, away from the goal
+    assert set(flags) == {(False, False)}
+    assert not hasattr(env, "max_episode_steps")
+
+
+@pytest.mark.parametrize(("override", "limit"), [({}, 500), ({"max_episode_steps": 1000}, 1000)])
+def test_time_limit_is_registered_and_overridable_through_make(override, limit):
+    env = gymnasium.make(
+        "skidnav/SkidSteerNav-v0", grid_map=parse_map(CORRIDOR), slip="slippery", **override
+    )
+    assert env.spec.max_episode_steps == limit
+    assert gymnasium.spec("skidnav/SkidSteerNav-v0").max_episode_steps == 500
+    env.reset(seed=0)
+    flags = [env.step(1)[2:4] for _ in range(limit)]  # backwards, away from the goal
+    assert flags[-1] == (False, True)
+    assert set(flags[:-1]) == {(False, False)}
+
+
+def test_a_goal_on_the_last_allowed_action_is_terminated_and_truncated():
+    env = gymnasium.wrappers.TimeLimit(make_env(), 9)  # forward reaches the goal at action 9
+    env.reset(seed=0)
+    flags = [env.step(0)[2:4] for _ in range(9)]
+    assert flags[-1] == (True, True)  # Gymnasium's convention: agents check terminated first
+    assert set(flags[:-1]) == {(False, False)}
 
 
 def test_step_penalty_is_the_true_region_variance_on_a_slippery_floor():
@@ -171,7 +200,6 @@ def test_drift_scales_eta_only_so_x_icr_stays_within_the_axles():
     [
         ({"observation": "image"}, "observation"),
         ({"variance": "guess"}, "variance"),
-        ({"max_episode_steps": 0}, "max_episode_steps"),
         (
             {"slip_field": SlipField(eta=np.zeros((7, 7)), x_icr=np.full((7, 7), -0.06))},
             r"expected x_icr in \[-a, b\] = \[-0.05, 0.05\] m in every region, got -0.06 m",

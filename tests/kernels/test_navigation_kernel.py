@@ -122,3 +122,65 @@ def test_log_replays_to_the_pose_with_the_region_of_each_substep_start() -> None
         assert (x, y) == (pose[0], pose[1])
         assert outcome.region == grid.region(x, y)
         assert outcome.state == grid.state(*pose)
+
+
+def test_task_arrays_give_back_the_task() -> None:
+    from skidnav.kernels.navigation import task_arrays, task_from_arrays
+    from skidnav.robot.params import RobotParams
+
+    env = SkidSteerNavEnv(map_kind="maze", world_seed=2, slip="slippery", drift_amplitude=0.3,
+                          robot=RobotParams(integrator="exact"), variance="observed")  # fmt: skip
+    rebuilt = task_from_arrays(*task_arrays(env.task))
+    for name, value in env.task._asdict().items():
+        copy = getattr(rebuilt, name)
+        if isinstance(value, np.ndarray):
+            assert np.shares_memory(copy, value), name  # the kernel updates the task's arrays
+        else:
+            assert copy == value, name
+    assert rebuilt.robot.exact_integration and rebuilt.rewards.observed_variance
+
+
+def test_step_arrays_is_transition() -> None:
+    from skidnav.kernels.navigation import draw_noise, step_arrays, task_arrays, transition
+
+    fast_env, env = _slippery_env(), _slippery_env()
+    poses = _free_poses(env, 100, np.random.default_rng(4))
+    arrays = task_arrays(fast_env.task)
+    rng, noise = np.random.default_rng(8), np.empty(20)
+    log, fast_log = np.empty((10, 6)), np.empty((10, 6))
+    for k, action in enumerate(np.random.default_rng(6).integers(0, 4, 100)):
+        pose, fast_pose = poses[k].copy(), poses[k].copy()
+        draw_noise(rng, noise)
+        outcome = transition(env.task, pose, int(action), 0.3 * k, noise, log)
+        fast = step_arrays(*arrays, fast_pose, int(action), 0.3 * k, noise, fast_log)
+        assert fast == tuple(outcome)
+        assert pose.tobytes() == fast_pose.tobytes()
+        assert log[: outcome.n_logged].tobytes() == fast_log[: outcome.n_logged].tobytes()
+    assert env.task.variance_stats.tobytes() == fast_env.task.variance_stats.tobytes()
+
+
+def test_drive_substep_is_the_actions_substep() -> None:
+    """Driven sub-step by sub-step with an action's wheel speeds, a robot follows the action's
+    logged path exactly, with either integrator, until a wall stops it."""
+    from skidnav.kernels.navigation import drive_substep, transition
+    from skidnav.robot.kinematics import commanded_wheel_speeds
+    from skidnav.robot.params import RobotParams
+
+    for integrator in ("euler", "exact"):
+        env = SkidSteerNavEnv(map_kind="obstacles", world_seed=3, slip="slippery",
+                              drift_amplitude=0.5, drift_period=7.0,
+                              robot=RobotParams(integrator=integrator))  # fmt: skip
+        rng, log, collisions = np.random.default_rng(1), np.empty((10, 6)), 0
+        for k, pose in enumerate(_free_poses(env, 150, np.random.default_rng(2))):
+            action, noise = k % 4, rng.random(20)
+            driven = tuple(float(v) for v in pose)
+            end = pose.copy()
+            outcome = transition(env.task, end, action, 0.5 * k, noise, log)
+            commands = commanded_wheel_speeds(action, env.robot.wheel_speed)
+            for step in range(outcome.n_logged + int(outcome.collided)):
+                time = 0.5 * k + step * env.robot.dt
+                left, right = noise[2 * step], noise[2 * step + 1]
+                driven = drive_substep(env.task, driven, commands, time, left, right)
+            assert driven == tuple(end)
+            collisions += outcome.collided
+        assert collisions > 0

@@ -1,29 +1,24 @@
 """Hostile real-time configs and checkpoints end in one line (exit 2) before anything is written;
-checkpoints, study records and study tables are written all-or-nothing."""
+checkpoints are written all-or-nothing."""
 
 from __future__ import annotations
 
 import errno
-import json
-import logging
 import os
 import subprocess
 import sys
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 from realtime_helpers import write_config
-from test_study import study_config
 
-from saved_file_support import listing, skidnav_with_full_disk, write_checkpoint
+from saved_file_support import listing, write_checkpoint
 from skidnav.agents.registry import load_agent, make_agent
 from skidnav.cli import main
 from skidnav.errors import CorruptFileError
 from skidnav.realtime.checkpoint import LATEST, Checkpoints
-from skidnav.realtime.study import RunRecord
 
 REALTIME = Path(__file__).resolve().parents[2] / "configs" / "realtime.toml"
 DEEP = 5000
@@ -255,55 +250,3 @@ def test_a_failed_checkpoint_leaves_the_previous_one(
     checkpoints.save(1, agent, {"results": [], "wheel_speed_stats": [], "episodes_done": 2})
     latest = checkpoints.latest()
     assert latest is not None and latest[0] == 1 and np.all(load_agent(latest[1] / "agent").q == 2)
-
-
-def _record(agent: str, preset: str, seed: int) -> dict[str, Any]:
-    return asdict(RunRecord(agent, preset, seed, 2, 1, 0.5, 10.0, 0, 1, 1))
-
-
-def _finished_study(tmp_path: Path) -> tuple[Path, list[str]]:
-    """(out, command line) of a study whose four runs all have their result.json."""
-    config, out = study_config(tmp_path), tmp_path / "study"
-    for agent in ("q-learning", "dyna-q"):
-        for preset in ("rough-stationary", "slippery-drifting"):
-            run = out / "runs" / agent / preset / "seed-0"
-            run.mkdir(parents=True)
-            (run / "result.json").write_text(json.dumps(_record(agent, preset, 0)))
-    argv = ["robot", "study", "--config", str(config), "--episodes", "2", "--quiet"]
-    return out, [*argv, "--out", str(out)]
-
-
-def test_study_tables_are_kept_whole_when_the_disk_fills(tmp_path: Path) -> None:
-    out, argv = _finished_study(tmp_path)
-    assert main(argv) == 0
-    table, report = (out / "study.csv").read_bytes(), (out / "study.md").read_bytes()
-    limit = (len(table) + len(report)) // 2  # the table fits, the report does not
-    assert len(table) < limit < len(report)
-    (out / "study.md").write_text("the previous report\n")
-    result = skidnav_with_full_disk(argv, max_file_bytes=limit)
-    line = _one_error_line(result.stderr)
-    assert result.returncode == 2
-    assert line == f"skidnav: error: {out / 'study.md'}: cannot write the report (File too large)"
-    assert (out / "study.md").read_text() == "the previous report\n"  # not a torn new one
-    assert (out / "study.csv").read_bytes() == table
-    assert not list(out.rglob("*.tmp"))
-
-
-def test_a_hostile_study_record_is_logged_and_the_run_repeated(
-    tmp_path: Path, caplog: pytest.LogCaptureFixture, capsys: pytest.CaptureFixture[str]
-) -> None:
-    out, argv = _finished_study(tmp_path)
-    runs = out / "runs" / "q-learning"
-    nested = runs / "rough-stationary" / "seed-0" / "result.json"
-    nested.write_text('{"agent": ' + NESTED_JSON + "}")
-    typed = runs / "slippery-drifting" / "seed-0" / "result.json"
-    typed.write_text(json.dumps({**_record("q-learning", "p", 0), "successes": "s" * 10_000}))
-    with caplog.at_level(logging.WARNING, logger="skidnav.realtime.study"):
-        assert main([*argv[:-2], "--agents", "q-learning", "--episodes", "1", *argv[-2:]]) == 0
-    warnings = [r.getMessage() for r in caplog.records if "the run is repeated" in r.getMessage()]
-    assert len(warnings) == 2 and all(len(w) < len(str(typed)) + 150 for w in warnings)
-    assert warnings[0].startswith(f"{nested}: JSON nested {DEEP + 1} deep")
-    assert warnings[1].startswith(f"{typed}: expected successes to be an integer >= 0, got")
-    for path in (nested, typed):
-        assert RunRecord(**json.loads(path.read_text())).episodes == 1  # run again, recorded
-    assert "2 runs finished" in capsys.readouterr().out

@@ -17,12 +17,15 @@ from skidnav.robot.slip import make_slip_field
 from skidnav.world.discretization import Discretization
 
 
-def make_robot(config: SimRobotConfig, occupancy: np.ndarray | None = None) -> SimRobot:
+def make_robot(
+    config: SimRobotConfig, occupancy: np.ndarray | None = None, integrator: str = "euler"
+) -> SimRobot:
     slip = make_slip_field("thesis", np.random.default_rng(0))
     slip = type(slip)(eta=np.zeros((7, 7)), x_icr=slip.x_icr)  # no slip: exact kinematics
     grid = Discretization()
+    robot = RobotParams(integrator=integrator)
     return SimRobot(
-        RobotParams(), slip, occupancy, grid, config, np.random.default_rng(1), (0.2, 0.25, 0.0)
+        robot, slip, occupancy, grid, config, np.random.default_rng(1), (0.2, 0.25, 0.0)
     )
 
 
@@ -45,6 +48,23 @@ def test_turn_rotates_and_skids_sideways() -> None:
     x, y, heading = robot.pose
     assert heading == pytest.approx(0.6375)
     assert math.hypot(x - 0.2, y - 0.25) > 0.02  # x_ICR ≠ 0 slides the body
+
+
+def test_the_robots_integrator_is_used() -> None:
+    """Ten exact 0.1 s steps of a constant twist are one exact 1 s step; Euler's differ."""
+    from skidnav.robot.kinematics import body_velocities, exact_step
+
+    poses = {}
+    for integrator in ("euler", "exact"):
+        robot = make_robot(SimRobotConfig(), integrator=integrator)
+        robot.command(-1.7, 1.7)
+        for _ in range(10):
+            robot.step()
+        poses[integrator] = robot.pose
+    twist = body_velocities(-1.7, 1.7, 0.05, 0.0225, 0.06)
+    closed_form = exact_step(0.2, 0.25, 0.0, *twist, 1.0)
+    assert poses["exact"] == pytest.approx(closed_form, abs=1e-12)
+    assert math.dist(poses["euler"][:2], closed_form[:2]) > 1e-4
 
 
 def test_latency_delays_the_command() -> None:

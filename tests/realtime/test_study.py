@@ -1,19 +1,39 @@
-"""The hardware-in-the-loop study: runs against the sim server, CSV/markdown, resume, tables."""
+"""The hardware-in-the-loop study through the experiment runner: real-time runs against the sim
+server, the store's tables, resume after an interruption, seeds, the markdown tables."""
 
 from __future__ import annotations
 
-import csv
 import json
+from collections.abc import Callable
 from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
 
+import numpy as np
+import pandas as pd
 import pytest
 from realtime_helpers import write_config
 from test_run import small_room_map
 
 from skidnav.cli import main
 from skidnav.errors import UserError
-from skidnav.realtime.study import load_study
+from skidnav.experiments.runs import RunSpec, expand_runs
+from skidnav.experiments.store import ResultStore
+from skidnav.realtime.loop import EXIT_INTERRUPTED
+from skidnav.realtime.records import EpisodeResult
+from skidnav.realtime.study import (
+    STUDY_LAYOUT,
+    build_grid,
+    grid_from_dict,
+    grid_to_dict,
+    load_study,
+    run_study,
+)
 from skidnav.realtime.study_report import markdown_report
+from skidnav.realtime.study_trial import run_config
+
+AGENTS = ("q-learning", "dyna-q")
+PRESETS = ("rough-stationary", "slippery-drifting")
 
 
 def study_config(tmp_path: Path) -> Path:
@@ -46,112 +66,277 @@ drift_period = 30.0
     )
 
 
-def test_study_writes_tables_and_skips_finished_runs(
+def summaries_of(out: Path) -> pd.DataFrame:
+    return pd.read_csv(out / "summaries.csv")
+
+
+def test_study_runs_through_the_runner_and_skips_finished_runs(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     config, out = study_config(tmp_path), tmp_path / "study"
     argv = ["robot", "study", "--config", str(config), "--episodes", "2", "--quiet"]
     assert main([*argv, "--out", str(out)]) == 0
-    assert "4 runs finished" in capsys.readouterr().out
-    with (out / "study.csv").open(encoding="utf-8") as stream:
-        rows = list(csv.DictReader(stream))
-    assert {(r["agent"], r["preset"], r["seed"]) for r in rows} == {
-        (agent, preset, "0")
-        for agent in ("q-learning", "dyna-q")
-        for preset in ("rough-stationary", "slippery-drifting")
+    assert "4 of 4 runs finished (4 run now, 0 done before)" in capsys.readouterr().out
+    summaries = summaries_of(out)
+    assert {(r.agent, r.preset, r.seed) for r in summaries.itertuples()} == {
+        (agent, preset, 0) for agent in AGENTS for preset in PRESETS
     }
-    for row in rows:
-        episodes, successes = int(row["episodes"]), int(row["successes"])
-        assert episodes == 2 and 0 <= successes <= episodes
-        assert float(row["success_rate"]) == pytest.approx(successes / episodes, abs=1e-4)
-        assert 1 <= float(row["mean_episode_actions"]) <= 15
-        assert 0 <= int(row["aborted"]) <= episodes
-        run = out / "runs" / row["agent"] / row["preset"] / "seed-0"
-        summary = json.loads((run / "result.json").read_text())
-        assert summary["successes"] == successes
-        transitions = (run / "run.jsonl").read_text().count('"event": "transition"')
-        assert transitions == pytest.approx(episodes * float(row["mean_episode_actions"]))
+    episodes = pd.read_parquet(out / "episodes.parquet")
+    for row in summaries.itertuples():
+        assert row.episodes == 2 and 0 <= row.successes <= 2 and row.exit_code == 0
+        assert row.success_rate == pytest.approx(row.successes / 2)
+        assert 1 <= row.mean_length <= 15 and row.aborted == 0
+        lengths = episodes[episodes["run_id"] == row.run_id]["length"]
+        assert lengths.mean() == pytest.approx(row.mean_length)
+        logs = out / "runs" / row.agent / row.preset / "seed-0"
+        transitions = (logs / "run.jsonl").read_text().count('"event": "transition"')
+        assert transitions == lengths.sum()  # the stored episodes are the loop's
+        assert (logs / "sim-server.jsonl").exists() and (logs / "checkpoints").is_dir()
+    metadata = json.loads((out / "metadata.json").read_text())
+    assert [s["completed"] for s in metadata["sessions"]] == [True]
+    assert json.loads((out / "config.json").read_text())["kind"] == "robot-study"
     report = (out / "study.md").read_text()
     assert "| q-learning | slippery-drifting | 1 | 2 |" in report
     assert "| dyna-q | rough | 1 |" in report and "| dyna-q | slippery | 1 |" in report
-    assert "no floor pairs" in report  # rough-stationary vs slippery-drifting: no pair
+    assert "no floor pair" in report  # rough-stationary vs slippery-drifting: no pair
 
     # a second call skips the finished runs (no server, logs untouched) and rewrites the tables
     kept = out / "runs" / "q-learning" / "rough-stationary" / "seed-0" / "run.jsonl"
     before = kept.read_bytes()
-    (out / "study.csv").unlink()
+    (out / "study.md").unlink()
     assert main([*argv, "--out", str(out)]) == 0
-    captured = capsys.readouterr()
-    assert captured.err.count("skipped") == 4 and "4 runs finished" in captured.out
+    assert "4 of 4 runs finished (0 run now, 4 done before)" in capsys.readouterr().out
     assert kept.read_bytes() == before
-    with (out / "study.csv").open(encoding="utf-8") as stream:
-        assert list(csv.DictReader(stream)) == rows
+    pd.testing.assert_frame_equal(summaries_of(out), summaries)
     assert (out / "study.md").read_text() == report
+    metadata = json.loads((out / "metadata.json").read_text())
+    assert [s["runs_done"] for s in metadata["sessions"]] == [4, 0]
+
+
+FakeRun = Callable[[RunSpec[Any], Path, Callable[[str], None]], tuple[int, list[EpisodeResult]]]
+
+
+def fake_realtime(calls: list[str], interrupt_at: int = 0) -> FakeRun:
+    """A stand-in for ``realtime_run``: episodes that depend on the run's seeds only (goal every
+    other episode from a phase of the world seed), a file in the run's folder, and an
+    interruption at the ``interrupt_at``-th call (1-based; 0: never)."""
+
+    def run(
+        spec: RunSpec[Any], out: Path, progress: Callable[[str], None]
+    ) -> tuple[int, list[EpisodeResult]]:
+        calls.append(spec.run_id)
+        (out / "run.jsonl").write_text("{}\n")
+        config = run_config(spec)
+        phase = config.run.seed % 2
+        results = [
+            EpisodeResult(e, actions=5 + e, reached_goal=(e + phase) % 2 == 0, wall_time=0.1)
+            for e in range(config.run.episodes)
+        ]
+        if len(calls) == interrupt_at:
+            return EXIT_INTERRUPTED, results[:1]
+        return 0, results
+
+    return run
+
+
+def test_an_interrupted_study_resumes_with_no_run_lost_or_repeated(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    tables, settings = load_study(study_config(tmp_path), {"seeds": 2, "episodes": 3})
+    out, calls = tmp_path / "study", []
+    monkeypatch.setattr("skidnav.realtime.study_trial.realtime_run", fake_realtime(calls, 3))
+    first = run_study(tables, settings, out)
+    assert first == (EXIT_INTERRUPTED, 8, 2, 2)
+    store = ResultStore(out, STUDY_LAYOUT)
+    assert store.finished() == {"run-000000", "run-000001"}
+    assert "| q-learning | rough-stationary | 2 | 6 |" in (out / "study.md").read_text()
+    interrupted = out / "runs" / "q-learning" / "slippery-drifting" / "seed-0"
+    assert (interrupted / "run.jsonl").exists()  # unfinished: no run file
+
+    monkeypatch.setattr("skidnav.realtime.study_trial.realtime_run", fake_realtime(calls))
+    second = run_study(tables, settings, out)
+    assert second == (0, 8, 8, 6)
+    assert calls[3:] == [f"run-{i:06d}" for i in range(2, 8)]  # the interrupted run again
+    assert store.finished() == {f"run-{i:06d}" for i in range(8)}
+    sessions = json.loads((out / "metadata.json").read_text())["sessions"]
+    assert [(s["runs_done"], s["completed"]) for s in sessions] == [(2, False), (6, True)]
+    summaries = summaries_of(out)
+    assert len(summaries) == 8 and set(summaries["episodes"]) == {3}
+
+
+def test_runs_meet_the_worlds_of_the_runner_seeds(tmp_path: Path) -> None:
+    tables, settings = load_study(study_config(tmp_path), {"seeds": 2})
+    grid = build_grid(tables, settings)
+    runs = expand_runs(grid)
+    assert len(runs) == grid.n_runs == 8
+    seeds = {(s.agent.name, s.preset, s.seed): run_config(s).run.seed for s in runs}
+    # every agent meets the same world (arena and sim server seed) of a (preset, seed) ...
+    for preset in PRESETS:
+        for seed in range(2):
+            assert seeds[("q-learning", preset, seed)] == seeds[("dyna-q", preset, seed)]
+    # ... and the worlds differ between presets and seeds; the agents' own streams all differ
+    assert len({seeds[("q-learning", p, s)] for p in PRESETS for s in range(2)}) == 4
+    assert len({spec.run_seed for spec in runs}) == 8
+    config = run_config(runs[-1])
+    assert config.sim.slip == "slippery" and config.sim.drift == 0.5
+    assert config.run.map == str(tmp_path / "room.txt") and config.run.episodes == 5
+    assert grid_from_dict(json.loads(json.dumps(grid_to_dict(grid)))) == grid
+    assert grid.conditions() == {PRESETS[0]: ("rough", False), PRESETS[1]: ("slippery", True)}
 
 
 def study_row(
     agent: str, preset: str, seed: int, successes: int, late: int, length: float = 50.0
 ) -> dict[str, object]:
-    """A study.csv row of 20 episodes, ``late`` of the ``successes`` in the last 10."""
+    """A summaries row of 20 episodes, ``late`` of the ``successes`` in the last 10."""
     return {
         "agent": agent,
+        "algorithm": agent,
+        "map": "room",
         "preset": preset,
         "seed": seed,
         "episodes": 20,
         "successes": successes,
         "success_rate": successes / 20,
-        "mean_episode_actions": length,
-        "aborted": 0,
         "late_episodes": 10,
         "late_successes": late,
+        "success_rate_last_half": late / 10,
+        "mean_length": length,
+        "aborted": 0,
     }
 
 
+SETTINGS = SimpleNamespace(
+    root_seed=0,
+    agent_labels=["q-learning", "dyna-q"],
+    baseline="q-learning",
+    bootstrap_samples=2000,
+    confidence=0.95,
+)
+CONDITIONS = {
+    "r": ("rough", False),
+    "s": ("slippery", False),
+    "d": ("rough", True),
+    "e": ("slippery", True),
+}
+
+
+def _cells(report: str, start: str) -> list[str]:
+    line = next(x for x in report.splitlines() if x.startswith(start))
+    return [cell.strip() for cell in line.strip("|").split("|")]
+
+
+def _bounds(cell: str) -> tuple[float, float, float]:
+    low, high = (float(v) for v in cell.split("[")[1].rstrip("]").split(","))
+    return float(cell.split()[0]), low, high
+
+
 def test_report_estimates_are_seed_means_with_paired_comparisons() -> None:
-    conditions = {"r": ("rough", False), "s": ("slippery", False), "d": ("rough", True)}
     rows = [
         study_row("q-learning", "r", 0, 4, 4, 80.0),
         study_row("q-learning", "r", 1, 8, 6, 60.0),
         study_row("q-learning", "s", 0, 2, 2),
         study_row("q-learning", "s", 1, 2, 2),
+        study_row("q-learning", "d", 0, 2, 2),
+        study_row("q-learning", "e", 0, 4, 4),
         study_row("dyna-q", "r", 0, 12, 8, 40.0),
         study_row("dyna-q", "r", 1, 12, 8, 40.0),
         study_row("dyna-q", "s", 0, 0, 0),
         study_row("dyna-q", "d", 0, 0, 0),
+        study_row("dyna-q", "e", 0, 0, 0),
     ]
-    report = markdown_report(rows, conditions)
+    report = markdown_report(pd.DataFrame(rows), SETTINGS, CONDITIONS)
     # q-learning on r: success 20 % and 40 % → 30 %; last half 40 %, 60 % → 50 %; length 70
-    line = next(x for x in report.splitlines() if x.startswith("| q-learning | r |"))
-    cells = [c.strip() for c in line.strip("|").split("|")]
+    cells = _cells(report, "| q-learning | r |")
     assert cells[2:4] == ["2", "40"] and cells[-1] == "0"
-    assert cells[4].startswith("30.0 [") and cells[5].startswith("50.0 [")
-    assert cells[6].startswith("70.0 [")
-    for cell in cells[4:7]:  # the interval lies within the two seeds' values
-        low, high = (float(v) for v in cell.split("[")[1].rstrip("]").split(","))
-        assert low <= float(cell.split()[0]) <= high
-    # one seed: no interval
-    assert "| dyna-q | s | 1 | 20 | 0.0 | 0.0 | 50.0 | 0 |" in report
-    # rough / slippery, paired by seed, on the last half: (40 + 60) / 2 over 20
-    assert "| q-learning | stationary | 2 | 50.0 | 20.0 | 2.50 [" in report
-    assert "| dyna-q | stationary | 1 | 80.0 | 0.0 | ∞ (slippery 0) |" in report
-    assert "| dyna-q | drifting |" not in report  # no slippery drifting run
-    # dyna-q minus q-learning on the rough floor: pairs (r, 0), (r, 1); (d, 0) has no partner
-    assert "| dyna-q | rough | 2 | +30.0 [+20.0, +40.0] | +30.0 [+20.0, +40.0] |" in report
-    assert "+30.0 [+20.0, +40.0] | -30.0 [-40.0, -20.0] |" in report
-    assert "| dyna-q | slippery | 1 | -10.0 | -20.0 | +0.0 |" in report
+    for cell, estimate, values in zip(
+        cells[4:7], (30.0, 50.0, 70.0), ((20, 40), (40, 60), (60, 80)), strict=True
+    ):
+        mean, low, high = _bounds(cell)  # the interval lies within the two seeds' values
+        assert mean == estimate and values[0] <= low <= mean <= high <= values[1]
+    assert "| dyna-q | s | 1 | 20 | 0.0 | 0.0 | 50.0 | 0 |" in report  # one seed: no interval
+    # rough / slippery, unpaired, on the last half: (40 + 60) / 2 over 20
+    ratio = _cells(report, "| q-learning | stationary |")
+    assert ratio[2:5] == ["2, 2", "50.0", "20.0"] and ratio[5].startswith("2.50 [")
+    assert "| q-learning | drifting | 1, 1 | 20.0 | 40.0 | 0.50 |" in report
+    pooled = _cells(report, "| q-learning | both |")  # (40 + 60 + 20) / 3 over (20 + 20 + 40) / 3
+    assert pooled[2:5] == ["3, 3", "40.0", "26.7"] and pooled[5].startswith("1.50 [")
+    assert "| dyna-q | stationary | 2, 1 | 80.0 | 0.0 | ∞ (slippery 0) |" in report
+    assert "| dyna-q | drifting | 1, 1 | 0.0 | 0.0 | undefined (both 0) |" in report
+    # a floor pair of one slip condition only: no pooled row
+    without_drift = {k: v for k, v in CONDITIONS.items() if k != "e"}
+    summaries = pd.DataFrame([r for r in rows if r["preset"] != "e"])
+    assert "| q-learning | both |" not in markdown_report(summaries, SETTINGS, without_drift)
+    # dyna-q minus q-learning on the rough floor, paired by (preset, seed): r0, r1, d0
+    rough = _cells(report, "| dyna-q | rough |")
+    assert rough[2] == "3"
+    for cell, differences in zip(
+        rough[3:6], ((40, 20, -10), (40, 20, -20), (-40, -20, 0)), strict=True
+    ):
+        mean, low, high = _bounds(cell)
+        assert mean == pytest.approx(np.mean(differences), abs=0.05)
+        assert min(differences) <= low <= mean <= high <= max(differences)
+    # on the slippery floor the runs differ (s1 only for q-learning): compared unpaired
+    slippery = _cells(report, "| dyna-q | slippery |")
+    assert slippery[2] == "2 (unpaired)" and slippery[5] == "+0.0 [+0.0, +0.0]"
+    assert slippery[3].startswith("-13.3 [") and slippery[4].startswith("-26.7 [")
 
 
-def test_study_settings_from_table_and_overrides(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+def test_study_settings_and_one_line_errors(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     config = study_config(tmp_path)
     tables, settings = load_study(config, {"seeds": 3, "agents": "dyna-q", "episodes": None})
     assert "study" not in tables and settings.agents == ("dyna-q",)
-    assert settings.presets == ("rough-stationary", "slippery-drifting") and settings.seeds == 3
+    assert settings.presets == PRESETS and settings.seeds == 3
     with pytest.raises(UserError, match="seeds"):
         load_study(config, {"seeds": 0})
+    with pytest.raises(UserError, match="expected one or more distinct agent names"):
+        load_study(config, {"agents": "dyna-q,dyna-q"})
     out = tmp_path / "out"
-    argv = ["robot", "study", "--config", str(config), "--agents", "dyna-nope", "--out", str(out)]
-    assert main(argv) == 2
-    assert "unknown agent 'dyna-nope'" in capsys.readouterr().err
+    argv = ["robot", "study", "--config", str(config), "--out", str(out)]
+    cases = {
+        "--agents=dyna-nope": "unknown agent 'dyna-nope'",
+        "--presets=nope": "unknown preset 'nope'",
+        "--episodes=0": "expected episodes to be an integer in [1, 10,000,000], got 0",
+    }
+    for option, message in cases.items():
+        assert main([*argv, option]) == 2
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and message in lines[0], lines
+    text = config.read_text()
+    broken = {
+        "[presets.rough-stationary]: a study runs every preset on the [run] map": (
+            text + '\n[presets.rough-stationary.run]\nmap = "free"\n'
+        ),
+        "agent 'dyna-q': ": text.replace("planning_steps = 5", "planning_steps = -1"),
+        "expected [run] seed to be an integer >= 0, got -1": text.replace(
+            "[run]\n", "[run]\nseed = -1\n"
+        ),
+    }
+    for message, broken_text in broken.items():
+        config.write_text(broken_text)
+        assert main(argv) == 2
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and message in lines[0], lines
     assert not out.exists()
+
+    config.write_text(text)
+    monkeypatch.setattr("skidnav.realtime.study_trial.realtime_run", fake_realtime([]))
+    assert main([*argv, "--episodes", "2", "--agents", "q-learning"]) == 0
+    assert main([*argv, "--episodes", "3", "--agents", "q-learning"]) == 2
+    assert (
+        capsys.readouterr()
+        .err.strip()
+        .endswith(
+            f"skidnav: error: {out}: holds results of a different config; choose another --out"
+        )
+    )
+    assert main(["report", str(out)]) == 2
+    assert f"{out}: holds 'robot-study' results, not 'experiment' results" in (
+        capsys.readouterr().err
+    )
+    earlier = tmp_path / "earlier"
+    earlier.mkdir()
+    (earlier / "study.csv").write_text("agent,preset\n")
+    assert main([*argv[:-1], str(earlier)]) == 2
+    assert "holds a study in an earlier format" in capsys.readouterr().err

@@ -1,9 +1,14 @@
 """The shared tabular core every agent builds on (one TD update, one ε-greedy, one save format).
 
 An agent owns a Q table ``q`` (float64, shape (n_states, n_actions)), a ``numpy.random.Generator``
-(every random draw of the agent comes from it) and a frozen config. Subclasses implement only
-:meth:`TabularAgent._learn` (what happens after one real transition) and, if they keep more state,
-:meth:`TabularAgent._state_arrays` / :meth:`TabularAgent._restore_state_arrays`.
+(every random draw of the agent comes from it), a frozen config and its int64 ``counters``
+(:mod:`skidnav.kernels.learning`). What one real transition teaches it is one compiled kernel,
+registered for the class of its :meth:`TabularAgent.learning_arrays` and given the scalars of
+:meth:`TabularAgent.learning_settings`; the step-by-step :meth:`TabularAgent.observe`
+and the fused trainer (:mod:`skidnav.agents.fast_training`) both call it, so there is one learning
+step per agent. Subclasses keeping more state also implement :meth:`TabularAgent.reserve` (room
+the kernel cannot allocate) and :meth:`TabularAgent._state_arrays` /
+:meth:`TabularAgent._restore_state_arrays`.
 
 Contract (docs/architecture.md): ``act(state)`` ε-greedy with random tie-breaking;
 ``greedy_action(state)`` the lowest-index greedy action (draws nothing, so evaluation never changes
@@ -26,6 +31,13 @@ import numpy as np
 from skidnav.agents.config import QLearningConfig
 from skidnav.atomicfile import write_atomic, write_npz_atomic
 from skidnav.errors import CorruptFileError, shown
+from skidnav.kernels.learning import (
+    N_COUNTERS,
+    PLANNING_UPDATES,
+    STEPS,
+    experience_from_info,
+    learn,
+)
 from skidnav.kernels.tabular import epsilon_at, epsilon_greedy, greedy_first
 
 logger = logging.getLogger(__name__)
@@ -92,12 +104,28 @@ class TabularAgent:
         self.n_actions = int(n_actions)
         self.rng = np.random.default_rng() if rng is None else rng
         self.q = np.full((n_states, n_actions), config.initial_q, dtype=np.float64)
-        self.steps = 0
-        """Real transitions observed so far."""
+        self.counters = np.zeros(N_COUNTERS, dtype=np.int64)
+        """Real steps and planning updates, int64 (N_COUNTERS,), as the learning kernel counts."""
         self.episodes = 0
         """Episodes completed (calls to :meth:`end_episode`)."""
-        self.planning_updates = 0
+
+    @property
+    def steps(self) -> int:
+        """Real transitions observed so far."""
+        return int(self.counters[STEPS])
+
+    @steps.setter
+    def steps(self, value: int) -> None:
+        self.counters[STEPS] = value
+
+    @property
+    def planning_updates(self) -> int:
         """Value updates made from a model (not from real experience) so far."""
+        return int(self.counters[PLANNING_UPDATES])
+
+    @planning_updates.setter
+    def planning_updates(self, value: int) -> None:
+        self.counters[PLANNING_UPDATES] = value
 
     @property
     def epsilon(self) -> float:
@@ -123,24 +151,38 @@ class TabularAgent:
         truncated: bool = False,
         info: Mapping[str, Any] | None = None,
     ) -> None:
-        """Learn from one real step. ``terminated`` stops the bootstrap; ``truncated`` does not
-        (the time limit is not part of the MDP). ``info`` is the env's info dict (may be None)."""
-        self.steps += 1
-        self._learn(
-            int(state), int(action), float(reward), int(next_state), bool(terminated), info or {}
-        )
+        """Learn from one real step: one call of the learning kernel. ``terminated`` stops the
+        bootstrap; ``truncated`` does not (the time limit is not part of the MDP). ``info`` is
+        the env's info dict (may be None), read by
+        :func:`~skidnav.kernels.learning.experience_from_info`.
 
-    def _learn(
-        self,
-        state: int,
-        action: int,
-        reward: float,
-        next_state: int,
-        terminated: bool,
-        info: Mapping[str, Any],
-    ) -> None:
-        """Update from one real step (direct RL, model learning, planning). Subclasses override."""
+        Raises:
+            ValueError: a state or action outside the Q table.
+        """
+        state, action, next_state = int(state), int(action), int(next_state)
+        if not (0 <= state < self.n_states and 0 <= next_state < self.n_states) or not (
+            0 <= action < self.n_actions
+        ):
+            raise ValueError(f"expected a valid transition, got ({state}, {action}, {next_state})")
+        self.reserve(1)
+        self.counters[STEPS] += 1
+        experience = experience_from_info(state, action, reward, next_state, terminated, info)
+        arrays, settings = self.learning_arrays(), self.learning_settings()
+        learn(arrays, settings, self.counters, experience, self.rng)
+
+    def learning_arrays(self) -> tuple[Any, ...]:
+        """The NamedTuple of arrays the agent's learning step learns into (its class chooses the
+        kernel: :func:`~skidnav.kernels.learning.learning_step`); views, never copies, to be
+        asked again after :meth:`reserve`, which may reallocate. Subclasses override."""
         raise NotImplementedError
+
+    def learning_settings(self) -> tuple[Any, ...]:
+        """The NamedTuple of scalars the agent's learning step reads. Subclasses override."""
+        raise NotImplementedError
+
+    def reserve(self, n_steps: int) -> None:
+        """Make room for ``n_steps`` more real steps in every buffer the kernel fills (it cannot
+        allocate); nothing for agents whose arrays have a fixed size."""
 
     def end_episode(self) -> None:
         """Mark the end of an episode (decays ε)."""

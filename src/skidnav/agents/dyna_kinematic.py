@@ -23,13 +23,16 @@ import logging
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
+from skidnav._jit import jit
 from skidnav.agents.config import DynaQConfig, QLearningConfig, _check
 from skidnav.agents.dyna_q import DynaQAgent
 from skidnav.kernels import kinematic_planning as kp
+from skidnav.kernels.learning import PLANNING_UPDATES, Experience, learning_step
+from skidnav.kernels.multinomial import MultinomialArrays, model_observe
 from skidnav.kernels.navigation import NavigationTask
 from skidnav.kernels.tabular import td_update
 from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
@@ -95,6 +98,67 @@ def geometry_from_task(task: NavigationTask) -> tuple[RobotParams, Discretizatio
 
 _NO_GRID = GridShape(2, 2, 1, 2, 2, 1.0, 1.0)
 _NO_ROBOT = RobotParams().kernel_constants()
+
+
+class ModelBasedArrays(NamedTuple):
+    """What the model-based agents learn into: Q table, multinomial model, the planner's arrays
+    and the kinematic model's sample buffers (float64 (n_regions, window, 5) and int64
+    (n_regions,); (1, 1, 5) and (1,) placeholders without a kinematic model)."""
+
+    q: np.ndarray
+    model: MultinomialArrays
+    planner: kp.PlannerArrays
+    kinematic_data: np.ndarray
+    kinematic_counts: np.ndarray
+
+
+class ModelBasedSettings(NamedTuple):
+    """The planning shares, the agent's robot and grid as the kernels take them, and whether it
+    has a geometry and a kinematic model."""
+
+    shares: kp.PlanningShares
+    robot: KinematicConstants
+    grid: GridShape
+    has_geometry: bool
+    has_kinematic: bool
+
+
+_NO_KINEMATIC = (np.zeros((1, 1, 5)), np.zeros(1, dtype=np.int64))
+
+
+@learning_step(ModelBasedArrays)
+@jit
+def model_based_step(
+    arrays: ModelBasedArrays,
+    settings: ModelBasedSettings,
+    counters: np.ndarray,
+    step: Experience,
+    rng: np.random.Generator,
+) -> None:
+    """The learning step of the model-based agents: TD update, model count, the planner's
+    bookkeeping (rewards, walls, goals, the episode's pairs), the kinematic samples of the step,
+    then the combined planning updates."""
+    a, s = arrays, settings
+    td_update(
+        a.q, step.state, step.action, step.reward, step.next_state, step.terminated,
+        s.shares.alpha, s.shares.gamma,
+    )  # fmt: skip
+    model_observe(a.model, step.state, step.action, step.reward, step.next_state, step.terminated)
+    pose = step.pose if s.has_geometry else np.full(3, -1.0)
+    logged = s.has_kinematic and step.n_logged >= 0
+    if logged:  # kinematic planning starts with the first step that brings samples
+        a.planner.counters[kp.USE_KINEMATIC] = 1
+    kp.planner_observe(
+        a.planner, step.state, step.action, step.reward, step.next_state, step.terminated,
+        step.collided, pose, s.robot, s.grid,
+    )  # fmt: skip
+    if logged:
+        n_regions = a.kinematic_counts.shape[0]
+        kp.feed_log(a.kinematic_data, a.kinematic_counts, step.log, step.n_logged, n_regions)
+    if s.shares.n_steps > 0:
+        counters[PLANNING_UPDATES] += kp.combined_planning(
+            a.q, a.model, a.planner, s.shares, s.grid, rng
+        )
 
 
 class ModelBasedAgent(DynaQAgent):
@@ -187,41 +251,21 @@ class ModelBasedAgent(DynaQAgent):
             grown[: keys.shape[0]] = keys
             self.planner = self.planner._replace(episode_keys=grown)
 
-    def _learn(
-        self,
-        state: int,
-        action: int,
-        reward: float,
-        next_state: int,
-        terminated: bool,
-        info: Mapping[str, Any],
-    ) -> None:
-        config = self.config
-        td_update(self.q, state, action, reward, next_state, terminated, config.alpha, config.gamma)
-        self.model.observe(state, action, reward, next_state, terminated)
-        self.reserve_episode(1)
-        pose = np.array(info["pose"], dtype=np.float64) if "pose" in info else np.full(3, -1.0)
-        if self.discretization is None:
-            pose[0] = -1.0
-        collided = bool(info.get("collision", False))
-        if self.kinematic is not None and "kinematic_log" in info:
-            self.planner.counters[kp.USE_KINEMATIC] = 1
-        kp.planner_observe(
-            self.planner, state, action, reward, next_state, terminated, collided, pose,
-            self.kernel_robot, self.kernel_grid,
-        )  # fmt: skip
-        if self.kinematic is not None and "kinematic_log" in info:
-            self.kinematic.feed(info["kinematic_log"])
-        self._plan()
+    def reserve(self, n_steps: int) -> None:
+        super().reserve(n_steps)
+        self.reserve_episode(n_steps)
 
-    def _plan(self) -> None:
-        if self.config.planning_steps == 0:
-            return
-        self.planning_updates += int(
-            kp.combined_planning(
-                self.q, self.model.arrays, self.planner, self.shares, self.kernel_grid, self.rng
-            )
+    def learning_arrays(self) -> ModelBasedArrays:  # type: ignore[override]
+        data, counts = (
+            (self.kinematic.data, self.kinematic.counts) if self.kinematic else _NO_KINEMATIC
         )
+        return ModelBasedArrays(self.q, self.model.arrays, self.planner, data, counts)
+
+    def learning_settings(self) -> ModelBasedSettings:  # type: ignore[override]
+        return ModelBasedSettings(
+            self.shares, self.kernel_robot, self.kernel_grid, self.discretization is not None,
+            self.kinematic is not None,
+        )  # fmt: skip
 
     def end_episode(self) -> None:
         """Update the best trajectories, refit the kinematic model on its schedule, decay ε."""

@@ -13,15 +13,58 @@ With ``planning_steps = 0`` it is exactly Q-learning (the model draws no random 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
+from skidnav._jit import jit
 from skidnav.agents.config import DynaQConfig, QLearningConfig
 from skidnav.agents.core import TabularAgent
+from skidnav.kernels.learning import PLANNING_UPDATES, Experience, learning_step
+from skidnav.kernels.multinomial import MultinomialArrays, model_observe
 from skidnav.kernels.planning import dyna_planning
 from skidnav.kernels.tabular import td_update
 from skidnav.models.multinomial import MultinomialModel
+
+
+class DynaArrays(NamedTuple):
+    """What Dyna-Q learns into: the Q table and the multinomial model's arrays."""
+
+    q: np.ndarray
+    model: MultinomialArrays
+
+
+class PlanningSettings(NamedTuple):
+    """α, γ, planning updates per real step and the planning target (``planning_mode_code``)."""
+
+    alpha: float
+    gamma: float
+    planning_steps: int
+    mode: int
+
+
+@learning_step(DynaArrays)
+@jit
+def dyna_q_step(
+    arrays: DynaArrays,
+    settings: PlanningSettings,
+    counters: np.ndarray,
+    step: Experience,
+    rng: np.random.Generator,
+) -> None:
+    """The learning step of Dyna-Q: TD update, model count, then the planning updates."""
+    s = settings
+    td_update(
+        arrays.q, step.state, step.action, step.reward, step.next_state, step.terminated,
+        s.alpha, s.gamma,
+    )  # fmt: skip
+    model_observe(
+        arrays.model, step.state, step.action, step.reward, step.next_state, step.terminated
+    )
+    if s.planning_steps > 0:
+        counters[PLANNING_UPDATES] += dyna_planning(
+            arrays.q, arrays.model, s.planning_steps, s.alpha, s.gamma, s.mode, rng
+        )
 
 
 class DynaQAgent(TabularAgent):
@@ -42,36 +85,18 @@ class DynaQAgent(TabularAgent):
         self.model = MultinomialModel(n_actions)
         """The transition model learned from real steps."""
 
-    def _learn(
-        self,
-        state: int,
-        action: int,
-        reward: float,
-        next_state: int,
-        terminated: bool,
-        info: Mapping[str, Any],
-    ) -> None:
-        config = self.config
-        td_update(self.q, state, action, reward, next_state, terminated, config.alpha, config.gamma)
-        self.model.observe(state, action, reward, next_state, terminated)
-        self._plan()
+    def reserve(self, n_steps: int) -> None:
+        self.model.reserve(n_steps)
 
-    def _plan(self) -> None:
-        """Run ``planning_steps`` model-based updates."""
+    def learning_arrays(self) -> DynaArrays:
+        return DynaArrays(self.q, self.model.arrays)
+
+    def learning_settings(self) -> PlanningSettings:
         config = self.config
-        if config.planning_steps == 0:
-            return
-        self.planning_updates += int(
-            dyna_planning(
-                self.q,
-                self.model.arrays,
-                config.planning_steps,
-                config.alpha,
-                config.gamma,
-                config.planning_mode_code,
-                self.rng,
-            )
-        )
+        return PlanningSettings(
+            float(config.alpha), float(config.gamma), int(config.planning_steps),
+            int(config.planning_mode_code),
+        )  # fmt: skip
 
     def _state_arrays(self) -> dict[str, np.ndarray]:
         return {**super()._state_arrays(), **self.model.to_arrays()}

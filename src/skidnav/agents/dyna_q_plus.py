@@ -10,13 +10,70 @@ may have changed (blocking and shortcut mazes, Examples 8.2 and 8.3).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
+from skidnav._jit import jit
 from skidnav.agents.config import DynaQPlusConfig, QLearningConfig
 from skidnav.agents.dyna_q import DynaQAgent
+from skidnav.kernels.learning import PLANNING_UPDATES, STEPS, Experience, learning_step
+from skidnav.kernels.multinomial import MultinomialArrays, model_observe
 from skidnav.kernels.planning import dyna_plus_planning
+from skidnav.kernels.tabular import td_update
+
+
+class DynaPlusArrays(NamedTuple):
+    """What Dyna-Q+ learns into. ``last_tried`` int64 (n_states, n_actions): the real step at
+    which each pair was last tried (0 = never); ``visited`` int64 (n_states,) whose first
+    ``n_visited[0]`` entries are the states seen, in order of first visit; ``is_visited`` bool
+    (n_states,)."""
+
+    q: np.ndarray
+    model: MultinomialArrays
+    last_tried: np.ndarray
+    visited: np.ndarray
+    n_visited: np.ndarray
+    is_visited: np.ndarray
+
+
+class BonusSettings(NamedTuple):
+    """α, γ, planning updates per real step, planning target and the bonus weight κ."""
+
+    alpha: float
+    gamma: float
+    planning_steps: int
+    mode: int
+    kappa: float
+
+
+@learning_step(DynaPlusArrays)
+@jit
+def dyna_q_plus_step(
+    arrays: DynaPlusArrays,
+    settings: BonusSettings,
+    counters: np.ndarray,
+    step: Experience,
+    rng: np.random.Generator,
+) -> None:
+    """The learning step of Dyna-Q+: note when the pair was tried and the state first visited,
+    TD update, model count, then the planning updates with the bonus."""
+    d, s = arrays, settings
+    d.last_tried[step.state, step.action] = counters[STEPS]
+    if not d.is_visited[step.state]:
+        d.is_visited[step.state] = True
+        d.visited[d.n_visited[0]] = step.state
+        d.n_visited[0] += 1
+    td_update(
+        d.q, step.state, step.action, step.reward, step.next_state, step.terminated, s.alpha,
+        s.gamma,
+    )  # fmt: skip
+    model_observe(d.model, step.state, step.action, step.reward, step.next_state, step.terminated)
+    if s.planning_steps > 0:
+        counters[PLANNING_UPDATES] += dyna_plus_planning(
+            d.q, d.model, d.visited, d.n_visited[0], d.last_tried, counters[STEPS], s.kappa,
+            s.planning_steps, s.alpha, s.gamma, s.mode, rng,
+        )  # fmt: skip
 
 
 class DynaQPlusAgent(DynaQAgent):
@@ -36,45 +93,27 @@ class DynaQPlusAgent(DynaQAgent):
         super().__init__(n_states, n_actions, config, rng)
         self.last_tried = np.zeros((n_states, n_actions), dtype=np.int64)
         """Real-step count when each pair was last tried (0 = never), (n_states, n_actions)."""
-        self.visited_states = np.zeros(0, dtype=np.int64)
-        """States seen as the start of a real step, in order of first visit."""
+        self._visited = np.zeros(n_states, dtype=np.int64)
+        self._n_visited = np.zeros(1, dtype=np.int64)
         self._is_visited = np.zeros(n_states, dtype=np.bool_)
 
-    def _learn(
-        self,
-        state: int,
-        action: int,
-        reward: float,
-        next_state: int,
-        terminated: bool,
-        info: Mapping[str, Any],
-    ) -> None:
-        self.last_tried[state, action] = self.steps
-        if not self._is_visited[state]:
-            self._is_visited[state] = True
-            self.visited_states = np.append(self.visited_states, state)
-        super()._learn(state, action, reward, next_state, terminated, info)
+    @property
+    def visited_states(self) -> np.ndarray:
+        """States seen as the start of a real step, in order of first visit, int64 (n,)."""
+        return self._visited[: self._n_visited[0]].copy()
 
-    def _plan(self) -> None:
+    def learning_arrays(self) -> DynaPlusArrays:  # type: ignore[override]
+        return DynaPlusArrays(
+            self.q, self.model.arrays, self.last_tried, self._visited, self._n_visited,
+            self._is_visited,
+        )  # fmt: skip
+
+    def learning_settings(self) -> BonusSettings:  # type: ignore[override]
         config = self.config
-        if config.planning_steps == 0:
-            return
-        self.planning_updates += int(
-            dyna_plus_planning(
-                self.q,
-                self.model.arrays,
-                self.visited_states,
-                self.visited_states.shape[0],
-                self.last_tried,
-                self.steps,
-                config.kappa,
-                config.planning_steps,
-                config.alpha,
-                config.gamma,
-                config.planning_mode_code,
-                self.rng,
-            )
-        )
+        return BonusSettings(
+            float(config.alpha), float(config.gamma), int(config.planning_steps),
+            int(config.planning_mode_code), float(config.kappa),
+        )  # fmt: skip
 
     def _state_arrays(self) -> dict[str, np.ndarray]:
         return {
@@ -95,10 +134,11 @@ class DynaQPlusAgent(DynaQAgent):
         if visited.size and (visited.min() < 0 or visited.max() >= self.n_states):
             raise ValueError("visited state out of range")
         if np.any(np.diff(np.sort(visited)) == 0):
-            raise ValueError("visited states repeat")  # the compiled trainer holds n_states
-        self.visited_states = visited
+            raise ValueError("visited states repeat")  # the visited buffer holds n_states
+        self._visited[: visited.size] = visited
+        self._n_visited[0] = visited.size
         self._is_visited[:] = False
-        self._is_visited[self.visited_states] = True
+        self._is_visited[visited] = True
 
 
 AGENT_NAME = "dyna-q-plus"

@@ -1,260 +1,182 @@
 """The fused compiled trainers: :func:`train_agent_fast`, a drop-in for
 :func:`skidnav.agents.training.train_agent` on ``skidnav/SkidSteerNav-v0`` and on the grid mazes
 (:class:`skidnav.envs.mazes.GridMazeEnv`), and :func:`train_for_steps_fast`, a drop-in for
-:func:`skidnav.agents.training.train_for_steps` on the mazes.
+:func:`skidnav.agents.training.train_for_steps` on the same envs.
 
-Whole episodes run in one numba call (:mod:`skidnav.kernels.trainer`,
-:mod:`skidnav.kernels.maze_trainer`): simulation, ε-greedy, TD update, model update and planning.
-Between episodes Python does what the agent does in ``end_episode`` (ε decay, trajectory
-bookkeeping, kinematic refits with scikit-learn) and the greedy evaluation rollout (also
-compiled). Same signature, same output, and the same numbers as the plain loop for the same seed
-(tested), except ``wall_time``. Agents or envs it does not know fall back to the plain loop. The
-navigation env's ``trail`` (for rendering) is not recorded.
+Episodes run in compiled stretches (:func:`skidnav.kernels.trainer.learn_stretch`, at most
+:data:`STRETCH` steps each): the env's compiled step (:mod:`skidnav.kernels.env_steps`),
+ε-greedy, and the agent's own learning step — the very kernel its ``observe`` calls, so there is
+one learning step per agent. Between stretches Python makes room in the agent's buffers
+(``reserve``); between episodes it does what the agent does in ``end_episode`` (ε decay,
+trajectory bookkeeping, kinematic refits with scikit-learn) and the greedy evaluation rollouts
+(also compiled). Same signature, same output, and the same numbers as the plain loop for the same
+seed (tested), except ``wall_time``. Other envs, or agents that are not a
+:class:`~skidnav.agents.core.TabularAgent`, fall back to the plain loop. The navigation env's
+``trail`` (for rendering) is not recorded.
 """
 
 from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 from skidnav.agents.core import TabularAgent
-from skidnav.agents.dyna_kinematic import ModelBasedAgent
 from skidnav.agents.training import TrainingLog, log_from_rows, train_agent, train_for_steps
-from skidnav.kernels import kinematic_planning as kp
-from skidnav.kernels import maze_trainer, trainer
-from skidnav.kernels.priority_queue import make_heap
+from skidnav.kernels import env_steps, trainer
+from skidnav.kernels.trainer import ELAPSED, ENDED, LENGTH, Limits
 
 logger = logging.getLogger(__name__)
 
 _BIG = np.iinfo(np.int64).max // 4
+STRETCH = 4096
+"""Most steps of one compiled call: the room :meth:`TabularAgent.reserve` makes before it."""
 
 
 def _unwrapped(env: gym.Env[Any, Any]) -> tuple[Any, int]:
-    """The innermost env and the smallest ``TimeLimit`` along the wrappers (``_BIG`` if none)."""
+    """The innermost env and the smallest step limit along the wrappers (``TimeLimit``) and of
+    the env itself (a grid maze's optional ``max_episode_steps``); ``_BIG`` if none."""
     limit = _BIG
     layer: Any = env
     while isinstance(layer, gym.Wrapper):
         if isinstance(layer, gym.wrappers.TimeLimit):
             limit = min(limit, int(layer._max_episode_steps))
         layer = layer.env
-    return layer, limit
+    return layer, min(limit, getattr(layer, "max_episode_steps", None) or _BIG)
 
 
-def _navigation_env(env: gym.Env[Any, Any]) -> tuple[Any, int] | None:
-    """The unwrapped navigation env and the smallest step limit along the wrappers (None if the
-    env is not ``SkidSteerNavEnv`` with discrete observations)."""
-    layer, limit = _unwrapped(env)
-    if not hasattr(layer, "task") or getattr(layer, "observation_kind", None) != "discrete":
+class FusedEnv:
+    """An unwrapped env the compiled loop drives, with the smallest step limit along its
+    wrappers; subclasses convert the env's state to and from the loop's
+    (:mod:`skidnav.kernels.env_steps`)."""
+
+    def __init__(self, env: Any, limit: int) -> None:
+        self.env, self.limit = env, limit
+
+    def reset(self, seed: int | None) -> int:
+        """``env.reset(seed=seed)``; the start state."""
+        return int(self.env.reset(seed=seed)[0])
+
+    def kernel_state(self) -> Any:
+        """The env's state as its compiled step takes it."""
+        raise NotImplementedError
+
+    def write_back(self, kernel: Any, state: int, elapsed: int) -> None:
+        """Leave the env where the loop left ``kernel`` (``elapsed``: steps since its reset)."""
+        raise NotImplementedError
+
+    @staticmethod
+    def find(env: gym.Env[Any, Any]) -> FusedEnv | None:
+        """The fused view of ``env``, or None if the loop cannot drive it."""
+        layer, limit = _unwrapped(env)
+        if callable(getattr(layer, "maze_arrays", None)):
+            return FusedMaze(layer, limit)
+        if hasattr(layer, "task") and getattr(layer, "observation_kind", None) == "discrete":
+            return FusedNavigation(layer, limit)
         return None
-    return layer, min(limit, int(layer.max_episode_steps))
 
 
-def _maze_env(env: gym.Env[Any, Any]) -> tuple[Any, int] | None:
-    """The unwrapped grid maze (``skidnav.envs.mazes.GridMazeEnv``, known by its
-    ``maze_arrays``) and the smallest step limit along the wrappers; None for other envs."""
-    layer, limit = _unwrapped(env)
-    if not callable(getattr(layer, "maze_arrays", None)):
-        return None
-    return layer, min(limit, layer.max_episode_steps or _BIG)
+class FusedNavigation(FusedEnv):
+    """``SkidSteerNavEnv`` with discrete observations."""
+
+    def kernel_state(self) -> env_steps.NavigationState:
+        substeps = self.env.task.robot.substeps
+        return env_steps.NavigationState(
+            self.env.task, self.env.pose, np.array([float(self.env.time)]),
+            np.empty(2 * substeps), np.empty((substeps, 6)),
+        )  # fmt: skip
+
+    def write_back(self, kernel: Any, state: int, elapsed: int) -> None:
+        self.env.time = float(kernel.clock[0])
 
 
-def _learner_arrays(agent: TabularAgent, reserve: int) -> trainer.LearnerArrays:
-    """The agent's arrays for the fused loop, after reserving room for ``reserve`` steps."""
-    planner = None
-    data, counts = np.zeros((1, 1, 5)), np.zeros(1, dtype=np.int64)
-    if isinstance(agent, ModelBasedAgent):
-        agent.reserve_episode(reserve)
-        planner = agent.planner
-        shares = agent.shares
-        if agent.kinematic is not None:
-            data, counts = agent.kinematic.data, agent.kinematic.counts
-            # The navigation env logs every step: as ``observe`` does at the first one.
-            planner.counters[kp.USE_KINEMATIC] = 1
-    model = getattr(agent, "model", None)
-    if model is not None:
-        model.reserve(reserve)
-    placeholder = _placeholder()
-    n_states = agent.n_states
-    visited = np.zeros(n_states if hasattr(agent, "visited_states") else 1, dtype=np.int64)
-    is_visited = getattr(agent, "_is_visited", np.zeros(1, dtype=np.bool_))
-    if hasattr(agent, "visited_states"):
-        visited[: agent.visited_states.size] = agent.visited_states
-    return trainer.LearnerArrays(
-        q=agent.q,
-        model=(model or placeholder.model).arrays,
-        heap=getattr(agent, "queue", None) or make_heap(1),
-        last_tried=getattr(agent, "last_tried", np.zeros((1, 1), dtype=np.int64)),
-        visited=visited,
-        is_visited=is_visited,
-        planner=planner or placeholder.planner,
-        shares=shares if planner is not None else placeholder.shares,
-        kinematic_data=data,
-        kinematic_counts=counts,
-    )
+class FusedMaze(FusedEnv):
+    """A grid maze (known by its ``maze_arrays``)."""
+
+    _NO_POSE, _NO_LOG = np.full(3, -1.0), np.zeros((0, 6))
+
+    def kernel_state(self) -> env_steps.MazeState:
+        total = np.array([self.env.progress()[2]], dtype=np.int64)
+        return env_steps.MazeState(self.env.maze_arrays(), total, self._NO_POSE, self._NO_LOG)
+
+    def write_back(self, kernel: Any, state: int, elapsed: int) -> None:
+        self.env.restore_progress(state, elapsed, int(kernel.total_steps[0]))
 
 
-_PLACEHOLDER: list[ModelBasedAgent] = []
+def _learn(
+    agent: TabularAgent, fused: FusedEnv, state: int, steps: tuple[int, int], rewards: np.ndarray
+) -> tuple[float, int, np.ndarray]:
+    """Learn from ``state`` (the env just reset) until the episode ends (goal, env limit or
+    ``max_steps``) or ``budget`` steps are taken (``steps`` = (max_steps, budget)), in compiled
+    stretches; leave the env where it stopped. ``rewards`` (float64, empty or (budget,))
+    receives each step's reward. Returns (return, last state, tally)."""
+    max_steps, budget = steps
+    tally = np.zeros(trainer.N_TALLY, dtype=np.int64)
+    kernel, env_rng = fused.kernel_state(), fused.env.np_random
+    own = type(agent.learning_arrays()).__module__.startswith("skidnav.")
+    stretch = trainer.learn_stretch if own else trainer.learn_stretch_uncached
+    total = 0.0
+    while tally[LENGTH] < budget and not tally[ENDED]:
+        chunk = int(min(STRETCH, budget - tally[LENGTH]))
+        agent.reserve(chunk)
+        limits = Limits(fused.limit, max_steps, int(tally[LENGTH]) + chunk)
+        total, state = stretch(
+            kernel, state, agent.learning_arrays(), agent.learning_settings(),
+            float(agent.epsilon), agent.counters, tally, limits, (total, rewards),
+            (env_rng, agent.rng),
+        )  # fmt: skip
+    fused.write_back(kernel, state, int(tally[ELAPSED]))
+    return float(total), int(state), tally
 
 
-def _placeholder() -> ModelBasedAgent:
-    """A tiny agent whose arrays fill the unused slots of :class:`trainer.LearnerArrays`."""
-    if not _PLACEHOLDER:
-        _PLACEHOLDER.append(ModelBasedAgent(1, 4))
-    return _PLACEHOLDER[0]
-
-
-def _supported(agent: TabularAgent, nav: Any) -> bool:
-    """True if the fused loop reproduces this agent on this env exactly."""
-    if agent.name not in trainer.AGENT_KINDS or agent.n_states != nav.observation_space.n:
-        return False
-    if isinstance(agent, ModelBasedAgent):  # it must see the env's own geometry
-        return bool(agent.kernel_grid == nav.task.grid and agent.kernel_robot == nav.task.robot)
-    return True
-
-
-def _settings(agent: TabularAgent, max_steps: int, env_limit: int) -> trainer.LearnerSettings:
-    config = agent.config
-    return trainer.LearnerSettings(
-        kind=trainer.AGENT_KINDS[agent.name], epsilon=float(agent.epsilon),
-        alpha=float(config.alpha), gamma=float(config.gamma),
-        planning_steps=int(getattr(config, "planning_steps", 0)),
-        mode=int(getattr(config, "planning_mode_code", 0)),
-        kappa=float(getattr(config, "kappa", 0.0)), theta=float(getattr(config, "theta", 0.0)),
-        max_steps=max_steps, env_limit=env_limit,
-    )  # fmt: skip
-
-
-def _start_tally(agent: TabularAgent, size: int = trainer.N_TALLY) -> np.ndarray:
-    """The int64 counters of a compiled call, (size,), with the agent's steps and visits."""
-    tally = np.zeros(size, dtype=np.int64)
-    tally[trainer.STEPS] = agent.steps
-    tally[trainer.N_VISITED] = agent.visited_states.size if hasattr(agent, "visited_states") else 0
-    return tally
-
-
-def _absorb(agent: TabularAgent, arrays: trainer.LearnerArrays, tally: np.ndarray) -> None:
-    """Copy the counters of a compiled call back into the agent."""
-    agent.steps = int(tally[trainer.STEPS])
-    agent.planning_updates += int(tally[trainer.PLANNING_UPDATES])
-    if hasattr(agent, "visited_states"):
-        agent.visited_states = arrays.visited[: tally[trainer.N_VISITED]].copy()
-
-
-def _fast_episode(
-    agent: TabularAgent, nav: Any, env_limit: int, max_steps: int, seed: int | None
+def _episode(
+    agent: TabularAgent, fused: FusedEnv, max_steps: int, seed: int | None
 ) -> tuple[float, int, bool, int, int]:
-    """Reset ``nav``, run one fused episode, finish it in Python; returns (return, length,
+    """Reset the env, run one episode, finish it in Python; returns (return, length,
     terminated, collisions, planning updates)."""
-    state, _ = nav.reset(seed=seed)
     planned_before = agent.planning_updates
-    arrays = _learner_arrays(agent, min(max_steps, env_limit))
-    tally = _start_tally(agent)
-    settings = _settings(agent, max_steps, env_limit)
-    total, nav.time = trainer.run_episode(
-        nav.task, nav.pose, int(state), float(nav.time), arrays, settings, tally,
-        nav.np_random, agent.rng,
-    )  # fmt: skip
-    nav.elapsed_steps = int(tally[trainer.ELAPSED])
-    _absorb(agent, arrays, tally)
+    steps = (max_steps, max_steps)
+    total, _, tally = _learn(agent, fused, fused.reset(seed), steps, _NO_REWARDS)
     agent.end_episode()  # may plan too (dyna-sweep): counted with the episode, as the plain loop
     return (
-        float(total), int(tally[trainer.LENGTH]), bool(tally[trainer.TERMINATED]),
+        total, int(tally[LENGTH]), bool(tally[trainer.TERMINATED]),
         int(tally[trainer.COLLISIONS]), agent.planning_updates - planned_before,
     )  # fmt: skip
 
 
-def _greedy(q: np.ndarray, eval_nav: Any, limit: int, env_limit: int, seed: int | None) -> int:
-    state, _ = eval_nav.reset(seed=seed)
-    length, eval_nav.time = trainer.greedy_episode(
-        eval_nav.task, eval_nav.pose, int(state), float(eval_nav.time), q, limit, env_limit,
-        eval_nav.np_random,
-    )  # fmt: skip
+def _greedy(q: np.ndarray, fused: FusedEnv, max_steps: int, seed: int | None) -> int:
+    """One compiled greedy rollout from ``reset(seed=seed)``: its length, or −1."""
+    state = fused.reset(seed)
+    kernel = fused.kernel_state()
+    length, state, taken = trainer.greedy_stretch(
+        kernel, state, q, max_steps, fused.limit, fused.env.np_random
+    )
+    fused.write_back(kernel, state, taken)
     return int(length)
 
 
 _NO_REWARDS = np.zeros(0)
 
 
-def _maze_stretch(
-    agent: TabularAgent, maze: Any, state: int, limits: tuple[int, int, int], rewards: np.ndarray
-) -> tuple[float, int, np.ndarray]:
-    """Run the fused maze loop from ``state`` (``limits`` = env limit, ``max_steps``, step
-    budget), leave the env where it stopped; returns (return, last state, tally)."""
-    env_limit, max_steps, budget = limits
-    # A maze pair has at most two outcomes (walls before and after the change): this bounds the
-    # model's growth however long the stretch is.
-    arrays = _learner_arrays(agent, min(budget, max_steps, 2 * agent.q.size))
-    tally = _start_tally(agent, maze_trainer.N_MAZE_TALLY)
-    _, tally[trainer.ELAPSED], tally[maze_trainer.TOTAL_STEPS] = maze.progress()
-    total, state = maze_trainer.maze_episode(
-        maze.maze_arrays(), int(state), arrays, _settings(agent, max_steps, env_limit), tally,
-        rewards, budget, agent.rng,
-    )  # fmt: skip
-    maze.restore_progress(state, tally[trainer.ELAPSED], tally[maze_trainer.TOTAL_STEPS])
-    _absorb(agent, arrays, tally)
-    return float(total), int(state), tally
-
-
-def _fast_maze_episode(
-    agent: TabularAgent, maze: Any, env_limit: int, max_steps: int, seed: int | None
-) -> tuple[float, int, bool, int, int]:
-    """As :func:`_fast_episode`, on a grid maze (no collisions)."""
-    state, _ = maze.reset(seed=seed)
-    total, _, tally = _maze_stretch(agent, maze, state, (env_limit, max_steps, _BIG), _NO_REWARDS)
-    agent.end_episode()
-    length, terminated = int(tally[trainer.LENGTH]), bool(tally[trainer.TERMINATED])
-    return total, length, terminated, 0, int(tally[trainer.PLANNING_UPDATES])
-
-
-def _maze_greedy(
-    q: np.ndarray, eval_maze: Any, limit: int, env_limit: int, seed: int | None
-) -> int:
-    state, _ = eval_maze.reset(seed=seed)
-    total_steps = eval_maze.progress()[2]
-    length, state, taken = maze_trainer.maze_greedy(
-        eval_maze.maze_arrays(), int(state), q, limit, env_limit, total_steps
-    )
-    eval_maze.restore_progress(state, taken, total_steps + taken)
-    return int(length)
-
-
-def _supported_maze(agent: TabularAgent, maze: Any) -> bool:
-    """True if the fused maze loop reproduces this agent on this maze exactly."""
-    kind = trainer.AGENT_KINDS.get(agent.name, trainer.MODEL_BASED)
-    return kind != trainer.MODEL_BASED and agent.n_states == maze.observation_space.n
-
-
-Episode = Callable[[TabularAgent, Any, int, int, int | None], tuple[float, int, bool, int, int]]
-"""(agent, env, env limit, max_steps, seed) → (return, length, terminated, collisions, updates)."""
-Greedy = Callable[[np.ndarray, Any, int, int, int | None], int]
-"""(Q table, evaluation env, step limit, env limit, reset seed) → greedy length or −1."""
-
-
-def _fused_functions(
-    agent: TabularAgent, env: gym.Env[Any, Any], greedy_eval_env: gym.Env[Any, Any] | None
-) -> tuple[Episode, tuple[Any, int], Greedy, tuple[Any, int] | None] | None:
-    """The fused episode and greedy functions for this agent and these envs, with the unwrapped
-    envs and their limits; None if the plain loop must be used."""
-    found, eval_found = _maze_env(env), None
-    episode: Episode
-    greedy: Greedy
-    if found is not None and _supported_maze(agent, found[0]):
-        episode, greedy = _fast_maze_episode, _maze_greedy
-        eval_found = None if greedy_eval_env is None else _maze_env(greedy_eval_env)
-    else:
-        found = _navigation_env(env)
-        if found is None or not _supported(agent, found[0]):
-            return None
-        episode, greedy = _fast_episode, _greedy
-        eval_found = None if greedy_eval_env is None else _navigation_env(greedy_eval_env)
-    if greedy_eval_env is not None and eval_found is None:
+def _fused_envs(
+    agent: Any, env: gym.Env[Any, Any], greedy_eval_env: gym.Env[Any, Any] | None
+) -> tuple[FusedEnv, FusedEnv | None] | None:
+    """The fused views of the training and evaluation envs, or None if the plain loop must run
+    (an agent that is not a TabularAgent, an env the loop cannot drive, a Q table of another
+    size)."""
+    fused = FusedEnv.find(env)
+    if not isinstance(agent, TabularAgent) or fused is None:
         return None
-    return episode, found, greedy, eval_found
+    if agent.n_states != fused.env.observation_space.n:
+        return None
+    if greedy_eval_env is None:
+        return fused, None
+    evaluation = FusedEnv.find(greedy_eval_env)
+    return None if evaluation is None else (fused, evaluation)
 
 
 def train_agent_fast(
@@ -269,7 +191,7 @@ def train_agent_fast(
     seed: int | None = None,
 ) -> TrainingLog:
     """As :func:`skidnav.agents.training.train_agent`, with compiled episodes (see module doc)."""
-    fused = _fused_functions(agent, env, greedy_eval_env)
+    fused = _fused_envs(agent, env, greedy_eval_env)
     if fused is None:
         logger.info("train_agent_fast: falling back to train_agent for %s", agent.name)
         return train_agent(
@@ -280,25 +202,21 @@ def train_agent_fast(
         raise ValueError(
             f"expected n_episodes >= 0 and max_steps >= 1, got {n_episodes}, {max_steps}"
         )
-    episode_function, (unwrapped, env_limit), greedy_function, eval_found = fused
+    training, evaluation = fused
     limit = greedy_max_steps or max_steps or 10_000
     seeds: Sequence[int | None] = [None] if greedy_seeds is None else list(greedy_seeds)
     columns: dict[str, list[Any]] = {name: [] for name in TrainingLog._fields}
     for episode in range(n_episodes):
         start = time.perf_counter()
-        result = episode_function(
-            agent, unwrapped, env_limit, max_steps or _BIG, seed if episode == 0 else None
-        )
+        result = _episode(agent, training, max_steps or _BIG, seed if episode == 0 else None)
         columns["wall_time"].append(time.perf_counter() - start)
         for name, value in zip(_EPISODE_FIELDS, result, strict=True):
             columns[name].append(value)
         greedy = [-1] * len(seeds)
-        if eval_found is not None:
+        if evaluation is not None:
             if episode == 0 and seed is not None and greedy_seeds is None:
-                eval_found[0].reset(seed=seed + 1)
-            greedy = [
-                greedy_function(agent.q, eval_found[0], limit, eval_found[1], s) for s in seeds
-            ]
+                evaluation.reset(seed + 1)
+            greedy = [_greedy(agent.q, evaluation, limit, s) for s in seeds]
         columns["greedy_lengths"].append(greedy)
     return log_from_rows(columns, len(seeds))
 
@@ -314,33 +232,31 @@ def evaluate_q_fast(
     seed (each from ``reset(seed=seed)``, at most ``max_steps`` actions), compiled: the
     evaluation every agent gets after each episode. Returns the lengths, int64 (len(seeds),),
     −1 where the goal was not reached."""
-    found = _navigation_env(env)
-    if found is None:
+    fused = FusedEnv.find(env)
+    if not isinstance(fused, FusedNavigation):
         raise ValueError("expected the skid-steer navigation env with discrete observations")
-    nav, env_limit = found
     q = np.ascontiguousarray(q, dtype=np.float64)
-    return np.array([_greedy(q, nav, max_steps, env_limit, int(s)) for s in seeds], np.int64)
+    return np.array([_greedy(q, fused, max_steps, int(s)) for s in seeds], np.int64)
 
 
 def train_for_steps_fast(
     agent: TabularAgent, env: gym.Env[Any, Any], n_steps: int, *, seed: int | None = None
 ) -> np.ndarray:
     """As :func:`skidnav.agents.training.train_for_steps` (cumulative reward after each step,
-    float64 (n_steps,)), compiled on the grid mazes; other envs or agents use the plain loop."""
-    found = _maze_env(env)
-    if found is None or not _supported_maze(agent, found[0]):
+    float64 (n_steps,)), compiled; envs or agents the loop cannot drive use the plain loop."""
+    fused = _fused_envs(agent, env, None)
+    if fused is None:
         logger.info("train_for_steps_fast: falling back to train_for_steps for %s", agent.name)
         return train_for_steps(agent, env, n_steps, seed=seed)
-    maze, env_limit = found
+    training = fused[0]
     rewards = np.zeros(n_steps, dtype=np.float64)
-    state, _ = maze.reset(seed=seed)
+    state = training.reset(seed)
     done = 0
     while done < n_steps:
-        limits = (env_limit, _BIG, n_steps - done)
-        _, state, tally = _maze_stretch(agent, maze, state, limits, rewards[done:])
-        done += int(tally[trainer.LENGTH])
-        if tally[maze_trainer.ENDED]:
+        _, state, tally = _learn(agent, training, state, (_BIG, n_steps - done), rewards[done:])
+        done += int(tally[LENGTH])
+        if tally[ENDED]:
             agent.end_episode()
-            state, _ = maze.reset()
+            state = training.reset(None)
     # The rewards are summed in step order, as the plain loop does.
     return np.cumsum(rewards)

@@ -16,14 +16,53 @@ the sampled reward; both are equal on a deterministic MDP).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
+from skidnav._jit import jit
 from skidnav.agents.config import PrioritizedSweepingConfig, QLearningConfig
 from skidnav.agents.dyna_q import DynaQAgent
+from skidnav.kernels.learning import PLANNING_UPDATES, Experience, learning_step
+from skidnav.kernels.multinomial import MultinomialArrays
 from skidnav.kernels.planning import sweep_step
-from skidnav.kernels.priority_queue import heap_push, make_heap
+from skidnav.kernels.priority_queue import HeapArrays, heap_push, make_heap
+
+
+class SweepArrays(NamedTuple):
+    """What prioritized sweeping learns into: Q table, model, and the priority queue of pairs."""
+
+    q: np.ndarray
+    model: MultinomialArrays
+    queue: HeapArrays
+
+
+class SweepSettings(NamedTuple):
+    """α, γ, queue pops per real step, planning target and the priority threshold θ."""
+
+    alpha: float
+    gamma: float
+    planning_steps: int
+    mode: int
+    theta: float
+
+
+@learning_step(SweepArrays)
+@jit
+def prioritized_sweeping_step(
+    arrays: SweepArrays,
+    settings: SweepSettings,
+    counters: np.ndarray,
+    step: Experience,
+    rng: np.random.Generator,
+) -> None:
+    """The learning step of prioritized sweeping (:func:`~skidnav.kernels.planning.sweep_step`:
+    model count, priority of the pair, then up to ``planning_steps`` pops)."""
+    s = settings
+    counters[PLANNING_UPDATES] += sweep_step(
+        arrays.q, arrays.model, arrays.queue, step.state, step.action, step.reward,
+        step.next_state, step.terminated, s.planning_steps, s.theta, s.alpha, s.gamma, s.mode, rng,
+    )  # fmt: skip
 
 
 class PrioritizedSweepingAgent(DynaQAgent):
@@ -44,23 +83,14 @@ class PrioritizedSweepingAgent(DynaQAgent):
         self.queue = make_heap(n_states * n_actions)
         """Pairs s·n_actions + a waiting for an update, by priority (24 bytes per pair)."""
 
-    def _learn(
-        self,
-        state: int,
-        action: int,
-        reward: float,
-        next_state: int,
-        terminated: bool,
-        info: Mapping[str, Any],
-    ) -> None:
+    def learning_arrays(self) -> SweepArrays:  # type: ignore[override]
+        return SweepArrays(self.q, self.model.arrays, self.queue)
+
+    def learning_settings(self) -> SweepSettings:  # type: ignore[override]
         config = self.config
-        self.model.prepare(state, action, next_state)
-        self.planning_updates += int(
-            sweep_step(
-                self.q, self.model.arrays, self.queue, state, action, reward, next_state,
-                terminated, config.planning_steps, config.theta, config.alpha, config.gamma,
-                config.planning_mode_code, self.rng,
-            )
+        return SweepSettings(
+            float(config.alpha), float(config.gamma), int(config.planning_steps),
+            int(config.planning_mode_code), float(config.theta),
         )  # fmt: skip
 
     def _state_arrays(self) -> dict[str, np.ndarray]:

@@ -6,12 +6,44 @@ bootstrap after termination). No model, no planning.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import ClassVar, NamedTuple
 
+import numpy as np
+
+from skidnav._jit import jit
 from skidnav.agents.config import QLearningConfig
 from skidnav.agents.core import TabularAgent
+from skidnav.kernels.learning import Experience, learning_step
 from skidnav.kernels.tabular import td_update
+
+
+class QArrays(NamedTuple):
+    """What Q-learning learns into: the Q table, float64 (n_states, n_actions)."""
+
+    q: np.ndarray
+
+
+class TDSettings(NamedTuple):
+    """Step size α and discount γ."""
+
+    alpha: float
+    gamma: float
+
+
+@learning_step(QArrays)
+@jit
+def q_learning_step(
+    arrays: QArrays,
+    settings: TDSettings,
+    counters: np.ndarray,
+    step: Experience,
+    rng: np.random.Generator,
+) -> None:
+    """The learning step of Q-learning: one TD update (draws nothing)."""
+    td_update(
+        arrays.q, step.state, step.action, step.reward, step.next_state, step.terminated,
+        settings.alpha, settings.gamma,
+    )  # fmt: skip
 
 
 class QLearningAgent(TabularAgent):
@@ -20,25 +52,11 @@ class QLearningAgent(TabularAgent):
     name: ClassVar[str] = "q-learning"
     config_class: ClassVar[type[QLearningConfig]] = QLearningConfig
 
-    def _learn(
-        self,
-        state: int,
-        action: int,
-        reward: float,
-        next_state: int,
-        terminated: bool,
-        info: Mapping[str, Any],
-    ) -> None:
-        td_update(
-            self.q,
-            state,
-            action,
-            reward,
-            next_state,
-            terminated,
-            self.config.alpha,
-            self.config.gamma,
-        )
+    def learning_arrays(self) -> QArrays:
+        return QArrays(self.q)
+
+    def learning_settings(self) -> TDSettings:
+        return TDSettings(float(self.config.alpha), float(self.config.gamma))
 
 
 AGENT_NAME = "q-learning"

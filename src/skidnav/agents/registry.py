@@ -39,16 +39,11 @@ AGENT_MODULES: dict[str, str] = {
 
 
 def agent_class(name: str) -> type[TabularAgent]:
-    """The agent class registered as ``name``; UserError if unknown or not installed."""
+    """The agent class registered as ``name``; UserError if unknown."""
     module_name = AGENT_MODULES.get(name)
     if module_name is None:
         raise UserError(f"unknown agent {shown(name)}; expected one of {', '.join(AGENT_MODULES)}")
-    try:
-        module = importlib.import_module(module_name)
-    except ModuleNotFoundError as error:
-        if error.name != module_name:
-            raise
-        raise UserError(f"agent {name!r} is not available (no module {module_name})") from None
+    module = importlib.import_module(module_name)
     cls: type[TabularAgent] = module.AGENT_CLASS
     if {module.AGENT_NAME, cls.name} != {name}:
         raise RuntimeError(f"{module_name} registers {module.AGENT_NAME!r}, expected {name!r}")
@@ -56,15 +51,8 @@ def agent_class(name: str) -> type[TabularAgent]:
 
 
 def available_agents() -> list[str]:
-    """Names of the registered agents whose modules can be imported."""
-    names = []
-    for name in AGENT_MODULES:
-        try:
-            agent_class(name)
-        except UserError:
-            continue
-        names.append(name)
-    return names
+    """Names of the registered agents, in registry order."""
+    return list(AGENT_MODULES)
 
 
 def make_config(name: str, config: QLearningConfig | Mapping[str, Any] | None) -> QLearningConfig:

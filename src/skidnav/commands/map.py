@@ -9,8 +9,8 @@ import numpy as np
 
 from skidnav.errors import UserError
 from skidnav.world.discretization import Discretization
-from skidnav.world.grid import MAP_KINDS, generate_map
-from skidnav.world.mapfile import MAX_SIZE, format_map, load_map, save_map
+from skidnav.world.grid import MAP_KINDS, MAX_SIZE, generate_map
+from skidnav.world.mapfile import format_map, load_map, save_map
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]

@@ -2,7 +2,7 @@
 
 ``skidnav robot sim-server`` runs the simulated robot server; ``skidnav robot run`` runs an agent
 in real time against a robot driver; ``skidnav robot study`` runs agents × presets × seeds against
-the sim server and tabulates success (realtime/study.py).
+the sim server through the experiment runner and tabulates success (realtime/study.py).
 """
 
 from __future__ import annotations
@@ -200,6 +200,11 @@ def _run_study(args: argparse.Namespace) -> int:
     def announce(line: str) -> None:
         print(f"\r{line:<79}", file=sys.stderr, flush=True)
 
-    code, records = run_study(tables, settings, args.out, progress=progress, announce=announce)
-    print(f"{len(records)} runs finished; tables in {args.out / 'study.md'}")
-    return code
+    outcome = run_study(tables, settings, args.out, progress=progress, announce=announce)
+    done_before = outcome.finished - outcome.executed
+    tables_line = f"tables in {args.out / 'study.md'}" if outcome.finished else "no tables yet"
+    print(
+        f"{outcome.finished} of {outcome.n_runs} runs finished ({outcome.executed} run now, "
+        f"{done_before} done before); {tables_line}"
+    )
+    return outcome.code

@@ -95,16 +95,20 @@ def _script(args: argparse.Namespace) -> list[int] | None:
 
 
 def _make_env(args: argparse.Namespace, max_steps: int) -> Any:
-    """The env of the arguments, truncating after ``max_steps`` actions (built directly:
-    ``gymnasium.make`` would keep the env's own 500-action limit); a bad value (negative drift,
-    seed, …) raises UserError."""
-    from skidnav.envs.navigation import SkidSteerNavEnv
+    """The env of the arguments, truncated by Gymnasium's ``TimeLimit`` after ``max_steps``
+    actions instead of the registered 500; a bad value (negative drift, seed, …) raises
+    UserError."""
+    import gymnasium
+
+    from skidnav.envs.registration import ENV_ID
 
     for option, seed in (("--world-seed", args.world_seed), ("--seed", args.seed)):
         if seed < 0:
             raise UserError(f"expected {option} >= 0, got {seed}")
     try:
-        return SkidSteerNavEnv(
+        return gymnasium.make(
+            ENV_ID,
+            max_episode_steps=max_steps,
             render_mode="rgb_array",
             map_file=args.map,
             map_kind=args.map_kind,
@@ -112,7 +116,6 @@ def _make_env(args: argparse.Namespace, max_steps: int) -> Any:
             slip=args.slip,
             drift_amplitude=args.drift,
             robot=RobotParams(integrator=args.integrator),
-            max_episode_steps=max_steps,
         )
     except ValueError as error:
         raise UserError(str(error)) from None

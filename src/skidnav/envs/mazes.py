@@ -176,7 +176,7 @@ class GridMazeEnv(gym.Env[int, int]):
                     frontier.append(nxt)
         return -1
 
-    def render(self) -> str | None:  # type: ignore[override]
+    def render(self) -> str | None:
         """Text picture: ``#`` wall, ``S`` start, ``G`` goal, ``A`` agent, ``.`` free."""
         if self.render_mode != "ansi":
             return None

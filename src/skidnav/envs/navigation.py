@@ -11,12 +11,15 @@ import numpy as np
 from gymnasium import spaces
 
 from skidnav.envs import rendering
+from skidnav.envs.step_info import step_info
 from skidnav.kernels.navigation import (
     NavigationTask,
     RewardScheme,
     build_task,
-    transition,
+    step_arrays,
+    task_arrays,
 )
+from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
 from skidnav.world.discretization import Discretization
@@ -57,14 +60,21 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     The centre of the map's start cell, heading 0 (facing +x).
 
     ## Episode End
-    Terminated when an action ends in the goal cell. Truncated after ``max_episode_steps`` actions
-    (default 500). Agents bootstrap on truncation, never on termination.
+    Terminated when an action ends in the goal cell. The env itself never truncates: Gymnasium's
+    ``TimeLimit`` does, which ``gymnasium.make`` adds after 500 actions (registered
+    ``max_episode_steps``; ``gymnasium.make(..., max_episode_steps=N)`` overrides it and
+    ``env.spec.max_episode_steps`` says which applies). Built directly, wrap it in
+    ``gymnasium.wrappers.TimeLimit`` for a limit. Agents bootstrap on truncation, never on
+    termination.
 
     ## Info
-    ``pose`` (x, y, heading), ``cell`` (i, j, heading_bin), ``collision`` (bool), ``wheel_speeds``
-    (ω_L, ω_R of the last sub-step [rad/s]), ``region`` (flat slip region at the end of the action),
-    ``kinematic_log`` float64 (n_free_substeps, 6), columns [region, omega_left_cmd,
-    omega_right_cmd, v_x, v_y, yaw_rate]: what the Bayesian ridge kinematic model learns from.
+    Built by :func:`skidnav.envs.step_info.step_info`, as the real-time loop's: ``pose``
+    (x [m], y [m], heading [rad]), ``cell`` (i, j, heading_bin), ``collision`` (bool),
+    ``wheel_speeds`` (ω_L, ω_R of the last sub-step after slip [rad/s]), ``region`` (flat slip
+    region at the end of the action), ``kinematic_log`` float64 (n_free_substeps, 6), columns
+    [region, omega_left_cmd, omega_right_cmd, v_x, v_y, yaw_rate] (what the Bayesian ridge
+    kinematic model learns from), and ``step_info``: the same as a typed
+    :class:`~skidnav.envs.step_info.StepInfo`.
 
     ## Arguments
     ``map_kind`` ("free", "obstacles", "maze") or ``map_file`` (plain-text map) or ``grid_map``;
@@ -72,20 +82,22 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     ``slip`` preset ("thesis", "slippery", "rough") or ``slip_field``; ``drift_amplitude`` and
     ``drift_period`` [s] (non-stationary slip; the clock runs across episodes and restarts when
     ``reset`` is given a seed); ``robot`` (:class:`RobotParams`, e.g. ``integrator="exact"``);
-    ``discretization``; ``max_episode_steps``; ``observation``; ``variance``; ``render_mode``
-    ("rgb_array" or "ansi").
+    ``discretization``; ``observation``; ``variance``; ``render_mode`` ("rgb_array" or "ansi").
 
     >>> import gymnasium, skidnav
     >>> env = gymnasium.make("skidnav/SkidSteerNav-v0", map_kind="free", world_seed=1)
     >>> state, info = env.reset(seed=0)
-    >>> int(env.observation_space.n), int(env.action_space.n)
-    (12500, 4)
+    >>> int(env.observation_space.n), int(env.action_space.n), env.spec.max_episode_steps
+    (12500, 4, 500)
     >>> _, reward, terminated, truncated, info = env.step(0)
     >>> round(float(reward), 3), info["collision"], info["kinematic_log"].shape
     (-1.0, False, (10, 6))
+    >>> info["step_info"].pose == info["pose"]
+    True
 
     ## Version History
-    v0: initial version.
+    v0: initial version; truncation moved from the env to Gymnasium's ``TimeLimit`` (same
+    limit, 500 actions, when made with ``gymnasium.make``).
     """
 
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 10}  # noqa: RUF012
@@ -104,7 +116,6 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         drift_period: float = 600.0,
         robot: RobotParams | None = None,
         discretization: Discretization | None = None,
-        max_episode_steps: int = 500,
         observation: str = "discrete",
         variance: str = "true",
     ) -> None:
@@ -116,8 +127,6 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
             raise ValueError(f"expected observation in {OBSERVATION_KINDS}, got {observation!r}")
         if variance not in VARIANCE_SOURCES:
             raise ValueError(f"expected variance in {VARIANCE_SOURCES}, got {variance!r}")
-        if not (isinstance(max_episode_steps, int) and max_episode_steps >= 1):
-            raise ValueError(f"expected max_episode_steps >= 1, got {max_episode_steps!r}")
         self.render_mode = render_mode
         self.robot = robot or RobotParams()
         map_rng, slip_rng = (
@@ -142,23 +151,25 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         self.task: NavigationTask = build_task(
             self.grid_map, self.slip_field, self.robot, self.discretization, rewards
         )
-        self.max_episode_steps = max_episode_steps
+        self._task_arrays = task_arrays(self.task)
         self.observation_kind = observation
         self.action_space = spaces.Discrete(4)  # type: ignore[assignment]
-        self.observation_space: spaces.Space[Any] = (
-            spaces.Discrete(self.discretization.n_states)
-            if observation == "discrete"
-            else spaces.Box(
-                low=np.array([0.0, 0.0, -math.pi]),
-                high=np.array([self.robot.arena_width, self.robot.arena_height, math.pi]),
-                dtype=np.float64,
-            )
-        )
+        self.observation_space = self._observation_space()
         self.pose = np.zeros(3)
         self.time = 0.0
-        self.elapsed_steps = 0
         self.trail: list[tuple[float, float]] = []
         self._log = np.zeros((self.robot.substeps, 6))
+        self._noise = np.zeros(2 * self.robot.substeps)
+        self._action_duration = self.robot.action_duration
+
+    def _observation_space(self) -> spaces.Space[Any]:
+        if self.observation_kind == "discrete":
+            return spaces.Discrete(self.discretization.n_states)
+        return spaces.Box(
+            low=np.array([0.0, 0.0, -math.pi]),
+            high=np.array([self.robot.arena_width, self.robot.arena_height, math.pi]),
+            dtype=np.float64,
+        )
 
     def start_pose(self) -> np.ndarray:
         """(x, y, heading) at the centre of the start cell, heading 0."""
@@ -175,36 +186,26 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
             self.time = 0.0
             self.task.variance_stats[:] = 0.0
         self.pose = self.start_pose()
-        self.elapsed_steps = 0
-        self.trail = [(float(self.pose[0]), float(self.pose[1]))]
-        state = self.discretization.state(*self.pose)
-        region = self.discretization.region(self.pose[0], self.pose[1])
-        return self._observation(state), self._info(state, region, False, (0.0, 0.0), 0)
+        x, y, heading = self.pose.tolist()
+        self.trail = [(x, y)]
+        state = self.discretization.state(x, y, heading)
+        region = self.discretization.region(x, y)
+        return self._observation(state), self._info(state, False, (0.0, 0.0), region, 0)
 
     def step(self, action: int) -> tuple[Any, float, bool, bool, dict[str, Any]]:
-        """Apply one action (10 sub-steps of 0.1 s by default)."""
-        if not self.action_space.contains(action):
-            raise ValueError(f"expected an action in 0..3, got {action!r}")
-        noise = self.np_random.random(2 * self.robot.substeps)
-        outcome = transition(self.task, self.pose, int(action), self.time, noise, self._log)
-        self.time += self.robot.action_duration
-        self.elapsed_steps += 1
-        self.trail.append((float(self.pose[0]), float(self.pose[1])))
-        truncated = not outcome.terminated and self.elapsed_steps >= self.max_episode_steps
-        info = self._info(
-            outcome.state,
-            outcome.region,
-            outcome.collided,
-            (outcome.omega_left, outcome.omega_right),
-            outcome.n_logged,
+        """Apply one action (10 sub-steps of 0.1 s by default); never truncates (see class doc)."""
+        if type(action) is not int or not 0 <= action < 4:  # the common case checked fast
+            if not self.action_space.contains(action):
+                raise ValueError(f"expected an action in 0..3, got {action!r}")
+            action = int(action)
+        self.np_random.random(out=self._noise)  # the same draws as ``random(2 · substeps)``
+        reward, terminated, collided, n_logged, omega_left, omega_right, state, region = (
+            step_arrays(*self._task_arrays, self.pose, action, self.time, self._noise, self._log)
         )
-        return (
-            self._observation(outcome.state),
-            float(outcome.reward),
-            bool(outcome.terminated),
-            truncated,
-            info,
-        )
+        self.time += self._action_duration
+        info = self._info(state, collided, (omega_left, omega_right), region, n_logged)
+        self.trail.append(info["pose"][:2])
+        return self._observation(state), float(reward), bool(terminated), False, info
 
     def state(self) -> int:
         """Flat discrete state of the current pose."""
@@ -213,28 +214,23 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     def _observation(self, state: int) -> Any:
         if self.observation_kind == "discrete":
             return int(state)
-        heading = math.atan2(math.sin(self.pose[2]), math.cos(self.pose[2]))
+        heading = wrap_angle(float(self.pose[2]))
         return np.array([self.pose[0], self.pose[1], heading])
 
     def _info(
         self,
         state: int,
-        region: int,
         collided: bool,
         wheel_speeds: tuple[float, float],
+        region: int,
         n_logged: int,
     ) -> dict[str, Any]:
-        x, y, heading = (float(v) for v in self.pose)
-        return {
-            "pose": (x, y, heading),
-            "cell": self.discretization.unflatten(state),
-            "collision": bool(collided),
-            "wheel_speeds": (float(wheel_speeds[0]), float(wheel_speeds[1])),
-            "region": int(region),
-            "kinematic_log": self._log[:n_logged].copy(),
-        }
+        """The step info of the current pose (:func:`~skidnav.envs.step_info.step_info`)."""
+        cell = self.discretization.unflatten(state)
+        log = self._log[:n_logged].copy()
+        return step_info(self.pose.tolist(), cell, collided, wheel_speeds, region, log)
 
-    def render(self) -> Any:  # type: ignore[override]
+    def render(self) -> Any:
         """An RGB image (H, W, 3) uint8 of the arena, or an ANSI text grid."""
         if self.render_mode == "ansi":
             return rendering.ansi_frame(self.grid_map, self.discretization, self.pose)

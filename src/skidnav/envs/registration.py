@@ -10,21 +10,26 @@ from __future__ import annotations
 import gymnasium
 
 ENV_ID = "skidnav/SkidSteerNav-v0"
+MAX_EPISODE_STEPS = 500
+"""Actions per episode of ``skidnav/SkidSteerNav-v0`` before Gymnasium's ``TimeLimit`` truncates
+it (``gymnasium.make(ENV_ID, max_episode_steps=N)`` overrides it)."""
 MAZE_IDS = {
     "skidnav/DynaMaze-v0": "skidnav.envs.mazes:dyna_maze",
     "skidnav/BlockingMaze-v0": "skidnav.envs.mazes:blocking_maze",
     "skidnav/ShortcutMaze-v0": "skidnav.envs.mazes:shortcut_maze",
 }
-"""The Sutton & Barto (2018) ch. 8 grid mazes (Examples 8.1–8.3) → their factories."""
+"""The Sutton & Barto (2018) ch. 8 grid mazes (Examples 8.1–8.3) → their factories. They are
+registered without a time limit, as the book runs them (episodes end at the goal)."""
 
 
 def register_envs() -> None:
-    """Register ``skidnav/SkidSteerNav-v0`` and the grid mazes (idempotent)."""
+    """Register ``skidnav/SkidSteerNav-v0`` (truncated by Gymnasium's ``TimeLimit`` after
+    :data:`MAX_EPISODE_STEPS` actions) and the grid mazes (idempotent)."""
     if ENV_ID not in gymnasium.registry:
         gymnasium.register(
             id=ENV_ID,
             entry_point="skidnav.envs.navigation:SkidSteerNavEnv",
-            max_episode_steps=None,
+            max_episode_steps=MAX_EPISODE_STEPS,
         )
     for env_id, entry_point in MAZE_IDS.items():
         if env_id not in gymnasium.registry:

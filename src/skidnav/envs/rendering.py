@@ -18,6 +18,7 @@ from PIL import Image, ImageDraw
 
 from skidnav.atomicfile import write_user_file
 from skidnav.errors import UserError
+from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.slip import SlipField
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
@@ -132,7 +133,7 @@ def ansi_frame(grid_map: GridMap, disc: Discretization, pose: np.ndarray) -> str
     """The map as text, top row first: ``#`` wall, ``S`` start, ``G`` goal, an arrow for the
     robot pointing along its heading (8 directions)."""
     robot_i, robot_j = disc.cell(float(pose[0]), float(pose[1]))
-    sector = round(math.atan2(math.sin(pose[2]), math.cos(pose[2])) / (math.pi / 4)) % 8
+    sector = round(wrap_angle(pose[2]) / (math.pi / 4)) % 8
     rows = []
     for j in range(disc.n_y - 1, -1, -1):
         chars = []

@@ -4,13 +4,18 @@ Every interval is a seeded percentile bootstrap (:mod:`skidnav.stats`); each tab
 cell gets its own generator keyed by the root seed and the cell's labels, so the numbers do not
 depend on the order in which they are computed. Agents are compared *paired by seed*: all agents
 of a (map, preset) cell meet the same maps and floors (see :mod:`skidnav.experiments.runs`).
+
+:func:`aggregate`, :func:`compare_surfaces` and :func:`baseline_differences` take the metrics
+(summary columns) and preset groups they compare, so the hardware-in-the-loop study
+(:mod:`skidnav.realtime.study_report`) computes its tables here too; they need of the grid only
+what :class:`StatsSettings` names.
 """
 
 from __future__ import annotations
 
 import zlib
-from collections.abc import Iterator
-from typing import Any
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from typing import Any, Protocol
 
 import numpy as np
 import pandas as pd
@@ -44,7 +49,22 @@ METRICS = {
 """Summary columns aggregated in the report, with their display names."""
 
 
-def stats_rng(config: ExperimentConfig, *keys: object) -> np.random.Generator:
+class StatsSettings(Protocol):
+    """What the statistics need of a grid (an :class:`ExperimentConfig` has it all)."""
+
+    @property
+    def root_seed(self) -> int: ...
+    @property
+    def agent_labels(self) -> list[str]: ...
+    @property
+    def baseline(self) -> str: ...
+    @property
+    def bootstrap_samples(self) -> int: ...
+    @property
+    def confidence(self) -> float: ...
+
+
+def stats_rng(config: StatsSettings, *keys: object) -> np.random.Generator:
     """A generator for one table cell, keyed by the root seed and the cell's labels."""
     key = zlib.crc32("|".join(str(k) for k in keys).encode())
     return np.random.default_rng([config.root_seed, 0x5747, key])
@@ -57,12 +77,17 @@ def cells(summaries: pd.DataFrame) -> Iterator[tuple[str, str, pd.DataFrame]]:
 
 
 def _by_seed(rows: pd.DataFrame, agent: str, column: str) -> pd.Series:
-    selected = rows[rows["agent"] == agent].set_index("seed")[column]
+    """``column`` of ``agent``'s rows indexed and sorted by (preset, seed): within one cell by
+    seed, over rows of several presets by the world each run met."""
+    selected = rows[rows["agent"] == agent].set_index(["preset", "seed"])[column]
     return selected.sort_index().astype(np.float64)
 
 
-def aggregate(summaries: pd.DataFrame, config: ExperimentConfig) -> pd.DataFrame:
-    """Mean and IQM with bootstrap intervals of every metric per (map, preset, agent).
+def aggregate(
+    summaries: pd.DataFrame, config: StatsSettings, metrics: Iterable[str] = METRICS
+) -> pd.DataFrame:
+    """Mean and IQM with bootstrap intervals of every metric (summary column, default
+    :data:`METRICS`) per (map, preset, agent).
 
     Returns a long table: map, preset, agent, metric, n, mean, mean_low, mean_high, iqm,
     iqm_low, iqm_high.
@@ -73,7 +98,7 @@ def aggregate(summaries: pd.DataFrame, config: ExperimentConfig) -> pd.DataFrame
             agent_rows = rows[rows["agent"] == agent]
             if agent_rows.empty:
                 continue
-            for metric in METRICS:
+            for metric in metrics:
                 values = agent_rows[metric].to_numpy(np.float64)
                 rng = stats_rng(config, map_label, preset, agent, metric)
                 mean = bootstrap_interval(
@@ -213,13 +238,29 @@ def _length_pairs(
     return int((np.isfinite(a) & np.isfinite(b)).sum()) if a.size == b.size else 0
 
 
+def _options(config: StatsSettings) -> dict[str, Any]:
+    """The bootstrap settings of ``config``."""
+    return {"n_resamples": config.bootstrap_samples, "confidence": config.confidence}
+
+
+def _difference(
+    rows: pd.DataFrame, agent: str, base: str, column: str, config: StatsSettings, *keys: str
+) -> tuple[Interval, int, bool]:
+    """(mean ``column`` of ``agent`` − of ``base`` with its interval, pairs or runs compared,
+    paired?): paired by (preset, seed) when both have the same runs, else unpaired; the
+    generator keyed by ``keys``."""
+    a, b, paired = _paired(rows, agent, base, column)
+    interval = difference_interval(
+        a, b, stats_rng(config, *keys), paired=paired, **_options(config)
+    )
+    n = int((np.isfinite(a) & np.isfinite(b)).sum()) if paired else min(a.size, b.size)
+    return interval, n, paired
+
+
 def _comparisons(
     rows: pd.DataFrame, agent: str, base: str, config: ExperimentConfig, *cell: str
 ) -> Iterator[tuple[str, Interval]]:
-    options: dict[str, Any] = {
-        "n_resamples": config.bootstrap_samples,
-        "confidence": config.confidence,
-    }
+    options = _options(config)
     a_times, a_seen = survival_columns(rows, agent)
     b_times, b_seen = survival_columns(rows, base)
     yield "improvement_probability", probability_of_improvement(
@@ -232,59 +273,93 @@ def _comparisons(
         ("length_difference", "final_length_actions"),
         ("gap_difference", "optimality_gap"),
     ):
-        a, b, paired = _paired(rows, agent, base, column)
-        yield (
-            name,
-            difference_interval(
-                a, b, stats_rng(config, *cell, agent, name), paired=paired, **options
-            ),
-        )  # type: ignore[arg-type]
+        yield name, _difference(rows, agent, base, column, config, *cell, agent, name)[0]
     a, b, paired = _paired(rows, agent, base, "success_rate")
     ratio = ratio_interval(
         a, b, stats_rng(config, *cell, agent, "relative"), paired=paired, **options
-    )  # type: ignore[arg-type]
+    )
     yield "success_gain_relative", Interval(ratio.estimate - 1, ratio.low - 1, ratio.high - 1)
 
 
 def compare_surfaces(
     summaries: pd.DataFrame,
-    config: ExperimentConfig,
-    rough: str = "rough",
-    slippery: str = "slippery",
+    config: StatsSettings,
+    rough: str | Sequence[str] = "rough",
+    slippery: str | Sequence[str] = "slippery",
+    metrics: Sequence[str] = ("success_rate", "success_rate_last10"),
 ) -> pd.DataFrame:
-    """Success rate on the rough floor over that on the slippery floor, per (map, agent).
+    """Mean of each metric on the rough floor over that on the slippery floor, per (map, agent).
 
-    The two floors are different worlds, so the seeds are resampled independently (unpaired).
-    Columns: map, agent, metric, ratio, ratio_low, ratio_high, rough, slippery (mean rates).
+    ``rough`` and ``slippery`` each name a preset, or a group of presets pooled (e.g. one floor
+    under stationary and under drifting slip). The two floors are different worlds, so the runs
+    are resampled independently (unpaired). Each (map, agent, metric) has its own generator,
+    keyed also by the presets when groups are given.
+    Columns: map, agent, metric, ratio, ratio_low, ratio_high, rough, slippery (mean rates),
+    rough_runs, slippery_runs (runs with a value, not NaN).
     """
-    if not {rough, slippery} <= set(summaries["preset"]):
+    first, second = _group(rough), _group(slippery)
+    present = set(summaries["preset"])
+    if not (present & set(first) and present & set(second)):
         return pd.DataFrame()
+    groups = () if isinstance(rough, str) and isinstance(slippery, str) else (*first, *second)
     records = []
     for (map_label, agent), rows in summaries.groupby(["map", "agent"], sort=False):
-        for metric in ("success_rate", "success_rate_last10"):
-            a = rows[rows["preset"] == rough][metric].to_numpy(np.float64)
-            b = rows[rows["preset"] == slippery][metric].to_numpy(np.float64)
-            rng = stats_rng(config, map_label, agent, metric, "surfaces")
-            ratio = ratio_interval(
-                a,
-                b,
-                rng,
-                paired=False,
-                n_resamples=config.bootstrap_samples,
-                confidence=config.confidence,
-            )
-            records.append(
-                {
-                    "map": map_label,
-                    "agent": agent,
-                    "metric": metric,
-                    "ratio": ratio.estimate,
-                    "ratio_low": ratio.low,
-                    "ratio_high": ratio.high,
-                    "rough": float(np.nanmean(a)),
-                    "slippery": float(np.nanmean(b)),
-                }
-            )
+        for metric in metrics:
+            a = rows[rows["preset"].isin(first)][metric].to_numpy(np.float64)
+            b = rows[rows["preset"].isin(second)][metric].to_numpy(np.float64)
+            rng = stats_rng(config, map_label, agent, metric, "surfaces", *groups)
+            ratio = ratio_interval(a, b, rng, paired=False, **_options(config))
+            records.append({
+                "map": map_label, "agent": agent, "metric": metric,
+                "ratio": ratio.estimate, "ratio_low": ratio.low, "ratio_high": ratio.high,
+                "rough": _mean(a), "slippery": _mean(b),
+                "rough_runs": int((~np.isnan(a)).sum()),
+                "slippery_runs": int((~np.isnan(b)).sum()),
+            })  # fmt: skip
+    return pd.DataFrame.from_records(records)
+
+
+def _group(presets: str | Sequence[str]) -> tuple[str, ...]:
+    """A preset name as a group of one, a group as a tuple."""
+    return (presets,) if isinstance(presets, str) else tuple(presets)
+
+
+def _mean(values: np.ndarray) -> float:
+    """Mean of the values that are not NaN, NaN without any."""
+    kept = values[~np.isnan(values)]
+    return float(kept.mean()) if kept.size else float("nan")
+
+
+def baseline_differences(
+    summaries: pd.DataFrame,
+    config: StatsSettings,
+    metrics: Sequence[str],
+    groups: Mapping[str, Sequence[str]],
+) -> pd.DataFrame:
+    """Each agent's mean of each metric minus the baseline's, per map and group of presets.
+
+    The runs of a group's presets are pooled and paired by (preset, seed): every agent of a
+    (map, preset, seed) meets the same world. With different runs on the two sides (an
+    unfinished grid) they are compared unpaired. Each (map, group, agent, metric) has its own
+    generator. Columns: map, group, agent, metric, difference, difference_low,
+    difference_high, n (pairs, or the smaller side's runs), paired.
+    """
+    base = config.baseline
+    records = []
+    for map_label, rows in summaries.groupby("map", sort=False):
+        for group, presets in groups.items():
+            selected = rows[rows["preset"].isin(presets)]
+            for agent in config.agent_labels:
+                if agent == base or selected[selected["agent"] == agent].empty:
+                    continue
+                for metric in metrics:
+                    keys = (str(map_label), group, agent, metric, "difference")
+                    interval, n, paired = _difference(selected, agent, base, metric, config, *keys)
+                    records.append({
+                        "map": map_label, "group": group, "agent": agent, "metric": metric,
+                        "difference": interval.estimate, "difference_low": interval.low,
+                        "difference_high": interval.high, "n": n, "paired": paired,
+                    })  # fmt: skip
     return pd.DataFrame.from_records(records)
 
 

@@ -86,12 +86,15 @@ def cache_dir() -> Path:
     return Path(os.environ.get("SKIDNAV_CACHE_DIR") or Path.home() / ".cache" / "skidnav")
 
 
-def _key(nav: Any, n_samples: int, seed: int, seeds: Sequence[int], max_steps: int) -> str:
-    """Hex digest of everything the oracle of ``nav`` depends on."""
+def _key(env: Any, n_samples: int, seed: int, seeds: Sequence[int], max_steps: int) -> str:
+    """Hex digest of everything the oracle of ``env`` depends on (its world, its step limit, the
+    sampling and evaluation settings)."""
     digest = hashlib.sha256(f"oracle-v{ORACLE_VERSION}".encode())
+    nav = env.unwrapped
+    limit = env.spec.max_episode_steps if env.spec is not None else None
     task = nav.task
     for part in (task.robot, task.grid, task.goal_i, task.goal_j, task.drift_amplitude,
-                 task.drift_period, task.rewards, nav.max_episode_steps):  # fmt: skip
+                 task.drift_period, task.rewards, limit):  # fmt: skip
         digest.update(repr(part).encode())
     for array in (task.occupancy, task.eta, task.x_icr, task.drift_phase, nav.start_pose()):
         digest.update(np.ascontiguousarray(array).tobytes())
@@ -133,7 +136,7 @@ def load_or_compute_oracle(
 ) -> Oracle:
     """:func:`compute_oracle`, read from the on-disk cache when it holds this world's oracle (a
     damaged cache file is logged and computed again)."""
-    path = cache_dir() / "oracles" / f"{_key(env.unwrapped, n_samples, seed, seeds, max_steps)}.npz"
+    path = cache_dir() / "oracles" / f"{_key(env, n_samples, seed, seeds, max_steps)}.npz"
     nav = env.unwrapped
     shape = (int(nav.observation_space.n), int(nav.action_space.n))
     if path.is_file():

@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
 
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.metrics import moving_average
@@ -188,9 +189,7 @@ def draw_arena(axes: Axes, run: TrialResult, *, slip: bool = True) -> None:
     )
     for key, color in (("start", "green"), ("goal", "red")):
         i, j = run.arrays[key]
-        axes.add_patch(
-            plt.Rectangle((i * cell_w, j * cell_h), cell_w, cell_h, color=color, alpha=0.8)
-        )
+        axes.add_patch(Rectangle((i * cell_w, j * cell_h), cell_w, cell_h, color=color, alpha=0.8))
     axes.set_xlim(0, n_x * cell_w)
     axes.set_ylim(0, n_y * cell_h)
     axes.set_aspect("equal")
@@ -361,7 +360,8 @@ def _error(center: pd.Series, low: pd.Series, high: pd.Series) -> np.ndarray:
     """Asymmetric error bars, shape (2, n), never negative (NaN bounds draw no bar)."""
     below = (center - low).to_numpy(float)
     above = (high - center).to_numpy(float)
-    return np.clip(np.vstack([below, above]), 0.0, None)
+    bars: np.ndarray = np.clip(np.vstack([below, above]), 0.0, None)
+    return bars
 
 
 def _speedup_panel(axes: Axes, rows: pd.DataFrame, color: tuple[float, ...], label: str) -> None:

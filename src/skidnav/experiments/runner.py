@@ -18,11 +18,18 @@ Started again on the same directory, the runner skips the runs already written, 
 by Ctrl-C or SIGKILL resumes with none lost and none duplicated; finished runs produced by other
 code are reused with a warning (:mod:`skidnav.experiments.sessions`). At the end the tidy tables
 and ``metadata.json`` (with the list of sessions) are (re)written.
+
+The grid is an :class:`~skidnav.experiments.config.ExperimentConfig` trained by
+:func:`skidnav.experiments.trial.run_trial`, or any other :class:`~skidnav.experiments.runs.Grid`
+with its own trial function and :class:`~skidnav.experiments.store.RunLayout` (the
+hardware-in-the-loop study, :mod:`skidnav.realtime.study`): the same expansion, seeds, store,
+lock, resume and metadata for both.
 """
 
 from __future__ import annotations
 
 import contextlib
+import importlib
 import itertools
 import logging
 import multiprocessing
@@ -39,17 +46,25 @@ from tqdm import tqdm
 
 from skidnav._jit import jit_disabled
 from skidnav.errors import UserError
-from skidnav.experiments.config import ExperimentConfig, config_to_dict
+from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.provenance import CODE_KEYS, code_version, package_versions
-from skidnav.experiments.runs import RunSpec, expand_runs
+from skidnav.experiments.runs import Grid, RunSpec, expand_runs
 from skidnav.experiments.sessions import mixed_code_message, other_code, update_sessions
-from skidnav.experiments.store import ResultStore, TrialResult, directory_lock
+from skidnav.experiments.store import (
+    EXPERIMENT_LAYOUT,
+    ResultStore,
+    RunLayout,
+    TrialResult,
+    directory_lock,
+)
 from skidnav.experiments.workers import init_worker
 
 logger = logging.getLogger(__name__)
 
 BACKENDS = ("serial", "process", "dask")
-TrialFunction = Callable[[RunSpec], TrialResult]
+TrialFunction = Callable[[RunSpec[Any]], TrialResult]
+"""One run of the grid: its spec in, its results out (a pure function of the spec for an
+experiment)."""
 DASK_CONNECT_TIMEOUT = "15s"
 """How long the Dask client tries to reach ``scheduler``."""
 
@@ -64,12 +79,14 @@ class RunOutcome(NamedTuple):
     wall_time: float
 
 
-def _serial(runs: Sequence[RunSpec], trial: TrialFunction) -> Iterator[TrialResult]:
+def _serial(runs: Sequence[RunSpec[Any]], trial: TrialFunction) -> Iterator[TrialResult]:
     for spec in runs:
         yield trial(spec)
 
 
-def _process(runs: Sequence[RunSpec], trial: TrialFunction, jobs: int) -> Iterator[TrialResult]:
+def _process(
+    runs: Sequence[RunSpec[Any]], trial: TrialFunction, jobs: int
+) -> Iterator[TrialResult]:
     if not runs:
         return
     jobs = min(jobs, len(runs))
@@ -85,6 +102,12 @@ def _process(runs: Sequence[RunSpec], trial: TrialFunction, jobs: int) -> Iterat
         executor.shutdown(wait=True, cancel_futures=True)
 
 
+def _distributed() -> Any:
+    """The ``distributed`` package, imported when a Dask backend is used (it has no type
+    hints, so it is handled as ``Any``)."""
+    return importlib.import_module("distributed")
+
+
 @contextlib.contextmanager
 def dask_client(jobs: int, scheduler: str | None) -> Iterator[Any]:
     """A ``distributed.Client`` on ``scheduler``, or on a local cluster of ``jobs`` worker
@@ -93,45 +116,42 @@ def dask_client(jobs: int, scheduler: str | None) -> Iterator[Any]:
     Raises:
         UserError: the scheduler cannot be reached within :data:`DASK_CONNECT_TIMEOUT`.
     """
-    from distributed import Client, LocalCluster
-
+    distributed = _distributed()
     if scheduler is not None:
         try:
-            client = Client(scheduler, timeout=DASK_CONNECT_TIMEOUT)
+            client = distributed.Client(scheduler, timeout=DASK_CONNECT_TIMEOUT)
         except OSError as error:
             raise UserError(f"cannot connect to Dask scheduler {scheduler!r}: {error}") from None
         with client:
             yield client
         return
     with (
-        LocalCluster(
+        distributed.LocalCluster(
             n_workers=jobs,
             threads_per_worker=1,
             processes=True,
             host="127.0.0.1",
             dashboard_address=None,
         ) as cluster,
-        Client(cluster) as client,
+        distributed.Client(cluster) as client,
     ):
         yield client
 
 
-def _dask(runs: Sequence[RunSpec], trial: TrialFunction, client: Any) -> Iterator[TrialResult]:
-    from distributed import as_completed as dask_completed
-
+def _dask(runs: Sequence[RunSpec[Any]], trial: TrialFunction, client: Any) -> Iterator[TrialResult]:
     keys = [f"skidnav-{spec.config.fingerprint()[:12]}-{spec.run_id}" for spec in runs]
     futures = client.map(trial, runs, key=keys, pure=False)
-    for future in dask_completed(futures):
+    for future in _distributed().as_completed(futures):
         yield future.result()
 
 
-def warm_up_first(runs: Sequence[RunSpec]) -> tuple[list[RunSpec], list[RunSpec]]:
+def warm_up_first(runs: Sequence[RunSpec[Any]]) -> tuple[list[RunSpec[Any]], list[RunSpec[Any]]]:
     """(first run of each algorithm, the others). The process backend runs the first ones here,
     so the compiled kernels are built once and cached on disk before the workers start, instead
     of being compiled by every worker at the same time."""
     seen: set[str] = set()
-    first: list[RunSpec] = []
-    rest: list[RunSpec] = []
+    first: list[RunSpec[Any]] = []
+    rest: list[RunSpec[Any]] = []
     for spec in runs:
         (rest if spec.agent.name in seen else first).append(spec)
         seen.add(spec.agent.name)
@@ -139,7 +159,7 @@ def warm_up_first(runs: Sequence[RunSpec]) -> tuple[list[RunSpec], list[RunSpec]
 
 
 def execute(
-    runs: Sequence[RunSpec],
+    runs: Sequence[RunSpec[Any]],
     trial: TrialFunction,
     backend: str,
     jobs: int,
@@ -176,7 +196,7 @@ def default_jobs() -> int:
 
 
 def run_experiment(
-    config: ExperimentConfig,
+    config: Grid,
     out_dir: Path | str,
     *,
     backend: str = "process",
@@ -186,38 +206,42 @@ def run_experiment(
     source_text: str = "",
     config_path: Path | str | None = None,
     progress: bool = False,
+    layout: RunLayout = EXPERIMENT_LAYOUT,
 ) -> RunOutcome:
     """Run (or resume) every run of ``config`` into ``out_dir``.
 
     Args:
-        config: the experiment.
+        config: the experiment (or another grid, with its ``trial`` and ``layout``).
         out_dir: results directory (created, or reopened to resume the same config).
         backend: one of :data:`BACKENDS`.
         jobs: worker processes (default: local cores).
         scheduler: Dask scheduler address (``tcp://host:port``), only with ``backend="dask"``.
-        trial: the run function (default :func:`skidnav.experiments.trial.run_trial`); it must be
-            importable by worker processes.
+        trial: the run function (default, for an experiment:
+            :func:`skidnav.experiments.trial.run_trial`); with ``backend="process"`` or
+            ``"dask"`` it must be importable by worker processes.
         source_text: the config file's text, saved as ``config.toml``.
         config_path: the config file, named in the errors of its agents, maps and env options.
         progress: show a progress bar with ETA on stderr.
+        layout: what the run files hold and how the grid is saved (:class:`RunLayout`).
+
+    Raises:
+        UserError: bad backend options, or ``out_dir`` holds other results or is in use.
+        KeyboardInterrupt: from the trial; the runs written until then stay, for a resume.
     """
     jobs = default_jobs() if jobs is None else jobs
     _check_backend(backend, jobs, scheduler)
     if trial is None:
-        from skidnav.experiments.trial import check_config, run_trial
-
-        check_config(config, config_path)
-        trial = run_trial
+        trial = _default_trial(config, config_path)
     started = time.time()
     runs = expand_runs(config)
-    ResultStore(out_dir).check(config)
+    ResultStore(out_dir, layout).check(config)
     with contextlib.ExitStack() as locked:
         with contextlib.ExitStack() as stack:
             client = None
-            if backend == "dask" and len(ResultStore(out_dir).finished()) < len(runs):
+            if backend == "dask" and len(ResultStore(out_dir, layout).finished()) < len(runs):
                 client = stack.enter_context(dask_client(jobs, scheduler))
             locked.enter_context(directory_lock(out_dir))  # held until the metadata is written
-            store = ResultStore.open(out_dir, config, source_text)
+            store = ResultStore.open(out_dir, config, source_text, layout)
             session = _session(started, backend, jobs, scheduler)
             records = _resume_records(store, session)
             pending = [spec for spec in runs if spec.run_id not in records]
@@ -227,14 +251,25 @@ def run_experiment(
         wall_time = time.time() - started
         session.update(wall_time_s=wall_time, completed=True)
         sessions = update_sessions(_previous_sessions(store.metadata()), records, session)
-        store.write_metadata(_metadata(config, runs, session, sessions))
+        store.write_metadata(_metadata(store, config, runs, session, sessions))
     return RunOutcome(store.root, len(runs), len(runs) - len(pending), len(pending), wall_time)
+
+
+def _default_trial(config: Grid, config_path: Path | str | None) -> TrialFunction:
+    """:func:`skidnav.experiments.trial.run_trial`, after checking the experiment ``config``
+    (only an :class:`ExperimentConfig` has a default trial)."""
+    from skidnav.experiments.trial import check_config, run_trial
+
+    if not isinstance(config, ExperimentConfig):
+        raise TypeError(f"a {type(config).__name__} grid needs its own trial function")
+    check_config(config, config_path)
+    return run_trial
 
 
 def _run_pending(
     store: ResultStore,
-    config: ExperimentConfig,
-    pending: list[RunSpec],
+    config: Grid,
+    pending: list[RunSpec[Any]],
     records: dict[str, dict[str, Any]],
     session: dict[str, Any],
     execution: tuple[TrialFunction, str, int, Any],
@@ -252,7 +287,7 @@ def _run_pending(
             bar.update(1)
 
 
-def _progress(config: ExperimentConfig, total: int, done: int, show: bool) -> tqdm[Any]:
+def _progress(config: Grid, total: int, done: int, show: bool) -> tqdm[Any]:
     return tqdm(
         total=total,
         initial=done,
@@ -301,13 +336,14 @@ def _previous_sessions(metadata: dict[str, Any]) -> list[dict[str, Any]]:
 
 
 def _metadata(
-    config: ExperimentConfig,
-    runs: Sequence[RunSpec],
+    store: ResultStore,
+    config: Grid,
+    runs: Sequence[RunSpec[Any]],
     session: dict[str, Any],
     sessions: list[dict[str, Any]],
 ) -> dict[str, Any]:
     return {
-        "config": config_to_dict(config),
+        "config": store.layout.to_dict(config),
         "fingerprint": config.fingerprint(),
         "versions": package_versions(),
         "git_commit": session["commit"],

@@ -11,15 +11,55 @@ children, a *world* root and a *run* root.
 
 Both depend only on positions in the grid, so a run has the same streams on every backend, in
 any order, and after a resume.
+
+A grid is anything with the attributes of :class:`Grid`: an
+:class:`~skidnav.experiments.config.ExperimentConfig` (``skidnav run``), or the
+hardware-in-the-loop study's grid (:class:`skidnav.realtime.study.StudyGrid`), whose runs the
+same runner executes with a trial function of its own.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, Generic, Protocol, TypeVar
 
 import numpy as np
 
-from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec
+from skidnav.experiments.config import AgentSpec, MapSpec
+
+
+class Grid(Protocol):
+    """What :func:`expand_runs` and the runner need of an experiment: agents × maps × presets ×
+    seeds from one root seed, and a fingerprint naming all of it (a results directory holds the
+    runs of one fingerprint)."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def agents(self) -> tuple[AgentSpec, ...]: ...
+    @property
+    def maps(self) -> tuple[MapSpec, ...]: ...
+    @property
+    def presets(self) -> tuple[str, ...]: ...
+    @property
+    def seeds(self) -> int: ...
+    @property
+    def root_seed(self) -> int: ...
+    @property
+    def n_runs(self) -> int: ...
+    def fingerprint(self) -> str: ...
+
+
+GridT = TypeVar("GridT", bound=Grid)
+
+
+def seed_int(sequence: np.random.SeedSequence) -> int:
+    """A 63-bit integer seed drawn from ``sequence`` (for APIs that take an int seed).
+
+    >>> seed_int(np.random.SeedSequence(7)) == seed_int(np.random.SeedSequence(7))
+    True
+    """
+    return int(sequence.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
 
 
 @dataclass(frozen=True)
@@ -42,7 +82,7 @@ class SeedKey:
 
 
 @dataclass(frozen=True)
-class RunSpec:
+class RunSpec(Generic[GridT]):
     """Everything one run needs; picklable, so it can travel to a process or Dask worker.
 
     Attributes:
@@ -50,7 +90,7 @@ class RunSpec:
         agent, map, preset, seed: the grid coordinates (``seed`` is the seed index 0..seeds−1).
         world_seed: stream of the map and slip field (shared by all agents).
         run_seed: stream of the agent and the episodes.
-        config: the whole experiment (episodes, max steps, drift, env options …).
+        config: the whole grid (for an experiment: episodes, max steps, drift, env options …).
     """
 
     index: int
@@ -60,20 +100,32 @@ class RunSpec:
     seed: int
     world_seed: SeedKey
     run_seed: SeedKey
-    config: ExperimentConfig
+    config: GridT
 
     @property
     def run_id(self) -> str:
         """Stable file-name-safe id, e.g. ``run-000042``."""
         return f"run-{self.index:06d}"
 
+    @property
+    def coordinates(self) -> dict[str, Any]:
+        """The run's place in the grid, as the results tables name it: agent (label),
+        algorithm (agent name), map (label), preset, seed (index)."""
+        return {
+            "agent": self.agent.label,
+            "algorithm": self.agent.name,
+            "map": self.map.label,
+            "preset": self.preset,
+            "seed": self.seed,
+        }
 
-def world_index(config: ExperimentConfig, map_index: int, preset_index: int, seed: int) -> int:
+
+def world_index(config: Grid, map_index: int, preset_index: int, seed: int) -> int:
     """Position of a (map, preset, seed) world among all worlds of the config."""
     return (map_index * len(config.presets) + preset_index) * config.seeds + seed
 
 
-def expand_runs(config: ExperimentConfig) -> list[RunSpec]:
+def expand_runs(config: GridT) -> list[RunSpec[GridT]]:
     """Every run of the grid, in index order.
 
     >>> from skidnav.experiments.config import AgentSpec, MapSpec, ExperimentConfig
@@ -86,7 +138,7 @@ def expand_runs(config: ExperimentConfig) -> list[RunSpec]:
     n_worlds = len(config.maps) * len(config.presets) * config.seeds
     worlds = world_root.spawn(n_worlds)
     run_seeds = run_root.spawn(config.n_runs)
-    runs = []
+    runs: list[RunSpec[GridT]] = []
     index = 0
     for agent in config.agents:
         for map_index, map_spec in enumerate(config.maps):

@@ -2,7 +2,7 @@
 
 Layout of a results directory::
 
-    config.json          resolved config + fingerprint (a resume must match it)
+    config.json          resolved config + fingerprint (a resume must match it) + layout kind
     config.toml          the config file as given (when run from a file)
     runs/run-000042.npz  one finished run: episode arrays, final trajectory, maps, summary JSON,
                          the code that produced it (version, commit, dirty flag, session)
@@ -20,6 +20,11 @@ duplicated), and reopening removes the temporaries of writers that died. One pro
 writes a directory (:func:`directory_lock`). Run files are read as
 :class:`~skidnav.savedfile.SavedArchive` with the arrays and sizes the config allows; nothing is
 pickled.
+
+What a run file holds depends on the kind of grid, described by a :class:`RunLayout`: an
+experiment's (:data:`EXPERIMENT_LAYOUT`, the default) or the hardware-in-the-loop study's
+(:data:`skidnav.realtime.study.STUDY_LAYOUT`: real-time episodes, no maps). ``config.json`` names
+the kind, so a directory of one kind is never read as the other.
 """
 
 from __future__ import annotations
@@ -28,7 +33,8 @@ import contextlib
 import fcntl
 import json
 import os
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -36,13 +42,14 @@ import numpy as np
 import pandas as pd
 
 from skidnav.atomicfile import remove_stale_temporaries, write_atomic, write_npz_atomic
-from skidnav.errors import CorruptFileError, UserError
+from skidnav.errors import CorruptFileError, UserError, shown
 from skidnav.experiments.config import (
     MAX_STEPS,
     ExperimentConfig,
     config_from_dict,
     config_to_dict,
 )
+from skidnav.experiments.runs import Grid
 from skidnav.savedfile import ArraySpec, SavedArchive, parse_json, read_json, up_to
 from skidnav.world.grid import MAX_SIZE
 
@@ -64,10 +71,14 @@ class TrialResult(NamedTuple):
 
     Attributes:
         run_id: ``RunSpec.run_id``.
-        coordinates: grid coordinates: agent (label), algorithm, map, preset, seed.
-        episodes: per-episode arrays, keys :data:`EPISODE_COLUMNS`, each shape (N,).
-        summary: per-run metrics (:func:`skidnav.experiments.metrics.run_metrics`).
-        arrays: ``greedy_poses`` (T, 3) [m, m, rad]; on the skid-steer env also
+        coordinates: grid coordinates (``RunSpec.coordinates``): agent (label), algorithm, map,
+            preset, seed.
+        episodes: per-episode arrays, keys the layout's ``episode_columns`` (an experiment's:
+            :data:`EPISODE_COLUMNS`), each shape (N,).
+        summary: per-run metrics (an experiment's:
+            :func:`skidnav.experiments.metrics.run_metrics`).
+        arrays: the layout's other arrays; an experiment's: ``greedy_poses`` (T, 3)
+            [m, m, rad]; on the skid-steer env also
             ``value_map`` (n_x, n_y) max of Q over headings and actions, ``heading_map``
             (n_x, n_y) heading bin of that maximum, ``policy_map`` (n_x, n_y) greedy action at
             the start heading, ``start_heading`` () [rad], ``occupancy`` (n_x, n_y) bool,
@@ -91,14 +102,18 @@ _WORLD_ARRAYS = {
 """The (n_x, n_y) or (regions_x, regions_y) arrays of a skid-steer run, by dtype kind."""
 
 
+DOCUMENT_SPEC = ArraySpec((), kinds="U")
+"""The ``document`` member of every run file: coordinates, summary and code record as JSON."""
+
+
 def run_file_specs(config: ExperimentConfig) -> dict[str, ArraySpec]:
-    """What a run file of ``config`` may hold (:class:`TrialResult`): the summary document,
-    every episode column (at most ``episodes`` long), the greedy poses (at most one per action
-    plus the start) and, on the skid-steer env, the maps (at most the largest map's cells)."""
+    """What a run file of ``config`` may hold besides its document (:class:`TrialResult`): every
+    episode column (at most ``episodes`` long), the greedy poses (at most one per action plus
+    the start) and, on the skid-steer env, the maps (at most the largest map's cells)."""
     episodes = up_to(config.episodes)
     poses = up_to((config.max_steps or MAX_STEPS) + 1)
     cells = up_to(MAX_SIZE)
-    specs = {"document": ArraySpec((), kinds="U")}
+    specs = {}
     for key in EPISODE_COLUMNS:
         specs[f"episode.{key}"] = ArraySpec((episodes,), kinds="fiub")
     specs["array.greedy_poses"] = ArraySpec((poses, 3), "<f8")
@@ -113,6 +128,34 @@ OPTIONAL_ARRAYS = frozenset(
     f"array.{key}" for key in (*_WORLD_ARRAYS, "start_heading", "start", "goal")
 )
 """Members of a run file only a skid-steer run has."""
+
+
+@dataclass(frozen=True)
+class RunLayout:
+    """What the results directory of one kind of grid holds, and how its grid is saved.
+
+    Attributes:
+        kind: the kind's name, written in ``config.json``.
+        episode_columns: the per-episode arrays of every run, in table order.
+        to_dict: the grid as a JSON-ready dict (saved in ``config.json`` and ``metadata.json``).
+        from_dict: the grid back from that dict (ValueError, TypeError or KeyError if invalid).
+        file_specs: what a run file of a grid may hold besides its document (checked before
+            anything is read).
+        optional: members of ``file_specs`` a run file may lack.
+    """
+
+    kind: str
+    episode_columns: tuple[str, ...]
+    to_dict: Callable[[Any], dict[str, Any]]
+    from_dict: Callable[[dict[str, Any]], Any]
+    file_specs: Callable[[Any], dict[str, ArraySpec]]
+    optional: frozenset[str] = frozenset()
+
+
+EXPERIMENT_LAYOUT = RunLayout(
+    "experiment", EPISODE_COLUMNS, config_to_dict, config_from_dict, run_file_specs, OPTIONAL_ARRAYS
+)
+"""The layout of ``skidnav run``'s results (an :class:`ExperimentConfig` grid)."""
 
 
 @contextlib.contextmanager
@@ -162,39 +205,47 @@ def _holder(descriptor: int) -> str:
 
 
 class ResultStore:
-    """A results directory bound to one config (see module docs)."""
+    """A results directory bound to one config (see module docs), of the kind ``layout``."""
 
-    def __init__(self, root: Path | str) -> None:
+    def __init__(self, root: Path | str, layout: RunLayout = EXPERIMENT_LAYOUT) -> None:
         self.root = Path(root)
         self.runs_dir = self.root / "runs"
+        self.layout = layout
         self._specs: dict[str, ArraySpec] | None = None
 
-    def check(self, config: ExperimentConfig) -> bool:
+    def check(self, config: Grid) -> bool:
         """True if the directory already holds results of ``config``, False if it holds none
         (it may not exist yet); creates nothing.
 
         Raises:
-            UserError: the directory holds results of a different config.
+            UserError: the directory holds results of a different config or another kind.
         """
         if self.root.exists() and not self.root.is_dir():
             raise UserError(f"{self.root}: not a directory; choose another --out")
         config_path = self.root / "config.json"
         if not config_path.exists():
             return False
-        if self._read_json(config_path).get("fingerprint") != config.fingerprint():
+        document = self._read_document(config_path)
+        if document.get("fingerprint") != config.fingerprint():
             raise UserError(
                 f"{self.root}: holds results of a different config; choose another --out"
             )
         return True
 
     @classmethod
-    def open(cls, root: Path | str, config: ExperimentConfig, source_text: str = "") -> ResultStore:
+    def open(
+        cls,
+        root: Path | str,
+        config: Grid,
+        source_text: str = "",
+        layout: RunLayout = EXPERIMENT_LAYOUT,
+    ) -> ResultStore:
         """Create the directory for ``config`` or reopen it to resume the same config.
 
         Raises:
-            UserError: the directory holds results of a different config.
+            UserError: the directory holds results of a different config or another kind.
         """
-        store = cls(root)
+        store = cls(root, layout)
         exists = store.check(config)
         store.runs_dir.mkdir(parents=True, exist_ok=True)
         for directory in (store.root, store.runs_dir):
@@ -202,7 +253,11 @@ class ResultStore:
         if exists:
             return store
         config_path = store.root / "config.json"
-        document = {"fingerprint": config.fingerprint(), "config": config_to_dict(config)}
+        document = {
+            "kind": layout.kind,
+            "fingerprint": config.fingerprint(),
+            "config": layout.to_dict(config),
+        }
         write_atomic(config_path, json.dumps(document, indent=2).encode())
         if source_text:
             write_atomic(store.root / "config.toml", source_text.encode())
@@ -213,11 +268,23 @@ class ResultStore:
             raise UserError(f"{path}: missing; is {self.root} a results directory?")
         return read_json(path, allow_nonfinite=True)
 
-    def config(self) -> ExperimentConfig:
-        """The config these results belong to."""
-        document = self._read_json(self.root / "config.json")
+    def _read_document(self, path: Path) -> dict[str, Any]:
+        """``config.json``, refused unless it is of this store's kind (one written before
+        kinds were recorded is an experiment's)."""
+        document = self._read_json(path)
+        kind = document.get("kind", EXPERIMENT_LAYOUT.kind)
+        if kind != self.layout.kind:
+            raise UserError(
+                f"{self.root}: holds {shown(kind)} results, not {self.layout.kind!r} results"
+            )
+        return document
+
+    def config(self) -> Any:
+        """The config (grid) these results belong to: an :class:`ExperimentConfig` for the
+        default layout."""
+        document = self._read_document(self.root / "config.json")
         try:
-            return config_from_dict(document["config"])
+            return self.layout.from_dict(document["config"])
         except (KeyError, TypeError, ValueError) as error:
             raise CorruptFileError(
                 f"{self.root / 'config.json'}: invalid config ({error})"
@@ -248,14 +315,14 @@ class ResultStore:
 
     def _run_specs(self) -> dict[str, ArraySpec]:
         if self._specs is None:
-            self._specs = run_file_specs(self.config())
+            self._specs = {"document": DOCUMENT_SPEC, **self.layout.file_specs(self.config())}
         return self._specs
 
     def read_run(self, run_id: str) -> TrialResult:
         """Load one run file (CorruptFileError naming it when damaged or too large)."""
         path = self.run_path(run_id)
         with SavedArchive(path) as archive:
-            arrays = archive.read_all(self._run_specs(), OPTIONAL_ARRAYS)
+            arrays = archive.read_all(self._run_specs(), self.layout.optional)
         document = _run_document(path, arrays.pop("document"))
         episodes = {k.split(".", 1)[1]: v for k, v in arrays.items() if k.startswith("episode.")}
         others = {k.split(".", 1)[1]: v for k, v in arrays.items() if k.startswith("array.")}
@@ -266,7 +333,7 @@ class ResultStore:
         path = self.run_path(run_id)
         specs = self._run_specs()
         with SavedArchive(path) as archive:
-            archive.check_names(specs, OPTIONAL_ARRAYS)
+            archive.check_names(specs, self.layout.optional)
             document = _run_document(path, archive.read("document", specs["document"]))
         code = document.get("code", {})
         return code if isinstance(code, dict) else {}
@@ -281,7 +348,8 @@ class ResultStore:
         files; returns (episodes, summaries)."""
         episode_frames, summary_rows = [], []
         for result in self.iter_runs():
-            frame = pd.DataFrame({key: result.episodes[key] for key in EPISODE_COLUMNS})
+            columns = self.layout.episode_columns
+            frame = pd.DataFrame({key: result.episodes[key] for key in columns})
             frame.insert(0, "episode", np.arange(1, len(frame) + 1))
             for position, key in enumerate(GRID_COLUMNS):
                 value = result.run_id if key == "run_id" else result.coordinates[key]

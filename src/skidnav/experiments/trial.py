@@ -19,7 +19,6 @@ skid-steer environment when it is installed and supports the agent, else
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import inspect
 import logging
 import math
@@ -29,18 +28,23 @@ from typing import Any
 import gymnasium
 import numpy as np
 
+from skidnav.agents.core import TabularAgent
+from skidnav.agents.fast_training import train_agent_fast
 from skidnav.agents.registry import agent_class, make_agent, make_config
 from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig, MapSpec
 from skidnav.experiments.metrics import ConvergenceRule, evaluation_summary, run_metrics
 from skidnav.experiments.oracle import Oracle, compute_oracle, load_or_compute_oracle
-from skidnav.experiments.runs import RunSpec, expand_runs
+from skidnav.experiments.runs import RunSpec, expand_runs, seed_int
 from skidnav.experiments.store import EPISODE_COLUMNS, TrialResult
 from skidnav.world.discretization import heading_bin
 from skidnav.world.grid import GridMap, border_walls, generate_map
 from skidnav.world.mapfile import load_map
 
 logger = logging.getLogger(__name__)
+
+ExperimentRun = RunSpec[ExperimentConfig]
+"""One run of an experiment config (``skidnav run``)."""
 
 SKID_ENV_ID = "skidnav/SkidSteerNav-v0"
 WARM_UP_LIMITS = (10, 300, 10, 10, 60, 10)
@@ -51,11 +55,6 @@ _warmed_up: set[tuple[str, str, str]] = set()
 """(env id, agent name, parameters) of the agent variants this process has warmed up."""
 
 
-def _seed_int(sequence: np.random.SeedSequence) -> int:
-    """A 63-bit integer seed drawn from ``sequence`` (for APIs that take an int seed)."""
-    return int(sequence.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
-
-
 def build_map(spec: MapSpec, rng: np.random.Generator) -> GridMap:
     """The map of a run: read from its file or generated with ``rng``."""
     if spec.file:
@@ -63,16 +62,25 @@ def build_map(spec: MapSpec, rng: np.random.Generator) -> GridMap:
     return generate_map(spec.kind, rng, **dict(spec.options))  # type: ignore[arg-type]
 
 
-def make_env(spec: RunSpec, grid_map: GridMap, slip_seed: int) -> gymnasium.Env[Any, Any]:
-    """The environment of a run (unwrapped: the trainer enforces the action limit).
+def make_env(spec: ExperimentRun, grid_map: GridMap, slip_seed: int) -> gymnasium.Env[Any, Any]:
+    """The environment of a run, as ``gymnasium.make`` gives it (wrappers included).
 
     ``env_id`` is a registered Gymnasium id (e.g. ``skidnav/DynaMaze-v0``; Gymnasium's
     ``module:Env-v0`` form imports ``module`` for its registrations first), made with the
     ``[env]`` options: nothing named in a config is called. Only the skid-steer env receives the
-    map, slip preset and drift of the run.
+    map, slip preset and drift of the run. Gymnasium's ``TimeLimit`` truncates after the config's
+    ``max_steps`` actions, else its ``[env] max_episode_steps``, else the registered limit
+    (:func:`action_limit` reads it back). Runs train and evaluate on ``env.unwrapped``: the
+    trainer enforces that limit itself.
     """
     config = spec.config
     options: dict[str, Any] = dict(config.env_options)
+    from_env = options.pop("max_episode_steps", None)
+    limit = config.max_steps or from_env
+    if limit is not None and (
+        isinstance(limit, bool) or not (isinstance(limit, int) and limit >= 1)
+    ):
+        raise ValueError(f"expected [env] max_episode_steps to be an integer >= 1, got {limit!r}")
     if config.env_id == SKID_ENV_ID:
         options.update(
             grid_map=grid_map,
@@ -81,12 +89,17 @@ def make_env(spec: RunSpec, grid_map: GridMap, slip_seed: int) -> gymnasium.Env[
             drift_amplitude=config.drift_amplitude,
             drift_period=config.drift_period,
         )
-        if config.max_steps is not None:
-            options["max_episode_steps"] = config.max_steps
     try:
-        return gymnasium.make(config.env_id, **options).unwrapped
+        return gymnasium.make(config.env_id, max_episode_steps=limit, **options)
     except ModuleNotFoundError as error:
         raise UserError(f"environment {config.env_id!r}: no module {error.name!r}") from None
+
+
+def action_limit(env: gymnasium.Env[Any, Any]) -> int:
+    """Actions per episode of a run on ``env`` (from :func:`make_env`): its time limit
+    (``env.spec.max_episode_steps``), or 10,000 for an env registered without one."""
+    limit = env.spec.max_episode_steps if env.spec is not None else None
+    return int(limit or 10_000)
 
 
 def _agent_context(name: str, env: gymnasium.Env[Any, Any]) -> dict[str, Any]:
@@ -98,20 +111,8 @@ def _agent_context(name: str, env: gymnasium.Env[Any, Any]) -> dict[str, Any]:
     return context
 
 
-def _trainer(env: gymnasium.Env[Any, Any]) -> Any:
-    """The compiled trainer for the skid-steer env (it falls back to the plain loop itself for
-    agents it does not compile), else the plain training loop."""
-    if hasattr(env, "task"):
-        try:
-            return importlib.import_module("skidnav.agents.fast_training").train_agent_fast
-        except ModuleNotFoundError as error:
-            if error.name != "skidnav.agents.fast_training":
-                raise
-    return importlib.import_module("skidnav.agents.training").train_agent
-
-
 def greedy_rollout(
-    agent: Any, env: gymnasium.Env[Any, Any], seed: int, max_steps: int
+    agent: TabularAgent, env: gymnasium.Env[Any, Any], seed: int, max_steps: int
 ) -> tuple[np.ndarray, bool]:
     """Follow the greedy policy from the start; returns (poses (T+1, 3) [m, m, rad], reached)."""
     state, info = env.reset(seed=seed)
@@ -161,7 +162,8 @@ def policy_map(q: np.ndarray, grid_map: GridMap, heading_index: int) -> np.ndarr
     at_heading = q.reshape(n_x, n_y, -1, q.shape[1])[:, :, heading_index, :]
     action = at_heading.argmax(axis=2).astype(np.int64)
     action[grid_map.occupancy | (at_heading.max(axis=2) == at_heading.min(axis=2))] = -1
-    return action
+    result: np.ndarray = action
+    return result
 
 
 def _world_arrays(
@@ -202,17 +204,18 @@ def _episode_arrays(log: Any) -> dict[str, np.ndarray]:
 
 
 def _world(
-    spec: RunSpec, map_rng: np.random.Generator, slip_seed: int
-) -> tuple[GridMap | None, gymnasium.Env[Any, Any], gymnasium.Env[Any, Any]]:
-    """(map or None, training env, evaluation env) of a run, the map drawn with ``map_rng``."""
+    spec: ExperimentRun, map_rng: np.random.Generator, slip_seed: int
+) -> tuple[GridMap | None, gymnasium.Env[Any, Any], gymnasium.Env[Any, Any], int]:
+    """(map or None, training env, evaluation env, action limit) of a run, the map drawn with
+    ``map_rng``; the envs unwrapped (:func:`make_env`)."""
     skid = spec.config.env_id == SKID_ENV_ID
     grid_map = build_map(spec.map, map_rng) if skid else None
     env = make_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
     eval_env = make_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
-    return grid_map, env, eval_env
+    return grid_map, env.unwrapped, eval_env.unwrapped, action_limit(env)
 
 
-def _agent(spec: RunSpec, env: gymnasium.Env[Any, Any], rng: np.random.Generator) -> Any:
+def _agent(spec: ExperimentRun, env: gymnasium.Env[Any, Any], rng: np.random.Generator) -> Any:
     """A new agent of the run's variant for ``env``."""
     name = spec.agent.name
     n_states, n_actions = int(env.observation_space.n), int(env.action_space.n)  # type: ignore[attr-defined]
@@ -221,7 +224,7 @@ def _agent(spec: RunSpec, env: gymnasium.Env[Any, Any], rng: np.random.Generator
     )
 
 
-def warm_up(spec: RunSpec) -> None:
+def warm_up(spec: ExperimentRun) -> None:
     """Train a throwaway copy of the run's agent variant for a few short episodes on a throwaway
     world, once per process and variant, so the kernels the run calls are compiled before its
     clock starts (module docs). Draws only from its own generators."""
@@ -234,11 +237,12 @@ def warm_up(spec: RunSpec) -> None:
         spec = dataclasses.replace(
             spec, config=dataclasses.replace(spec.config, max_steps=max(WARM_UP_LIMITS))
         )
-    env, eval_env = make_env(spec, grid_map, 0), make_env(spec, grid_map, 0)  # type: ignore[arg-type]
+    made = (make_env(spec, grid_map, 0) for _ in range(2))  # type: ignore[arg-type]
+    env, eval_env = (each.unwrapped for each in made)
     env.reset(seed=1)
     eval_env.reset(seed=2)
     agent = _agent(spec, env, np.random.default_rng(3))
-    train = _trainer(env)
+    train = train_agent_fast
     for limit in WARM_UP_LIMITS:
         train(
             agent,
@@ -255,13 +259,13 @@ def warm_up(spec: RunSpec) -> None:
     _warmed_up.add(key)
 
 
-def run_trial(spec: RunSpec) -> TrialResult:
+def run_trial(spec: ExperimentRun) -> TrialResult:
     """Train and measure one run of the grid (see module docs)."""
     warm_up(spec)
     return measure_trial(spec)
 
 
-def measure_trial(spec: RunSpec) -> TrialResult:
+def measure_trial(spec: ExperimentRun) -> TrialResult:
     """:func:`run_trial` without the warm-up: the first call in a process also times numba's
     compilation of the kernels.
 
@@ -271,18 +275,18 @@ def measure_trial(spec: RunSpec) -> TrialResult:
     config = spec.config
     map_seed, slip_seed, evaluation_seed, oracle_seed = spec.world_seed.sequence().spawn(4)
     agent_seed, episode_seed, _ = spec.run_seed.sequence().spawn(3)
-    grid_map, env, eval_env = _world(spec, np.random.default_rng(map_seed), _seed_int(slip_seed))
-    eval_seeds = [_seed_int(s) for s in evaluation_seed.spawn(config.eval_rollouts)]
-    env.reset(seed=_seed_int(episode_seed))
+    world = _world(spec, np.random.default_rng(map_seed), seed_int(slip_seed))
+    grid_map, env, eval_env, max_steps = world
+    eval_seeds = [seed_int(s) for s in evaluation_seed.spawn(config.eval_rollouts)]
+    env.reset(seed=seed_int(episode_seed))
     agent = _agent(spec, env, np.random.default_rng(agent_seed))
-    max_steps = config.max_steps or int(getattr(env, "max_episode_steps", None) or 10_000)
     oracle = None
     if grid_map is not None:
         oracle = load_or_compute_oracle(
-            eval_env, config.oracle_samples, _seed_int(oracle_seed), eval_seeds, max_steps
+            eval_env, config.oracle_samples, seed_int(oracle_seed), eval_seeds, max_steps
         )
     reference = _reference_length(oracle, eval_env)
-    log = _trainer(env)(
+    log = train_agent_fast(
         agent,
         env,
         config.episodes,
@@ -295,20 +299,13 @@ def measure_trial(spec: RunSpec) -> TrialResult:
     arrays = {"greedy_poses": poses}
     if grid_map is not None:
         arrays.update(_world_arrays(agent.q, grid_map, env))
-    coordinates = {
-        "agent": spec.agent.label,
-        "algorithm": spec.agent.name,
-        "map": spec.map.label,
-        "preset": spec.preset,
-        "seed": spec.seed,
-    }
     rule = None
     if math.isfinite(reference) and config.greedy_eval:
         rule = ConvergenceRule(reference, config.convergence_tolerance, config.convergence_window)
     summary = run_metrics(episodes, poses, reached, rule)
     summary["action_limit"] = float(max_steps)
     summary.update(_oracle_columns(reference, oracle))
-    return TrialResult(spec.run_id, coordinates, episodes, summary, arrays)
+    return TrialResult(spec.run_id, spec.coordinates, episodes, summary, arrays)
 
 
 def _oracle_columns(reference: float, oracle: Oracle | None) -> dict[str, float]:

@@ -35,7 +35,7 @@ import warnings
 import zlib
 from collections.abc import Callable, Generator, Sequence
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 import optuna
@@ -52,12 +52,15 @@ from skidnav.experiments.config import (
 )
 from skidnav.experiments.runner import TrialFunction, _check_backend, dask_client, default_jobs
 from skidnav.experiments.runner import execute as execute_runs
-from skidnav.experiments.runs import RunSpec, SeedKey, expand_runs
+from skidnav.experiments.runs import SeedKey, expand_runs
 from skidnav.experiments.store import TrialResult, directory_lock
 from skidnav.experiments.tuneconfig import ParamRange, TuneConfig, check_tuning, default_point
 from skidnav.experiments.tunedfile import write_tuned
 from skidnav.stats import iqm
 from skidnav.world.grid import GridMap
+
+if TYPE_CHECKING:
+    from skidnav.experiments.trial import ExperimentRun
 
 logger = logging.getLogger(__name__)
 
@@ -129,7 +132,7 @@ def trial_config(
     )
 
 
-def tuning_runs(config: ExperimentConfig) -> list[RunSpec]:
+def tuning_runs(config: ExperimentConfig) -> list[ExperimentRun]:
     """The runs of a :func:`trial_config`, on the tuning streams, seed-major."""
     runs = [
         dataclasses.replace(
@@ -140,7 +143,7 @@ def tuning_runs(config: ExperimentConfig) -> list[RunSpec]:
     return sorted(runs, key=lambda spec: (spec.seed, spec.index))
 
 
-def run_map(spec: RunSpec) -> GridMap:
+def run_map(spec: ExperimentRun) -> GridMap:
     """The map run ``spec`` trains on (drawn as :func:`skidnav.experiments.trial.measure_trial`
     draws it: from the first child of the world stream)."""
     from skidnav.experiments.trial import build_map
@@ -267,14 +270,16 @@ def make_pruner(tune: TuneConfig) -> optuna.pruners.BasePruner:
     )
 
 
-def _results(runs: Sequence[RunSpec], context: _Context) -> Generator[TrialResult, None, None]:
+def _results(
+    runs: Sequence[ExperimentRun], context: _Context
+) -> Generator[TrialResult, None, None]:
     # Closing this generator drops the last reference to the runner's iterator, whose clean-up
     # (a process pool's shutdown with its pending runs cancelled, Dask futures released) then
     # runs at once.
     yield from execute_runs(runs, context.trial, context.backend, context.jobs, context.client)
 
 
-def evaluate(trial: optuna.Trial, runs: Sequence[RunSpec], context: _Context) -> float:
+def evaluate(trial: optuna.Trial, runs: Sequence[ExperimentRun], context: _Context) -> float:
     """The objective of one trial over ``runs`` (seed-major); reports the IQM of each finished
     prefix of seeds and raises ``optuna.TrialPruned`` when the pruner says so."""
     n_seeds = max(spec.seed for spec in runs) + 1

@@ -23,7 +23,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from skidnav._jit import jit
+from skidnav._jit import inline_jit, jit
 from skidnav.kernels.kinematic_prediction import (
     PREDICT_COLLISION,
     PREDICT_GOAL,
@@ -39,7 +39,7 @@ from skidnav.kernels.multinomial import (
     most_probable_target,
     split_key,
 )
-from skidnav.kernels.tabular import inline_jit, td_target, update_toward
+from skidnav.kernels.tabular import td_target, update_toward
 from skidnav.robot.params import KinematicConstants
 from skidnav.world.discretization import GridShape, region_of, state_of
 
@@ -210,7 +210,7 @@ def combined_planning(
             pair = int(rng.random() * n_pairs)
             key = pair_key[pair]  # a visited pair: no need to look it up
             if use_kinematic and (u - share) / (1.0 - share) < shares.kinematic_share:
-                predicted = pred_next[key // n_actions, int(rng.random() * n_actions)]
+                predicted = pred_next[split_key(key, n_actions)[0], int(rng.random() * n_actions)]
                 key = predicted * n_actions + int(rng.random() * n_actions)
                 pair = -1
         if pair < 0:
@@ -362,11 +362,11 @@ def loop_erase(keys: np.ndarray, n_actions: int, n_states: int) -> np.ndarray:
     out = np.empty(keys.shape[0], dtype=np.int64)
     length = 0
     for key in keys:
-        state = key // n_actions
+        state = split_key(key, n_actions)[0]
         earlier = position[state]
         if earlier >= 0:
             for k in range(earlier, length):
-                position[out[k] // n_actions] = -1
+                position[split_key(out[k], n_actions)[0]] = -1
             length = earlier
         position[state] = length
         out[length] = key
@@ -409,9 +409,9 @@ def neighbourhood_keys(
     out = np.empty(trajectory.shape[0] * n_actions * 27, dtype=np.int64)
     length = 0
     for k in range(trajectory.shape[0] - 1, -1, -1):
-        state = trajectory[k] // n_actions
+        state, taken = split_key(trajectory[k], n_actions)
         for action in range(n_actions):
-            if action != trajectory[k] % n_actions:
+            if action != taken:
                 out[length] = state * n_actions + action
                 length += 1
         if spatial:

@@ -58,8 +58,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from skidnav._jit import jit
-from skidnav.kernels.tabular import inline_jit, td_target
+from skidnav._jit import inline_jit, jit
+from skidnav.kernels.tabular import td_target
 
 MOST_PROBABLE = 0
 SAMPLE = 1

@@ -1,25 +1,28 @@
 """The navigation MDP as compiled kernels: one action of the skid-steer robot, with slip,
-collisions and reward (SPEC §1–3). The Gymnasium env, the batch simulator and the fused trainers
-all call :func:`transition`, so there is one implementation of the dynamics.
+collisions and reward (SPEC §1–3). The Gymnasium env (through :func:`step_arrays`), the batch
+simulator, the fused trainers all call :func:`transition`, and the simulated robot server
+(:func:`drive_substep`) its sub-step, so there is one implementation of the dynamics.
 
-One action = ``substeps`` sub-steps of ``dt`` seconds. In each sub-step, with the robot in coarse
-region ρ at simulated time t:
+One action = ``substeps`` sub-steps of ``dt`` seconds. In each sub-step (:func:`substep`), with the
+robot in coarse region ρ at simulated time t:
 
 1. η = η₀[ρ] · max(0, 1 + A sin(2π t / P + φ[ρ])) (the slip field, possibly drifting);
 2. each wheel's commanded speed loses u·η in magnitude, u from the ``noise`` array of uniforms in
    [0, 1) (two per sub-step: left, right). Callers fill ``noise`` with ``rng.random(2·substeps)``
    (the env) or the same draws one by one inside a compiled loop (the trainers): same stream,
    same numbers, and no Generator crosses the Python/numba boundary on every step;
-3. the ICR model with x_ICR[ρ] gives (v_x, v_y, yaw_rate); explicit Euler or the exact
-   constant-twist step advances the pose, which is clipped to the arena;
+3. the ICR model with x_ICR[ρ] gives (v_x, v_y, yaw_rate); the robot's integrator (explicit Euler
+   or the exact constant-twist step, ``RobotParams.integrator``) advances the pose, which is
+   clipped to the arena;
 4. if the new position lies in a wall cell the motion stops: the position stays at the last free
    sub-step, the heading of the colliding sub-step is kept, and the action is a collision;
    otherwise the sub-step is logged as (ρ, ω_L_cmd, ω_R_cmd, v_x, v_y, yaw_rate).
 
-Reward (thesis): +10 and termination if the robot ends the action in the goal cell; −10 after a
-collision; otherwise −1 − 10·var, var being the wheel-speed variance of the region where the action
-ends: the slip field's true η²/12 (default) or, with ``observed_variance``, the running sample
-variance of wheel speeds measured during forward actions in that region (the thesis's choice).
+Reward (thesis, :func:`action_reward`, also the real-time loop's): +10 and termination if the
+robot ends the action in the goal cell; −10 after a collision; otherwise −1 − 10·var, var being
+the wheel-speed variance of the region where the action ends: the slip field's true η²/12
+(default) or, with ``observed_variance``, the running sample variance of wheel speeds measured
+during forward actions in that region (the thesis's choice).
 """
 
 from __future__ import annotations
@@ -29,14 +32,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from skidnav._jit import jit
-from skidnav.kernels.tabular import inline_jit
+from skidnav._jit import inline_jit, jit
 from skidnav.robot.kinematics import (
     apply_slip,
     body_velocities,
     commanded_wheel_speeds,
-    euler_step,
-    exact_step,
+    pose_step,
 )
 from skidnav.robot.params import KinematicConstants, RobotParams
 from skidnav.robot.slip import SlipField
@@ -162,10 +163,9 @@ def integrate(
     (x [m], y [m], heading [rad]) with body twist (v_x, v_y [m/s], yaw_rate [rad/s]); the new
     position is clipped to the arena [0, W] × [0, H]."""
     v_x, v_y, yaw_rate = twist
-    if robot.exact_integration:
-        new_x, new_y, new_heading = exact_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
-    else:
-        new_x, new_y, new_heading = euler_step(x, y, heading, v_x, v_y, yaw_rate, robot.dt)
+    new_x, new_y, new_heading = pose_step(
+        x, y, heading, v_x, v_y, yaw_rate, robot.dt, robot.exact_integration
+    )
     new_x = min(max(new_x, 0.0), robot.arena_width)
     new_y = min(max(new_y, 0.0), robot.arena_height)
     return new_x, new_y, new_heading
@@ -186,6 +186,34 @@ def _log_row(
     log[row, 3] = twist[0]
     log[row, 4] = twist[1]
     log[row, 5] = twist[2]
+
+
+@inline_jit
+def substep(
+    robot: KinematicConstants,
+    slip: tuple[float, float],
+    pose: tuple[float, float, float],
+    commands: tuple[float, float],
+    noise: tuple[float, float],
+) -> tuple[float, float, float, float, float, tuple[float, float, float]]:
+    """One sub-step of ``robot.dt`` seconds (steps 2–3 of the module doc) from ``pose`` (x [m],
+    y [m], heading [rad]) on a floor whose region there has ``slip`` (η [rad/s] at this time,
+    x_ICR [m]), driven by the wheel speeds ``commands`` (ω_L, ω_R) [rad/s]; ``noise``: (left,
+    right) uniforms in [0, 1). The caller checks the new position against the walls (step 4).
+
+    Returns:
+        (x, y, heading) after the sub-step, clipped to the arena; ω_L and ω_R after slip
+        [rad/s]; the body twist (v_x, v_y, yaw_rate).
+
+    Scalars only: numba reference-counts every array an inlined helper receives, on every call
+    (the occupancy grid here would cost a tenth of the batch simulator's speed).
+    """
+    eta, x_icr = slip
+    omega_left = apply_slip(commands[0], noise[0] * eta)
+    omega_right = apply_slip(commands[1], noise[1] * eta)
+    twist = body_velocities(omega_left, omega_right, x_icr, robot.wheel_radius, robot.half_track)
+    new_x, new_y, new_heading = integrate(robot, pose[0], pose[1], pose[2], twist)
+    return new_x, new_y, new_heading, omega_left, omega_right, twist
 
 
 @inline_jit
@@ -215,14 +243,11 @@ def simulate_action(
     omega_left = omega_right = 0.0
     n_logged = 0
     collided = False
-    for substep in range(robot.substeps):
-        eta = slip_scale(task, region, time + substep * robot.dt)
-        omega_left = apply_slip(commands[0], noise[2 * substep] * eta)
-        omega_right = apply_slip(commands[1], noise[2 * substep + 1] * eta)
-        twist = body_velocities(
-            omega_left, omega_right, task.x_icr[region], robot.wheel_radius, robot.half_track
+    for k in range(robot.substeps):
+        slip = (slip_scale(task, region, time + k * robot.dt), task.x_icr[region])
+        new_x, new_y, heading, omega_left, omega_right, twist = substep(
+            robot, slip, (x, y, heading), commands, (noise[2 * k], noise[2 * k + 1])
         )
-        new_x, new_y, heading = integrate(robot, x, y, heading, twist)
         i, j = cell_of(new_x, new_y, grid)
         if task.occupancy[i, j] != 0:
             collided = True
@@ -236,6 +261,19 @@ def simulate_action(
         region = region_of(x, y, grid)  # the next sub-step's region (shares x / W with cell_of)
     pose[0], pose[1], pose[2] = x, y, heading
     return collided, n_logged, omega_left, omega_right
+
+
+@inline_jit
+def action_reward(rewards: RewardScheme, at_goal: bool, collided: bool, variance: float) -> float:
+    """The reward of an action (SPEC §3): ``rewards.goal`` if it ended in the goal cell (the
+    episode terminates), else ``rewards.collision`` after a collision, else ``rewards.step −
+    rewards.variance_weight · variance``, ``variance`` [rad²/s²] being the wheel-speed variance of
+    the region where it ended (whichever estimate the caller uses)."""
+    if at_goal:
+        return rewards.goal
+    if collided:
+        return rewards.collision
+    return rewards.step - rewards.variance_weight * variance
 
 
 @inline_jit
@@ -255,14 +293,9 @@ def transition(
     state = state_of(pose[0], pose[1], pose[2], task.grid)
     region = region_of(pose[0], pose[1], task.grid)
     terminated = i == task.goal_i and j == task.goal_j
-    if terminated:
-        reward = task.rewards.goal
-    elif collided:
-        reward = task.rewards.collision
-    else:
-        end_time = time + task.robot.dt * task.robot.substeps
-        variance = region_variance(task, region, end_time)
-        reward = task.rewards.step - task.rewards.variance_weight * variance
+    end_time = time + task.robot.dt * task.robot.substeps
+    variance = region_variance(task, region, end_time)
+    reward = action_reward(task.rewards, terminated, collided, variance)
     return Outcome(reward, terminated, collided, n_logged, omega_left, omega_right, state, region)
 
 
@@ -321,6 +354,24 @@ def build_task(
             f"expected a map of {discretization.n_x} × {discretization.n_y} cells, "
             f"got {grid_map.shape[0]} × {grid_map.shape[1]}"
         )
+    task = floor_task(grid_map.as_uint8(), slip, robot, discretization)
+    goal_i, goal_j = (int(v) for v in grid_map.goal)
+    return task._replace(goal_i=goal_i, goal_j=goal_j, rewards=rewards or RewardScheme())
+
+
+def floor_task(
+    occupancy: np.ndarray | None,
+    slip: SlipField,
+    robot: RobotParams,
+    discretization: Discretization,
+) -> NavigationTask:
+    """The task of a robot that only moves (no goal: goal cell (−1, −1)), for
+    :func:`drive_substep`: walls ``occupancy`` (bool or uint8 (n_x, n_y), nonzero = wall; None
+    for none) and the floor ``slip``, checked as in :func:`build_task`."""
+    shape = (discretization.n_x, discretization.n_y)
+    walls = np.zeros(shape, dtype=np.uint8) if occupancy is None else occupancy
+    if walls.shape != shape:
+        raise ValueError(f"expected walls of {shape[0]} × {shape[1]} cells, got {walls.shape}")
     if slip.shape != (discretization.regions_x, discretization.regions_y):
         raise ValueError(
             f"expected a slip field of {discretization.regions_x} × {discretization.regions_y} "
@@ -331,14 +382,111 @@ def build_task(
     return NavigationTask(
         robot=robot.kernel_constants(),
         grid=discretization.grid_shape(),
-        occupancy=grid_map.as_uint8(),
-        goal_i=int(grid_map.goal[0]),
-        goal_j=int(grid_map.goal[1]),
+        occupancy=np.ascontiguousarray(walls != 0, dtype=np.uint8),
+        goal_i=-1,
+        goal_j=-1,
         eta=eta,
         x_icr=x_icr,
         drift_phase=phase,
         drift_amplitude=float(slip.drift_amplitude),
         drift_period=float(slip.drift_period),
-        rewards=rewards or RewardScheme(),
+        rewards=RewardScheme(),
         variance_stats=np.zeros((discretization.n_regions, 3)),
     )
+
+
+@jit
+def drive_substep(
+    task: NavigationTask,
+    pose: tuple[float, float, float],
+    commands: tuple[float, float],
+    time: float,
+    noise_left: float,
+    noise_right: float,
+) -> tuple[float, float, float]:
+    """One sub-step of a robot driven by any wheel speeds ``commands`` (ω_L, ω_R) [rad/s], as the
+    simulated robot server moves it: :func:`substep` from ``pose`` (x [m], y [m], heading [rad])
+    at time ``time`` [s]. A wall blocks the position but not the turn (the heading of a colliding
+    sub-step is kept, as in an action). Returns the new pose."""
+    x, y, _ = pose
+    region = region_of(x, y, task.grid)
+    slip = (slip_scale(task, region, time), task.x_icr[region])
+    new_x, new_y, new_heading, _, _, _ = substep(
+        task.robot, slip, pose, commands, (noise_left, noise_right)
+    )
+    i, j = cell_of(new_x, new_y, task.grid)
+    if task.occupancy[i, j] != 0:
+        return x, y, new_heading
+    return new_x, new_y, new_heading
+
+
+N_TASK_SCALARS = 24
+"""Length of the scalar vector of :func:`task_arrays`."""
+
+TaskArrays = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+"""A task as :func:`task_arrays` gives it."""
+
+
+def task_arrays(task: NavigationTask) -> TaskArrays:
+    """``task`` as the six arrays :func:`step_arrays` takes: float64 (:data:`N_TASK_SCALARS`,) of
+    its scalars (the fields of ``robot`` and ``grid``, the goal cell, the drift amplitude and
+    period, the fields of ``rewards``, in this order), then ``occupancy``, ``eta``, ``x_icr``,
+    ``drift_phase`` and ``variance_stats`` (shared, not copied: the kernel updates the last).
+
+    Why arrays: numba types a NamedTuple argument in Python on every call (about 4 µs for a task,
+    more than the action's own work), an array in C (about 0.05 µs).
+    """
+    scalars = np.array(
+        [*task.robot, *task.grid, task.goal_i, task.goal_j, task.drift_amplitude,
+         task.drift_period, *task.rewards],
+        dtype=np.float64,
+    )  # fmt: skip
+    assert scalars.shape == (N_TASK_SCALARS,)
+    return (
+        scalars, task.occupancy, task.eta, task.x_icr, task.drift_phase, task.variance_stats
+    )  # fmt: skip
+
+
+@inline_jit
+def task_from_arrays(
+    scalars: np.ndarray,
+    occupancy: np.ndarray,
+    eta: np.ndarray,
+    x_icr: np.ndarray,
+    drift_phase: np.ndarray,
+    variance_stats: np.ndarray,
+) -> NavigationTask:
+    """The :class:`NavigationTask` of :func:`task_arrays` (integers and flags are exact in
+    float64)."""
+    s = scalars
+    robot = KinematicConstants(s[0], s[1], s[2], s[3], int(s[4]), s[5], s[6], s[7] != 0.0)
+    grid = GridShape(int(s[8]), int(s[9]), int(s[10]), int(s[11]), int(s[12]), s[13], s[14])
+    rewards = RewardScheme(s[19], s[20], s[21], s[22], s[23] != 0.0)
+    return NavigationTask(
+        robot, grid, occupancy, int(s[15]), int(s[16]), eta, x_icr, drift_phase, s[17], s[18],
+        rewards, variance_stats,
+    )  # fmt: skip
+
+
+@jit
+def step_arrays(
+    scalars: np.ndarray,
+    occupancy: np.ndarray,
+    eta: np.ndarray,
+    x_icr: np.ndarray,
+    drift_phase: np.ndarray,
+    variance_stats: np.ndarray,
+    pose: np.ndarray,
+    action: int,
+    time: float,
+    noise: np.ndarray,
+    log: np.ndarray,
+) -> tuple[float, bool, bool, int, float, float, int, int]:
+    """:func:`transition` on the task given as :func:`task_arrays`, for callers in Python (the
+    env): the :class:`Outcome` fields as a plain tuple, which crosses back into Python faster."""
+    task = task_from_arrays(scalars, occupancy, eta, x_icr, drift_phase, variance_stats)
+    outcome = transition(task, pose, action, time, noise, log)
+    return (
+        outcome.reward, outcome.terminated, outcome.collided, outcome.n_logged,
+        outcome.omega_left, outcome.omega_right, outcome.state, outcome.region,
+    )  # fmt: skip

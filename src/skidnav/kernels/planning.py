@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from skidnav._jit import jit
+from skidnav._jit import inline_jit, jit
 from skidnav.kernels.multinomial import (
     EXPECTED,
     MOST_PROBABLE,
@@ -28,10 +28,11 @@ from skidnav.kernels.multinomial import (
     most_probable_target,
     pair_state_action,
     sample_entry,
+    split_key,
     unsigned_index,
 )
 from skidnav.kernels.priority_queue import HeapArrays, heap_push, pop, push
-from skidnav.kernels.tabular import inline_jit, td_target, update_toward
+from skidnav.kernels.tabular import td_target, update_toward
 
 
 @jit
@@ -199,7 +200,7 @@ def prioritized_sweeping(
             target = most_probable_target(q, model, pair, gamma, uniform)
         update_toward(cells, unsigned_index(key), 0, target, alpha)
         updates += 1
-        slot = hash_find(target_table, target_state, key // n_actions)
+        slot = hash_find(target_table, target_state, split_key(key, n_actions)[0])
         entry = target_head[slot] if slot >= 0 else -1
         while entry >= 0:  # queue the predecessors of the updated state
             pair = entry_pair[entry]

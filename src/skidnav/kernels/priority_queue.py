@@ -34,8 +34,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from skidnav._jit import jit
-from skidnav.kernels.tabular import inline_jit
+from skidnav._jit import inline_jit, jit
 
 
 class HeapArrays(NamedTuple):

@@ -37,27 +37,9 @@ Randomness: every function that draws takes a ``numpy.random.Generator`` and cal
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any, TypeVar
-
-import numba
 import numpy as np
 
-F = TypeVar("F", bound=Callable[..., Any])
-
-
-def inline_jit(function: F) -> F:
-    """Like :func:`skidnav._jit.jit`, but inlined into compiled callers at the numba IR level.
-
-    Used for the small helpers of the hot loops: a non-inlined call that receives arrays (or a
-    Generator) costs ~30–300 ns in numba 0.68 (reference counting of every array argument), more
-    than the helper's work. Inlining does not remove all of it: every array (or tuple of arrays)
-    bound to a helper parameter, and every view such as ``q[state]``, is still reference-counted
-    each call unless numba can prune the pair. Hot helpers therefore index ``q[state, action]``
-    (no row views) and take only the few arrays they read. Called from Python it behaves like
-    any compiled function, and with ``NUMBA_DISABLE_JIT=1`` it is the plain function.
-    """
-    return numba.njit(inline="always", cache=True, nogil=True)(function)  # type: ignore
+from skidnav._jit import inline_jit
 
 
 @inline_jit

@@ -1,233 +1,111 @@
-"""The fused compiled episode: simulator, behaviour, TD update, model update and planning in one
-numba loop (used by :func:`skidnav.agents.fast_training.train_agent_fast`).
+"""The fused compiled loop: whole stretches of an episode in one numba call (used by
+:mod:`skidnav.agents.fast_training`).
 
-Every step calls the same kernels, in the same order, with the same random streams as the plain
-Python loop (:func:`skidnav.agents.training.run_episode` driving
-``SkidSteerNavEnv.step`` and the agent's ``observe``), so both give identical numbers:
+The loop knows how an episode goes, and nothing of the agent or of the env: it calls the env's
+step through :func:`skidnav.kernels.env_steps.env_step` and the agent's learning step through
+:func:`skidnav.kernels.learning.learn`, both chosen while compiling by the type of the env's
+state and of the agent's arrays (numba compiles and caches the loop once per such pair). Each
+step does what the plain Python loop (:func:`skidnav.agents.training.run_episode` driving
+``env.step`` and the agent's ``observe``) does, in the same order and with the same draws, so
+both give identical numbers:
 
 1. ``epsilon_greedy(q, s, ε, agent_rng)`` (:mod:`skidnav.kernels.tabular`);
-2. ``draw_noise(env_rng, noise)`` then ``transition(task, pose, a, time, noise, log)``
-   (:mod:`skidnav.kernels.navigation`); the clock advances by one action;
-3. the agent's learning step, by ``kind`` (:data:`AGENT_KINDS`) — the body of its ``_learn``;
-4. truncation after the env's limit or the trainer's ``max_steps``.
-
-What the Python agents do between episodes (``end_episode``: ε decay, trajectory bookkeeping,
-kinematic refits with scikit-learn) stays in Python.
+2. the env's step with the env's generator;
+3. the agent's learning step with the agent's generator;
+4. the end: termination, the env's limit or the trainer's ``max_steps``.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from skidnav._jit import jit
-from skidnav.kernels import kinematic_planning as kp
-from skidnav.kernels.multinomial import MultinomialArrays, model_observe
-from skidnav.kernels.navigation import NavigationTask, draw_noise, transition
-from skidnav.kernels.planning import dyna_planning, dyna_plus_planning, sweep_step
-from skidnav.kernels.priority_queue import HeapArrays
-from skidnav.kernels.tabular import epsilon_greedy, greedy_first, td_update
+from skidnav._jit import jit, uncached
+from skidnav.kernels.env_steps import env_step
+from skidnav.kernels.learning import STEPS, Experience, learn
+from skidnav.kernels.tabular import epsilon_greedy, greedy_first
 
-Q_LEARNING, DYNA_Q, DYNA_Q_PLUS, PRIORITIZED_SWEEPING, MODEL_BASED = range(5)
-AGENT_KINDS = {
-    "q-learning": Q_LEARNING,
-    "dyna-q": DYNA_Q,
-    "dyna-q-plus": DYNA_Q_PLUS,
-    "prioritized-sweeping": PRIORITIZED_SWEEPING,
-    "dyna-kinematic": MODEL_BASED,
-    "trajectory-prioritized": MODEL_BASED,
-    "dyna-full": MODEL_BASED,
-    "dyna-sweep": MODEL_BASED,
-}
-"""Agent registry name → the learning step the fused loop runs."""
-
-# columns of the int64 ``tally`` array
-STEPS, PLANNING_UPDATES, N_VISITED, LENGTH, COLLISIONS, TERMINATED, ELAPSED = range(7)
-N_TALLY = 7
+# columns of the int64 ``tally`` array of one episode
+LENGTH, COLLISIONS, TERMINATED, ELAPSED, ENDED = range(5)
+N_TALLY = 5
+"""``LENGTH``: steps taken by this episode's calls; ``COLLISIONS``; ``TERMINATED`` and ``ENDED``
+(0/1: the goal was reached; the episode is over); ``ELAPSED``: the env's steps since its reset."""
 
 
-class LearnerSettings(NamedTuple):
-    """Scalars of one episode (numba-friendly)."""
+class Limits(NamedTuple):
+    """When a stretch stops: the env's step limit, the trainer's ``max_steps`` (both per
+    episode), and ``stop``, the ``tally[LENGTH]`` at which to pause without ending the episode."""
 
-    kind: int
-    epsilon: float
-    alpha: float
-    gamma: float
-    planning_steps: int
-    mode: int
-    kappa: float
-    theta: float
-    max_steps: int
     env_limit: int
+    max_steps: int
+    stop: int
 
 
-class LearnerArrays(NamedTuple):
-    """Every array an agent learns into (unused ones are small placeholders).
+@jit
+def learn_stretch(
+    env: Any,
+    state: int,
+    arrays: Any,
+    settings: Any,
+    epsilon: float,
+    counters: np.ndarray,
+    tally: np.ndarray,
+    limits: Limits,
+    returns: tuple[float, np.ndarray],
+    rngs: tuple[np.random.Generator, np.random.Generator],
+) -> tuple[float, int]:
+    """Learn from ``state`` until the episode ends or ``tally[LENGTH]`` reaches ``limits.stop``.
 
-    ``visited`` int64 (n_states,) and ``is_visited`` bool (n_states,) are Dyna-Q+'s visited
-    states; ``kinematic_data``/``kinematic_counts`` the kinematic model's sample buffers.
+    :func:`~skidnav.kernels.env_steps.env_step` moves ``env`` (whose ``pose`` and ``log`` the
+    experience carries); :func:`~skidnav.kernels.learning.learn` teaches the agent whose
+    ``arrays``, ``settings`` and ``counters`` these are. ``returns`` is (the return so
+    far, float64 rewards array: reward of step k at ``[tally[LENGTH]]`` unless it is empty);
+    ``rngs`` (env's, agent's). Returns (the return so far, the state reached).
     """
-
-    q: np.ndarray
-    model: MultinomialArrays
-    heap: HeapArrays
-    last_tried: np.ndarray
-    visited: np.ndarray
-    is_visited: np.ndarray
-    planner: kp.PlannerArrays
-    shares: kp.PlanningShares
-    kinematic_data: np.ndarray
-    kinematic_counts: np.ndarray
-
-
-@jit
-def classic_learn(
-    agent: LearnerArrays,
-    settings: LearnerSettings,
-    tally: np.ndarray,
-    state: int,
-    action: int,
-    reward: float,
-    next_state: int,
-    terminated: bool,
-    rng: np.random.Generator,
-) -> None:
-    """The ``_learn`` of Q-learning, Dyna-Q, Dyna-Q+ and prioritized sweeping."""
-    s = settings
-    if s.kind == PRIORITIZED_SWEEPING:
-        tally[PLANNING_UPDATES] += sweep_step(
-            agent.q, agent.model, agent.heap, state, action, reward, next_state, terminated,
-            s.planning_steps, s.theta, s.alpha, s.gamma, s.mode, rng,
-        )  # fmt: skip
-        return
-    if s.kind == DYNA_Q_PLUS:
-        agent.last_tried[state, action] = tally[STEPS]
-        if not agent.is_visited[state]:
-            agent.is_visited[state] = True
-            agent.visited[tally[N_VISITED]] = state
-            tally[N_VISITED] += 1
-    td_update(agent.q, state, action, reward, next_state, terminated, s.alpha, s.gamma)
-    if s.kind == Q_LEARNING:
-        return
-    model_observe(agent.model, state, action, reward, next_state, terminated)
-    if s.planning_steps == 0:
-        return
-    if s.kind == DYNA_Q:
-        tally[PLANNING_UPDATES] += dyna_planning(
-            agent.q, agent.model, s.planning_steps, s.alpha, s.gamma, s.mode, rng
-        )
-    else:
-        tally[PLANNING_UPDATES] += dyna_plus_planning(
-            agent.q, agent.model, agent.visited, tally[N_VISITED], agent.last_tried,
-            tally[STEPS], s.kappa, s.planning_steps, s.alpha, s.gamma, s.mode, rng,
-        )  # fmt: skip
-
-
-@jit
-def _model_based_learn(
-    agent: LearnerArrays,
-    settings: LearnerSettings,
-    tally: np.ndarray,
-    task: NavigationTask,
-    state: int,
-    action: int,
-    reward: float,
-    next_state: int,
-    terminated: bool,
-    collided: bool,
-    pose: np.ndarray,
-    log: np.ndarray,
-    n_logged: int,
-    rng: np.random.Generator,
-) -> None:
-    """The ``_learn`` of :class:`skidnav.agents.dyna_kinematic.ModelBasedAgent`."""
-    s = settings
-    td_update(agent.q, state, action, reward, next_state, terminated, s.alpha, s.gamma)
-    model_observe(agent.model, state, action, reward, next_state, terminated)
-    kp.planner_observe(
-        agent.planner, state, action, reward, next_state, terminated, collided, pose,
-        task.robot, task.grid,
-    )  # fmt: skip
-    if agent.planner.counters[kp.USE_KINEMATIC] != 0:
-        n_regions = agent.kinematic_counts.shape[0]
-        kp.feed_log(agent.kinematic_data, agent.kinematic_counts, log, n_logged, n_regions)
-    if s.planning_steps > 0:
-        tally[PLANNING_UPDATES] += kp.combined_planning(
-            agent.q, agent.model, agent.planner, agent.shares, task.grid, rng
-        )
-
-
-@jit
-def run_episode(
-    task: NavigationTask,
-    pose: np.ndarray,
-    state: int,
-    time: float,
-    agent: LearnerArrays,
-    settings: LearnerSettings,
-    tally: np.ndarray,
-    env_rng: np.random.Generator,
-    agent_rng: np.random.Generator,
-) -> tuple[float, float]:
-    """One learning episode from ``state`` (pose already reset, ``tally[ELAPSED]`` the env's step
-    counter). Updates ``pose``, ``tally`` and the agent's arrays in place; returns (return, time
-    at the end [s])."""
-    noise = np.empty(2 * task.robot.substeps)
-    log = np.empty((task.robot.substeps, 6))
-    duration = task.robot.dt * task.robot.substeps
-    total = 0.0
-    while True:
-        action = epsilon_greedy(agent.q, state, settings.epsilon, agent_rng)
-        draw_noise(env_rng, noise)
-        outcome = transition(task, pose, action, time, noise, log)
-        time += duration
+    total, rewards = returns
+    env_rng, agent_rng = rngs
+    while tally[LENGTH] < limits.stop:
+        action = epsilon_greedy(arrays.q, state, epsilon, agent_rng)
+        next_state, reward, terminated, collided, n_logged = env_step(env, state, action, env_rng)
+        if rewards.shape[0] > 0:
+            rewards[tally[LENGTH]] = reward
         tally[ELAPSED] += 1
         tally[LENGTH] += 1
-        tally[STEPS] += 1
-        tally[COLLISIONS] += 1 if outcome.collided else 0
-        total += outcome.reward
-        terminated = outcome.terminated
-        if settings.kind == MODEL_BASED:
-            _model_based_learn(
-                agent, settings, tally, task, state, action, outcome.reward, outcome.state,
-                terminated, outcome.collided, pose, log, outcome.n_logged, agent_rng,
-            )  # fmt: skip
-        else:
-            classic_learn(
-                agent, settings, tally, state, action, outcome.reward, outcome.state,
-                terminated, agent_rng,
-            )  # fmt: skip
-        state = outcome.state
-        truncated = tally[ELAPSED] >= settings.env_limit or tally[LENGTH] >= settings.max_steps
-        if terminated or truncated:
+        tally[COLLISIONS] += 1 if collided else 0
+        counters[STEPS] += 1
+        total += reward
+        experience = Experience(
+            state, action, reward, next_state, terminated, collided, env.pose, env.log, n_logged
+        )
+        learn(arrays, settings, counters, experience, agent_rng)
+        state = next_state
+        if terminated or tally[ELAPSED] >= limits.env_limit or tally[LENGTH] >= limits.max_steps:
             tally[TERMINATED] = 1 if terminated else 0
-            return total, time
+            tally[ENDED] = 1
+            break
+    return total, state
+
+
+learn_stretch_uncached = uncached(learn_stretch)
+""":func:`learn_stretch` for agents whose arrays are not skidnav's own types (not cached)."""
 
 
 @jit
-def greedy_episode(
-    task: NavigationTask,
-    pose: np.ndarray,
+def greedy_stretch(
+    env: Any,
     state: int,
-    time: float,
     q: np.ndarray,
     max_steps: int,
     env_limit: int,
     env_rng: np.random.Generator,
-) -> tuple[int, float]:
-    """Greedy rollout (``greedy_first``, no learning) from a reset pose: returns (actions taken if
-    the goal was reached else −1, the clock at the end [s])."""
-    noise = np.empty(2 * task.robot.substeps)
-    log = np.empty((task.robot.substeps, 6))
-    duration = task.robot.dt * task.robot.substeps
+) -> tuple[int, int, int]:
+    """Greedy rollout (``greedy_first``, no learning) from a reset env: returns (actions taken if
+    the goal was reached else −1, last state, actions taken)."""
     for step in range(1, max_steps + 1):
-        draw_noise(env_rng, noise)
-        outcome = transition(task, pose, greedy_first(q, state), time, noise, log)
-        time += duration
-        state = outcome.state
-        if outcome.terminated:
-            return step, time
+        state, _, terminated, _, _ = env_step(env, state, greedy_first(q, state), env_rng)
+        if terminated:
+            return step, state, step
         if step >= env_limit:
-            return -1, time
-    return -1, time
+            return -1, state, step
+    return -1, state, max_steps

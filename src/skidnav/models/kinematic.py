@@ -218,7 +218,8 @@ class KinematicModel:
         regression = BayesianRidge(fit_intercept=fit_intercept)
         regression.fit(inputs, residual, sample_weight=weights)
         delta = np.append(regression.coef_, regression.intercept_ if fit_intercept else 0.0)
-        return base + delta
+        coefficients: np.ndarray = base + delta
+        return coefficients
 
     # -- prediction ------------------------------------------------------------------------
 

@@ -43,6 +43,7 @@ from skidnav.kernels.multinomial import (
     first_predecessor,
     hash_rebuild,
     model_observe,
+    split_key,
 )
 
 _INITIAL_CAPACITY = 256
@@ -230,7 +231,7 @@ class MultinomialModel:
         entry = int(first_predecessor(arrays, state))
         while entry >= 0:
             key = int(arrays.pair_key[arrays.entry_pair[entry]])
-            result.append(divmod(key, self.n_actions))
+            result.append(split_key(key, self.n_actions))
             entry = int(arrays.entry_pred_link[entry])
         return result
 

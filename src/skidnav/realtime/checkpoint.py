@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from skidnav.agents.core import TabularAgent
 from skidnav.atomicfile import remove_stale_temporaries, write_atomic
 from skidnav.errors import CorruptFileError, first_line, shown
 from skidnav.realtime.records import EpisodeResult
@@ -55,7 +56,7 @@ class Checkpoints:
         self.root = root
         self.keep = keep
 
-    def save(self, episode: int, agent: Any, loop_state: dict[str, Any]) -> Path:
+    def save(self, episode: int, agent: TabularAgent, loop_state: dict[str, Any]) -> Path:
         """Write the checkpoint after ``episode`` (0-based) and point ``latest.json`` to it."""
         name = directory_name(episode)
         directory = self.root / name

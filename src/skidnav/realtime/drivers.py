@@ -130,12 +130,7 @@ def make_driver(name: str, config: RealtimeConfig, server_log: Path | None = Non
 
 def _make_ros2_driver(options: Mapping[str, Any]) -> RobotDriver:
     """The rosbridge driver of ``skidnav.realtime.ros2`` built from the ``[ros2]`` table."""
-    try:
-        module = importlib.import_module("skidnav.realtime.ros2")
-    except ModuleNotFoundError as error:
-        if error.name != "skidnav.realtime.ros2":
-            raise
-        raise UserError("the ros2 driver is not installed (no skidnav.realtime.ros2)") from None
+    module = importlib.import_module("skidnav.realtime.ros2")  # lazily: it imports roslibpy
     values = {key: tuple(v) if isinstance(v, list) else v for key, v in options.items()}
     try:
         config = module.Ros2Config(**values)

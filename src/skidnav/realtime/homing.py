@@ -29,7 +29,7 @@ import math
 import numpy as np
 
 from skidnav.realtime.driver import Pose
-from skidnav.realtime.transition import wrap_angle
+from skidnav.robot.kinematics import wrap_angle
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap, cell_distances
 

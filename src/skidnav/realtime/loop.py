@@ -7,9 +7,10 @@ consecutive poses give the kinematic log rows
 (realtime/transition.py). A virtual bumper predicts the next period's pose with the nominal
 kinematics: if it would enter a wall cell of the map, the wheels stop and the action is a
 collision, as in the env. At the end of an action the wheels are stopped while the agent learns
-("stop and think"), so planning time never moves the robot; the reward, discrete states and the
-``info`` dict follow the env's contract. Between episodes the robot drives back to the start
-(realtime/homing.py) or waits for the operator.
+("stop and think"), so planning time never moves the robot; the reward (the env's rule), the
+discrete states and the ``info`` dict (built by the env's
+:func:`~skidnav.envs.step_info.step_info`) follow the env's contract. Between episodes the robot
+drives back to the start (realtime/homing.py) or waits for the operator.
 
 Safety (realtime/safety.py) can abort an episode at any time: the episode is marked aborted, its
 unfinished action is not learned from, a checkpoint is written, and the run reconnects (link or
@@ -28,6 +29,8 @@ from typing import Any
 
 import numpy as np
 
+from skidnav.agents.core import TabularAgent
+from skidnav.envs.step_info import step_info
 from skidnav.realtime.checkpoint import Checkpoints
 from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.driver import Pose, RobotDriver
@@ -35,7 +38,7 @@ from skidnav.realtime.homing import HomingController
 from skidnav.realtime.records import EpisodeResult, RunLog
 from skidnav.realtime.safety import STOP_WAIT, SafetyLimits, SafetyMonitor
 from skidnav.realtime.transition import IcrEstimates, WheelSpeedStats, log_row, reward_of
-from skidnav.robot.kinematics import body_velocities, commanded_wheel_speeds, euler_step
+from skidnav.robot.kinematics import body_velocities, commanded_wheel_speeds, pose_step
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
@@ -62,7 +65,7 @@ class RealtimeLoop:
     def __init__(
         self,
         driver: RobotDriver,
-        agent: Any,
+        agent: TabularAgent,
         grid_map: GridMap,
         config: RealtimeConfig,
         out: Path,
@@ -173,7 +176,8 @@ class RealtimeLoop:
         return not inside or bool(self.grid_map.occupancy[self.grid.cell(x, y)])
 
     def _would_collide(self, pose: Pose, command: tuple[float, float]) -> bool:
-        """Virtual bumper: the nominal pose after one period lies in a wall (or already does)."""
+        """Virtual bumper: the nominal pose after one period (no slip, nominal x_ICR, the robot's
+        integrator, not clipped to the arena) lies in a wall or outside (or already does)."""
         v_x, v_y, yaw_rate = body_velocities(
             command[0],
             command[1],
@@ -181,7 +185,10 @@ class RealtimeLoop:
             self.robot.wheel_radius,
             self.robot.half_track,
         )
-        x, y, _ = euler_step(pose.x, pose.y, pose.heading, v_x, v_y, yaw_rate, self.settings.period)
+        x, y, _ = pose_step(
+            pose.x, pose.y, pose.heading, v_x, v_y, yaw_rate, self.settings.period,
+            self.robot.exact_integration,
+        )  # fmt: skip
         return self._blocked(pose.x, pose.y) or self._blocked(x, y)
 
     # --- one action ----------------------------------------------------------------------
@@ -242,15 +249,14 @@ class RealtimeLoop:
         reward, terminated = reward_of(end, collided, self.grid_map.goal, self.grid, self.stats)
         truncated = last and not terminated
         next_state = self.grid.state(end.x, end.y, end.heading)
-        command = commanded_wheel_speeds(action, self.robot.wheel_speed)
-        info = {
-            "pose": (end.x, end.y, end.heading),
-            "cell": self.grid.unflatten(next_state),
-            "collision": collided,
-            "wheel_speeds": command,
-            "region": self.grid.region(end.x, end.y),
-            "kinematic_log": rows,
-        }
+        info = step_info(
+            (end.x, end.y, end.heading),
+            self.grid.unflatten(next_state),
+            collided,
+            commanded_wheel_speeds(action, self.robot.wheel_speed),
+            self.grid.region(end.x, end.y),
+            rows,
+        )
         self.agent.observe(state, action, reward, next_state, terminated, truncated, info)
         result.actions += 1
         result.return_ += reward

@@ -4,8 +4,7 @@ the sim server's event log (docs/realtime.md, "Files written").
 The two logs are append-only, the one exception to writing files atomically
 (:mod:`skidnav.atomicfile`): a log grows for the whole run, so each record is one line, written
 and flushed at once, and a kill can cut only the last line (a reader should skip a torn one).
-Checkpoints and the study's records and tables are written with
-:func:`~skidnav.atomicfile.write_atomic`."""
+Checkpoints are written with :func:`~skidnav.atomicfile.write_atomic`."""
 
 from __future__ import annotations
 

@@ -13,6 +13,7 @@ import math
 from collections.abc import Mapping
 from typing import Any, TypeGuard
 
+from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.params import RobotParams
 
 TWIST = "geometry_msgs/Twist"
@@ -175,7 +176,7 @@ def compose(
     return (
         ox + cos_h * x - sin_h * y,
         oy + sin_h * x + cos_h * y,
-        math.atan2(math.sin(total), math.cos(total)),
+        wrap_angle(total),
     )
 
 

@@ -2,7 +2,8 @@
 
 Files written under ``--out`` (docs/realtime.md): ``run.jsonl`` (every command, pose, transition,
 safety event), ``checkpoints/`` (per episode), ``summary.json``, and for the ``sim`` driver the
-server's own command log ``sim-server.jsonl``.
+server's own command log ``sim-server.jsonl``. :func:`new_agent` and :func:`drive` are shared
+with the hardware-in-the-loop study (realtime/study.py), whose runs are real-time runs too.
 """
 
 from __future__ import annotations
@@ -17,6 +18,8 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
+import numpy as np
+
 from skidnav.atomicfile import write_user_file
 from skidnav.errors import UserError
 from skidnav.realtime.arena import build_map, seed_streams
@@ -27,6 +30,7 @@ from skidnav.realtime.loop import RealtimeLoop
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
+from skidnav.world.grid import GridMap
 
 
 def agent_context(name: str, robot: RobotParams, grid: Discretization) -> dict[str, Any]:
@@ -47,7 +51,7 @@ def _make_or_resume_agent(
     args: argparse.Namespace, config: RealtimeConfig, context: dict[str, Any], grid: Discretization
 ) -> tuple[Any, int, dict[str, Any] | None]:
     """(agent, first episode, loop state to restore or None)."""
-    from skidnav.agents.registry import load_agent, make_agent
+    from skidnav.agents.registry import load_agent
 
     if args.resume:
         latest = Checkpoints(args.out / "checkpoints").latest()
@@ -60,10 +64,23 @@ def _make_or_resume_agent(
                 f"{directory}: checkpoint holds agent {agent.name!r}, not {args.agent!r}"
             )
         return agent, episode + 1, state
-    rng = seed_streams(config.run.seed)["agent"]
-    table = config.agents.get(args.agent)
-    agent = make_agent(args.agent, grid.n_states, N_ACTIONS, table, rng, **context)
+    agent = new_agent(args.agent, config, context, grid, seed_streams(config.run.seed)["agent"])
     return agent, 0, None
+
+
+def new_agent(
+    name: str,
+    config: RealtimeConfig,
+    context: dict[str, Any],
+    grid: Discretization,
+    rng: np.random.Generator,
+) -> Any:
+    """A new agent ``name`` with the hyperparameters of ``[agents.NAME]``, drawing from the
+    generator ``rng``, over ``grid``'s states and the robot's actions."""
+    from skidnav.agents.registry import make_agent
+
+    table = config.agents.get(name)
+    return make_agent(name, grid.n_states, N_ACTIONS, table, rng, **context)
 
 
 def warm_up_agent(
@@ -72,8 +89,6 @@ def warm_up_agent(
     """Compile (numba) every kernel of agent ``name`` before the robot moves: a throwaway agent
     acts, learns from one dummy step and ends an episode. Compilation holds the GIL, which would
     starve the driver's reader thread and trip the pose watchdog mid-episode."""
-    import numpy as np
-
     from skidnav.agents.registry import make_agent
 
     agent = make_agent(
@@ -128,13 +143,49 @@ def run_from_args(
     context = agent_context(args.agent, robot, grid)
     agent, first_episode, state = _make_or_resume_agent(args, config, context, grid)
     warm_up_agent(args.agent, config, context, grid.n_states)
-    driver = make_driver(args.driver, config, server_log=out / "sim-server.jsonl")
+    code, loop = drive(
+        args.driver,
+        agent,
+        grid_map,
+        config,
+        out,
+        robot=robot,
+        grid=grid,
+        progress=progress,
+        wait_for_operator=wait_for_operator,
+        resume=(first_episode, state),
+    )
+    return code, _summarize(loop, out, code)
+
+
+def drive(
+    driver_name: str,
+    agent: Any,
+    grid_map: GridMap,
+    config: RealtimeConfig,
+    out: Path,
+    *,
+    robot: RobotParams,
+    grid: Discretization,
+    progress: Callable[[str], None],
+    wait_for_operator: Callable[[str], None] | None = None,
+    resume: tuple[int, dict[str, Any] | None] = (0, None),
+) -> tuple[int, RealtimeLoop]:
+    """Connect driver ``driver_name`` (a sim server logs to ``out/sim-server.jsonl``), run the
+    loop of ``agent`` with its files in ``out`` from episode ``resume[0]`` (loop state
+    ``resume[1]`` restored first, if any), SIGINT and SIGTERM tripping its safety monitor, and
+    shut the driver down; returns (exit code of :meth:`RealtimeLoop.run`, the loop).
+
+    Raises:
+        UserError: the robot cannot be reached.
+    """
+    driver = make_driver(driver_name, config, server_log=out / "sim-server.jsonl")
     shutdown = getattr(driver, "shutdown", driver.close)
     try:
         driver.connect()
     except ConnectionError as error:
         shutdown()
-        raise UserError(f"cannot connect to the robot ({args.driver}): {error}") from None
+        raise UserError(f"cannot connect to the robot ({driver_name}): {error}") from None
     try:
         loop = RealtimeLoop(
             driver,
@@ -147,13 +198,14 @@ def run_from_args(
             progress=progress,
             wait_for_operator=wait_for_operator,
         )
+        first_episode, state = resume
         if state is not None:
             loop.restore(state)
         with interrupt_handlers(loop):
             code = loop.run(first_episode)
     finally:
         shutdown()
-    return code, _summarize(loop, out, code)
+    return code, loop
 
 
 def output_directory(path: Path) -> Path:

@@ -1,12 +1,14 @@
 """The physics of the simulated robot behind the sim server (hardware-in-the-loop stand-in).
 
-One control period of ``dt`` seconds of robot time, with the robot in coarse region ρ at robot
-time t (the same model as kernels/navigation.py, but driven by arbitrary wheel-speed commands):
+One control period of ``dt`` seconds of robot time is one sub-step of the simulator's own kernel
+(:func:`skidnav.kernels.navigation.drive_substep`, the env's sub-step driven by arbitrary
+wheel-speed commands instead of the four actions):
 
 1. commands whose latency has elapsed take effect (a FIFO of (due time, ω_L, ω_R));
 2. each wheel loses U(0, η(ρ, t)) in magnitude (the slip field, possibly drifting, SPEC §2);
-3. the ICR model with x_ICR[ρ] gives the body twist; explicit Euler advances the pose
-   (Kozłowski & Pazderski 2004), clipped to the arena;
+3. the ICR model with x_ICR[ρ] gives the body twist; the robot's integrator
+   (``RobotParams.integrator``: explicit Euler or the exact constant-twist step) advances the
+   pose, clipped to the arena;
 4. a step that would end in a wall cell does not happen: walls physically block the robot
    (its heading still turns, as in the kernels).
 
@@ -28,11 +30,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from skidnav.errors import UserError
+from skidnav.kernels.navigation import drive_substep, floor_task
 from skidnav.realtime import protocol as pr
 from skidnav.realtime.arena import build_map, seed_streams, start_pose
 from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.records import EventLog
-from skidnav.robot.kinematics import apply_slip, body_velocities, euler_step
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
 from skidnav.world.discretization import Discretization
@@ -65,8 +67,9 @@ class SimRobot:
     """A skid-steer robot on a slippery floor with walls.
 
     Args:
-        robot: geometry and control period (``robot.dt`` is the period [s]).
-        slip: the floor.
+        robot: geometry, integrator and control period (``robot.dt`` is the period [s]).
+        slip: the floor (its arrays are shared with the kernel's task, not copied: changing
+            ``slip.x_icr`` in place changes the floor).
         occupancy: bool (n_x, n_y) walls (True) on the grid of ``grid``, or None for none.
         grid: discretization whose cells index ``occupancy`` and whose regions index ``slip``.
         config: imperfections.
@@ -86,8 +89,8 @@ class SimRobot:
     ) -> None:
         self.robot = robot
         self.slip = slip
-        self.occupancy = occupancy
         self.grid = grid
+        self.task = floor_task(occupancy, slip, robot, grid)
         self.config = config
         self.rng = rng
         self.pose = (float(pose[0]), float(pose[1]), float(pose[2]))
@@ -101,7 +104,7 @@ class SimRobot:
         if not (math.isfinite(omega_left) and math.isfinite(omega_right)):
             raise ValueError(f"expected finite wheel speeds, got {omega_left}, {omega_right}")
         limit = self.robot.wheel_speed
-        left, right = (min(max(omega, -limit), limit) for omega in (omega_left, omega_right))
+        left, right = (float(min(max(omega, -limit), limit)) for omega in (omega_left, omega_right))
         self._queue.append((self.time + self.config.latency, left, right))
 
     def stop(self) -> None:
@@ -116,34 +119,18 @@ class SimRobot:
 
     def blocked(self, x: float, y: float) -> bool:
         """True if position (x, y) [m] lies in a wall cell."""
-        if self.occupancy is None:
-            return False
-        return bool(self.occupancy[self.grid.cell(x, y)])
+        return bool(self.task.occupancy[self.grid.cell(x, y)])
 
     def step(self) -> None:
         """Advance one control period (see module doc)."""
         while self._queue and self._queue[0][0] <= self.time + 1e-12:
             _, left, right = self._queue.popleft()
             self.wheels = (left, right)
-        x, y, heading = self.pose
-        region = self.grid.region(x, y)
-        ri, rj = divmod(region, self.grid.regions_y)
-        eta = float(self.slip.eta_at(self.time)[ri, rj])
-        left = apply_slip(self.wheels[0], self.rng.random() * eta)
-        right = apply_slip(self.wheels[1], self.rng.random() * eta)
-        v_x, v_y, yaw_rate = body_velocities(
-            left,
-            right,
-            float(self.slip.x_icr[ri, rj]),
-            self.robot.wheel_radius,
-            self.robot.half_track,
+        noise_left, noise_right = self.rng.random(), self.rng.random()
+        x, y, heading = (float(value) for value in self.pose)
+        self.pose = drive_substep(
+            self.task, (x, y, heading), self.wheels, self.time, noise_left, noise_right
         )
-        new_x, new_y, new_heading = euler_step(x, y, heading, v_x, v_y, yaw_rate, self.robot.dt)
-        new_x = min(max(new_x, 0.0), self.robot.arena_width)
-        new_y = min(max(new_y, 0.0), self.robot.arena_height)
-        if self.blocked(new_x, new_y):
-            new_x, new_y = x, y
-        self.pose = (new_x, new_y, new_heading)
         self.time += self.robot.dt
 
     def measured_pose(self) -> tuple[float, float, float] | None:
@@ -202,9 +189,7 @@ def build_robot(
 
 def warm_up(robot: SimRobot) -> None:
     """Compile the kinematics kernels now (numba), so the first periods are not late."""
-    body_velocities(0.0, 0.0, 0.0, 1.0, 1.0)
-    euler_step(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.1)
-    apply_slip(0.0, 0.0)
+    drive_substep(robot.task, robot.pose, (0.0, 0.0), robot.time, 0.0, 0.0)
     robot.grid.cell(0.0, 0.0)
     robot.grid.region(0.0, 0.0)
 

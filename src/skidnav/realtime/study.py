@@ -1,53 +1,60 @@
-"""Hardware-in-the-loop study: agents × floor/slip presets × seeds against the sim server.
+"""Hardware-in-the-loop study: agents × floor/slip presets × seeds on the sim server, run by the
+experiment runner (docs/realtime.md, "Hardware-in-the-loop study").
 
-Every (agent, preset, seed) is one real-time run (:class:`skidnav.realtime.loop.RealtimeLoop`
-on the ``sim`` driver, which starts its own server on a free loopback port) written to
-``OUT/runs/AGENT/PRESET/seed-N/`` with the run's usual files plus ``result.json``. A run whose
-``result.json`` exists is skipped, so an interrupted study resumes where it stopped (an unfinished
-run starts over). ``OUT/study.csv`` holds one row per run and ``OUT/study.md`` the tables of
-docs/realtime.md ("Hardware-in-the-loop study"): success rate and mean episode length per agent
-× preset, the rough/slippery success ratio, and model-based minus Q-learning success per floor.
-The comparison mirrors the thesis's real-robot results (SPEC §5, "Thesis results to reproduce":
-model-based ≈ +12 % success; the rough floor about doubles the success of the slippery one).
+The study is a grid (:class:`StudyGrid`, a :class:`~skidnav.experiments.runs.Grid`): agents ×
+the config's ``[run] map`` × presets × seeds. :func:`skidnav.experiments.runner.run_experiment`
+expands, seeds, stores, locks and resumes it as it does an experiment's, with the study's
+results layout (:data:`STUDY_LAYOUT`) and its trial function,
+:class:`~skidnav.realtime.study_trial.RealtimeTrial`: one real-time run on the ``sim`` driver.
+Seeds as in an experiment (:mod:`skidnav.experiments.runs`): every agent of a (preset, seed)
+meets the same world, and each run has its own stream for the agent. A run without a run file
+starts over. The tables of ``OUT/study.md`` (:mod:`skidnav.realtime.study_report`) come from the
+store's summaries through :mod:`skidnav.experiments.analysis`. The comparison mirrors the
+thesis's real-robot results (SPEC §5: model-based ≈ +12 % success; the rough floor about
+doubles the success of the slippery one).
 """
 
 from __future__ import annotations
 
-import csv
-import io
+import dataclasses
+import hashlib
 import json
-import logging
 import math
-import shutil
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
-from skidnav.atomicfile import remove_stale_temporaries, write_user_file
+from skidnav.atomicfile import write_user_file
 from skidnav.errors import UserError, first_line, shown
-from skidnav.realtime.arena import build_map, seed_streams
+from skidnav.experiments.config import MAX_EPISODES, MAX_SEEDS, AgentSpec, MapSpec
+from skidnav.experiments.runner import run_experiment
+from skidnav.experiments.store import ResultStore, RunLayout
+from skidnav.realtime.arena import build_map
 from skidnav.realtime.config import (
     RealtimeConfig,
+    RunSettings,
+    SimSettings,
     config_from_mapping,
     read_tables,
     with_overrides,
 )
-from skidnav.realtime.drivers import make_driver
-from skidnav.realtime.loop import EXIT_INTERRUPTED, RealtimeLoop
-from skidnav.realtime.run import agent_context, interrupt_handlers, warm_up_agent
-from skidnav.realtime.study_report import CSV_FIELDS, markdown_report
-from skidnav.robot.kinematics import N_ACTIONS
-from skidnav.robot.params import RobotParams
-from skidnav.savedfile import read_json
+from skidnav.realtime.loop import EXIT_INTERRUPTED
+from skidnav.realtime.study_report import markdown_report
+from skidnav.realtime.study_trial import EPISODE_COLUMNS, RealtimeTrial, ignore
+from skidnav.savedfile import ArraySpec, up_to
 from skidnav.world.discretization import Discretization
+from skidnav.world.grid import MAP_KINDS
 
-log = logging.getLogger(__name__)
-
-__all__ = ["CSV_FIELDS", "RunRecord", "StudySettings", "load_study", "run_study"]
-
-MAX_RECORD_BYTES = 2**16
-"""Largest ``result.json`` read [bytes] (one is about 300)."""
+__all__ = [
+    "STUDY_LAYOUT",
+    "StudyGrid",
+    "StudyOutcome",
+    "StudySettings",
+    "build_grid",
+    "load_study",
+    "run_study",
+]
 
 
 @dataclass(frozen=True)
@@ -56,7 +63,7 @@ class StudySettings:
 
     Attributes:
         agents: agent names (registry). presets: ``[presets.NAME]`` tables of the config.
-        seeds: runs per (agent, preset), with root seeds ``seed``, ``seed + 1``, …
+        seeds: runs per (agent, preset).
         episodes: episodes per run (None: the preset's ``[run] episodes``).
         time_scale: robot s per wall s (None: the preset's ``[run] time_scale``).
     """
@@ -73,50 +80,31 @@ class StudySettings:
     time_scale: float | None = None
 
     def __post_init__(self) -> None:
-        if not self.agents or not self.presets:
-            raise ValueError(
-                f"expected agents and presets, got {shown(self.agents)}, {shown(self.presets)}"
-            )
-        if not (isinstance(self.seeds, int) and self.seeds >= 1):
-            raise ValueError(f"expected seeds to be an integer >= 1, got {shown(self.seeds)}")
-        if self.episodes is not None and not (
-            isinstance(self.episodes, int) and self.episodes >= 1
-        ):
-            raise ValueError(f"expected episodes to be an integer >= 1, got {shown(self.episodes)}")
-        if self.time_scale is not None and not self.time_scale > 0:
-            raise ValueError(f"expected time_scale > 0, got {shown(self.time_scale)}")
+        for name in ("agents", "presets"):
+            names = getattr(self, name)
+            named = isinstance(names, tuple) and all(isinstance(n, str) and n for n in names)
+            if not (named and names and len(set(names)) == len(names)):
+                raise ValueError(
+                    f"expected one or more distinct {name[:-1]} names, got {shown(names)}"
+                )
+        _check_count("seeds", self.seeds, MAX_SEEDS)
+        if self.episodes is not None:
+            _check_count("episodes", self.episodes, MAX_EPISODES)
+        scale = self.time_scale
+        if scale is not None and not (isinstance(scale, int | float) and 0 < scale < math.inf):
+            raise ValueError(f"expected a finite time_scale > 0, got {shown(scale)}")
 
 
-@dataclass(frozen=True)
-class RunRecord:
-    """Outcome of one run (a row of ``study.csv``); ``mean_episode_actions`` is over all its
-    episodes (goal, truncated at ``max_actions`` or aborted alike); ``late_episodes`` and
-    ``late_successes`` count the last half of the episodes (the odd middle one included), where
-    the agent has learned the most. Validated on construction, so a ``result.json`` read back
-    with wrong fields is refused."""
+def _check_root_seed(name: str, value: object) -> None:
+    """ValueError unless ``value`` is an integer >= 0 (a ``SeedSequence`` entropy)."""
+    if not (isinstance(value, int) and not isinstance(value, bool) and value >= 0):
+        raise ValueError(f"expected {name} to be an integer >= 0, got {shown(value)}")
 
-    agent: str
-    preset: str
-    seed: int
-    episodes: int
-    successes: int
-    success_rate: float
-    mean_episode_actions: float
-    aborted: int
-    late_episodes: int
-    late_successes: int
 
-    def __post_init__(self) -> None:
-        counts = ("seed", "episodes", "successes", "aborted", "late_episodes", "late_successes")
-        rates = (self.success_rate, self.mean_episode_actions)
-        if not (isinstance(self.agent, str) and isinstance(self.preset, str)):
-            raise ValueError("expected agent and preset to be strings")
-        for name in counts:
-            value = getattr(self, name)
-            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 0):
-                raise ValueError(f"expected {name} to be an integer >= 0, got {shown(value)}")
-        if not all(isinstance(v, int | float) and 0 <= v < math.inf for v in rates):
-            raise ValueError(f"expected finite rates >= 0, got {shown(rates)}")
+def _check_count(name: str, value: object, most: int) -> None:
+    """ValueError unless ``value`` is an integer in [1, ``most``]."""
+    if not (isinstance(value, int) and not isinstance(value, bool) and 1 <= value <= most):
+        raise ValueError(f"expected {name} to be an integer in [1, {most:,}], got {shown(value)}")
 
 
 def load_study(path: Path, overrides: Mapping[str, Any]) -> tuple[dict[str, Any], StudySettings]:
@@ -131,7 +119,7 @@ def load_study(path: Path, overrides: Mapping[str, Any]) -> tuple[dict[str, Any]
     for key in ("agents", "presets"):
         if isinstance(table.get(key), str):
             table[key] = [name.strip() for name in table[key].split(",") if name.strip()]
-        if key in table:
+        if key in table and isinstance(table[key], list | tuple):
             table[key] = tuple(table[key])
     try:
         settings = StudySettings(**table)
@@ -140,99 +128,178 @@ def load_study(path: Path, overrides: Mapping[str, Any]) -> tuple[dict[str, Any]
     return data, settings
 
 
-def run_config(
-    tables: Mapping[str, Any], settings: StudySettings, preset: str, seed: int
+@dataclass(frozen=True)
+class StudyGrid:
+    """A study as the runner's grid (:class:`~skidnav.experiments.runs.Grid`) and as the
+    statistics' settings (:class:`~skidnav.experiments.analysis.StatsSettings`).
+
+    Attributes:
+        agents: one per agent name (label = name; hyperparameters: ``configs``' ``agents``).
+        maps: the one map of every run, the config's ``[run] map``.
+        presets: preset names; ``configs``: the config of each, with the study's episodes and
+            time scale (its ``[run] map`` and ``seed`` are the study's; a run's seed comes from
+            its world stream).
+        seeds: runs per (agent, preset). root_seed: the config's ``[run] seed``.
+        bootstrap_samples, confidence: of every interval of the tables.
+    """
+
+    agents: tuple[AgentSpec, ...]
+    maps: tuple[MapSpec, ...]
+    presets: tuple[str, ...]
+    configs: tuple[RealtimeConfig, ...]
+    seeds: int
+    root_seed: int
+    name: str = "robot-study"
+    bootstrap_samples: int = 2000
+    confidence: float = 0.95
+
+    def __post_init__(self) -> None:
+        if not (self.agents and len(self.maps) == 1 and len(self.configs) == len(self.presets)):
+            raise ValueError("expected agents, one map and one config per preset")
+        _check_count("seeds", self.seeds, MAX_SEEDS)
+        _check_root_seed("root_seed", self.root_seed)
+
+    @property
+    def agent_labels(self) -> list[str]:
+        """Agent labels in grid order."""
+        return [agent.label for agent in self.agents]
+
+    @property
+    def baseline(self) -> str:
+        """The agent the others are compared to: Q-learning if in the study, else the first."""
+        return "q-learning" if "q-learning" in self.agent_labels else self.agent_labels[0]
+
+    @property
+    def n_runs(self) -> int:
+        """Runs of the grid."""
+        return len(self.agents) * len(self.presets) * self.seeds
+
+    def fingerprint(self) -> str:
+        """SHA-256 of the canonical JSON of :func:`grid_to_dict` (names a study directory)."""
+        text = json.dumps(grid_to_dict(self), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def conditions(self) -> dict[str, tuple[str, bool]]:
+        """Preset → (slip preset of its floor, drifting slip?)."""
+        return {
+            p: (c.sim.slip, c.sim.drift > 0)
+            for p, c in zip(self.presets, self.configs, strict=True)
+        }
+
+
+def grid_to_dict(grid: StudyGrid) -> dict[str, Any]:
+    """The grid as a JSON-ready dict (inverse of :func:`grid_from_dict`)."""
+    return {
+        "name": grid.name,
+        "agents": [agent.name for agent in grid.agents],
+        "map": {"label": grid.maps[0].label, "kind": grid.maps[0].kind, "file": grid.maps[0].file},
+        "presets": [
+            {"name": preset, "run": asdict(c.run), "sim": asdict(c.sim), "agents": dict(c.agents)}
+            for preset, c in zip(grid.presets, grid.configs, strict=True)
+        ],
+        "seeds": grid.seeds,
+        "root_seed": grid.root_seed,
+        "bootstrap_samples": grid.bootstrap_samples,
+        "confidence": grid.confidence,
+    }
+
+
+def grid_from_dict(data: dict[str, Any]) -> StudyGrid:
+    """The grid saved by :func:`grid_to_dict` (KeyError, TypeError or ValueError if invalid)."""
+    presets = data["presets"]
+    configs = tuple(
+        RealtimeConfig(
+            run=RunSettings(**p["run"]), sim=SimSettings(**p["sim"]), agents=dict(p["agents"])
+        )
+        for p in presets
+    )
+    return StudyGrid(
+        agents=tuple(AgentSpec(name, name) for name in data["agents"]),
+        maps=(MapSpec(**data["map"]),),
+        presets=tuple(str(p["name"]) for p in presets),
+        configs=configs,
+        seeds=data["seeds"],
+        root_seed=data["root_seed"],
+        name=data["name"],
+        bootstrap_samples=data["bootstrap_samples"],
+        confidence=data["confidence"],
+    )
+
+
+def study_file_specs(grid: StudyGrid) -> dict[str, ArraySpec]:
+    """What a study run file may hold besides its document: the :data:`EPISODE_COLUMNS`, each at
+    most the longest preset's episodes long."""
+    episodes = up_to(max(config.run.episodes for config in grid.configs))
+    return {f"episode.{key}": ArraySpec((episodes,), kinds="fiub") for key in EPISODE_COLUMNS}
+
+
+STUDY_LAYOUT = RunLayout(
+    "robot-study", EPISODE_COLUMNS, grid_to_dict, grid_from_dict, study_file_specs
+)
+"""The results directory of a study (:class:`~skidnav.experiments.store.RunLayout`)."""
+
+
+def build_grid(tables: Mapping[str, Any], settings: StudySettings) -> StudyGrid:
+    """The grid of ``settings`` over the config ``tables``, checked before anything runs.
+
+    Raises:
+        UserError: an unknown agent or preset, invalid hyperparameters, an unreadable map, a
+            negative root seed, or a preset that sets ``[run] map``, ``seed`` or manual reset.
+    """
+    from skidnav.agents.registry import make_config
+
+    base = config_from_mapping(tables).run
+    seed = base.seed
+    try:
+        _check_root_seed("[run] seed", seed)
+    except ValueError as error:
+        raise UserError(str(error)) from None
+    configs = tuple(_preset_config(tables, settings, preset, base) for preset in settings.presets)
+    for config in configs:
+        for agent in settings.agents:
+            make_config(agent, config.agents.get(agent))  # UserError if unknown or invalid
+    build_map(base.map, seed, Discretization())  # UserError if unreadable
+    return StudyGrid(
+        agents=tuple(AgentSpec(name, name) for name in settings.agents),
+        maps=(_map_spec(base.map),),
+        presets=settings.presets,
+        configs=configs,
+        seeds=settings.seeds,
+        root_seed=seed,
+    )
+
+
+def _preset_config(
+    tables: Mapping[str, Any], settings: StudySettings, preset: str, base: RunSettings
 ) -> RealtimeConfig:
-    """The config of one run: ``preset`` merged over the tables, the study's overrides, ``seed``."""
+    """The config of ``preset`` with the study's episodes and time scale, without the tables of
+    other drivers than ``sim``."""
     config = config_from_mapping(tables, preset)
-    return with_overrides(
-        config,
-        episodes=settings.episodes,
-        time_scale=settings.time_scale,
-        seed=config.run.seed + seed,
-    )
+    run = config.run
+    if (run.map, run.seed, run.reset) != (base.map, base.seed, "auto"):
+        raise UserError(
+            f"[presets.{preset}]: a study runs every preset on the [run] map from the [run] "
+            "seed, resetting automatically; this preset sets [run] map, seed or reset"
+        )
+    config = dataclasses.replace(config, drivers={})  # the sim driver needs none
+    return with_overrides(config, episodes=settings.episodes, time_scale=settings.time_scale)
 
 
-def _check_agents(agents: Sequence[str]) -> None:
-    from skidnav.agents.registry import agent_class
-
-    for name in agents:
-        agent_class(name)  # UserError if unknown
-
-
-def _run_one(
-    config: RealtimeConfig, agent_name: str, out: Path, progress: Callable[[str], None]
-) -> tuple[int, list[Any]]:
-    """One real-time run of a new agent on the ``sim`` driver; (exit code, episode results)."""
-    from skidnav.agents.registry import make_agent
-
-    robot, grid = RobotParams(), Discretization()
-    grid_map = build_map(config.run.map, config.run.seed, grid)
-    context = agent_context(agent_name, robot, grid)
-    rng = seed_streams(config.run.seed)["agent"]
-    table = config.agents.get(agent_name)
-    agent = make_agent(agent_name, grid.n_states, N_ACTIONS, table, rng, **context)
-    warm_up_agent(agent_name, config, context, grid.n_states)
-    driver = make_driver("sim", config, server_log=out / "sim-server.jsonl")
-    try:
-        driver.connect()
-    except ConnectionError as error:
-        getattr(driver, "shutdown", driver.close)()
-        raise UserError(f"cannot start the sim server: {error}") from None
-    loop = RealtimeLoop(
-        driver, agent, grid_map, config, out, robot=robot, grid=grid, progress=progress
-    )
-    try:
-        with interrupt_handlers(loop):
-            code = loop.run(0)
-    finally:
-        getattr(driver, "shutdown", driver.close)()
-    return code, loop.results
+def _map_spec(spec: str) -> MapSpec:
+    """A ``[run] map`` (a kind, or a map file's absolute path) as the grid's map."""
+    if spec in MAP_KINDS:
+        return MapSpec(spec, kind=spec)
+    return MapSpec(Path(spec).stem, file=spec)
 
 
-def record_of(agent: str, preset: str, seed: int, results: Sequence[Any]) -> RunRecord:
-    """The :class:`RunRecord` of a run's episode results (``EpisodeResult`` objects)."""
-    episodes = len(results)
-    reached = [bool(r.reached_goal) and not r.aborted for r in results]
-    late = reached[episodes // 2 :]
-    successes = sum(reached)
-    return RunRecord(
-        agent=agent,
-        preset=preset,
-        seed=seed,
-        episodes=episodes,
-        successes=successes,
-        success_rate=successes / episodes if episodes else 0.0,
-        mean_episode_actions=sum(r.actions for r in results) / episodes if episodes else 0.0,
-        aborted=sum(bool(r.aborted) for r in results),
-        late_episodes=len(late),
-        late_successes=sum(late),
-    )
+class StudyOutcome(NamedTuple):
+    """What :func:`run_study` did: exit code (0, or 130 interrupted), runs of the grid, runs
+    finished (before or now), runs executed now."""
 
-
-def _read_record(path: Path) -> RunRecord | None:
-    """The record of a finished run, or None (logged) when it is absent or unreadable (too
-    large, not JSON, nested too deeply, wrong fields): the run is then repeated."""
-    if not path.is_file():
-        return None
-    try:
-        data = read_json(path, max_bytes=MAX_RECORD_BYTES, what="run record")
-        unknown = sorted(set(data) - set(RunRecord.__dataclass_fields__))
-        if unknown:
-            raise ValueError(f"unexpected field {shown(unknown[0])}")
-        return RunRecord(**data)
-    except UserError as error:  # names the file
-        problem = first_line(error, len(str(path)) + 120)
-    except (ValueError, TypeError) as error:
-        problem = f"{path}: {first_line(error, 120)}"
-    log.warning("%s; the run is repeated", problem)
-    return None
-
-
-def _write_record(path: Path, record: RunRecord) -> None:
-    """Write ``result.json`` atomically: a run killed while writing it is repeated, never half
-    recorded."""
-    write_user_file(path, json.dumps(asdict(record), indent=1).encode("utf-8"), "run record")
+    code: int
+    n_runs: int
+    finished: int
+    executed: int
 
 
 def run_study(
@@ -240,73 +307,41 @@ def run_study(
     settings: StudySettings,
     out: Path,
     *,
-    progress: Callable[[str], None] | None = None,
-    announce: Callable[[str], None] | None = None,
-) -> tuple[int, list[RunRecord]]:
-    """Run every unfinished (agent, preset, seed), then write ``study.csv`` and ``study.md``.
+    progress: Callable[[str], None] = ignore,
+    announce: Callable[[str], None] = ignore,
+) -> StudyOutcome:
+    """Run (or resume) every run of the study in ``out`` through the experiment runner, then
+    write ``study.md`` (also after an interruption, from the runs finished by then).
 
-    Returns (exit code: 0, or the code of an interrupted run; the records of all finished runs).
-    ``announce`` gets one line per run (ran or skipped); ``progress`` the loop's status lines.
+    Raises:
+        UserError: bad settings or config (before anything is written), ``out`` holds other
+            results or is in use, a run's robot cannot be reached, a file cannot be written.
     """
-    progress = progress or (lambda line: None)
-    announce = announce or (lambda line: None)
-    _check_agents(settings.agents)
-    configs = {
-        (preset, seed): run_config(tables, settings, preset, seed)
-        for preset in settings.presets
-        for seed in range(settings.seeds)
-    }
-    records: list[RunRecord] = []
-    code = 0
-    for agent in settings.agents:
-        for (preset, seed), config in configs.items():
-            run_dir = out / "runs" / agent / preset / f"seed-{seed}"
-            record = _read_record(run_dir / "result.json")
-            if record is not None:
-                announce(f"{agent} {preset} seed {seed}: done before, skipped")
-                records.append(record)
-                continue
-            if run_dir.exists():
-                shutil.rmtree(run_dir)  # unfinished: start over
-            run_dir.mkdir(parents=True)
-            code, results = _run_one(config, agent, run_dir, progress)
-            if code == EXIT_INTERRUPTED:
-                break
-            record = record_of(agent, preset, seed, results)
-            _write_record(run_dir / "result.json", record)
-            announce(
-                f"{agent} {preset} seed {seed}: {record.successes}/{record.episodes} goals, "
-                f"{record.mean_episode_actions:.1f} actions/episode, {record.aborted} aborted"
-            )
-            records.append(record)
-        if code == EXIT_INTERRUPTED:
-            break
-    write_outputs(records, configs, out)
-    return (EXIT_INTERRUPTED if code == EXIT_INTERRUPTED else 0), records
-
-
-def write_outputs(
-    records: Sequence[RunRecord], configs: Mapping[tuple[str, int], RealtimeConfig], out: Path
-) -> None:
-    """``study.csv`` (one row per run) and ``study.md`` (see :func:`markdown_report`), each
-    written atomically (:func:`~skidnav.atomicfile.write_atomic`): a kill leaves the old table or
-    the new one, and the next call removes its temporary."""
-    table = io.StringIO()
-    writer = csv.DictWriter(table, fieldnames=CSV_FIELDS)
-    writer.writeheader()
-    for record in records:
-        row = asdict(record)
-        row["success_rate"] = f"{record.success_rate:.4f}"
-        row["mean_episode_actions"] = f"{record.mean_episode_actions:.2f}"
-        writer.writerow(row)
-    conditions = {
-        preset: (config.sim.slip, config.sim.drift > 0) for (preset, _), config in configs.items()
-    }
-    rows = [asdict(record) for record in records]
+    grid = build_grid(tables, settings)
+    if (out / "study.csv").exists() and not (out / "config.json").exists():
+        raise UserError(f"{out}: holds a study in an earlier format; choose another --out")
+    store = ResultStore(out, STUDY_LAYOUT)
+    before = len(store.finished()) if store.check(grid) else 0
+    trial = RealtimeTrial(out, progress, announce)
     try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise UserError(f"{out}: cannot create the folder ({error.strerror or error})") from None
-    remove_stale_temporaries(out)  # of a study killed while writing its tables
-    write_user_file(out / "study.csv", table.getvalue().encode("utf-8"), "study table")
-    write_user_file(out / "study.md", markdown_report(rows, conditions).encode("utf-8"), "report")
+        try:
+            outcome = run_experiment(grid, out, backend="serial", trial=trial, layout=STUDY_LAYOUT)
+        except KeyboardInterrupt:
+            finished = write_report(store, grid, consolidate=True)
+            return StudyOutcome(EXIT_INTERRUPTED, grid.n_runs, finished, finished - before)
+        write_report(store, grid)
+    except OSError as error:  # a full disk, a folder that cannot be written
+        reason = error.strerror or first_line(error)
+        raise UserError(f"{error.filename or out}: cannot write the study ({reason})") from None
+    return StudyOutcome(0, outcome.n_runs, outcome.n_runs, outcome.executed)
+
+
+def write_report(store: ResultStore, grid: StudyGrid, *, consolidate: bool = False) -> int:
+    """Write ``study.md`` from the store's summaries (consolidated first when asked, e.g. after
+    an interruption); returns the runs it covers (0 without any finished run: nothing written)."""
+    if not store.finished():
+        return 0
+    summaries = store.consolidate()[1] if consolidate else store.load_tables()[1]
+    text = markdown_report(summaries, grid, grid.conditions())
+    write_user_file(store.root / "study.md", text.encode("utf-8"), "report")
+    return len(summaries)

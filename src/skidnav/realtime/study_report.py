@@ -1,218 +1,187 @@
 """The markdown tables of a hardware-in-the-loop study (realtime/study.py, docs/realtime.md).
 
-Every statistic is over seeds: each run contributes its own success rate (all episodes, or the
-last half: ``late``) and its mean episode length; a cell's estimate is the mean over its seeds
-with a 95 % percentile-bootstrap interval (:mod:`skidnav.stats`; no interval from one seed).
-Comparisons are paired by seed: runs with the same seed share the map and the root seed, so
-rough vs slippery pairs the two floors of one slip condition, and an agent vs Q-learning pairs
-the same preset. The resamples come from ``np.random.default_rng(0)``: the same rows give the same
-tables.
+Every statistic comes from :mod:`skidnav.experiments.analysis`, over the store's summaries (one
+row per run): a cell's estimate is the mean over its seeds of the runs' own rates and lengths,
+with a percentile-bootstrap interval (none from one seed) drawn by the cell's own generator,
+keyed by the root seed and the cell's labels. An agent minus the baseline (Q-learning) is paired
+by (preset, seed): both met the same world. The rough and the slippery floor are different
+worlds, compared unpaired. This module only formats.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
-import numpy as np
+import pandas as pd
 
-from skidnav.stats import Interval, bootstrap_interval, difference_interval, ratio_interval
-
-CSV_FIELDS = (
-    "agent",
-    "preset",
-    "seed",
-    "episodes",
-    "successes",
-    "success_rate",
-    "mean_episode_actions",
-    "aborted",
-    "late_episodes",
-    "late_successes",
+from skidnav.experiments.analysis import (
+    StatsSettings,
+    aggregate,
+    baseline_differences,
+    compare_surfaces,
 )
-BASELINE = "q-learning"
-SLIP_CONDITIONS = (("stationary", False), ("drifting", True), ("both", None))
 
-Row = Mapping[str, Any]
-Metric = Callable[[Row], float]
+CELL_METRICS = ("success_rate", "success_rate_last_half", "mean_length")
+"""Summary columns of the tables: success (all episodes, last half), episode length [actions]."""
+SCALES = {"success_rate": 100.0, "success_rate_last_half": 100.0, "mean_length": 1.0}
+"""Display scale of each metric (rates in %)."""
+SLIP_CONDITIONS = (("stationary", (False,)), ("drifting", (True,)), ("both", (False, True)))
+"""Rows of the floor table: (label, drifting slip? values pooled)."""
 
-
-def success_rate(row: Row) -> float:
-    """Share of a run's episodes that reached the goal."""
-    return int(row["successes"]) / int(row["episodes"])
-
-
-def late_success_rate(row: Row) -> float:
-    """Share of the last half of a run's episodes that reached the goal."""
-    return int(row["late_successes"]) / int(row["late_episodes"])
+Conditions = Mapping[str, tuple[str, bool]]
+"""Preset → (slip preset of its floor, drifting slip?)."""
 
 
-def episode_length(row: Row) -> float:
-    """Mean actions per episode of a run."""
-    return float(row["mean_episode_actions"])
-
-
-def _interval(value: Interval, scale: float = 100.0, digits: int = 1) -> str:
-    text = f"{scale * value.estimate:.{digits}f}"
-    if math.isnan(value.low):
+def _interval(estimate: float, low: float, high: float, scale: float, signed: bool = False) -> str:
+    """``estimate [low, high]`` times ``scale`` with one decimal (and a sign when ``signed``);
+    without the bounds when they are NaN (one seed)."""
+    form = "+.1f" if signed else ".1f"
+    text = f"{scale * estimate:{form}}"
+    if math.isnan(low):
         return text
-    return f"{text} [{scale * value.low:.{digits}f}, {scale * value.high:.{digits}f}]"
+    return f"{text} [{scale * low:{form}}, {scale * high:{form}}]"
 
 
-def _signed(value: Interval, scale: float = 100.0) -> str:
-    text = f"{scale * value.estimate:+.1f}"
-    if math.isnan(value.low):
-        return text
-    return f"{text} [{scale * value.low:+.1f}, {scale * value.high:+.1f}]"
+def _by(table: pd.DataFrame, *keys: str) -> dict[tuple[Any, ...], dict[Any, Any]]:
+    """The rows of ``table`` as dicts, by the values of the columns ``keys``."""
+    return {tuple(row[k] for k in keys): row for row in table.to_dict("records")}
 
 
-def _by_seed(rows: Sequence[Row]) -> dict[int, Row]:
-    return {int(r["seed"]): r for r in rows}
-
-
-def _paired(
-    first: Sequence[Row], second: Sequence[Row], metric: Metric
-) -> tuple[np.ndarray, np.ndarray]:
-    """``metric`` of the runs of ``first`` and ``second`` that share a seed, in seed order."""
-    a, b = _by_seed(first), _by_seed(second)
-    seeds = sorted(set(a) & set(b))
-    return np.array([metric(a[s]) for s in seeds]), np.array([metric(b[s]) for s in seeds])
-
-
-def _cell_table(rows: Sequence[Row], agents: list[str], presets: list[str]) -> str:
+def _cell_table(summaries: pd.DataFrame, settings: StatsSettings, presets: Sequence[str]) -> str:
     lines = [
         "| agent | preset | seeds | episodes | success [%] | success, last half [%] "
         "| episode length [actions] | aborted |",
         "|---|---|---:|---:|---:|---:|---:|---:|",
     ]
-    rng = np.random.default_rng(0)
-    for agent in agents:
+    table = _by(aggregate(summaries, settings, CELL_METRICS), "agent", "preset", "metric")
+    for agent in settings.agent_labels:
         for preset in presets:
-            cell = [r for r in rows if r["agent"] == agent and r["preset"] == preset]
-            if not cell:
+            runs = summaries[(summaries["agent"] == agent) & (summaries["preset"] == preset)]
+            if runs.empty:
                 continue
-            success, late, length = (
-                bootstrap_interval([metric(r) for r in cell], rng)
-                for metric in (success_rate, late_success_rate, episode_length)
-            )
-            episodes = sum(int(r["episodes"]) for r in cell)
-            aborted = sum(int(r["aborted"]) for r in cell)
+            cells = []
+            for metric in CELL_METRICS:
+                row = table[(agent, preset, metric)]
+                cells.append(
+                    _interval(row["mean"], row["mean_low"], row["mean_high"], SCALES[metric])
+                )
             lines.append(
-                f"| {agent} | {preset} | {len(cell)} | {episodes} | {_interval(success)} "
-                f"| {_interval(late)} | {_interval(length, 1.0)} | {aborted} |"
+                f"| {agent} | {preset} | {len(runs)} | {int(runs['episodes'].sum())} "
+                f"| {' | '.join(cells)} | {int(runs['aborted'].sum())} |"
             )
     return "\n".join(lines)
 
 
-def _floor_pairs(
-    rows: Sequence[Row],
-    agent: str,
-    conditions: Mapping[str, tuple[str, bool]],
-    drifting: bool | None,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Late success on the rough and on the slippery floor, paired by (slip condition, seed)."""
-    rough, slippery = [], []
-    for is_drifting in (False, True):
-        if drifting is not None and is_drifting != drifting:
-            continue
-
-        def of(floor: str, is_drifting: bool = is_drifting) -> list[Row]:
-            return [
-                r
-                for r in rows
-                if r["agent"] == agent and conditions[r["preset"]] == (floor, is_drifting)
-            ]
-
-        a, b = _paired(of("rough"), of("slippery"), late_success_rate)
-        rough.append(a)
-        slippery.append(b)
-    return np.concatenate(rough), np.concatenate(slippery)
+def _floor_presets(conditions: Conditions, floor: str, drifting: Sequence[bool]) -> list[str]:
+    return [p for p, (slip, drifts) in conditions.items() if slip == floor and drifts in drifting]
 
 
-def _ratio_table(
-    rows: Sequence[Row], agents: list[str], conditions: Mapping[str, tuple[str, bool]]
-) -> str:
-    """Rough / slippery late success per agent and slip condition (and both pooled)."""
+def _ratio(row: Mapping[str, Any]) -> str:
+    """Rough / slippery, or why there is no ratio."""
+    if row["slippery"] > 0:
+        text = f"{row['ratio']:.2f}"
+        return (
+            text
+            if math.isnan(row["ratio_low"])
+            else (f"{text} [{row['ratio_low']:.2f}, {row['ratio_high']:.2f}]")
+        )
+    return "∞ (slippery 0)" if row["rough"] > 0 else "undefined (both 0)"
+
+
+def _ratio_table(summaries: pd.DataFrame, settings: StatsSettings, conditions: Conditions) -> str:
+    """Rough / slippery success in the last half per agent and slip condition run on both
+    floors, and both conditions pooled when each was."""
     lines = [
-        "| agent | slip | pairs | rough [%] | slippery [%] | rough / slippery |",
+        "| agent | slip | runs (rough, slippery) | rough [%] | slippery [%] | rough / slippery |",
         "|---|---|---:|---:|---:|---:|",
     ]
-    rng = np.random.default_rng(0)
-    for agent in agents:
-        for label, drifting in SLIP_CONDITIONS:
-            rough, slippery = _floor_pairs(rows, agent, conditions, drifting)
-            if rough.size == 0:
+    matched = {
+        drifting
+        for drifting in (False, True)
+        if _floor_presets(conditions, "rough", (drifting,))
+        and _floor_presets(conditions, "slippery", (drifting,))
+    }
+    tables = {}
+    for label, drifting in SLIP_CONDITIONS:
+        if not matched >= set(drifting):  # "both" only when each condition has both floors
+            continue
+        rough = _floor_presets(conditions, "rough", drifting)
+        slippery = _floor_presets(conditions, "slippery", drifting)
+        metrics = ("success_rate_last_half",)
+        table = compare_surfaces(summaries, settings, rough, slippery, metrics)
+        tables[label] = _by(table, "agent")
+    for agent in settings.agent_labels:
+        for label, rows in tables.items():
+            row = rows.get((agent,))
+            if row is None:
                 continue
-            if slippery.mean() > 0:
-                ratio = _interval(ratio_interval(rough, slippery, rng), 1.0, 2)
-            else:
-                ratio = "∞ (slippery 0)" if rough.mean() > 0 else "undefined (both 0)"
             lines.append(
-                f"| {agent} | {label} | {rough.size} | {100 * rough.mean():.1f} "
-                f"| {100 * slippery.mean():.1f} | {ratio} |"
+                f"| {agent} | {label} | {row['rough_runs']}, {row['slippery_runs']} "
+                f"| {100 * row['rough']:.1f} | {100 * row['slippery']:.1f} | {_ratio(row)} |"
             )
     if len(lines) == 2:
-        return "(no floor pairs: no slip condition was run on both floors with the same seed)"
+        return "(no floor pair: no slip condition was run on both the rough and the slippery floor)"
     return "\n".join(lines)
-
-
-def _versus_baseline(
-    rows: Sequence[Row], agent: str, presets: Sequence[str], metric: Metric
-) -> tuple[np.ndarray, np.ndarray]:
-    """``metric`` of ``agent`` and of Q-learning, paired by (preset, seed) over ``presets``."""
-    pairs = [
-        _paired(
-            [r for r in rows if r["agent"] == agent and r["preset"] == preset],
-            [r for r in rows if r["agent"] == BASELINE and r["preset"] == preset],
-            metric,
-        )
-        for preset in presets
-    ]
-    return np.concatenate([p[0] for p in pairs]), np.concatenate([p[1] for p in pairs])
 
 
 def _difference_table(
-    rows: Sequence[Row], agents: list[str], conditions: Mapping[str, tuple[str, bool]]
+    summaries: pd.DataFrame, settings: StatsSettings, conditions: Conditions
 ) -> str:
-    """Each other agent minus Q-learning, paired by (preset, seed), per floor."""
+    """Each other agent minus the baseline per floor, paired by (preset, seed)."""
     lines = [
         "| agent | floor | pairs | Δ success [points] | Δ success, last half [points] "
         "| Δ episode length [actions] |",
         "|---|---|---:|---:|---:|---:|",
     ]
-    rng = np.random.default_rng(0)
-    metrics = ((success_rate, 100.0), (late_success_rate, 100.0), (episode_length, 1.0))
-    for agent in (a for a in agents if a != BASELINE):
-        for floor in sorted({slip for slip, _ in conditions.values()}):
-            presets = [preset for preset, (slip, _) in conditions.items() if slip == floor]
-            cells = []
-            for metric, scale in metrics:
-                ours, theirs = _versus_baseline(rows, agent, presets, metric)
-                cells.append(_signed(difference_interval(ours, theirs, rng), scale))
-            if ours.size:
-                lines.append(f"| {agent} | {floor} | {ours.size} | {' | '.join(cells)} |")
+    floors = sorted({slip for slip, _ in conditions.values()})
+    groups = {
+        floor: [p for p, (slip, _) in conditions.items() if slip == floor] for floor in floors
+    }
+    table = baseline_differences(summaries, settings, CELL_METRICS, groups)
+    if table.empty:
+        return "(no pair: no other agent ran a preset the baseline ran)"
+    rows = _by(table, "agent", "group", "metric")
+    for agent, floor in dict.fromkeys(zip(table["agent"], table["group"], strict=True)):
+        cells = [
+            _interval(row["difference"], row["difference_low"], row["difference_high"],
+                      SCALES[metric], signed=True)
+            for metric, row in ((m, rows[(agent, floor, m)]) for m in CELL_METRICS)
+        ]  # fmt: skip
+        first = rows[(agent, floor, CELL_METRICS[0])]
+        pairs = f"{first['n']}" if first["paired"] else f"{first['n']} (unpaired)"
+        lines.append(f"| {agent} | {floor} | {pairs} | {' | '.join(cells)} |")
     return "\n".join(lines)
 
 
-def markdown_report(rows: Sequence[Row], conditions: Mapping[str, tuple[str, bool]]) -> str:
-    """The study's markdown: per agent × preset table, rough/slippery ratios, and (with
-    Q-learning among the agents) every other agent minus Q-learning per floor.
+def markdown_report(
+    summaries: pd.DataFrame, settings: StatsSettings, conditions: Conditions
+) -> str:
+    """The study's markdown: per agent × preset table, rough/slippery ratios, and (with more
+    than one agent) every other agent minus the baseline per floor.
 
     Args:
-        rows: run records (keys of :data:`CSV_FIELDS`).
-        conditions: preset → (slip preset of its floor, drifting slip?).
+        summaries: one row per finished run (``summaries.parquet``: grid coordinates and the
+            metrics of :func:`skidnav.realtime.study.run_summary`).
+        settings: root seed, agents, baseline and bootstrap settings (the study's grid).
+        conditions: every preset of the grid, in order → (slip preset, drifting slip?).
     """
-    agents = list(dict.fromkeys(str(r["agent"]) for r in rows))
-    presets = [p for p in conditions if any(r["preset"] == p for r in rows)]
+    present = set(summaries["preset"])
+    presets = [preset for preset in conditions if preset in present]
+    level = round(100 * settings.confidence)
     parts = [
-        "Estimates are means over seeds with 95 % bootstrap intervals in brackets; comparisons "
-        "are paired by seed.\n",
+        f"Estimates are means over seeds with {level} % bootstrap intervals in brackets; an agent "
+        f"minus {settings.baseline} is paired by preset and seed, the floors are compared "
+        "unpaired.\n",
         "## Success and episode length\n",
-        _cell_table(rows, agents, presets),
+        _cell_table(summaries, settings, presets),
         "\n## Rough vs slippery floor (success, last half of the episodes)\n",
-        _ratio_table(rows, agents, conditions),
+        _ratio_table(summaries, settings, conditions),
     ]
-    if BASELINE in agents and len(agents) > 1:
-        parts += [f"\n## Minus {BASELINE}\n", _difference_table(rows, agents, conditions)]
+    if len(set(summaries["agent"])) > 1:
+        parts += [
+            f"\n## Minus {settings.baseline}\n",
+            _difference_table(summaries, settings, conditions),
+        ]
     return "\n".join(parts) + "\n"

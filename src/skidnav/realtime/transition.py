@@ -9,12 +9,13 @@ the body-frame finite differences consistent with the explicit-Euler model are
 
 keyed by the coarse region of p₀, with the commanded wheel speeds of the action.
 
-Reward (the env's rule, SPEC §3): +10 and termination when the action ends in the goal cell; −10
-after a collision; otherwise −1 − 10·var with var the observed (thesis) variance of the wheel
-speeds measured during forward actions in the region where the action ends, corrected for pose
-noise (:class:`WheelSpeedStats`). A real robot has no known slip field, so the observed variance is
-the only one available here; uncorrected, a tracker's 1 mm of pose noise alone would read as a
-variance of ≈ 0.4 rad²/s² over 0.1 s periods, a −4 penalty on every step of every region.
+Reward: the env's rule, :func:`skidnav.kernels.navigation.action_reward` (SPEC §3: +10 and
+termination when the action ends in the goal cell; −10 after a collision; otherwise −1 − 10·var),
+var being the observed (thesis) variance of the wheel speeds measured during forward actions in
+the region where the action ends, corrected for pose noise (:class:`WheelSpeedStats`). A real
+robot has no known slip field, so the observed variance is the only one available here;
+uncorrected, a tracker's 1 mm of pose noise alone would read as a variance of ≈ 0.4 rad²/s² over
+0.1 s periods, a −4 penalty on every step of every region.
 Wheel speeds are recovered from the measured twist by inverting the ICR model:
 ω_R = (v_x + c·yaw_rate)/r, ω_L = (v_x − c·yaw_rate)/r (Kozłowski & Pazderski 2004).
 """
@@ -25,17 +26,13 @@ import math
 
 import numpy as np
 
-from skidnav.kernels.navigation import LOG_COLUMNS, RewardScheme
+from skidnav.kernels.navigation import LOG_COLUMNS, RewardScheme, action_reward
 from skidnav.realtime.driver import Pose
+from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
 
 assert len(LOG_COLUMNS) == 6
-
-
-def wrap_angle(angle: float) -> float:
-    """``angle`` [rad] wrapped to [−π, π]."""
-    return math.atan2(math.sin(angle), math.cos(angle))
 
 
 def log_row(
@@ -174,10 +171,7 @@ def reward_of(
     scheme: RewardScheme | None = None,
 ) -> tuple[float, bool]:
     """(reward, terminated) of an action that ended at ``pose`` (see module doc)."""
-    scheme = scheme or RewardScheme()
-    if grid.cell(pose.x, pose.y) == tuple(goal):
-        return scheme.goal, True
-    if collided:
-        return scheme.collision, False
+    at_goal = grid.cell(pose.x, pose.y) == tuple(goal)
     variance = stats.variance(grid.region(pose.x, pose.y))
-    return scheme.step - scheme.variance_weight * variance, False
+    reward = action_reward(scheme or RewardScheme(), at_goal, bool(collided), variance)
+    return float(reward), at_goal

@@ -7,6 +7,7 @@ from skidnav.robot.kinematics import (
     commanded_wheel_speeds,
     euler_step,
     exact_step,
+    pose_step,
 )
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SLIP_PRESETS, SlipField, make_slip_field
@@ -22,4 +23,5 @@ __all__ = [
     "euler_step",
     "exact_step",
     "make_slip_field",
+    "pose_step",
 ]

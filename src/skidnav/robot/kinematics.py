@@ -15,12 +15,22 @@ from __future__ import annotations
 
 import math
 
-from skidnav._jit import jit
+from skidnav._jit import inline_jit, jit
 
 N_ACTIONS = 4
 """Number of discrete actions: 0 forward, 1 backward, 2 turn left, 3 turn right."""
 
 ACTION_NAMES = ("forward", "backward", "left", "right")
+
+
+@inline_jit
+def wrap_angle(angle: float) -> float:
+    """``angle`` [rad] wrapped to [−π, π] (compiled and plain Python alike).
+
+    >>> round(wrap_angle(3 * math.pi / 2), 6)
+    -1.570796
+    """
+    return math.atan2(math.sin(angle), math.cos(angle))
 
 
 @jit
@@ -96,6 +106,28 @@ def exact_step(
     new_x = x + forward * cos_h - lateral * sin_h
     new_y = y + forward * sin_h + lateral * cos_h
     return new_x, new_y, heading + turn
+
+
+@jit
+def pose_step(
+    x: float,
+    y: float,
+    heading: float,
+    v_x: float,
+    v_y: float,
+    yaw_rate: float,
+    dt: float,
+    exact: bool,
+) -> tuple[float, float, float]:
+    """One step of the robot's integrator: :func:`exact_step` if ``exact``, else
+    :func:`euler_step` (``RobotParams.integrator``). Args and returns as :func:`euler_step`.
+
+    >>> pose_step(0.0, 0.0, 0.0, 0.1, 0.0, 0.0, 0.5, False)
+    (0.05, 0.0, 0.0)
+    """
+    if exact:
+        return exact_step(x, y, heading, v_x, v_y, yaw_rate, dt)
+    return euler_step(x, y, heading, v_x, v_y, yaw_rate, dt)
 
 
 @jit

@@ -95,6 +95,11 @@ class RobotParams:
         """Duration of one action [s]."""
         return self.dt * self.substeps
 
+    @property
+    def exact_integration(self) -> bool:
+        """True for the closed-form constant-twist step, False for explicit Euler."""
+        return self.integrator == "exact"
+
     def kernel_constants(self) -> KinematicConstants:
         """The parameters as the named tuple the compiled kernels take."""
         return KinematicConstants(
@@ -105,5 +110,5 @@ class RobotParams:
             substeps=int(self.substeps),
             arena_width=float(self.arena_width),
             arena_height=float(self.arena_height),
-            exact_integration=self.integrator == "exact",
+            exact_integration=self.exact_integration,
         )

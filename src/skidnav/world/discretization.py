@@ -20,6 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
+from skidnav.robot.kinematics import wrap_angle
 
 
 class GridShape(NamedTuple):
@@ -48,7 +49,7 @@ def level_index(value: float, extent: float, levels: int) -> int:
 @jit
 def heading_bin(heading: float, n_headings: int) -> int:
     """Bin of a heading [rad] among ``n_headings`` equal sectors starting at −π."""
-    wrapped = math.atan2(math.sin(heading), math.cos(heading))
+    wrapped = wrap_angle(heading)
     return math.floor((wrapped + math.pi) / (2.0 * math.pi) * n_headings) % n_headings
 
 
@@ -185,10 +186,6 @@ class Discretization:
     def heading_centre(self, heading_index: int) -> float:
         """Centre angle of a heading bin [rad], in [−π, π)."""
         return -math.pi + (heading_index + 0.5) * 2.0 * math.pi / self.n_headings
-
-    def region_of_cell(self, i: int, j: int) -> int:
-        """Flat slip-region index of the centre of cell (i, j)."""
-        return self.region(*self.cell_centre(i, j))
 
     def state_cells(self) -> np.ndarray:
         """(i, j) of every flat state, shape (n_states, 2)."""
