@@ -16,19 +16,19 @@ from typing import Any
 import numpy as np
 import pytest
 
-from saved_file_support import (
-    arrays_of,
-    listing,
-    run_with_full_disk,
-    skidnav_with_full_disk,
-    write_checkpoint,
-)
 from skidnav.agents.registry import load_agent, make_agent
 from skidnav.cli import main
 from skidnav.commands.reproduce import dyna_maze_runs
 from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
+from tests.saved_file_support import (
+    arrays_of,
+    listing,
+    run_with_full_disk,
+    skidnav_with_full_disk,
+    write_checkpoint,
+)
 
 REALTIME = Path(__file__).resolve().parents[2] / "configs" / "realtime.toml"
 SMALL_GRID = Discretization(n_x=6, n_y=5, n_headings=4, regions_x=2, regions_y=2)

@@ -19,7 +19,9 @@ from skidnav.envs.mazes import dyna_maze
 
 @pytest.fixture(autouse=True)
 def _registered(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setitem(registry.AGENT_MODULES, "sample-average-q", "sample_average_agent")
+    monkeypatch.setitem(
+        registry.AGENT_MODULES, "sample-average-q", "tests.agents.sample_average_agent"
+    )
 
 
 def _agent(seed: int) -> registry.TabularAgent:

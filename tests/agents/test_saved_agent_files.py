@@ -11,15 +11,6 @@ from typing import Any
 import numpy as np
 import pytest
 
-from saved_file_support import (
-    arrays_of,
-    forged_header_length,
-    forged_npy,
-    listing,
-    npy_bytes,
-    write_checkpoint,
-    write_npz,
-)
 from skidnav.agents.registry import load_agent, make_agent
 from skidnav.agents.training import train_agent
 from skidnav.cli import main
@@ -29,6 +20,15 @@ from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
 from skidnav.robot.params import RobotParams
 from skidnav.savedfile import SavedArchive
 from skidnav.world.discretization import Discretization
+from tests.saved_file_support import (
+    arrays_of,
+    forged_header_length,
+    forged_npy,
+    listing,
+    npy_bytes,
+    write_checkpoint,
+    write_npz,
+)
 
 REALTIME = Path(__file__).resolve().parents[2] / "configs" / "realtime.toml"
 Files = tuple[dict[str, Any], dict[str, Any]]

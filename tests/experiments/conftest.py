@@ -5,10 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from exp_support import TINY_TOML
 
 from skidnav.experiments.configfile import parse_config
 from skidnav.experiments.runner import run_experiment
+from tests.experiments.exp_support import TINY_TOML
 
 
 @pytest.fixture(scope="session")

@@ -6,7 +6,8 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from realtime_helpers import ServerProcess, ServerThread
+
+from tests.realtime.realtime_helpers import ServerProcess, ServerThread
 
 
 @pytest.fixture

@@ -18,11 +18,11 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skidnav.realtime import protocol as pr
 from skidnav.realtime.config import ServerOptions
-from skidnav.realtime.records import EventLog
-from skidnav.realtime.sim_robot import SimRobot, SimRobotConfig, build_robot, warm_up
-from skidnav.realtime.sim_server import SimServer, bind_listener
+from skidnav.realtime.control.records import EventLog
+from skidnav.realtime.link import protocol as pr
+from skidnav.realtime.sim.robot import SimRobot, SimRobotConfig, build_robot, warm_up
+from skidnav.realtime.sim.server import SimServer, bind_listener
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import make_slip_field
 from skidnav.world.discretization import Discretization

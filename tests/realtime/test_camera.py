@@ -1,4 +1,4 @@
-"""Overhead-camera tracking on synthetic images rendered at known poses (conftest_camera.py)."""
+"""Overhead-camera tracking on synthetic images rendered at known poses (camera_scenes.py)."""
 
 from __future__ import annotations
 
@@ -7,16 +7,10 @@ import math
 import cv2
 import numpy as np
 import pytest
-from conftest_camera import (
-    IMAGE_SIZE,
-    camera_homography,
-    degrade,
-    heading_error,
-    render_scene,
-)
 
 from skidnav.errors import UserError
-from skidnav.realtime.camera import (
+from skidnav.realtime.camera.markers import apply_homography, quad_centre
+from skidnav.realtime.camera.tracking import (
     ArenaLayout,
     CameraPosedDriver,
     CameraPoseSource,
@@ -25,7 +19,13 @@ from skidnav.realtime.camera import (
     MarkerDetector,
     calibrate,
 )
-from skidnav.realtime.camera_markers import apply_homography, quad_centre
+from tests.realtime.camera_scenes import (
+    IMAGE_SIZE,
+    camera_homography,
+    degrade,
+    heading_error,
+    render_scene,
+)
 
 LAYOUT = ArenaLayout()
 TOP_DOWN_SCALE = 1600.0  # px per m of the orthographic test view

@@ -9,18 +9,18 @@ import math
 import cv2
 import numpy as np
 import pytest
-from conftest_camera import (
+
+from skidnav import cli
+from skidnav.commands import camera as camera_command
+from skidnav.errors import UserError
+from skidnav.realtime.camera.tracking import ArenaLayout, CharucoBoardSpec, MarkerDetector
+from tests.realtime.camera_scenes import (
     LensCamera,
     heading_error,
     lens_board_views,
     render_lens_scene,
     render_scene,
 )
-
-from skidnav import cli
-from skidnav.commands import camera as camera_command
-from skidnav.errors import UserError
-from skidnav.realtime.camera import ArenaLayout, CharucoBoardSpec, MarkerDetector
 
 LAYOUT = ArenaLayout()
 POSES = [(0.1, 0.1, 0.5), None, (0.5, 0.4, -2.5)]

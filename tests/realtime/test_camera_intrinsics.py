@@ -1,6 +1,6 @@
 """Lens model: ChArUco calibration, undistortion and the marker height, on ray-cast lens images.
 
-The scenes of conftest_camera.LensCamera have a known K and distortion (k1 = -0.25); the intrinsics
+The scenes of camera_scenes.LensCamera have a known K and distortion (k1 = -0.25); the intrinsics
 used for tracking are the ones *calibrated* from the board views, never the true ones, unless a
 test says otherwise.
 """
@@ -13,7 +13,25 @@ import math
 import cv2
 import numpy as np
 import pytest
-from conftest_camera import (
+
+from skidnav.errors import CorruptFileError, UserError
+from skidnav.realtime.camera.calibration import check_intrinsics
+from skidnav.realtime.camera.intrinsics import board_view
+from skidnav.realtime.camera.lens import camera_pose, correct_for_height, undistort_pixels
+from skidnav.realtime.camera.tracking import (
+    ArenaLayout,
+    CameraIntrinsics,
+    CameraPoseSource,
+    CharucoBoardSpec,
+    FloorCalibration,
+    Frame,
+    MarkerDetector,
+    calibrate,
+    calibrate_intrinsics,
+    load_calibration,
+    load_intrinsics,
+)
+from tests.realtime.camera_scenes import (
     LENS_BOARD,
     LENS_DISTORTION,
     LENS_IMAGE_SIZE,
@@ -28,24 +46,6 @@ from conftest_camera import (
     true_intrinsics,
     undistort_normalised,
 )
-
-from skidnav.errors import CorruptFileError, UserError
-from skidnav.realtime.camera import (
-    ArenaLayout,
-    CameraIntrinsics,
-    CameraPoseSource,
-    CharucoBoardSpec,
-    FloorCalibration,
-    Frame,
-    MarkerDetector,
-    calibrate,
-    calibrate_intrinsics,
-    load_calibration,
-    load_intrinsics,
-)
-from skidnav.realtime.camera_calibration import check_intrinsics
-from skidnav.realtime.camera_intrinsics import board_view
-from skidnav.realtime.camera_lens import camera_pose, correct_for_height, undistort_pixels
 
 LAYOUT = ArenaLayout()
 MARKER_HEIGHT = 0.08  # m, the robot marker's height in the height tests

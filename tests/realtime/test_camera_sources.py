@@ -8,10 +8,9 @@ import math
 import cv2
 import numpy as np
 import pytest
-from conftest_camera import IMAGE_SIZE, heading_error, render_scene
 
 from skidnav.errors import CorruptFileError, UserError
-from skidnav.realtime.camera import (
+from skidnav.realtime.camera.tracking import (
     ArenaLayout,
     CameraPoseSource,
     FloorCalibration,
@@ -20,6 +19,7 @@ from skidnav.realtime.camera import (
     load_calibration,
     open_frames,
 )
+from tests.realtime.camera_scenes import IMAGE_SIZE, heading_error, render_scene
 
 LAYOUT = ArenaLayout()
 POSES = [(0.12, 0.15, 0.0), (0.2, 0.2, 0.8), (0.3, 0.26, 1.6), (0.4, 0.3, 2.4)]

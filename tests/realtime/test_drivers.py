@@ -6,9 +6,9 @@ import pytest
 
 from skidnav.errors import UserError
 from skidnav.realtime.config import config_from_mapping
-from skidnav.realtime.drivers import SimDriver, make_driver
-from skidnav.realtime.line_client import LineClient, SerialLink, TcpLink
-from skidnav.realtime.run import agent_context
+from skidnav.realtime.control.run import agent_context
+from skidnav.realtime.link.drivers import SimDriver, make_driver
+from skidnav.realtime.link.line_client import LineClient, SerialLink, TcpLink
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
 
@@ -44,7 +44,7 @@ def test_sim_driver_passes_the_run_to_the_server() -> None:
 
 
 def test_ros2_driver_is_built_by_name_when_installed() -> None:
-    pytest.importorskip("skidnav.realtime.ros2")
+    pytest.importorskip("skidnav.realtime.link.ros2")
     driver = make_driver("ros2", config_from_mapping({"ros2": {"port": 9999}}))
     assert type(driver).__name__ == "Ros2Driver"
     with pytest.raises(UserError, match=r"\[ros2\]"):

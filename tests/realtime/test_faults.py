@@ -11,7 +11,10 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from realtime_helpers import (
+
+from skidnav.agents.registry import load_agent
+from skidnav.realtime.control.checkpoint import Checkpoints
+from tests.realtime.realtime_helpers import (
     ServerProcess,
     ServerThread,
     read_events,
@@ -19,9 +22,6 @@ from realtime_helpers import (
     wait_for,
     write_config,
 )
-
-from skidnav.agents.registry import load_agent
-from skidnav.realtime.checkpoint import Checkpoints
 
 TIME_SCALE = 20.0
 POSE_TIMEOUT = 0.1  # max(5 periods of 5 ms, the 0.1 s floor)

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from skidnav.realtime.arena import build_map, seed_streams, start_pose
-from skidnav.realtime.driver import Pose
-from skidnav.realtime.homing import HomingController
-from skidnav.realtime.sim_robot import SimRobot, SimRobotConfig, build_robot
-from skidnav.realtime.transition import IcrEstimates, WheelSpeedStats, log_row, reward_of
+from skidnav.realtime.control.homing import HomingController
+from skidnav.realtime.control.transition import IcrEstimates, WheelSpeedStats, log_row, reward_of
+from skidnav.realtime.link.interface import Pose
+from skidnav.realtime.sim.robot import SimRobot, SimRobotConfig, build_robot
 from skidnav.robot.kinematics import body_velocities, euler_step
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization

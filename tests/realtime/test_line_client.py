@@ -8,12 +8,12 @@ import threading
 import time
 
 import pytest
-from realtime_helpers import ServerThread, wait_for
 
-from skidnav.realtime import protocol as pr
-from skidnav.realtime.line_client import LineClient, SerialLink, TcpLink
-from skidnav.realtime.safety import SafetyLimits, SafetyMonitor
-from skidnav.realtime.sim_server import FdChannel
+from skidnav.realtime.control.safety import SafetyLimits, SafetyMonitor
+from skidnav.realtime.link import protocol as pr
+from skidnav.realtime.link.line_client import LineClient, SerialLink, TcpLink
+from skidnav.realtime.sim.server import FdChannel
+from tests.realtime.realtime_helpers import ServerThread, wait_for
 
 
 def test_tcp_client_drives_the_sim_robot_and_stops_it(server_thread: ServerThread) -> None:

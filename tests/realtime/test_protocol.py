@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from skidnav.realtime import protocol as pr
+from skidnav.realtime.link import protocol as pr
 
 EXAMPLES = [
     pr.Hello(seq=0, name="skidnav"),

@@ -20,8 +20,8 @@ from typing import Any
 import pytest
 from websockets.asyncio.server import ServerConnection, serve
 
-from skidnav.realtime.ros2 import Ros2Config, Ros2Driver
-from skidnav.realtime.ros2_messages import (
+from skidnav.realtime.link.ros2 import Ros2Config, Ros2Driver
+from skidnav.realtime.link.ros2_messages import (
     compose,
     heading_from_quaternion,
     pose_from_message,

@@ -9,19 +9,19 @@ import math
 from typing import Any
 
 import pytest
-from test_ros2 import PARAMS, RosbridgeStub, make_driver, odometry, wait_for
 
 from skidnav.errors import UserError
 from skidnav.realtime.config import config_from_mapping
-from skidnav.realtime.drivers import make_driver as driver_by_name
-from skidnav.realtime.ros2 import Ros2Config
-from skidnav.realtime.ros2_messages import (
+from skidnav.realtime.control.safety import SafetyLimits, SafetyMonitor
+from skidnav.realtime.link.drivers import make_driver as driver_by_name
+from skidnav.realtime.link.ros2 import Ros2Config
+from skidnav.realtime.link.ros2_messages import (
     heading_from_quaternion,
     ros_time,
     seconds_from_stamp,
     wheel_speeds_to_twist,
 )
-from skidnav.realtime.safety import SafetyLimits, SafetyMonitor
+from tests.realtime.test_ros2 import PARAMS, RosbridgeStub, make_driver, odometry, wait_for
 
 WALL = 1_700_000_000.25  # this machine's ROS time in these tests [s since the epoch]
 MONO = 50.0  # its monotonic clock [s]
@@ -257,7 +257,7 @@ MALFORMED = [
 
 
 def test_malformed_messages_trip_with_one_log_line_and_the_reader_survives(server, caplog) -> None:
-    caplog.set_level(logging.DEBUG, logger="skidnav.realtime.ros2")
+    caplog.set_level(logging.DEBUG, logger="skidnav.realtime.link.ros2")
     driver = make_driver(server, wall_clock=FakeClock(1000.0), clock="header")
     reasons: list[str] = []
     driver.on_fault = reasons.append
@@ -279,7 +279,7 @@ def test_malformed_messages_trip_with_one_log_line_and_the_reader_survives(serve
     assert all("\n" not in reason and len(reason) < 160 for reason in reasons)
     assert "missing field header" in reasons[0] and "nanosec" in reasons[2]
     assert "out of range" in reasons[7] and "finite" in reasons[8]
-    ours = [r for r in caplog.records if r.name == "skidnav.realtime.ros2"]
+    ours = [r for r in caplog.records if r.name == "skidnav.realtime.link.ros2"]
     assert [r.getMessage() for r in ours if r.levelno == logging.WARNING] == [reasons[0]]
     assert not [r for r in caplog.records if r.exc_info or r.levelno >= logging.ERROR]
 

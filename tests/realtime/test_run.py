@@ -7,13 +7,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from realtime_helpers import read_events, write_config
 
 from skidnav.agents.registry import load_agent
 from skidnav.cli import main
-from skidnav.realtime.checkpoint import Checkpoints
 from skidnav.realtime.config import load_config
+from skidnav.realtime.control.checkpoint import Checkpoints
 from skidnav.world.discretization import Discretization
+from tests.realtime.realtime_helpers import read_events, write_config
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs" / "realtime.toml"
 

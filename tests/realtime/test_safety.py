@@ -6,10 +6,10 @@ import threading
 import time
 
 import pytest
-from realtime_helpers import wait_for
 
-from skidnav.realtime.driver import Pose
-from skidnav.realtime.safety import SafetyLimits, SafetyMonitor
+from skidnav.realtime.control.safety import SafetyLimits, SafetyMonitor
+from skidnav.realtime.link.interface import Pose
+from tests.realtime.realtime_helpers import wait_for
 
 
 class ScriptedDriver:

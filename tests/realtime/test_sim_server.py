@@ -8,13 +8,13 @@ import time
 
 import numpy as np
 import pytest
-from realtime_helpers import RawClient, ServerThread
 
-from skidnav.realtime import protocol as pr
-from skidnav.realtime.sim_robot import SimRobot, SimRobotConfig, build_robot
+from skidnav.realtime.link import protocol as pr
+from skidnav.realtime.sim.robot import SimRobot, SimRobotConfig, build_robot
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import make_slip_field
 from skidnav.world.discretization import Discretization
+from tests.realtime.realtime_helpers import RawClient, ServerThread
 
 
 def make_robot(

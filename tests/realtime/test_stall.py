@@ -14,7 +14,13 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from realtime_helpers import ServerProcess, read_events, start_run, wait_for, write_config
+from tests.realtime.realtime_helpers import (
+    ServerProcess,
+    read_events,
+    start_run,
+    wait_for,
+    write_config,
+)
 
 TIME_SCALE = 5.0  # 20 ms periods: an action of 10 periods lasts 0.2 s, most of the time moving
 FREEZE = 0.4

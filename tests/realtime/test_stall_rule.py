@@ -7,12 +7,12 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import pytest
-from realtime_helpers import bench_robot
 
-from skidnav.realtime import protocol as pr
 from skidnav.realtime.config import ServerOptions
-from skidnav.realtime.records import EventLog
-from skidnav.realtime.sim_robot import Firmware
+from skidnav.realtime.control.records import EventLog
+from skidnav.realtime.link import protocol as pr
+from skidnav.realtime.sim.robot import Firmware
+from tests.realtime.realtime_helpers import bench_robot
 
 HOST = 1000.0  # the host's clock reads 1000 s when the robot's reads 0
 

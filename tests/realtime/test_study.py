@@ -12,15 +12,13 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import pytest
-from realtime_helpers import write_config
-from test_run import small_room_map
 
 from skidnav.cli import main
 from skidnav.errors import UserError
 from skidnav.experiments.runs import RunSpec, expand_runs
 from skidnav.experiments.store import ResultStore
-from skidnav.realtime.loop import EXIT_INTERRUPTED
-from skidnav.realtime.records import EpisodeResult
+from skidnav.realtime.control.loop import EXIT_INTERRUPTED
+from skidnav.realtime.control.records import EpisodeResult
 from skidnav.realtime.study import (
     STUDY_LAYOUT,
     build_grid,
@@ -31,6 +29,8 @@ from skidnav.realtime.study import (
 )
 from skidnav.realtime.study_report import markdown_report
 from skidnav.realtime.study_trial import run_config
+from tests.realtime.realtime_helpers import write_config
+from tests.realtime.test_run import small_room_map
 
 AGENTS = ("q-learning", "dyna-q")
 PRESETS = ("rough-stationary", "slippery-drifting")

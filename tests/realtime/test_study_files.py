@@ -10,13 +10,13 @@ import sys
 from pathlib import Path
 
 import pytest
-from realtime_helpers import cli_env, wait_for
-from test_study import fake_realtime, study_config
 
-from saved_file_support import skidnav_with_full_disk
 from skidnav.cli import main
 from skidnav.experiments.store import directory_lock
 from skidnav.realtime.study import load_study, run_study
+from tests.realtime.realtime_helpers import cli_env, wait_for
+from tests.realtime.test_study import fake_realtime, study_config
+from tests.saved_file_support import skidnav_with_full_disk
 
 
 def _finished_study(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[Path, list[str]]:

@@ -9,9 +9,9 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from realtime_helpers import read_events, start_run, wait_for, write_config
 
 from skidnav.cli import main
+from tests.realtime.realtime_helpers import read_events, start_run, wait_for, write_config
 
 
 def blocked_path(tmp_path: Path) -> Path:
@@ -36,6 +36,7 @@ def run_cli(argv: list[str]) -> int:
         (["robot", "sim-server", "--port", "http"], "expected a port number, got 'http'"),
         (["robot", "sim-server", "--port", "0", "--time-scale", "inf"], "time_scale"),
         (["robot", "sim-server", "--port", "0", "--idle-timeout", "0.1"], "idle_timeout"),
+        (["robot", "sim-server", "--port", "0", "--integrator", "rk4"], "invalid choice: 'rk4'"),
         (["robot", "sim-server", "--port", "0", "--log", "{blocked}/server.jsonl"], "cannot write"),
         (["robot", "run", "--agent", "q-learning", "--out", "{blocked}/run"], "cannot write"),
         (["robot", "run", "--agent", "q-learning", "--episodes", "many"], "invalid int value"),
@@ -54,6 +55,23 @@ def test_bad_arguments_end_in_one_line_and_exit_code_2(
     assert needle in lines[0]
     assert captured.out == ""
     assert sorted(tmp_path.rglob("*")) == before  # nothing written
+
+
+@pytest.mark.parametrize("integrator", ["euler", "exact"])
+def test_the_sim_server_takes_the_integrator_asked_for(
+    integrator: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import skidnav.realtime.sim.robot as sim_robot
+
+    built = []
+
+    def build(**arguments: object) -> None:
+        built.append(arguments["robot"])
+        raise SystemExit(0)  # stop before the server binds
+
+    monkeypatch.setattr(sim_robot, "build_robot", build)
+    run_cli(["robot", "sim-server", "--port", "0", "--integrator", integrator])
+    assert [robot.integrator for robot in built] == [integrator]  # type: ignore[attr-defined]
 
 
 def process_gone(pid: int) -> bool:

@@ -12,12 +12,12 @@ from dataclasses import fields
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from realtime_helpers import bench_robot
 
-from skidnav.realtime import protocol as pr
 from skidnav.realtime.config import ServerOptions
-from skidnav.realtime.records import EventLog
-from skidnav.realtime.sim_robot import Firmware, SimRobot
+from skidnav.realtime.control.records import EventLog
+from skidnav.realtime.link import protocol as pr
+from skidnav.realtime.sim.robot import Firmware, SimRobot
+from tests.realtime.realtime_helpers import bench_robot
 
 FIELDS = sorted({f.name for cls in pr.MESSAGE_TYPES.values() for f in fields(cls)} | {"v", "type"})
 

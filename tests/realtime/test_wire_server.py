@@ -10,9 +10,9 @@ import time
 from pathlib import Path
 
 import pytest
-from realtime_helpers import RawClient, ServerThread, wait_for
 
-from skidnav.realtime import protocol as pr
+from skidnav.realtime.link import protocol as pr
+from tests.realtime.realtime_helpers import RawClient, ServerThread, wait_for
 
 TIME_SCALE = 10.0
 

@@ -23,7 +23,11 @@ from typing import Any
 import cv2
 
 from skidnav.errors import UserError
-from skidnav.realtime.camera import (
+from skidnav.realtime.camera.calibration import check_intrinsics
+from skidnav.realtime.camera.intrinsics import DEFAULT_BOARD_DICTIONARY, MIN_VIEWS
+from skidnav.realtime.camera.markers import DEFAULT_DICTIONARY, aruco_dictionary
+from skidnav.realtime.camera.sources import read_images
+from skidnav.realtime.camera.tracking import (
     ArenaLayout,
     CameraPoseSource,
     CharucoBoardSpec,
@@ -34,10 +38,6 @@ from skidnav.realtime.camera import (
     load_intrinsics,
     open_frames,
 )
-from skidnav.realtime.camera_calibration import check_intrinsics
-from skidnav.realtime.camera_intrinsics import DEFAULT_BOARD_DICTIONARY, MIN_VIEWS
-from skidnav.realtime.camera_markers import DEFAULT_DICTIONARY, aruco_dictionary
-from skidnav.realtime.camera_sources import read_images
 
 
 def add_parser(subparsers: Any) -> None:

@@ -53,6 +53,12 @@ def _add_sim_server(commands: Any) -> None:
     server.add_argument("--pose-noise", type=float, default=0.0, help="pose noise σ [m]")
     server.add_argument("--drop", type=float, default=0.0, help="pose drop probability")
     server.add_argument("--map", default="free", help="free, obstacles, maze or a map file")
+    server.add_argument(
+        "--integrator",
+        choices=("euler", "exact"),
+        default="euler",
+        help="pose integration of each 0.1 s sub-step, as the simulator's (default euler)",
+    )
     server.add_argument("--seed", type=int, default=0, help="root seed (map, slip, noise)")
     server.add_argument("--log", type=Path, help="JSON-lines log of received commands")
     server.add_argument("--link-timeout", type=float, default=0.5, help="quiet link stop [s]")
@@ -71,10 +77,11 @@ def _add_sim_server(commands: Any) -> None:
 
 
 def _run_sim_server(args: argparse.Namespace) -> int:
-    from skidnav.realtime import sim_server as ss
     from skidnav.realtime.config import ServerOptions
-    from skidnav.realtime.records import EventLog
-    from skidnav.realtime.sim_robot import SimRobotConfig, build_robot, warm_up
+    from skidnav.realtime.control.records import EventLog
+    from skidnav.realtime.sim import server as ss
+    from skidnav.realtime.sim.robot import SimRobotConfig, build_robot, warm_up
+    from skidnav.robot.params import RobotParams
 
     try:
         config = SimRobotConfig(latency=args.latency, pose_noise=args.pose_noise, drop=args.drop)
@@ -93,6 +100,7 @@ def _run_sim_server(args: argparse.Namespace) -> int:
         map_spec=args.map,
         seed=args.seed,
         config=config,
+        robot=RobotParams(integrator=args.integrator),
     )
     warm_up(robot)
     with contextlib.ExitStack() as stack:
@@ -149,7 +157,7 @@ def _add_run(commands: Any) -> None:
 
 
 def _run_loop(args: argparse.Namespace) -> int:
-    from skidnav.realtime.run import run_from_args
+    from skidnav.realtime.control.run import run_from_args
 
     def progress(line: str) -> None:
         if not args.quiet:

@@ -23,6 +23,7 @@ from skidnav.robot.kinematics import ACTION_NAMES
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.savedfile import read_limited
+from skidnav.seeding import ARENA_ROLES, child_sequences, seed_int
 from skidnav.world.grid import MAP_KINDS
 
 ACTION_ALIASES = {name: index for index, name in enumerate(ACTION_NAMES)} | {
@@ -44,7 +45,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     parser.add_argument("--slip", choices=SLIP_PRESETS, default="thesis")
     parser.add_argument("--drift", type=float, default=0.0, help="relative slip drift amplitude")
     parser.add_argument("--integrator", choices=("euler", "exact"), default="euler")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the slip noise and policy")
+    parser.add_argument("--seed", type=int, default=0, help="root of the slip noise and policy")
     script = parser.add_mutually_exclusive_group()
     script.add_argument("--actions", help="actions, e.g. 'f f l f r' or '0,0,2,0,3'")
     script.add_argument("--actions-file", type=Path, help="file of actions (same syntax)")
@@ -138,8 +139,9 @@ def _simulate(args: argparse.Namespace) -> int:
 
     script = _script(args)
     env = _make_env(args, len(script) if script else args.random)
-    _, info = env.reset(seed=args.seed)
-    policy = np.random.default_rng(args.seed)
+    streams = child_sequences(args.seed, ARENA_ROLES)  # env noise and policy never share one
+    _, info = env.reset(seed=seed_int(streams["robot"]))
+    policy = np.random.default_rng(streams["agent"])
     rows: list[tuple[Any, ...]] = [(0, -1, *info["pose"], 0.0, False)]
     total, step, done = 0.0, 0, False
     while not done:

@@ -22,9 +22,10 @@ from skidnav.kernels.navigation import (
 from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
+from skidnav.seeding import ARENA_ROLES, streams
 from skidnav.world.discretization import Discretization
-from skidnav.world.grid import GridMap, generate_map
-from skidnav.world.mapfile import load_map
+from skidnav.world.grid import GridMap
+from skidnav.world.maps import build_map
 
 OBSERVATION_KINDS = ("discrete", "pose")
 VARIANCE_SOURCES = ("true", "observed")
@@ -129,9 +130,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
             raise ValueError(f"expected variance in {VARIANCE_SOURCES}, got {variance!r}")
         self.render_mode = render_mode
         self.robot = robot or RobotParams()
-        map_rng, slip_rng = (
-            np.random.default_rng(s) for s in np.random.SeedSequence(world_seed).spawn(2)
-        )
+        world = streams(world_seed, ARENA_ROLES)
+        map_rng, slip_rng = world["map"], world["slip"]
         self.grid_map = _resolve_map(grid_map, map_file, map_kind, map_rng, discretization)
         self.discretization = discretization or Discretization(
             n_x=self.grid_map.shape[0],
@@ -253,10 +253,11 @@ def _resolve_map(
     rng: np.random.Generator,
     discretization: Discretization | None,
 ) -> GridMap:
-    """The map given, read from a file, or generated."""
+    """The map given, else read from ``map_file``, else generated (:func:`build_map`); a map of
+    ``discretization``'s size (25 × 25 cells without one)."""
     if grid_map is not None:
         return grid_map
+    shape = (discretization.n_x, discretization.n_y) if discretization else None
     if map_file is not None:
-        return load_map(map_file)
-    shape = (discretization.n_x, discretization.n_y) if discretization else (25, 25)
-    return generate_map(map_kind, rng, shape)
+        return build_map(rng, file=map_file, shape=shape)
+    return build_map(rng, kind=map_kind, shape=shape or (25, 25))

@@ -1,7 +1,7 @@
 """The expanded grid of runs and their random streams.
 
-Seeding (architecture.md, "Randomness"): one root ``SeedSequence(root_seed)`` is spawned into two
-children, a *world* root and a *run* root.
+Seeding (:mod:`skidnav.seeding`, architecture.md "Randomness"): the root ``SeedSequence(root_seed)``
+has the children of :data:`~skidnav.seeding.ROOT_ROLES`, among them a *world* root and a *run* root.
 
 * ``run root.spawn(n_runs)[index]`` is the stream of the run at position ``index`` of the grid
   (agent-major, then map, preset, seed): it drives the agent and the episodes.
@@ -23,9 +23,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Generic, Protocol, TypeVar
 
-import numpy as np
-
 from skidnav.experiments.config import AgentSpec, MapSpec
+from skidnav.seeding import ROOT_ROLES, SeedKey, child_sequences
 
 
 class Grid(Protocol):
@@ -51,34 +50,6 @@ class Grid(Protocol):
 
 
 GridT = TypeVar("GridT", bound=Grid)
-
-
-def seed_int(sequence: np.random.SeedSequence) -> int:
-    """A 63-bit integer seed drawn from ``sequence`` (for APIs that take an int seed).
-
-    >>> seed_int(np.random.SeedSequence(7)) == seed_int(np.random.SeedSequence(7))
-    True
-    """
-    return int(sequence.generate_state(1, dtype=np.uint64)[0] >> np.uint64(1))
-
-
-@dataclass(frozen=True)
-class SeedKey:
-    """A SeedSequence as plain integers (JSON- and pickle-friendly)."""
-
-    entropy: int
-    spawn_key: tuple[int, ...]
-
-    def sequence(self) -> np.random.SeedSequence:
-        """The SeedSequence these integers name."""
-        return np.random.SeedSequence(self.entropy, spawn_key=self.spawn_key)
-
-    @classmethod
-    def of(cls, sequence: np.random.SeedSequence) -> SeedKey:
-        """The integers naming ``sequence``."""
-        entropy = sequence.entropy
-        assert isinstance(entropy, int)
-        return cls(entropy, tuple(int(k) for k in sequence.spawn_key))
 
 
 @dataclass(frozen=True)
@@ -134,7 +105,8 @@ def expand_runs(config: GridT) -> list[RunSpec[GridT]]:
     >>> [(r.run_id, r.seed) for r in expand_runs(cfg)]
     [('run-000000', 0), ('run-000001', 1), ('run-000002', 2)]
     """
-    world_root, run_root = np.random.SeedSequence(config.root_seed).spawn(2)
+    roots = child_sequences(config.root_seed, ROOT_ROLES)
+    world_root, run_root = roots["world"], roots["run"]
     n_worlds = len(config.maps) * len(config.presets) * config.seeds
     worlds = world_root.spawn(n_worlds)
     run_seeds = run_root.spawn(config.n_runs)

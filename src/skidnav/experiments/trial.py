@@ -35,11 +35,13 @@ from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig, MapSpec
 from skidnav.experiments.metrics import ConvergenceRule, evaluation_summary, run_metrics
 from skidnav.experiments.oracle import Oracle, compute_oracle, load_or_compute_oracle
-from skidnav.experiments.runs import RunSpec, expand_runs, seed_int
+from skidnav.experiments.runs import RunSpec, expand_runs
 from skidnav.experiments.store import EPISODE_COLUMNS, TrialResult
+from skidnav.seeding import RUN_ROLES, WORLD_ROLES, child_sequences, seed_int
 from skidnav.world.discretization import heading_bin
-from skidnav.world.grid import GridMap, border_walls, generate_map
+from skidnav.world.grid import GridMap, border_walls
 from skidnav.world.mapfile import load_map
+from skidnav.world.maps import build_map as build_world_map
 
 logger = logging.getLogger(__name__)
 
@@ -56,10 +58,9 @@ _warmed_up: set[tuple[str, str, str]] = set()
 
 
 def build_map(spec: MapSpec, rng: np.random.Generator) -> GridMap:
-    """The map of a run: read from its file or generated with ``rng``."""
-    if spec.file:
-        return load_map(spec.file)
-    return generate_map(spec.kind, rng, **dict(spec.options))  # type: ignore[arg-type]
+    """The map of a run (:func:`skidnav.world.maps.build_map` of its ``[[maps]]`` entry): read
+    from its file or generated with ``rng`` and its options."""
+    return build_world_map(rng, kind=spec.kind, file=spec.file or None, options=dict(spec.options))
 
 
 def make_env(spec: ExperimentRun, grid_map: GridMap, slip_seed: int) -> gymnasium.Env[Any, Any]:
@@ -273,17 +274,19 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     sampling seed (so every agent of a world meets the same evaluations: common random numbers);
     the run stream gives the agent and the training episodes."""
     config = spec.config
-    map_seed, slip_seed, evaluation_seed, oracle_seed = spec.world_seed.sequence().spawn(4)
-    agent_seed, episode_seed, _ = spec.run_seed.sequence().spawn(3)
-    world = _world(spec, np.random.default_rng(map_seed), seed_int(slip_seed))
-    grid_map, env, eval_env, max_steps = world
-    eval_seeds = [seed_int(s) for s in evaluation_seed.spawn(config.eval_rollouts)]
-    env.reset(seed=seed_int(episode_seed))
-    agent = _agent(spec, env, np.random.default_rng(agent_seed))
+    world_streams = child_sequences(spec.world_seed.sequence(), WORLD_ROLES)
+    run_streams = child_sequences(spec.run_seed.sequence(), RUN_ROLES)
+    map_rng = np.random.default_rng(world_streams["map"])
+    grid_map, env, eval_env, max_steps = _world(spec, map_rng, seed_int(world_streams["slip"]))
+    evaluation = world_streams["evaluation"].spawn(config.eval_rollouts)
+    eval_seeds = [seed_int(s) for s in evaluation]
+    env.reset(seed=seed_int(run_streams["episodes"]))
+    agent = _agent(spec, env, np.random.default_rng(run_streams["agent"]))
     oracle = None
     if grid_map is not None:
+        oracle_seed = seed_int(world_streams["oracle"])
         oracle = load_or_compute_oracle(
-            eval_env, config.oracle_samples, seed_int(oracle_seed), eval_seeds, max_steps
+            eval_env, config.oracle_samples, oracle_seed, eval_seeds, max_steps
         )
     reference = _reference_length(oracle, eval_env)
     log = train_agent_fast(

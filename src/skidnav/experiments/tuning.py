@@ -52,10 +52,11 @@ from skidnav.experiments.config import (
 )
 from skidnav.experiments.runner import TrialFunction, _check_backend, dask_client, default_jobs
 from skidnav.experiments.runner import execute as execute_runs
-from skidnav.experiments.runs import SeedKey, expand_runs
+from skidnav.experiments.runs import expand_runs
 from skidnav.experiments.store import TrialResult, directory_lock
 from skidnav.experiments.tuneconfig import ParamRange, TuneConfig, check_tuning, default_point
 from skidnav.experiments.tunedfile import write_tuned
+from skidnav.seeding import ROOT_ROLES, WORLD_ROLES, SeedKey, child_sequences
 from skidnav.stats import iqm
 from skidnav.world.grid import GridMap
 
@@ -64,7 +65,7 @@ if TYPE_CHECKING:
 
 logger = logging.getLogger(__name__)
 
-TUNE_STREAM = 2
+TUNE_STREAM = ROOT_ROLES.index("tuning")
 """Child of ``SeedSequence(root_seed)`` that roots every tuning stream (0, 1: evaluation)."""
 SAMPLER_STREAM = 2
 """Child of the tuning root that seeds the samplers (0, 1: tuning worlds and runs)."""
@@ -148,7 +149,7 @@ def run_map(spec: ExperimentRun) -> GridMap:
     draws it: from the first child of the world stream)."""
     from skidnav.experiments.trial import build_map
 
-    map_seed, _ = spec.world_seed.sequence().spawn(2)
+    map_seed = child_sequences(spec.world_seed.sequence(), WORLD_ROLES)["map"]
     return build_map(spec.map, np.random.default_rng(map_seed))
 
 

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from skidnav.errors import UserError, shown
-from skidnav.realtime.protocol import MAX_LINE_BYTES
+from skidnav.realtime.link.protocol import MAX_LINE_BYTES
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.savedfile import parse_toml, read_config_text
 from skidnav.world.grid import MAP_KINDS
@@ -26,7 +26,7 @@ T = TypeVar("T")
 DRIVER_TABLES = ("tcp", "serial", "ros2")
 """The tables of driver options."""
 FAULTS = ("silence", "garbage", "oversized", "escape", "hangup")
-"""Faults the sim server can inject for tests (realtime/sim_server.py)."""
+"""Faults the sim server can inject for tests (realtime/sim/server.py)."""
 
 
 @dataclass(frozen=True)

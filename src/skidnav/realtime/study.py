@@ -39,7 +39,7 @@ from skidnav.realtime.config import (
     read_tables,
     with_overrides,
 )
-from skidnav.realtime.loop import EXIT_INTERRUPTED
+from skidnav.realtime.control.loop import EXIT_INTERRUPTED
 from skidnav.realtime.study_report import markdown_report
 from skidnav.realtime.study_trial import EPISODE_COLUMNS, RealtimeTrial, ignore
 from skidnav.savedfile import ArraySpec, up_to

@@ -1,13 +1,15 @@
 """The trial function of a hardware-in-the-loop study (realtime/study.py): one real-time run.
 
 :class:`RealtimeTrial` is what :func:`skidnav.experiments.runner.run_experiment` calls for every
-run of a :class:`~skidnav.realtime.study.StudyGrid`: a new agent, drawing from the run's stream,
-acts in real time (:class:`~skidnav.realtime.loop.RealtimeLoop`) on the ``sim`` driver, which
-starts its own server on a free loopback port with the root seed drawn from the run's world
-stream (map, slip field, robot noise, dropped poses: the same for every agent of a preset and
-seed). The loop's files (``run.jsonl``, ``checkpoints/``, ``sim-server.jsonl``) go to
-``OUT/runs/AGENT/PRESET/seed-N/``; the per-episode results (:data:`EPISODE_COLUMNS`) and the
-run's metrics (:func:`run_summary`) go back to the runner, which stores them.
+run of a :class:`~skidnav.realtime.study.StudyGrid`: a new agent, drawing from the run stream,
+acts in real time (:class:`~skidnav.realtime.control.loop.RealtimeLoop`) on the ``sim`` driver,
+which starts its own server on a free loopback port with the root seed drawn from the run's world
+stream (its :data:`~skidnav.seeding.ARENA_ROLES` children: map, slip field, robot noise, dropped
+poses; the same for every agent of a preset and seed). The agent draws from the ``agent`` child
+of the run stream (:data:`~skidnav.seeding.RUN_ROLES`), as in an experiment. The loop's files
+(``run.jsonl``, ``checkpoints/``, ``sim-server.jsonl``) go to ``OUT/runs/AGENT/PRESET/seed-N/``;
+the per-episode results (:data:`EPISODE_COLUMNS`) and the run's metrics (:func:`run_summary`) go
+back to the runner, which stores them.
 """
 
 from __future__ import annotations
@@ -21,14 +23,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from skidnav.experiments.runs import RunSpec, seed_int
+from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import TrialResult
 from skidnav.realtime.arena import build_map
 from skidnav.realtime.config import RealtimeConfig
-from skidnav.realtime.loop import EXIT_INTERRUPTED
-from skidnav.realtime.records import EpisodeResult
-from skidnav.realtime.run import agent_context, drive, new_agent, warm_up_agent
+from skidnav.realtime.control.loop import EXIT_INTERRUPTED
+from skidnav.realtime.control.records import EpisodeResult
+from skidnav.realtime.control.run import agent_context, drive, new_agent, warm_up_agent
 from skidnav.robot.params import RobotParams
+from skidnav.seeding import RUN_ROLES, child_sequences, seed_int
 from skidnav.world.discretization import Discretization
 
 if TYPE_CHECKING:
@@ -97,14 +100,14 @@ class RealtimeTrial:
 def realtime_run(
     spec: RunSpec[StudyGrid], out: Path, progress: Callable[[str], None]
 ) -> tuple[int, list[EpisodeResult]]:
-    """One real-time run of a new agent (drawing from the run stream) on the ``sim`` driver,
-    its files in ``out``; (exit code, episode results)."""
+    """One real-time run of a new agent (drawing from the run stream's ``agent`` child) on the
+    ``sim`` driver, its files in ``out``; (exit code, episode results)."""
     config = run_config(spec)
     robot, grid = RobotParams(), Discretization()
     grid_map = build_map(config.run.map, config.run.seed, grid)
     name = spec.agent.name
     context = agent_context(name, robot, grid)
-    rng = np.random.default_rng(spec.run_seed.sequence())
+    rng = np.random.default_rng(child_sequences(spec.run_seed.sequence(), RUN_ROLES)["agent"])
     agent = new_agent(name, config, context, grid, rng)
     warm_up_agent(name, config, context, grid.n_states)
     code, loop = drive(

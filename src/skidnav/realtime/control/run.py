@@ -1,0 +1,238 @@
+"""Assembling a real-time run from the command line: config, map, agent, driver, loop, signals.
+
+Files written under ``--out`` (docs/realtime.md): ``run.jsonl`` (every command, pose, transition,
+safety event), ``checkpoints/`` (per episode), ``summary.json``, and for the ``sim`` driver the
+server's own command log ``sim-server.jsonl``. :func:`new_agent` and :func:`drive` are shared
+with the hardware-in-the-loop study (realtime/study.py), whose runs are real-time runs too.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import json
+import signal
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from types import FrameType
+from typing import Any
+
+import numpy as np
+
+from skidnav.atomicfile import write_user_file
+from skidnav.errors import UserError
+from skidnav.realtime.arena import build_map, seed_streams
+from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
+from skidnav.realtime.control.checkpoint import Checkpoints
+from skidnav.realtime.control.loop import RealtimeLoop
+from skidnav.realtime.link.drivers import make_driver
+from skidnav.robot.kinematics import N_ACTIONS
+from skidnav.robot.params import RobotParams
+from skidnav.world.discretization import Discretization
+from skidnav.world.grid import GridMap
+
+
+def agent_context(name: str, robot: RobotParams, grid: Discretization) -> dict[str, Any]:
+    """Extra constructor arguments of agent ``name``: the model-based agents take the robot
+    geometry and discretization (``robot``, ``discretization``) for their kinematic model."""
+    from skidnav.agents.registry import agent_class
+
+    parameters = inspect.signature(agent_class(name).__init__).parameters
+    context: dict[str, Any] = {}
+    if "robot" in parameters:
+        context["robot"] = robot
+    if "discretization" in parameters:
+        context["discretization"] = grid
+    return context
+
+
+def _make_or_resume_agent(
+    args: argparse.Namespace, config: RealtimeConfig, context: dict[str, Any], grid: Discretization
+) -> tuple[Any, int, dict[str, Any] | None]:
+    """(agent, first episode, loop state to restore or None)."""
+    from skidnav.agents.registry import load_agent
+
+    if args.resume:
+        latest = Checkpoints(args.out / "checkpoints").latest()
+        if latest is None:
+            raise UserError(f"{args.out}: no checkpoint to resume from")
+        episode, directory, state = latest
+        agent = load_agent(directory / "agent", **context)
+        if agent.name != args.agent:
+            raise UserError(
+                f"{directory}: checkpoint holds agent {agent.name!r}, not {args.agent!r}"
+            )
+        return agent, episode + 1, state
+    agent = new_agent(args.agent, config, context, grid, seed_streams(config.run.seed)["agent"])
+    return agent, 0, None
+
+
+def new_agent(
+    name: str,
+    config: RealtimeConfig,
+    context: dict[str, Any],
+    grid: Discretization,
+    rng: np.random.Generator,
+) -> Any:
+    """A new agent ``name`` with the hyperparameters of ``[agents.NAME]``, drawing from the
+    generator ``rng``, over ``grid``'s states and the robot's actions."""
+    from skidnav.agents.registry import make_agent
+
+    table = config.agents.get(name)
+    return make_agent(name, grid.n_states, N_ACTIONS, table, rng, **context)
+
+
+def warm_up_agent(
+    name: str, config: RealtimeConfig, context: dict[str, Any], n_states: int
+) -> None:
+    """Compile (numba) every kernel of agent ``name`` before the robot moves: a throwaway agent
+    acts, learns from one dummy step and ends an episode. Compilation holds the GIL, which would
+    starve the driver's reader thread and trip the pose watchdog mid-episode."""
+    from skidnav.agents.registry import make_agent
+
+    agent = make_agent(
+        name, n_states, N_ACTIONS, config.agents.get(name), np.random.default_rng(0), **context
+    )
+    info = {
+        "pose": (0.0, 0.0, 0.0),
+        "cell": (0, 0, 0),
+        "collision": False,
+        "wheel_speeds": (0.0, 0.0),
+        "region": 0,
+        "kinematic_log": np.zeros((0, 6)),
+    }
+    for terminated in (False, True):
+        action = agent.act(0)
+        agent.observe(0, action, -1.0, 1, terminated, False, info)
+    agent.greedy_action(0)
+    agent.end_episode()
+
+
+@contextmanager
+def interrupt_handlers(loop: RealtimeLoop) -> Iterator[None]:
+    """SIGINT and SIGTERM trip the safety monitor (and end an operator wait) while inside."""
+
+    def handler(signum: int, frame: FrameType | None) -> None:
+        loop.interrupt(f"signal {signal.Signals(signum).name}")
+        if loop.waiting_for_operator:
+            raise KeyboardInterrupt
+
+    previous = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for signum, old in previous.items():
+            signal.signal(signum, old)
+
+
+def run_from_args(
+    args: argparse.Namespace,
+    *,
+    progress: Callable[[str], None],
+    wait_for_operator: Callable[[str], None],
+) -> tuple[int, str]:
+    """Run ``skidnav robot run``; returns (exit code, one-line summary)."""
+    config = load_config(args.config, args.preset)
+    config = with_overrides(
+        config, episodes=args.episodes, time_scale=args.time_scale, reset=args.reset
+    )
+    robot, grid = RobotParams(), Discretization()
+    grid_map = build_map(config.run.map, config.run.seed, grid)
+    out = output_directory(args.out)
+    context = agent_context(args.agent, robot, grid)
+    agent, first_episode, state = _make_or_resume_agent(args, config, context, grid)
+    warm_up_agent(args.agent, config, context, grid.n_states)
+    code, loop = drive(
+        args.driver,
+        agent,
+        grid_map,
+        config,
+        out,
+        robot=robot,
+        grid=grid,
+        progress=progress,
+        wait_for_operator=wait_for_operator,
+        resume=(first_episode, state),
+    )
+    return code, _summarize(loop, out, code)
+
+
+def drive(
+    driver_name: str,
+    agent: Any,
+    grid_map: GridMap,
+    config: RealtimeConfig,
+    out: Path,
+    *,
+    robot: RobotParams,
+    grid: Discretization,
+    progress: Callable[[str], None],
+    wait_for_operator: Callable[[str], None] | None = None,
+    resume: tuple[int, dict[str, Any] | None] = (0, None),
+) -> tuple[int, RealtimeLoop]:
+    """Connect driver ``driver_name`` (a sim server logs to ``out/sim-server.jsonl``), run the
+    loop of ``agent`` with its files in ``out`` from episode ``resume[0]`` (loop state
+    ``resume[1]`` restored first, if any), SIGINT and SIGTERM tripping its safety monitor, and
+    shut the driver down; returns (exit code of :meth:`RealtimeLoop.run`, the loop).
+
+    Raises:
+        UserError: the robot cannot be reached.
+    """
+    driver = make_driver(driver_name, config, server_log=out / "sim-server.jsonl")
+    shutdown = getattr(driver, "shutdown", driver.close)
+    try:
+        driver.connect()
+    except ConnectionError as error:
+        shutdown()
+        raise UserError(f"cannot connect to the robot ({driver_name}): {error}") from None
+    try:
+        loop = RealtimeLoop(
+            driver,
+            agent,
+            grid_map,
+            config,
+            out,
+            robot=robot,
+            grid=grid,
+            progress=progress,
+            wait_for_operator=wait_for_operator,
+        )
+        first_episode, state = resume
+        if state is not None:
+            loop.restore(state)
+        with interrupt_handlers(loop):
+            code = loop.run(first_episode)
+    finally:
+        shutdown()
+    return code, loop
+
+
+def output_directory(path: Path) -> Path:
+    """``path`` created if needed, with a probe file written and removed; UserError naming it
+    if it cannot hold the run's files."""
+    probe = path / ".skidnav-write-test"
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as error:
+        raise UserError(f"cannot write to {path}: {error.strerror or error}") from None
+    return path
+
+
+def _summarize(loop: RealtimeLoop, out: Path, code: int) -> str:
+    results = loop.results
+    summary = {
+        "exit_code": code,
+        "episodes": len(results),
+        "goals": sum(r.reached_goal for r in results),
+        "aborted": sum(r.aborted for r in results),
+        "actions": sum(r.actions for r in results),
+        "last_abort_reason": next((r.reason for r in reversed(results) if r.aborted), None),
+    }
+    write_user_file(out / "summary.json", json.dumps(summary, indent=1).encode(), "run summary")
+    return (
+        f"{summary['episodes']} episodes, {summary['goals']} reached the goal, "
+        f"{summary['aborted']} aborted; results in {out}"
+    )

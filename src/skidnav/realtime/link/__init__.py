@@ -1,0 +1,3 @@
+"""The link layer: the driver interface every robot implements (:mod:`.interface`), the drivers by
+name (:mod:`.drivers`), the line protocol and its client (:mod:`.protocol`,
+:mod:`.line_client`), and ROS 2 through rosbridge (:mod:`.ros2`, :mod:`.ros2_messages`)."""

@@ -1,0 +1,326 @@
+"""Robot drivers speaking the line protocol (docs/protocol.md) over TCP or a serial line.
+
+:class:`LineClient` implements :class:`~skidnav.realtime.link.interface.RobotDriver` over any
+:class:`Link` (a byte stream). A reader thread parses incoming lines, keeps the newest pose
+(stamped on this process's monotonic clock at receipt), collects ``ack``/``stopped`` replies and
+sends a ``heartbeat`` whenever nothing was sent for ``heartbeat_interval`` seconds. A lost link,
+a malformed line or an ``error`` from the robot is a *fault*: it is kept in :attr:`fault` and
+passed at once to the fault callback (the safety monitor's trip).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import socket
+import threading
+import time
+from collections.abc import Callable
+from typing import Protocol
+
+import serial
+
+from skidnav.realtime.link import protocol as pr
+from skidnav.realtime.link.interface import Pose
+
+log = logging.getLogger(__name__)
+
+READ_POLL = 0.005
+"""Longest a link read blocks [s]: bounds how late a heartbeat or a shutdown can be."""
+
+
+class Link(Protocol):
+    """A byte stream to the robot."""
+
+    def open(self) -> None: ...
+    def read(self) -> bytes:
+        """Bytes received (b"" if none within READ_POLL); raises ConnectionError at EOF."""
+        ...
+
+    def write(self, data: bytes) -> None: ...
+    def close(self) -> None: ...
+
+
+class TcpLink:
+    """TCP to ``host:port`` (Nagle off: every line leaves at once)."""
+
+    def __init__(self, host: str, port: int, connect_timeout: float = 2.0) -> None:
+        self.host, self.port, self.connect_timeout = host, port, connect_timeout
+        self._sock: socket.socket | None = None
+
+    def open(self) -> None:
+        try:
+            sock = socket.create_connection((self.host, self.port), self.connect_timeout)
+        except OSError as error:
+            raise ConnectionError(f"cannot reach {self.host}:{self.port}: {error}") from None
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        sock.settimeout(READ_POLL)
+        self._sock = sock
+
+    def read(self) -> bytes:
+        assert self._sock is not None
+        try:
+            data = self._sock.recv(4096)
+        except TimeoutError:
+            return b""
+        except OSError as error:
+            raise ConnectionError(str(error)) from None
+        if not data:
+            raise ConnectionError("connection closed by the robot")
+        return data
+
+    def write(self, data: bytes) -> None:
+        if self._sock is None:
+            raise ConnectionError("not connected")
+        try:
+            self._sock.sendall(data)
+        except OSError as error:
+            raise ConnectionError(str(error)) from None
+
+    def close(self) -> None:
+        if self._sock is not None:
+            self._sock.close()
+            self._sock = None
+
+
+class SerialLink:
+    """A serial port or any pyserial URL (``/dev/ttyUSB0``, ``loop://``, ``socket://…``)."""
+
+    def __init__(self, url: str, baudrate: int = 115200) -> None:
+        self.url, self.baudrate = url, baudrate
+        self._port: serial.SerialBase | None = None
+
+    def open(self) -> None:
+        try:
+            self._port = serial.serial_for_url(self.url, baudrate=self.baudrate, timeout=READ_POLL)
+        except (serial.SerialException, ValueError) as error:
+            raise ConnectionError(f"cannot open {self.url}: {error}") from None
+
+    def read(self) -> bytes:
+        assert self._port is not None
+        try:
+            waiting = max(1, self._port.in_waiting)
+            return bytes(self._port.read(waiting))
+        except (serial.SerialException, OSError) as error:
+            raise ConnectionError(str(error)) from None
+
+    def write(self, data: bytes) -> None:
+        if self._port is None:
+            raise ConnectionError("not connected")
+        try:
+            self._port.write(data)
+        except (serial.SerialException, OSError) as error:
+            raise ConnectionError(str(error)) from None
+
+    def close(self) -> None:
+        if self._port is not None:
+            self._port.close()
+            self._port = None
+
+
+class LineClient:
+    """A :class:`~skidnav.realtime.link.interface.RobotDriver` over a :class:`Link`.
+
+    Args:
+        link: the byte stream.
+        handshake_timeout: wait for the robot's ``hello`` [s].
+        stop_timeout: the stop is re-sent every ``stop_timeout / 2`` until confirmed [s].
+        heartbeat_interval: idle time before a ``heartbeat`` is sent [s].
+        command_ttl: validity of each ``cmd`` after it was sent [s] (the robot's lease).
+        dead_timeout: a robot from which nothing at all arrived for this long is declared
+            lost, and :meth:`stop` gives up [s].
+    """
+
+    def __init__(
+        self,
+        link: Link,
+        *,
+        handshake_timeout: float = 2.0,
+        stop_timeout: float = 0.1,
+        heartbeat_interval: float = 0.05,
+        command_ttl: float = 0.5,
+        dead_timeout: float = 2.0,
+    ) -> None:
+        if not (stop_timeout > 0 and command_ttl > 0 and dead_timeout > 0):
+            raise ValueError("expected stop_timeout, command_ttl and dead_timeout > 0 s")
+        self.link = link
+        self.handshake_timeout = handshake_timeout
+        self.stop_timeout = stop_timeout
+        self.heartbeat_interval = heartbeat_interval
+        self.command_ttl = command_ttl
+        self.dead_timeout = dead_timeout
+        self.robot_period: float | None = None
+        self.fault: str | None = None
+        self.on_fault: Callable[[str], None] | None = None
+        self.on_pose: Callable[[Pose, float], None] | None = None
+        self._pose: Pose | None = None
+        self._measurement: tuple[Pose, float] | None = None
+        self._seq = 0
+        self._last_tx = 0.0
+        self._last_rx = 0.0
+        self._write_lock = threading.Lock()
+        self._reply = threading.Condition()
+        self._hello = threading.Event()
+        self._stopped_up_to = -1  # the largest seq a ``stopped`` acknowledged
+        self._running = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    # --- RobotDriver ---------------------------------------------------------------------
+    def connect(self) -> None:
+        """Open the link, start the reader and shake hands; raises ConnectionError."""
+        self.close()
+        self.fault = None
+        self._pose = None
+        self._measurement = None
+        self._hello.clear()
+        self._stopped_up_to = -1
+        self.link.open()
+        self._last_rx = time.monotonic()
+        self._running.set()
+        self._thread = threading.Thread(target=self._read_loop, name="line-client", daemon=True)
+        self._thread.start()
+        self._send(lambda seq: pr.Hello(seq=seq, name="skidnav"))
+        deadline = time.monotonic() + self.handshake_timeout
+        while not self._hello.wait(READ_POLL):  # an error reply (busy, version) ends the wait
+            if self.fault is not None or time.monotonic() >= deadline:
+                reason = self.fault or "no hello from the robot"
+                self.close()
+                raise ConnectionError(reason)
+
+    def command(self, omega_left: float, omega_right: float) -> None:
+        """Send wheel speeds [rad/s], valid for ``command_ttl`` from now; a link error becomes
+        a fault, not an exception."""
+        self._send(
+            lambda seq: pr.Command(
+                seq=seq,
+                omega_left=omega_left,
+                omega_right=omega_right,
+                stamp=time.monotonic(),
+                ttl=self.command_ttl,
+            )
+        )
+
+    def latest_pose(self) -> Pose | None:
+        """The newest pose, stamped on this process's monotonic clock at receipt."""
+        return self._pose
+
+    def latest_measurement(self) -> tuple[Pose, float] | None:
+        """The newest pose with the robot's own stamp [s robot clock], or None."""
+        return self._measurement
+
+    def stop(self) -> bool:
+        """Send ``stop`` and re-send it every ``stop_timeout / 2`` until a ``stopped`` answers
+        one of them (True), or until the link is dead (False): the connection failed, or
+        nothing at all arrived from the robot for ``dead_timeout``. A stalled robot that
+        resumes reads them all and confirms."""
+        return self._stop_until(math.inf)
+
+    def close(self) -> None:
+        """Stop the wheels (best effort, one ``stop_timeout``), end the reader, close the link."""
+        if self._thread is None:
+            return
+        if self._running.is_set():
+            self._stop_until(time.monotonic() + self.stop_timeout)
+        self._running.clear()
+        self._thread.join(timeout=1.0)
+        self._thread = None
+        self.link.close()
+
+    def _stop_until(self, give_up: float) -> bool:
+        """:meth:`stop`, giving up at ``give_up`` (monotonic [s]) at the latest."""
+        first: int | None = None
+        while True:
+            seq = self._send(lambda seq: pr.Stop(seq=seq))
+            if seq is None:
+                return False
+            first = seq if first is None else first
+            wait_until = min(give_up, time.monotonic() + self.stop_timeout / 2)
+            with self._reply:
+                while self._stopped_up_to < first and self._running.is_set():
+                    remaining = wait_until - time.monotonic()
+                    if remaining <= 0:
+                        break
+                    self._reply.wait(remaining)
+                if self._stopped_up_to >= first:  # a stopped for a later stop counts too
+                    return True
+            silent = time.monotonic() - self._last_rx > self.dead_timeout
+            if silent or not self._running.is_set() or time.monotonic() >= give_up:
+                return False
+
+    # --- internals -----------------------------------------------------------------------
+    def _send(self, build: Callable[[int], pr.Message]) -> int | None:
+        """Encode and write one message; returns its seq, or None if the link failed."""
+        with self._write_lock:
+            seq = self._seq
+            self._seq += 1
+            try:
+                self.link.write(pr.encode(build(seq)))
+            except ConnectionError as error:
+                self._report(f"link lost: {error}")
+                return None
+            self._last_tx = time.monotonic()
+            return seq
+
+    def _report(self, fault: str) -> None:
+        if self.fault is None:
+            self.fault = fault
+            log.warning("robot link fault: %s", fault)
+            if self.on_fault is not None:
+                self.on_fault(fault)
+
+    def _read_loop(self) -> None:
+        buffer = pr.LineBuffer()
+        while self._running.is_set():
+            try:
+                data = self.link.read()
+            except ConnectionError as error:
+                self._report(f"link lost: {error}")
+                break
+            if data:
+                self._last_rx = time.monotonic()
+                buffer.feed(data)
+                self._drain(buffer)
+            if time.monotonic() - self._last_tx > self.heartbeat_interval:
+                self._send(lambda seq: pr.Heartbeat(seq=seq, stamp=time.monotonic()))
+        self._running.clear()
+        with self._reply:
+            self._reply.notify_all()
+
+    def _drain(self, buffer: pr.LineBuffer) -> None:
+        while True:
+            try:
+                for line in buffer.lines():
+                    self._handle_line(line)
+                return
+            except pr.ProtocolError as error:  # an oversized line; the buffer resynchronizes
+                self._report(f"malformed message ({error.code}): {error}")
+
+    def _handle_line(self, line: bytes) -> None:
+        """Decode and dispatch one line; nothing in it can end the reader."""
+        try:
+            message = pr.decode(line)
+        except pr.ProtocolError as error:
+            self._report(f"malformed message ({error.code}): {error}")
+            return
+        try:
+            self._handle(message)
+        except Exception as error:  # a failing callback must not stop stops being confirmed
+            log.exception("handling a %s message failed", message.TYPE)
+            self._report(f"handling a {message.TYPE} message failed: {error}")
+
+    def _handle(self, message: pr.Message) -> None:
+        if isinstance(message, pr.PoseReport):
+            pose = Pose(time.monotonic(), message.x, message.y, message.heading)
+            self._measurement = (pose, message.stamp)
+            self._pose = pose
+            if self.on_pose is not None:
+                self.on_pose(pose, message.stamp)
+        elif isinstance(message, pr.Stopped):
+            with self._reply:
+                self._stopped_up_to = max(self._stopped_up_to, message.ack)
+                self._reply.notify_all()
+        elif isinstance(message, pr.Hello):
+            self.robot_period = message.period
+            self._hello.set()
+        elif isinstance(message, pr.Error):
+            self._report(f"robot error ({message.code}): {message.message}")

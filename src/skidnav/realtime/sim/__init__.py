@@ -1,0 +1,2 @@
+"""The simulated robot: the firmware-like robot model (:mod:`.robot`) and the TCP server that
+speaks the wire protocol for it (:mod:`.server`)."""

@@ -1,0 +1,327 @@
+"""The physics of the simulated robot behind the sim server (hardware-in-the-loop stand-in).
+
+One control period of ``dt`` seconds of robot time is one sub-step of the simulator's own kernel
+(:func:`skidnav.kernels.navigation.drive_substep`, the env's sub-step driven by arbitrary
+wheel-speed commands instead of the four actions):
+
+1. commands whose latency has elapsed take effect (a FIFO of (due time, ω_L, ω_R));
+2. each wheel loses U(0, η(ρ, t)) in magnitude (the slip field, possibly drifting, SPEC §2);
+3. the ICR model with x_ICR[ρ] gives the body twist; the robot's integrator
+   (``RobotParams.integrator``: explicit Euler or the exact constant-twist step) advances the
+   pose, clipped to the arena;
+4. a step that would end in a wall cell does not happen: walls physically block the robot
+   (its heading still turns, as in the kernels).
+
+The measured pose adds Gaussian noise (σ [m] on x and y, σ/0.1 [rad] on the heading). Wheel
+commands saturate at ±``RobotParams.wheel_speed`` (the motors' limit).
+
+:class:`Firmware` is the robot's side of the line protocol on one connection (docs/protocol.md,
+"What a robot must do"): the reference a microcontroller port follows, written against its
+own clock (the wall clock of the server, which keeps running while the process is stalled).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from skidnav.errors import UserError
+from skidnav.kernels.navigation import drive_substep, floor_task
+from skidnav.realtime.arena import build_map, seed_streams, start_pose
+from skidnav.realtime.config import ServerOptions
+from skidnav.realtime.control.records import EventLog
+from skidnav.realtime.link import protocol as pr
+from skidnav.robot.params import RobotParams
+from skidnav.robot.slip import SlipField, make_slip_field
+from skidnav.world.discretization import Discretization
+
+
+@dataclass(frozen=True)
+class SimRobotConfig:
+    """Imperfections of the simulated robot, validated on construction.
+
+    Attributes:
+        latency: delay between receiving a command and the wheels following it [s robot time].
+        pose_noise: standard deviation of the reported x and y [m].
+        drop: probability that a period's pose report is not sent.
+    """
+
+    latency: float = 0.0
+    pose_noise: float = 0.0
+    drop: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not self.latency >= 0:
+            raise ValueError(f"expected latency >= 0 s, got {self.latency}")
+        if not self.pose_noise >= 0:
+            raise ValueError(f"expected pose_noise >= 0 m, got {self.pose_noise}")
+        if not 0 <= self.drop < 1:
+            raise ValueError(f"expected drop in [0, 1), got {self.drop}")
+
+
+class SimRobot:
+    """A skid-steer robot on a slippery floor with walls.
+
+    Args:
+        robot: geometry, integrator and control period (``robot.dt`` is the period [s]).
+        slip: the floor (its arrays are shared with the kernel's task, not copied: changing
+            ``slip.x_icr`` in place changes the floor).
+        occupancy: bool (n_x, n_y) walls (True) on the grid of ``grid``, or None for none.
+        grid: discretization whose cells index ``occupancy`` and whose regions index ``slip``.
+        config: imperfections.
+        rng: every random draw (slip, noise, drops).
+        pose: initial (x [m], y [m], heading [rad]).
+    """
+
+    def __init__(
+        self,
+        robot: RobotParams,
+        slip: SlipField,
+        occupancy: np.ndarray | None,
+        grid: Discretization,
+        config: SimRobotConfig,
+        rng: np.random.Generator,
+        pose: tuple[float, float, float],
+    ) -> None:
+        self.robot = robot
+        self.slip = slip
+        self.grid = grid
+        self.task = floor_task(occupancy, slip, robot, grid)
+        self.config = config
+        self.rng = rng
+        self.pose = (float(pose[0]), float(pose[1]), float(pose[2]))
+        self.time = 0.0
+        self.wheels = (0.0, 0.0)
+        self._queue: deque[tuple[float, float, float]] = deque()
+
+    def command(self, omega_left: float, omega_right: float) -> None:
+        """Queue wheel speeds [rad/s] to take effect after the latency; each saturates at
+        ±``wheel_speed``. ValueError if one is not finite."""
+        if not (math.isfinite(omega_left) and math.isfinite(omega_right)):
+            raise ValueError(f"expected finite wheel speeds, got {omega_left}, {omega_right}")
+        limit = self.robot.wheel_speed
+        left, right = (float(min(max(omega, -limit), limit)) for omega in (omega_left, omega_right))
+        self._queue.append((self.time + self.config.latency, left, right))
+
+    def stop(self) -> None:
+        """Zero the wheels now and drop every queued command."""
+        self._queue.clear()
+        self.wheels = (0.0, 0.0)
+
+    @property
+    def moving(self) -> bool:
+        """True while a wheel turns or a command waits out its latency."""
+        return self.wheels != (0.0, 0.0) or bool(self._queue)
+
+    def blocked(self, x: float, y: float) -> bool:
+        """True if position (x, y) [m] lies in a wall cell."""
+        return bool(self.task.occupancy[self.grid.cell(x, y)])
+
+    def step(self) -> None:
+        """Advance one control period (see module doc)."""
+        while self._queue and self._queue[0][0] <= self.time + 1e-12:
+            _, left, right = self._queue.popleft()
+            self.wheels = (left, right)
+        noise_left, noise_right = self.rng.random(), self.rng.random()
+        x, y, heading = (float(value) for value in self.pose)
+        self.pose = drive_substep(
+            self.task, (x, y, heading), self.wheels, self.time, noise_left, noise_right
+        )
+        self.time += self.robot.dt
+
+    def measured_pose(self) -> tuple[float, float, float] | None:
+        """The pose as the tracker reports it (noisy), or None when this report is dropped."""
+        if self.config.drop > 0 and self.rng.random() < self.config.drop:
+            return None
+        x, y, heading = self.pose
+        sigma = self.config.pose_noise
+        if sigma > 0:
+            x += sigma * self.rng.standard_normal()
+            y += sigma * self.rng.standard_normal()
+            heading += sigma / 0.1 * self.rng.standard_normal()
+        wrapped = float(np.arctan2(np.sin(heading), np.cos(heading)))
+        return x, y, wrapped
+
+
+def build_robot(
+    *,
+    slip: str,
+    drift: float,
+    drift_period: float,
+    map_spec: str,
+    seed: int,
+    config: SimRobotConfig,
+    robot: RobotParams | None = None,
+    grid: Discretization | None = None,
+) -> SimRobot:
+    """A simulated robot at the start pose of the map ``map_spec`` (see
+    :func:`skidnav.realtime.arena.build_map`), its floor the slip preset ``slip`` with relative
+    drift amplitude ``drift`` and period ``drift_period`` [s]; random streams from ``seed``."""
+    robot = robot or RobotParams()
+    grid = grid or Discretization()
+    streams = seed_streams(seed)
+    grid_map = build_map(map_spec, seed, grid)
+    try:
+        field = make_slip_field(
+            slip,
+            streams["slip"],
+            regions=(grid.regions_x, grid.regions_y),
+            drift_amplitude=drift,
+            drift_period=drift_period,
+            robot=robot,
+        )
+    except ValueError as error:
+        raise UserError(str(error)) from None
+    return SimRobot(
+        robot,
+        field,
+        grid_map.occupancy,
+        grid,
+        config,
+        streams["robot"],
+        start_pose(grid_map, grid),
+    )
+
+
+def warm_up(robot: SimRobot) -> None:
+    """Compile the kinematics kernels now (numba), so the first periods are not late."""
+    drive_substep(robot.task, robot.pose, (0.0, 0.0), robot.time, 0.0, 0.0)
+    robot.grid.cell(0.0, 0.0)
+    robot.grid.region(0.0, 0.0)
+
+
+class Firmware:
+    """The robot's side of the line protocol on one connection (docs/protocol.md).
+
+    :meth:`receive` answers one batch of messages — everything read at once — and applies only
+    its newest motion message (``cmd``, ``stop``, or a malformed line, which stops), so a robot
+    that stalled never replays the commands that queued up meanwhile; every ``stop`` is
+    answered. A ``cmd`` beyond the wheel-speed limit is refused (``range``), one read after its
+    deadline (``stamp + ttl`` of the host's clock, mapped by
+    :class:`~skidnav.realtime.link.protocol.HostClock`) is refused (``expired``); both stop the
+    wheels. :meth:`watch`, called every period, stops the wheels when the newest command's
+    deadline passes (the lease) or when no valid message came for ``link_timeout``, and
+    declares the client idle after ``idle_timeout``. Times are the robot's own clock [s].
+
+    Args:
+        robot: the robot. options: the timeouts and the robot's name. events: the log.
+        reply: queues one message for the host (called with a builder taking the ``seq``).
+        now: the time of connection.
+    """
+
+    def __init__(
+        self,
+        robot: SimRobot,
+        options: ServerOptions,
+        events: EventLog,
+        reply: Callable[[Callable[[int], pr.Message]], None],
+        now: float,
+    ) -> None:
+        self.robot, self.options, self.events, self.reply = robot, options, events, reply
+        self.greeted = False
+        self.closed = False  # the connection is gone: nothing more is applied
+        self.clock = pr.HostClock()
+        self.last_valid = now
+        self.lease: float | None = None
+
+    def stop(self) -> None:
+        """Zero the wheels and end the lease."""
+        self.robot.stop()
+        self.lease = None
+
+    def reject(self, code: str, text: str) -> None:
+        """Bad input: stop the wheels and report it with an ``error``."""
+        self.stop()
+        self.events.write("error", code=code, message=text)
+        self.reply(lambda seq: pr.Error(seq=seq, code=code, message=text[:200]))
+
+    def receive(self, items: list[pr.Message | pr.ProtocolError], now: float) -> None:
+        """Answer the messages (or line errors) read at ``now``, in order (see class doc)."""
+        motions = [i for i, item in enumerate(items) if isinstance(item, _MOTION)]
+        newest = motions[-1] if motions else -1
+        for index, item in enumerate(items):
+            if self.closed:
+                return
+            if isinstance(item, pr.ProtocolError):
+                self.reject(item.code, str(item))
+            elif isinstance(item, pr.Hello):
+                self._hello(item, now)
+            elif not self.greeted:
+                self.reject("state", f"{item.TYPE} before hello")
+            else:
+                self.last_valid = now
+                self._handle(item, now, superseded=index < newest)
+
+    def _hello(self, message: pr.Hello, now: float) -> None:
+        self.greeted, self.last_valid = True, now
+        self.events.write("hello", name=message.name)
+        period, name = self.robot.robot.dt, self.options.name
+        self.reply(lambda seq: pr.Hello(seq=seq, name=name, period=period))
+
+    def _handle(self, message: pr.Message, now: float, superseded: bool) -> None:
+        if isinstance(message, pr.Command | pr.Heartbeat):
+            self.clock.observe(message.stamp, now)
+        if isinstance(message, pr.Command):
+            self._command(message, now, superseded)
+        elif isinstance(message, pr.Stop):
+            self.stop()
+            self.events.write("stop", seq=message.seq, robot_time=self.robot.time)
+            self.reply(lambda seq: pr.Stopped(seq=seq, ack=message.seq))
+        elif isinstance(message, pr.Heartbeat):
+            stamp = self.robot.time
+            self.reply(lambda seq: pr.Heartbeat(seq=seq, stamp=stamp))
+        elif isinstance(message, pr.Error):
+            self.events.write("peer_error", code=message.code, message=message.message)
+        else:
+            self.reject("state", f"unexpected {message.TYPE} from host")
+
+    def _command(self, message: pr.Command, now: float, superseded: bool) -> None:
+        """Apply a ``cmd`` unless superseded, beyond the limit or expired."""
+        if superseded:
+            self.events.write("superseded", seq=message.seq, stamp=message.stamp)
+            return
+        limit = self.robot.robot.wheel_speed
+        if max(abs(message.omega_left), abs(message.omega_right)) > limit:
+            self.reject("range", f"cmd {message.seq}: a wheel speed beyond ±{limit} rad/s")
+            return
+        deadline = self.clock.deadline(message.stamp, message.ttl)
+        if now >= deadline:
+            late = now - deadline
+            self.reject("expired", f"cmd {message.seq} read {late:.3f} s after its deadline")
+            return
+        self.robot.command(message.omega_left, message.omega_right)
+        self.lease = deadline
+        self.events.write(
+            "cmd",
+            seq=message.seq,
+            omega_left=message.omega_left,
+            omega_right=message.omega_right,
+            stamp=message.stamp,
+            valid_for=deadline - now,
+            robot_time=self.robot.time,
+        )
+        self.reply(lambda seq: pr.Ack(seq=seq, ack=message.seq))
+
+    def watch(self, now: float) -> str | None:
+        """The robot's own safety at ``now``: the lease and the quiet link stop the wheels;
+        returns why the client is idle (to be dropped), or None."""
+        if self.lease is not None and now >= self.lease:
+            if self.robot.moving:
+                self.events.write("lease", late=now - self.lease, robot_time=self.robot.time)
+            self.stop()
+        quiet = now - self.last_valid
+        if quiet > self.options.idle_timeout:
+            return f"no valid message for {quiet:.3f} s"
+        if quiet > self.options.link_timeout:
+            if self.robot.moving:
+                self.events.write("watchdog", robot_time=self.robot.time)
+            self.stop()
+        return None
+
+
+_MOTION = (pr.Command, pr.Stop, pr.ProtocolError)
+"""What sets the wheels: a ``cmd``, a ``stop``, or a malformed line (which stops them)."""

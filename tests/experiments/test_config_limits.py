@@ -1,0 +1,109 @@
+"""Experiment configs read by their loaders within limits: a nested, huge or non-text config is
+one line (exit 2) for ``skidnav run`` and ``skidnav tune``, long values are quoted in part, and a
+config is read once (a pipe works)."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import threading
+from pathlib import Path
+
+import pytest
+
+from skidnav.cli import main
+from skidnav.errors import UserError
+from skidnav.experiments.configfile import load_config, load_config_and_text
+from skidnav.experiments.tuneconfig import load_tune_config
+from tests.experiments.exp_support import TINY_TOML, cli_command, cli_env
+
+DEEP = 5000
+TUNE = "\n[tune]\ntrials = 2\n\n[tune.space.q-learning]\nalpha = { low = 0.05, high = 1.0 }\n"
+"""A ``[tune]`` table for :data:`TINY_TOML` (so that ``skidnav tune`` reads the agents)."""
+PARAMS = "params = { planning_steps = 5 }"
+
+CASES: dict[str, tuple[str, str]] = {
+    # name: (config text, message)
+    "nested dotted keys": (
+        TINY_TOML.replace(PARAMS, "params" + ".x" * DEEP + " = 1"),
+        "malformed TOML: nested too deeply (5003 levels, at most 32)",
+    ),
+    "nested inline tables": (
+        TINY_TOML.replace(PARAMS, "params = " + "{ x = " * DEEP + "1" + " }" * DEEP),
+        "malformed TOML: nested too deeply",
+    ),
+    "nested table headers": (
+        TINY_TOML + "\n[env" + ".x" * DEEP + "]\n",
+        "malformed TOML: nested too deeply",
+    ),
+    "5000-digit integer": (
+        TINY_TOML.replace("episodes = 6", "episodes = " + "6" * DEEP),
+        "malformed TOML: Exceeds the limit (4300 digits)",
+    ),
+    "long presets": (
+        TINY_TOML.replace('presets = ["rough", "slippery"]', f'presets = "{"p" * 10_000}"'),
+        "[experiment] presets: expected a list of strings, got \"'pppp",
+    ),
+    "long unknown key": (
+        TINY_TOML.replace("episodes = 6", f"{'k' * 10_000} = 6"),
+        "[experiment] unknown key \"'kkkk",
+    ),
+    "long map file": (
+        TINY_TOML.replace('kind = "free"', f'file = "{"m" * 10_000}.txt"'),
+        "file: no such map file \"'mmmm",
+    ),
+}
+
+
+@pytest.mark.parametrize("command", ["run", "tune"])
+@pytest.mark.parametrize("case", CASES)
+def test_a_hostile_config_is_one_line_and_writes_nothing(
+    case: str, command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text, message = CASES[case]
+    config = tmp_path / "hostile.toml"
+    config.write_text(text + (TUNE if command == "tune" else ""))
+    out = tmp_path / "out"
+    assert main([command, str(config), "--out", str(out), "--backend", "serial"]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"skidnav: error: {config}"), lines
+    assert message in lines[0], lines
+    assert not re.search(r"(.)\1{40}", lines[0])  # an excerpt of a long value, not all of it
+    assert sorted(tmp_path.iterdir()) == [config]
+
+
+def test_the_loaders_bound_their_own_reads(tmp_path: Path) -> None:
+    for load in (load_config, load_tune_config, load_config_and_text):
+        with pytest.raises(UserError, match=r"^/dev/zero: config file larger than 4,000,000"):
+            load("/dev/zero")
+    config = tmp_path / "tiny.toml"
+    config.write_text(TINY_TOML)
+    loaded, text = load_config_and_text(config)
+    assert text == TINY_TOML and loaded == load_config(config) and loaded.name == "tiny"
+
+
+def test_tune_reads_its_config_once_so_a_pipe_works(tmp_path: Path) -> None:
+    pipe = tmp_path / "config.toml"
+    os.mkfifo(pipe)
+
+    def feed() -> None:  # one writer: a second open for reading would wait forever
+        with open(pipe, "w", encoding="utf-8") as stream:
+            stream.write(TINY_TOML)
+
+    writer = threading.Thread(target=feed, daemon=True)
+    writer.start()
+    out = tmp_path / "out"
+    try:
+        result = subprocess.run(
+            cli_command("tune", str(pipe), "--out", str(out)),
+            env=cli_env(), capture_output=True, text=True, timeout=60,
+        )  # fmt: skip
+    finally:
+        if writer.is_alive():  # release the writer if the command never opened the pipe
+            os.close(os.open(pipe, os.O_RDONLY | os.O_NONBLOCK))
+        writer.join(5)
+    lines = result.stderr.strip().splitlines()
+    assert result.returncode == 2 and len(lines) == 1, result.stderr[-2000:]
+    assert lines[0] == f"skidnav: error: {pipe}: no [tune] table (see docs/tuning.md)"
+    assert not out.exists()

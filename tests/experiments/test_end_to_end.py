@@ -1,0 +1,126 @@
+"""The tiny config end to end: records, summaries, metadata, figures, report."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skidnav.errors import UserError
+from skidnav.experiments.configfile import parse_config
+from skidnav.experiments.runner import run_experiment
+from skidnav.experiments.store import EPISODE_COLUMNS, GRID_COLUMNS, ResultStore
+from tests.experiments.exp_support import cli_command, cli_env
+
+SUMMARY_COLUMNS = (
+    "convergence_episode",
+    "converged",
+    "optimality_gap",
+    "oracle_length",
+    "final_length_actions",
+    "final_length_m",
+    "success_rate",
+    "success_rate_last10",
+    "mean_return",
+    "collisions_per_episode",
+    "planning_updates",
+    "wall_time",
+)
+
+
+def test_records_and_summaries(serial_results: Path) -> None:
+    episodes, summaries = ResultStore(serial_results).load_tables()
+    assert list(episodes.columns) == [*GRID_COLUMNS, "episode", *EPISODE_COLUMNS]
+    assert len(episodes) == 8 * 6 and len(summaries) == 8
+    assert not episodes.duplicated(["run_id", "episode"]).any()
+    assert set(SUMMARY_COLUMNS) <= set(summaries.columns)
+    assert set(summaries["agent"]) == {"q-learning", "dyna-q-5"}
+    assert episodes["length"].between(1, 60).all()
+    assert (episodes["success"] == (episodes["length"] < 60) | episodes["success"]).all()
+    assert summaries["success_rate"].between(0, 1).all()
+    assert summaries["convergence_episode"].between(1, 6).all()
+    # Q-learning never plans; Dyna-Q plans 5 updates per real step once it has a model.
+    q_rows = episodes[episodes["agent"] == "q-learning"]
+    dyna_rows = episodes[episodes["agent"] == "dyna-q-5"]
+    assert (q_rows["planning_updates"] == 0).all()
+    assert (dyna_rows["planning_updates"] <= 5 * dyna_rows["length"]).all()
+    assert dyna_rows["planning_updates"].sum() > 0
+    reached = episodes["greedy_success"] > 0  # share of the evaluation's rollouts
+    assert episodes["greedy_success"].between(0, 1).all()
+    assert episodes.loc[reached, "greedy_length"].between(1, 60).all()
+    assert episodes.loc[~reached, "greedy_length"].isna().all()
+    assert (summaries["oracle_length"] > 1).all()
+
+
+def test_metadata_and_saved_config(serial_results: Path) -> None:
+    metadata = json.loads((serial_results / "metadata.json").read_text())
+    assert metadata["config"]["name"] == "tiny"
+    assert metadata["versions"]["numpy"] == np.__version__
+    assert len(metadata["seeds"]["runs"]) == 8
+    assert "git_commit" in metadata and "git_dirty" in metadata
+    assert metadata["sessions"][0]["runs_done"] == 8
+    store = ResultStore(serial_results)
+    assert store.config() == parse_config(_tiny_text())
+
+
+def _tiny_text() -> str:
+    from tests.experiments.exp_support import TINY_TOML
+
+    return TINY_TOML
+
+
+def test_resume_refuses_other_config(serial_results: Path) -> None:
+    other = parse_config(_tiny_text().replace("root_seed = 11", "root_seed = 12"))
+    with pytest.raises(UserError, match="different config"):
+        run_experiment(other, serial_results, backend="serial")
+
+
+def test_rerun_skips_finished_runs(serial_results: Path) -> None:
+    before = {p.name: p.stat().st_mtime_ns for p in (serial_results / "runs").iterdir()}
+    outcome = run_experiment(parse_config(_tiny_text()), serial_results, backend="serial")
+    assert outcome.executed == 0 and outcome.skipped == 8
+    after = {p.name: p.stat().st_mtime_ns for p in (serial_results / "runs").iterdir()}
+    assert before == after
+
+
+def test_report_cli_writes_one_self_contained_file(serial_results: Path, tmp_path: Path) -> None:
+    output = tmp_path / "cli-report.html"
+    result = subprocess.run(
+        cli_command("report", str(serial_results), "-o", str(output)),
+        capture_output=True,
+        text=True,
+        env=cli_env(),
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    text = output.read_text()
+    images = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', text)
+    # Per map x preset cell (2 here): performance profiles, learning curves, metric strips,
+    # trajectories, value maps, policy maps; plus the rough / slippery success ratio.
+    assert len(images) == 2 * 6 + 1
+    assert all(base64.b64decode(image)[:8] == b"\x89PNG\r\n\x1a\n" for image in images)
+    assert 'src="http' not in text and "<script" not in text
+    for needle in (
+        "Thesis reproduction",
+        "16×",
+        "Convergence episode",
+        "10%",
+        "dyna-q-5",
+        "&quot;root_seed&quot;: 11",
+        'alt="policy maps"',
+        "session started (UTC)",
+    ):
+        assert needle in text, needle
+    missing = subprocess.run(
+        cli_command("report", str(tmp_path / "nothing")),
+        capture_output=True,
+        text=True,
+        env=cli_env(),
+        timeout=120,
+    )
+    assert missing.returncode == 2 and "nothing" in missing.stderr

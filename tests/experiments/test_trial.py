@@ -1,0 +1,141 @@
+"""One run: the warm-up changes no number and leaves nothing to compile inside the timed run;
+the greedy-policy map; config errors that name the file."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skidnav import cli
+from skidnav._jit import jit_disabled
+from skidnav.agents.registry import available_agents
+from skidnav.errors import UserError
+from skidnav.experiments import trial
+from skidnav.experiments.configfile import parse_config
+from skidnav.experiments.runner import run_experiment
+from skidnav.experiments.runs import expand_runs
+from skidnav.experiments.store import TrialResult
+from skidnav.world.grid import GridMap
+from tests.experiments.exp_support import TINY_TOML, cli_env
+
+
+def _numbers(result: TrialResult) -> dict[str, object]:
+    """Everything a run measured except wall times, as comparable lists (NaN as −9)."""
+    episodes = {
+        k: np.nan_to_num(v, nan=-9.0).tolist()
+        for k, v in result.episodes.items()
+        if k != "wall_time"
+    }
+    summary = {k: -9.0 if v != v else v for k, v in result.summary.items() if k != "wall_time"}
+    arrays = {k: np.nan_to_num(v, nan=-9.0).tolist() for k, v in result.arrays.items()}
+    return {"episodes": episodes, "summary": summary, "arrays": arrays}
+
+
+def test_warm_up_changes_no_number(monkeypatch: pytest.MonkeyPatch) -> None:
+    runs = expand_runs(parse_config(TINY_TOML))
+    spec = runs[-1]  # dyna-q: plans from a learned model
+    without = _numbers(trial.measure_trial(spec))
+    monkeypatch.setattr(trial, "_warmed_up", set())
+    trial.warm_up(runs[0])  # another agent's warm-up in between must not matter either
+    assert _numbers(trial.run_trial(spec)) == without
+    assert ("skidnav/SkidSteerNav-v0", "dyna-q", repr(spec.agent.params)) in trial._warmed_up
+
+
+# Run in a fresh interpreter: the run after the warm-up must not add a compiled signature to any
+# numba dispatcher of skidnav, i.e. nothing is compiled (or loaded from the cache) on its clock.
+FRESH_PROCESS = """
+import json, sys
+import numba.core.dispatcher
+from skidnav.experiments import trial
+from skidnav.experiments.configfile import parse_config
+from skidnav.experiments.runs import expand_runs
+
+def signatures():
+    found = {}
+    for name, module in list(sys.modules.items()):
+        if name.startswith("skidnav."):
+            for attr, value in vars(module).items():
+                if isinstance(value, numba.core.dispatcher.Dispatcher):
+                    found[f"{name}.{attr}"] = len(value.signatures)
+    return found
+
+report = []
+for spec in expand_runs(parse_config(sys.argv[1])):
+    trial.warm_up(spec)
+    before = signatures()
+    trial.measure_trial(spec)
+    after = signatures()
+    compiled = sorted(k for k in after if after[k] != before.get(k, 0))
+    report.append({"agent": spec.agent.label, "compiled": sum(before.values()), "new": compiled})
+print(json.dumps(report))
+"""
+
+
+@pytest.mark.skipif(jit_disabled(), reason="nothing is compiled with NUMBA_DISABLE_JIT=1")
+def test_warm_up_compiles_everything_before_the_clock_starts() -> None:
+    others = [name for name in available_agents() if name not in ("q-learning", "dyna-q")]
+    text = TINY_TOML.replace("seeds = 2", "seeds = 1") + "".join(
+        f'\n[[agents]]\nname = "{name}"\nparams = {{ planning_steps = 3 }}\n' for name in others
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", FRESH_PROCESS, text],
+        capture_output=True,
+        text=True,
+        env=cli_env(),
+        timeout=600,
+    )
+    assert result.returncode == 0, result.stderr
+    report = json.loads(result.stdout.strip().splitlines()[-1])
+    assert [entry["agent"] for entry in report[::2]] == ["q-learning", "dyna-q-5", *others]
+    for entry in report:
+        assert entry["compiled"] > 0, entry
+        assert entry["new"] == [], entry
+
+
+def test_policy_map_is_the_greedy_action_at_the_heading() -> None:
+    rng = np.random.default_rng(5)
+    walls = np.zeros((4, 3), dtype=bool)
+    walls[2, 1] = True
+    grid_map = GridMap(walls, (0, 0), (1, 1))
+    n_headings = 5
+    q = rng.normal(size=(4 * 3 * n_headings, 4))
+    q[(3 * 3 + 0) * n_headings + 2] = 0.0  # cell (3, 0) at heading 2: never updated
+    actions = trial.policy_map(q, grid_map, 2)
+    assert actions.shape == (4, 3) and actions.dtype == np.int64
+    for i in range(4):
+        for j in range(3):
+            state = (i * 3 + j) * n_headings + 2
+            expected = -1 if walls[i, j] or (i, j) == (3, 0) else int(np.argmax(q[state]))
+            assert actions[i, j] == expected, (i, j)
+
+
+def test_run_arrays_hold_the_policy_map(serial_results: Path) -> None:
+    from skidnav.experiments.store import ResultStore
+
+    run = ResultStore(serial_results).read_run("run-000004")
+    policy, occupancy = run.arrays["policy_map"], run.arrays["occupancy"]
+    assert policy.shape == occupancy.shape
+    assert set(np.unique(policy)) <= {-1, 0, 1, 2, 3}
+    assert (policy[occupancy] == -1).all()
+    assert (policy >= 0).any()
+    assert float(run.arrays["start_heading"]) == 0.0
+
+
+def test_invalid_agent_params_name_the_config_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "bad-params.toml"
+    path.write_text(TINY_TOML.replace("planning_steps = 5", "planning_steps = -1"))
+    config = parse_config(path.read_text(), path)
+    with pytest.raises(UserError, match=rf"^{path}: agent 'dyna-q': .*planning_steps"):
+        run_experiment(config, tmp_path / "out", backend="serial", config_path=path)
+    assert not (tmp_path / "out").exists()
+    code = cli.main(["run", str(path), "--out", str(tmp_path / "out"), "--no-progress"])
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(lines) == 1
+    assert lines[0].startswith(f"skidnav: error: {path}: agent 'dyna-q'")
