@@ -19,6 +19,7 @@ import pytest
 from skidnav.agents.registry import load_agent, make_agent
 from skidnav.cli import main
 from skidnav.commands.reproduce import dyna_maze_runs
+from skidnav.errors import CorruptFileError
 from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
@@ -28,6 +29,7 @@ from tests.saved_file_support import (
     run_with_full_disk,
     skidnav_with_full_disk,
     write_checkpoint,
+    write_npz,
 )
 
 REALTIME = Path(__file__).resolve().parents[2] / "configs" / "realtime.toml"
@@ -91,43 +93,58 @@ def _kinematic_agent(window: int = 16) -> Any:
     )  # fmt: skip
 
 
-def _huge_regions(arrays: dict[str, np.ndarray]) -> None:
-    arrays["geometry"] = arrays["geometry"].copy()
-    arrays["geometry"][15:17] = 10**6  # regions_x, regions_y: 10^12 regions
+def _huge_regions(meta: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
+    meta["geometry"]["discretization"].update(regions_x=10**6, regions_y=10**6)
 
 
-def _no_geometry(arrays: dict[str, np.ndarray]) -> None:
-    arrays["geometry"] = arrays["geometry"].copy()
-    arrays["geometry"][12:] = np.nan
+def _no_geometry(meta: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
+    meta["geometry"]["discretization"] = None
 
 
-def _other_window(arrays: dict[str, np.ndarray]) -> None:
+def _other_window(meta: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
     arrays["kinematic_data"] = np.zeros((4, 32, 5))
 
 
-GEOMETRY_CASES: dict[str, tuple[Callable[[dict[str, np.ndarray]], None], str]] = {
-    "huge regions": (_huge_regions, "saved planner_reward_stats of shape (6, 2) disagrees"),
-    "no geometry, kinematic data": (_no_geometry, "saved kinematic_data of shape (4, 16, 5)"),
-    "other window": (_other_window, "saved kinematic_data of shape (4, 32, 5) disagrees"),
+def _text_field(meta: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
+    meta["geometry"]["robot"]["substeps"] = "ten" * 1000
+
+
+def _fractional_cells(meta: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
+    meta["geometry"]["discretization"]["n_x"] = 6.5
+
+
+def _extra_field(meta: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
+    meta["geometry"]["robot"]["mass"] = 1.0
+
+
+Change = Callable[[dict[str, Any], dict[str, np.ndarray]], None]
+GEOMETRY_CASES: dict[str, tuple[Change, str]] = {
+    "huge regions": (_huge_regions, "1000000 × 1000000 slip regions for 6 × 5 cells"),
+    "no geometry, kinematic data": (_no_geometry, "unexpected array 'kinematic_"),
+    "other window": (_other_window, "kinematic_data"),
+    "text field": (_text_field, "expected robot.substeps like 10, got "),
+    "fractional cells": (_fractional_cells, "expected discretization.n_x like 25, got 6.5"),
+    "extra field": (_extra_field, "expected the robot fields"),
 }
 
 
 @pytest.mark.parametrize("case", GEOMETRY_CASES)
-def test_a_restored_geometry_is_checked_before_it_allocates(case: str, tmp_path: Path) -> None:
-    npz_path, _ = _kinematic_agent().save(tmp_path / "k")
-    arrays = arrays_of(npz_path)
+def test_a_saved_geometry_is_checked_before_it_allocates(case: str, tmp_path: Path) -> None:
+    npz_path, json_path = _kinematic_agent().save(tmp_path / "k")
+    meta, arrays = json.loads(json_path.read_text()), arrays_of(npz_path)
     change, message = GEOMETRY_CASES[case]
-    change(arrays)
-    agent = _kinematic_agent()
+    change(meta, arrays)
+    json_path.write_text(json.dumps(meta))
+    write_npz(npz_path, arrays)
     tracemalloc.start()
     try:
-        with pytest.raises(ValueError, match=re.escape(message)) as caught:
-            agent._restore_state_arrays(arrays)
+        with pytest.raises(CorruptFileError, match=re.escape(message)) as caught:
+            load_agent(npz_path)
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    assert peak < 2**20 and "\n" not in str(caught.value)  # refused before any table is built
-    assert agent.kinematic is not None and agent.kinematic.data.shape == (4, 16, 5)
+    assert peak < 2**22 and "\n" not in str(caught.value)  # refused before any table is built
+    assert len(str(caught.value)) < 400
 
 
 def test_a_saved_geometry_that_fits_is_restored(tmp_path: Path) -> None:

@@ -43,7 +43,8 @@ from skidnav.kernels.tabular import epsilon_at, epsilon_greedy, greedy_first
 logger = logging.getLogger(__name__)
 
 SAVE_FORMAT = "skidnav-agent"
-SAVE_VERSION = 1
+SAVE_VERSION = 2
+"""2: a model-based agent's geometry in the JSON (1 held it as 19 numbers in the archive)."""
 
 
 def save_paths(path: str | Path) -> tuple[Path, Path]:
@@ -197,6 +198,10 @@ class TabularAgent:
     def _restore_state_arrays(self, arrays: Mapping[str, np.ndarray]) -> None:
         """Inverse of :meth:`_state_arrays`; raise KeyError/ValueError if something is missing."""
 
+    def _state_json(self) -> dict[str, Any]:
+        """Entries beyond the common ones for the saved JSON (subclasses extend)."""
+        return {}
+
     def save(self, path: str | Path) -> tuple[Path, Path]:
         """Write ``path.npz`` (Q and model arrays) and ``path.json`` (name, config, counters,
         generator state), each atomically (:func:`~skidnav.atomicfile.write_npz_atomic`,
@@ -218,6 +223,7 @@ class TabularAgent:
                 "planning_updates": self.planning_updates,
             },
             "rng": generator_state(self.rng),
+            **self._state_json(),
         }
         write_atomic(json_path, json.dumps(meta, indent=1).encode("utf-8"))
         logger.info("saved agent %s to %s", self.name, npz_path)

@@ -22,7 +22,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, fields
 from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
@@ -30,6 +30,7 @@ import numpy as np
 from skidnav._jit import jit
 from skidnav.agents.config import DynaQConfig, QLearningConfig, _check
 from skidnav.agents.dyna_q import DynaQAgent
+from skidnav.errors import shown
 from skidnav.kernels import kinematic_planning as kp
 from skidnav.kernels.learning import PLANNING_UPDATES, Experience, learning_step
 from skidnav.kernels.multinomial import MultinomialArrays, model_observe
@@ -350,17 +351,19 @@ class ModelBasedAgent(DynaQAgent):
             "planner_episode_keys": planner.episode_keys[: counters[kp.EPISODE_LENGTH]],
             "trajectory_keys": np.concatenate(trajectories),
             "trajectory_lengths": np.array([t.size for t in self.trajectories], dtype=np.int64),
-            "geometry": _geometry_array(self.robot, self.discretization),
         }
         if self.kinematic is not None:
             arrays.update(self.kinematic.state_arrays())
         return arrays
 
+    def _state_json(self) -> dict[str, Any]:
+        return {**super()._state_json(), "geometry": geometry_json(self.robot, self.discretization)}
+
     def _restore_state_arrays(self, arrays: Mapping[str, np.ndarray]) -> None:
+        """The saved planner, trajectories and kinematic model, into an agent built with the
+        saved geometry (:func:`skidnav.agents.registry.load_agent` builds it so, once the
+        archive's arrays are known to have that geometry's shapes)."""
         super()._restore_state_arrays(arrays)
-        robot, grid = geometry_from_array(arrays["geometry"])
-        self._check_saved_geometry(grid, arrays)
-        self._set_geometry(robot, grid)
         planner = self.planner
         for name in ("walls", "goals", "stale", "reward_stats", "counters"):
             saved = np.asarray(arrays[f"planner_{name}"])
@@ -387,33 +390,6 @@ class ModelBasedAgent(DynaQAgent):
         if self.kinematic is not None:
             self.kinematic.load_arrays(dict(arrays))
             self._refresh_table()
-
-    def _check_saved_geometry(
-        self, grid: Discretization | None, arrays: Mapping[str, np.ndarray]
-    ) -> None:
-        """ValueError unless the saved arrays have the shapes the saved geometry implies, checked
-        before :meth:`_set_geometry` allocates them: a geometry cannot ask for more memory than
-        the file holds (cells: the planner's walls; slip regions: its reward statistics and the
-        kinematic model's data, present exactly when this agent keeps one on a geometry)."""
-        expected: dict[str, tuple[int, ...] | None] = {"kinematic_data": None}
-        if grid is not None:
-            config: Any = self.config  # has kinematic_config() when uses_kinematic
-            expected = {
-                "planner_walls": (grid.n_x, grid.n_y),
-                "planner_reward_stats": (grid.n_regions + 2, 2),
-                "kinematic_data": (
-                    (grid.n_regions, config.kinematic_config().window, 5)
-                    if self.uses_kinematic
-                    else None
-                ),
-            }
-        for name, shape in expected.items():
-            saved = np.shape(arrays[name]) if name in arrays else None
-            if saved != shape:
-                raise ValueError(
-                    f"saved {name} of shape {saved} disagrees with the saved geometry "
-                    f"(expected {shape})"
-                )
 
 
 def _saved_keys(arrays: Mapping[str, np.ndarray], name: str, n_keys: int) -> np.ndarray:
@@ -457,39 +433,44 @@ def _at_least_one(keys: np.ndarray) -> np.ndarray:
     return keys.copy() if keys.size else np.zeros(1, dtype=np.int64)
 
 
-_ROBOT_FIELDS = ("wheel_radius", "half_track", "front_axle", "rear_axle", "x_icr",
-                 "body_length", "wheel_speed", "dt", "arena_width", "arena_height")  # fmt: skip
-_GRID_FIELDS = ("n_x", "n_y", "n_headings", "regions_x", "regions_y")
+def geometry_json(robot: RobotParams, grid: Discretization | None) -> dict[str, Any]:
+    """The robot and discretization (None: no geometry) as saved in an agent's JSON: every
+    field of :class:`RobotParams` and :class:`Discretization` by name."""
+    return {"robot": asdict(robot), "discretization": None if grid is None else asdict(grid)}
 
 
-def _geometry_array(robot: RobotParams, grid: Discretization | None) -> np.ndarray:
-    """Robot and discretization as float64 (19,) (the last 7 are NaN without geometry)."""
-    values = [float(getattr(robot, name)) for name in _ROBOT_FIELDS]
-    values += [float(robot.substeps), float(robot.integrator == "exact")]
+def geometry_from_json(value: Any) -> tuple[RobotParams, Discretization | None]:
+    """The robot and discretization of :func:`geometry_json`; ValueError (one line, quoting at
+    most an excerpt) unless it is exactly that: the two tables with every field, of its type,
+    finite, and valid for the dataclasses."""
+    if not isinstance(value, Mapping) or set(value) != {"robot", "discretization"}:
+        raise ValueError("expected a geometry with 'robot' and 'discretization'")
+    robot = _dataclass_from_json(RobotParams, value["robot"], "robot")
+    grid = value["discretization"]
     if grid is None:
-        return np.array([*values, *([math.nan] * 7)])
-    values += [float(getattr(grid, name)) for name in _GRID_FIELDS]
-    return np.array([*values, grid.arena_width, grid.arena_height])
-
-
-def geometry_from_array(values: np.ndarray) -> tuple[RobotParams, Discretization | None]:
-    """The robot and discretization (None: no geometry) of a saved ``geometry`` array, float64
-    (19,) as :meth:`ModelBasedAgent._state_arrays` writes it; ValueError if it is not one (the
-    dataclasses validate every field)."""
-    values = np.asarray(values, dtype=np.float64)
-    if values.shape != (19,):
-        raise ValueError(f"expected a geometry of 19 values, got shape {values.shape}")
-    robot = RobotParams(
-        **{name: float(v) for name, v in zip(_ROBOT_FIELDS, values[:10], strict=True)},
-        substeps=int(values[10]), integrator="exact" if values[11] else "euler",
-    )  # fmt: skip
-    if math.isnan(values[12]):
         return robot, None
-    grid = Discretization(
-        **{name: int(v) for name, v in zip(_GRID_FIELDS, values[12:17], strict=True)},
-        arena_width=float(values[17]), arena_height=float(values[18]),
-    )  # fmt: skip
-    return robot, grid
+    return robot, _dataclass_from_json(Discretization, grid, "discretization")
+
+
+def _dataclass_from_json(cls: Any, value: Any, where: str) -> Any:
+    """``cls(**value)`` once ``value`` has exactly ``cls``'s fields, each of its default's type
+    (an int where an int is, a finite number where a float is)."""
+    defaults = {field.name: field.default for field in fields(cls)}
+    if not isinstance(value, Mapping) or set(value) != set(defaults):
+        raise ValueError(f"expected the {where} fields {sorted(defaults)}")
+    for name, default in defaults.items():
+        item = value[name]
+        if isinstance(default, bool) or isinstance(item, bool):
+            ok = type(item) is type(default)
+        elif isinstance(default, int):
+            ok = isinstance(item, int)
+        elif isinstance(default, float):
+            ok = isinstance(item, (int, float)) and math.isfinite(item)
+        else:
+            ok = isinstance(item, type(default))
+        if not ok:
+            raise ValueError(f"expected {where}.{name} like {default!r}, got {shown(item)}")
+    return cls(**value)
 
 
 class DynaKinematicAgent(ModelBasedAgent):

@@ -141,6 +141,8 @@ class _SavedMeta(NamedTuple):
     n_actions: int
     config: QLearningConfig
     steps: int
+    geometry: dict[str, Any]
+    """The saved geometry of a model-based agent as constructor arguments (else empty)."""
 
 
 def _read_meta(json_path: Path) -> _SavedMeta:
@@ -159,13 +161,14 @@ def _read_meta(json_path: Path) -> _SavedMeta:
         for name in ("episodes", "planning_updates"):
             _integer(counters, name, 0, MAX_COUNTER, "counter ")
         _mapping(meta, "rng")
+        geometry = _saved_geometry(cls, n_states, config, meta)
     except KeyError as error:
         raise CorruptFileError(
             f"{json_path}: cannot load agent: missing {error.args[0]!r}"
         ) from None
     except (ValueError, TypeError, UserError) as error:
         raise CorruptFileError(f"{json_path}: cannot load agent: {first_line(error)}") from None
-    return _SavedMeta(meta, cls, n_states, n_actions, config, steps)
+    return _SavedMeta(meta, cls, n_states, n_actions, config, steps, geometry)
 
 
 def _integer(values: Mapping[str, Any], key: str, low: int, high: int, what: str = "") -> int:
@@ -188,30 +191,39 @@ def _string(values: Mapping[str, Any], key: str) -> str:
 def _fresh_agent(
     saved: _SavedMeta, archive: SavedArchive, context: Mapping[str, Any]
 ) -> TabularAgent:
-    """A new agent of the saved metadata (and the saved geometry, when the file holds one), built
-    only once the archive's Q table is known to have the declared shape."""
+    """A new agent of the saved metadata (a model-based one with the saved geometry, which
+    replaces any geometry in ``context``), built only once the archive's Q table is known to
+    have the declared shape."""
     archive.header("q", ArraySpec((saved.n_states, saved.n_actions), "<f8"))
-    if "geometry" in archive.names:
-        from skidnav.agents.dyna_kinematic import ModelBasedAgent
-
-        if issubclass(saved.cls, ModelBasedAgent):
-            kept = {key: value for key, value in context.items() if key not in _GEOMETRY_CONTEXT}
-            context = {**kept, **_saved_geometry(saved, archive)}
+    if saved.geometry:
+        kept = {key: value for key, value in context.items() if key not in _GEOMETRY_CONTEXT}
+        context = {**kept, **saved.geometry}
     return saved.cls(saved.n_states, saved.n_actions, saved.config, None, **context)
 
 
-def _saved_geometry(saved: _SavedMeta, archive: SavedArchive) -> dict[str, Any]:
-    """The robot and discretization a model-based agent saved, checked so that the agent built
-    from them allocates no more than its metadata declare."""
-    from skidnav.agents.dyna_kinematic import geometry_from_array
+def _saved_geometry(
+    cls: type[TabularAgent], n_states: int, config: QLearningConfig, meta: Mapping[str, Any]
+) -> dict[str, Any]:
+    """The robot and discretization a model-based agent saved in its JSON (empty for the other
+    agents), checked so that the agent built from them allocates no more than its metadata
+    declare: its states those of the Q table, no more slip regions than cells along each axis,
+    a kinematic model within bounds."""
+    from skidnav.agents.dyna_kinematic import ModelBasedAgent, geometry_from_json
     from skidnav.models.kinematic import KinematicModel
 
-    robot, grid = geometry_from_array(archive.read("geometry", ArraySpec((up_to(64),), "<f8")))
+    if not issubclass(cls, ModelBasedAgent):
+        return {}
+    robot, grid = geometry_from_json(meta["geometry"])
     if grid is None:
         return {"robot": robot}
-    if grid.n_states != saved.n_states:
-        raise ValueError(f"saved geometry has {grid.n_states} states, expected {saved.n_states}")
-    kinematic_config = getattr(saved.config, "kinematic_config", None)
+    if grid.n_states != n_states:
+        raise ValueError(f"saved geometry has {grid.n_states} states, expected {n_states}")
+    if grid.regions_x > grid.n_x or grid.regions_y > grid.n_y:
+        raise ValueError(
+            f"saved geometry has {grid.regions_x} × {grid.regions_y} slip regions for "
+            f"{grid.n_x} × {grid.n_y} cells"
+        )
+    kinematic_config = getattr(config, "kinematic_config", None)
     if callable(kinematic_config):
         KinematicModel.check_size(grid, kinematic_config())
     return {"robot": robot, "discretization": grid}

@@ -77,32 +77,10 @@ def _add_sim_server(commands: Any) -> None:
 
 
 def _run_sim_server(args: argparse.Namespace) -> int:
-    from skidnav.realtime.config import ServerOptions
     from skidnav.realtime.control.records import EventLog
     from skidnav.realtime.sim import server as ss
-    from skidnav.realtime.sim.robot import SimRobotConfig, build_robot, warm_up
-    from skidnav.robot.params import RobotParams
 
-    try:
-        config = SimRobotConfig(latency=args.latency, pose_noise=args.pose_noise, drop=args.drop)
-        options = ServerOptions(
-            time_scale=args.time_scale,
-            link_timeout=args.link_timeout,
-            idle_timeout=args.idle_timeout,
-            faults=tuple(fault for fault in args.fault.split(",") if fault),
-        )
-    except ValueError as error:
-        raise UserError(str(error)) from None
-    robot = build_robot(
-        slip=args.slip,
-        drift=args.drift,
-        drift_period=args.drift_period,
-        map_spec=args.map,
-        seed=args.seed,
-        config=config,
-        robot=RobotParams(integrator=args.integrator),
-    )
-    warm_up(robot)
+    robot, options = _sim_robot(args)
     with contextlib.ExitStack() as stack:
         try:
             listener = stack.enter_context(ss.bind_listener(args.host, args.port))
@@ -125,6 +103,31 @@ def _run_sim_server(args: argparse.Namespace) -> int:
         print(f"listening on {host}:{port}", flush=True)
         server.serve_tcp(listener)
     return 0
+
+
+def _sim_robot(args: argparse.Namespace) -> tuple[Any, Any]:
+    """The simulated robot of the ``sim-server`` arguments (compiled, warmed up) and the
+    server's options; UserError on a bad value."""
+    from skidnav.realtime.config import ServerOptions
+    from skidnav.realtime.sim.robot import SimRobotConfig, build_robot, warm_up
+    from skidnav.robot.params import RobotParams
+
+    try:
+        config = SimRobotConfig(latency=args.latency, pose_noise=args.pose_noise, drop=args.drop)
+        options = ServerOptions(
+            time_scale=args.time_scale,
+            link_timeout=args.link_timeout,
+            idle_timeout=args.idle_timeout,
+            faults=tuple(fault for fault in args.fault.split(",") if fault),
+        )
+    except ValueError as error:
+        raise UserError(str(error)) from None
+    robot = build_robot(
+        slip=args.slip, drift=args.drift, drift_period=args.drift_period, map_spec=args.map,
+        seed=args.seed, config=config, robot=RobotParams(integrator=args.integrator),
+    )  # fmt: skip
+    warm_up(robot)
+    return robot, options
 
 
 def _open_log(path: Path) -> IO[str]:

@@ -120,14 +120,7 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         observation: str = "discrete",
         variance: str = "true",
     ) -> None:
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(
-                f"expected render_mode in {self.metadata['render_modes']}, got {render_mode!r}"
-            )
-        if observation not in OBSERVATION_KINDS:
-            raise ValueError(f"expected observation in {OBSERVATION_KINDS}, got {observation!r}")
-        if variance not in VARIANCE_SOURCES:
-            raise ValueError(f"expected variance in {VARIANCE_SOURCES}, got {variance!r}")
+        self._check_choices(render_mode, observation, variance)
         self.render_mode = render_mode
         self.robot = robot or RobotParams()
         world = streams(world_seed, ARENA_ROLES)
@@ -161,6 +154,18 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         self._log = np.zeros((self.robot.substeps, 6))
         self._noise = np.zeros(2 * self.robot.substeps)
         self._action_duration = self.robot.action_duration
+
+    @classmethod
+    def _check_choices(cls, render_mode: str | None, observation: str, variance: str) -> None:
+        """ValueError unless the render mode, observation and variance source are known."""
+        if render_mode is not None and render_mode not in cls.metadata["render_modes"]:
+            raise ValueError(
+                f"expected render_mode in {cls.metadata['render_modes']}, got {render_mode!r}"
+            )
+        if observation not in OBSERVATION_KINDS:
+            raise ValueError(f"expected observation in {OBSERVATION_KINDS}, got {observation!r}")
+        if variance not in VARIANCE_SOURCES:
+            raise ValueError(f"expected variance in {VARIANCE_SOURCES}, got {variance!r}")
 
     def _observation_space(self) -> spaces.Space[Any]:
         if self.observation_kind == "discrete":
