@@ -32,7 +32,7 @@ bench: $(STAMP)
 # numba's on-disk cache does not notice edits to helpers inlined from another module:
 # after changing a kernel, clear it.
 clean-cache:
-	find src -name '*.nbi' -delete -o -name '*.nbc' -delete
+	find src tests -name '*.nbi' -delete -o -name '*.nbc' -delete
 
 clean: clean-cache
 	rm -rf $(VENV) runs .pytest_cache .mypy_cache .ruff_cache
