@@ -47,7 +47,7 @@ CASES: dict[str, tuple[str, str]] = {
     ),
     "long unknown key": (
         TINY_TOML.replace("episodes = 6", f"{'k' * 10_000} = 6"),
-        "[experiment] unknown key \"'kkkk",
+        "[experiment]: unknown key \"'kkkk",
     ),
     "long map file": (
         TINY_TOML.replace('kind = "free"', f'file = "{"m" * 10_000}.txt"'),

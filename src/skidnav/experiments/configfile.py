@@ -1,10 +1,11 @@
 """Reading experiment configs from TOML files, with one-line errors a user can act on.
 
 Every problem raises :class:`skidnav.errors.UserError` naming the file and the key, e.g.
-``configs/a.toml: [experiment] unknown key 'episods'`` or
-``configs/a.toml:4:9: malformed TOML: Invalid value``. Map files are resolved relative to the
-config file. Agent names and hyperparameters are checked against the agents package by
-:func:`skidnav.experiments.trial.check_config`, which the runner calls before any run starts.
+``configs/a.toml: [experiment]: unknown key 'episods' (expected one of …)`` or
+``configs/a.toml:4:9: malformed TOML: Invalid value``. Tables, keys and map paths (relative to
+the config file) follow :mod:`skidnav.configtables`. Agent names and hyperparameters are checked
+against the agents package by :func:`skidnav.experiments.trial.check_config`, which the runner
+calls before any run starts.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import itertools
 from pathlib import Path
 from typing import Any
 
+from skidnav.configtables import check_keys, resolve_path, table, table_array
 from skidnav.errors import UserError, shown
 from skidnav.experiments.config import (
     DEFAULT_ENV_ID,
@@ -87,43 +89,23 @@ def config_from_tables(data: dict[str, Any], path: Path | str) -> ExperimentConf
     UserError naming ``path`` and the key."""
     try:
         return _build(data, Path(path))
-    except (ValueError, TypeError) as error:
+    except (UserError, ValueError, TypeError) as error:
         raise UserError(f"{path}: {error}") from None
 
 
-def _check_keys(table: dict[str, Any], allowed: tuple[str, ...], where: str) -> None:
-    for key in table:
-        if key not in allowed:
-            raise ValueError(
-                f"{where} unknown key {shown(key)} (expected one of {', '.join(allowed)})"
-            )
-
-
-def _table(value: Any, where: str) -> dict[str, Any]:
-    if not isinstance(value, dict):
-        raise ValueError(f"{where} expected a table, got {shown(value)}")
-    return value
-
-
-def _tables(value: Any, where: str) -> list[dict[str, Any]]:
-    if not isinstance(value, list) or not value:
-        raise ValueError(f"expected at least one [[{where}]] table")
-    return [_table(item, f"[[{where}]] #{n + 1}:") for n, item in enumerate(value)]
-
-
-def _string(table: dict[str, Any], key: str, where: str, default: str | None = None) -> str:
-    value = table.get(key, default)
+def _string(values: dict[str, Any], key: str, where: str, default: str | None = None) -> str:
+    value = values.get(key, default)
     if value is None:
-        raise ValueError(f"{where} missing key {key!r}")
+        raise ValueError(f"{where}: missing key {key!r}")
     if not isinstance(value, str):
         raise ValueError(f"{where} {key}: expected a string, got {shown(value)}")
     return value
 
 
 def _build(data: dict[str, Any], path: Path) -> ExperimentConfig:
-    _check_keys(data, TOP_KEYS, "top level:")
-    experiment = _table(data.get("experiment"), "[experiment]")
-    _check_keys(experiment, EXPERIMENT_KEYS, "[experiment]")
+    check_keys(data, TOP_KEYS, "top level")
+    experiment = table(data.get("experiment"), "[experiment]")
+    check_keys(experiment, EXPERIMENT_KEYS, "[experiment]")
     values = dict(experiment)
     for key in ("name", "description", "env_id", "baseline"):
         if key in values:
@@ -136,32 +118,32 @@ def _build(data: dict[str, Any], path: Path) -> ExperimentConfig:
     values["presets"] = tuple(presets)
     agents = tuple(
         itertools.chain.from_iterable(
-            _agents(table, f"[[agents]] #{n + 1}:")
-            for n, table in enumerate(_tables(data.get("agents"), "agents"))
+            _agents(agent, f"[[agents]] #{n + 1}")
+            for n, agent in enumerate(table_array(data.get("agents"), "agents"))
         )
     )
     maps = _maps(data, values.get("env_id", DEFAULT_ENV_ID), path.parent)
-    env = freeze_params(_table(data.get("env", {}), "[env]"))
+    env = freeze_params(table(data.get("env", {}), "[env]"))
     try:
         return ExperimentConfig(agents=agents, maps=maps, env_options=env, **values)
     except ValueError as error:
-        raise ValueError(f"[experiment] {error}") from None
+        raise ValueError(f"[experiment]: {error}") from None
 
 
-def _agents(table: dict[str, Any], where: str) -> list[AgentSpec]:
+def _agents(agent: dict[str, Any], where: str) -> list[AgentSpec]:
     """One agent table, expanded over the cartesian product of its ``sweep`` lists."""
-    _check_keys(table, AGENT_KEYS, where)
-    name = _string(table, "name", where)
-    label = _string(table, "label", where, default=name)
-    params = _table(table.get("params", {}), f"{where} params:")
-    sweep = _table(table.get("sweep", {}), f"{where} sweep:")
+    check_keys(agent, AGENT_KEYS, where)
+    name = _string(agent, "name", where)
+    label = _string(agent, "label", where, default=name)
+    params = table(agent.get("params", {}), f"{where} params")
+    sweep = table(agent.get("sweep", {}), f"{where} sweep")
     for key, values in sweep.items():
         if not isinstance(values, list) or not values:
             raise ValueError(
                 f"{where} sweep.{shown(key)}: expected a non-empty list, got {shown(values)}"
             )
         if key in params:
-            raise ValueError(f"{where} {shown(key)} is both in params and in sweep")
+            raise ValueError(f"{where}: {shown(key)} is both in params and in sweep")
     keys = sorted(sweep)
     agents = []
     for combination in itertools.product(*(sweep[key] for key in keys)):
@@ -171,7 +153,7 @@ def _agents(table: dict[str, Any], where: str) -> list[AgentSpec]:
         try:
             agents.append(AgentSpec(name, full_label, freeze_params({**params, **chosen})))
         except ValueError as error:
-            raise ValueError(f"{where} {error}") from None
+            raise ValueError(f"{where}: {error}") from None
     return agents
 
 
@@ -180,25 +162,27 @@ def _maps(data: dict[str, Any], env_id: str, folder: Path) -> tuple[MapSpec, ...
     its maps may be omitted (one placeholder map named after the env)."""
     if "maps" not in data and env_id != DEFAULT_ENV_ID:
         return (MapSpec(label=env_id.rsplit(":", 1)[-1], kind="free"),)
-    tables = _tables(data.get("maps"), "maps")
-    return tuple(_map(table, f"[[maps]] #{n + 1}:", folder) for n, table in enumerate(tables))
+    tables = table_array(data.get("maps"), "maps")
+    return tuple(read_map(spec, f"[[maps]] #{n + 1}", folder) for n, spec in enumerate(tables))
 
 
-def _map(table: dict[str, Any], where: str, folder: Path) -> MapSpec:
-    _check_keys(table, MAP_KEYS, where)
-    kind = _string(table, "kind", where, default="")
-    file = _string(table, "file", where, default="")
+def read_map(spec: dict[str, Any], where: str, folder: Path) -> MapSpec:
+    """One ``[[maps]]`` table (also a ``[[tune.maps]]`` one) as a map; its file relative to
+    ``folder``, the config file's. ValueError or UserError naming ``where``."""
+    check_keys(spec, MAP_KEYS, where)
+    kind = _string(spec, "kind", where, default="")
+    file = _string(spec, "file", where, default="")
     if file:
-        resolved = (folder / file).resolve()
+        resolved = resolve_path(file, folder)
         if not _is_file(resolved):
             raise ValueError(f"{where} file: no such map file {shown(file)} in {folder.resolve()}")
         file = str(resolved)
-    label = _string(table, "label", where, default=kind or Path(file).stem)
-    options = freeze_params(_table(table.get("options", {}), f"{where} options:"))
+    label = _string(spec, "label", where, default=kind or Path(file).stem)
+    options = freeze_params(table(spec.get("options", {}), f"{where} options"))
     try:
         return MapSpec(label=label, kind=kind, file=file, options=options)
     except ValueError as error:
-        raise ValueError(f"{where} {error}") from None
+        raise ValueError(f"{where}: {error}") from None
 
 
 def _is_file(path: Path) -> bool:

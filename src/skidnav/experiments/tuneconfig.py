@@ -35,19 +35,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from skidnav.configtables import check_keys, table, table_array
 from skidnav.errors import UserError, shown
 from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec, _check_range
 
-# The [[maps]] schema and its table helpers live in configfile; reusing them keeps [[tune.maps]]
-# and [[maps]] one schema, with the same messages.
-from skidnav.experiments.configfile import (
-    _check_keys,
-    _map,
-    _table,
-    _tables,
-    config_from_tables,
-    parse_tables,
-)
+# The [[maps]] schema lives in configfile; reusing it keeps [[tune.maps]] and [[maps]] one schema,
+# with the same messages.
+from skidnav.experiments.configfile import config_from_tables, parse_tables, read_map
 from skidnav.savedfile import read_config_text
 
 if TYPE_CHECKING:
@@ -291,51 +285,51 @@ def load_tune_config_and_text(path: Path | str) -> tuple[ExperimentConfig, TuneC
         raise UserError(f"{path}: no [tune] table (see docs/tuning.md)")
     try:
         return config, parse_tune(data["tune"], config, Path(path)), text
-    except (ValueError, TypeError) as error:
+    except (UserError, ValueError, TypeError) as error:
         raise UserError(f"{path}: {error}") from None
 
 
-def parse_tune(table: Any, config: ExperimentConfig, path: Path) -> TuneConfig:
+def parse_tune(value: Any, config: ExperimentConfig, path: Path) -> TuneConfig:
     """The ``[tune]`` table as a :class:`TuneConfig`; map files relative to ``path``'s folder.
 
     Raises:
-        ValueError: a bad key or value, naming it.
+        ValueError, UserError: a bad key or value, naming it.
     """
-    table = _table(table, "[tune]")
-    _check_keys(table, TUNE_KEYS, "[tune]")
+    tune = table(value, "[tune]")
+    check_keys(tune, TUNE_KEYS, "[tune]")
     maps = config.maps
-    if "maps" in table:
-        tables = _tables(table["maps"], "tune.maps")
-        where = "[[tune.maps]] #{}:"
-        maps = tuple(_map(t, where.format(n + 1), path.parent) for n, t in enumerate(tables))
-    if "space" not in table:
-        raise ValueError("[tune] missing table [tune.space.<agent label>]")
+    if "maps" in tune:
+        tables = table_array(tune["maps"], "tune.maps")
+        where = "[[tune.maps]] #{}"
+        maps = tuple(read_map(t, where.format(n + 1), path.parent) for n, t in enumerate(tables))
+    if "space" not in tune:
+        raise ValueError("[tune]: missing table [tune.space.<agent label>]")
     spaces = tuple(
         (label, _space(label, ranges))
-        for label, ranges in _table(table["space"], "[tune.space]").items()
+        for label, ranges in table(tune["space"], "[tune.space]").items()
     )
     for label, _ in spaces:
         if label not in config.agent_labels:
             raise ValueError(
-                f"[tune.space] unknown agent label {shown(label)} "
+                f"[tune.space]: unknown agent label {shown(label)} "
                 f"(expected one of {', '.join(config.agent_labels)})"
             )
-    values = {key: table[key] for key in TUNE_KEYS if key in table and key not in {"maps", "space"}}
+    values = {key: tune[key] for key in TUNE_KEYS if key in tune and key not in {"maps", "space"}}
     try:
         return TuneConfig(maps=maps, spaces=spaces, **values)
     except ValueError as error:
-        raise ValueError(f"[tune] {error}") from None
+        raise ValueError(f"[tune]: {error}") from None
 
 
-def _space(label: str, table: Any) -> tuple[ParamRange, ...]:
+def _space(label: str, value: Any) -> tuple[ParamRange, ...]:
     where = f"[tune.space.{label}]"
-    table = _table(table, where)
-    if not table:
-        raise ValueError(f"{where} expected at least one hyperparameter")
+    space = table(value, where)
+    if not space:
+        raise ValueError(f"{where}: expected at least one hyperparameter")
     ranges = []
-    for name, spec in table.items():
-        spec = _table(spec, f"{where} {name}:")
-        _check_keys(spec, RANGE_KEYS, f"{where} {name}:")
+    for name, spec in space.items():
+        spec = table(spec, f"{where} {name}")
+        check_keys(spec, RANGE_KEYS, f"{where} {name}")
         values = dict(spec)
         if "choices" in values:
             if not isinstance(values["choices"], list):

@@ -13,18 +13,19 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any
 
+from skidnav.configtables import build_dataclass, check_keys, resolve_path, table
 from skidnav.errors import UserError, shown
 from skidnav.realtime.link.protocol import MAX_LINE_BYTES
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.savedfile import parse_toml, read_config_text
 from skidnav.world.grid import MAP_KINDS
 
-T = TypeVar("T")
-
 DRIVER_TABLES = ("tcp", "serial", "ros2")
 """The tables of driver options."""
+TOP_TABLES = ("run", "sim", *DRIVER_TABLES, "agents", "study")
+"""The tables of a config besides ``[presets]`` (``[study]``: :mod:`skidnav.realtime.study`)."""
 FAULTS = ("silence", "garbage", "oversized", "escape", "hangup")
 """Faults the sim server can inject for tests (realtime/sim/server.py)."""
 
@@ -218,52 +219,32 @@ def _merge(base: dict[str, Any], override: Mapping[str, Any]) -> dict[str, Any]:
     return merged
 
 
-def _build(cls: type[T], table: Any, where: str) -> T:
-    table = _table(table, where)
-    known = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
-    unknown = sorted(set(table) - known)
-    if unknown:
-        raise UserError(f"{where}: unknown option(s) {shown(', '.join(unknown))}")
-    try:
-        return cls(**table)
-    except (ValueError, TypeError) as error:
-        raise UserError(f"{where}: {error}") from None
-
-
-def _table(value: Any, where: str) -> dict[str, Any]:
-    """``value`` if it is a TOML table; UserError naming ``where`` otherwise."""
-    if not isinstance(value, dict):
-        raise UserError(f"{where}: expected a table, got {shown(value)}")
-    return value
-
-
 def config_from_mapping(data: Mapping[str, Any], preset: str | None = None) -> RealtimeConfig:
     """A config from parsed TOML, with ``[presets.NAME]`` merged over it if ``preset`` is given."""
     tables = {key: value for key, value in data.items() if key != "presets"}
     if preset is not None:
-        presets = _table(data.get("presets", {}), "[presets]")
+        presets = table(data.get("presets", {}), "[presets]")
         if preset not in presets:
             names = shown(", ".join(presets))
             raise UserError(f"unknown preset {preset!r}; expected one of {names}")
-        tables = _merge(tables, _table(presets[preset], f"[presets.{preset}]"))
-    unknown = sorted(set(tables) - {"run", "sim", *DRIVER_TABLES, "agents", "study"})
-    if unknown:
-        raise UserError(f"unknown config table(s) {shown(', '.join(unknown))}")
-    agents = _table(tables.get("agents", {}), "[agents]")
+        tables = _merge(tables, table(presets[preset], f"[presets.{preset}]"))
+    check_keys(tables, TOP_TABLES, "top level")
+    agents = table(tables.get("agents", {}), "[agents]")
     return RealtimeConfig(
-        run=_build(RunSettings, tables.get("run", {}), "[run]"),
-        sim=_build(SimSettings, tables.get("sim", {}), "[sim]"),
-        drivers={name: dict(_table(tables.get(name, {}), f"[{name}]")) for name in DRIVER_TABLES},
-        agents={name: dict(_table(value, f"[agents.{name}]")) for name, value in agents.items()},
+        run=build_dataclass(RunSettings, tables.get("run", {}), "[run]"),
+        sim=build_dataclass(SimSettings, tables.get("sim", {}), "[sim]"),
+        drivers={name: dict(table(tables.get(name, {}), f"[{name}]")) for name in DRIVER_TABLES},
+        agents={name: dict(table(value, f"[agents.{name}]")) for name, value in agents.items()},
     )
 
 
 def read_tables(path: Path) -> dict[str, Any]:
     """The TOML tables of a config file (read by :func:`~skidnav.savedfile.read_config_text`:
     at most :data:`~skidnav.savedfile.MAX_CONFIG_BYTES`, a device or a pipe ends at that limit;
-    nested at most :data:`~skidnav.savedfile.MAX_JSON_DEPTH` levels), with every relative map
-    file path (``[run] map`` and ``[presets.NAME.run] map``, when not a map kind) made relative
-    to the file's folder; UserError (one line naming the file) if unreadable or malformed."""
+    nested at most :data:`~skidnav.savedfile.MAX_JSON_DEPTH` levels), with every map file path
+    (``[run] map`` and ``[presets.NAME.run] map``, when not a map kind) made absolute, a relative
+    one against the file's folder (:func:`~skidnav.configtables.resolve_path`); UserError (one
+    line naming the file) if unreadable or malformed."""
     data = parse_toml(read_config_text(path), path)
     presets = data.get("presets", {})
     runs = [data.get("run")]
@@ -273,8 +254,8 @@ def read_tables(path: Path) -> dict[str, Any]:
         if not isinstance(run, dict):
             continue
         spec = run.get("map")
-        if isinstance(spec, str) and spec not in MAP_KINDS and not Path(spec).is_absolute():
-            run["map"] = str((path.parent / spec).resolve())
+        if isinstance(spec, str) and spec not in MAP_KINDS:
+            run["map"] = str(resolve_path(spec, path.parent))
     return data
 
 

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from skidnav.atomicfile import write_user_file
+from skidnav.configtables import build_dataclass, table
 from skidnav.errors import UserError, first_line, shown
 from skidnav.experiments.config import MAX_EPISODES, MAX_SEEDS, AgentSpec, MapSpec
 from skidnav.experiments.runner import run_experiment
@@ -111,21 +112,14 @@ def load_study(path: Path, overrides: Mapping[str, Any]) -> tuple[dict[str, Any]
     """(TOML tables without ``[study]``, settings from ``[study]`` with ``overrides`` — keys of
     :class:`StudySettings`, None values ignored — on top); UserError if unreadable or invalid."""
     data = read_tables(path)
-    study = data.pop("study", {})
-    if not isinstance(study, dict):
-        raise UserError(f"{path}: [study]: expected a table, got {shown(study)}")
-    table = dict(study)
-    table.update({key: value for key, value in overrides.items() if value is not None})
+    study = dict(table(data.pop("study", {}), f"{path}: [study]"))
+    study.update({key: value for key, value in overrides.items() if value is not None})
     for key in ("agents", "presets"):
-        if isinstance(table.get(key), str):
-            table[key] = [name.strip() for name in table[key].split(",") if name.strip()]
-        if key in table and isinstance(table[key], list | tuple):
-            table[key] = tuple(table[key])
-    try:
-        settings = StudySettings(**table)
-    except (TypeError, ValueError) as error:
-        raise UserError(f"[study]: {error}") from None
-    return data, settings
+        if isinstance(study.get(key), str):
+            study[key] = [name.strip() for name in study[key].split(",") if name.strip()]
+        if key in study and isinstance(study[key], list | tuple):
+            study[key] = tuple(study[key])
+    return data, build_dataclass(StudySettings, study, "[study]")
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,77 @@
+"""The conventions every TOML config loader follows (experiments, tuning, real-time runs, studies).
+
+A problem is one :class:`~skidnav.errors.UserError` line ``"WHERE: PROBLEM"``, where ``WHERE``
+names the table (``[run]``, ``[[maps]] #2``, ``[tune.space.q-learning] alpha``) and a value read
+from the file is quoted in part (:func:`~skidnav.errors.shown`). A path in a config is relative to
+the config file's folder.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any, TypeVar
+
+from skidnav.errors import UserError, shown
+
+T = TypeVar("T")
+
+__all__ = ["build_dataclass", "check_keys", "resolve_path", "table", "table_array"]
+
+
+def table(value: Any, where: str) -> dict[str, Any]:
+    """``value`` if it is a TOML table; UserError ``"{where}: expected a table, got …"`` otherwise.
+
+    >>> table({"a": 1}, "[run]")
+    {'a': 1}
+    >>> table(3, "[run]")
+    Traceback (most recent call last):
+    ...
+    skidnav.errors.UserError: [run]: expected a table, got 3
+    """
+    if not isinstance(value, dict):
+        raise UserError(f"{where}: expected a table, got {shown(value)}")
+    return value
+
+
+def table_array(value: Any, name: str) -> list[dict[str, Any]]:
+    """The tables of a non-empty TOML array of tables ``[[name]]``; UserError otherwise (an item
+    that is not a table is named ``[[name]] #N``, counting from 1)."""
+    if not isinstance(value, list) or not value:
+        raise UserError(f"expected at least one [[{name}]] table")
+    return [table(item, f"[[{name}]] #{n + 1}") for n, item in enumerate(value)]
+
+
+def check_keys(values: Iterable[str], known: Iterable[str], where: str) -> None:
+    """UserError naming the first of ``values`` (a table's keys, in the file's order) that is not
+    in ``known``, and the known ones.
+
+    >>> check_keys({"episods": 6}, ("episodes", "seeds"), "[experiment]")
+    Traceback (most recent call last):
+    ...
+    skidnav.errors.UserError: [experiment]: unknown key 'episods' (expected one of episodes, seeds)
+    """
+    allowed = tuple(known)
+    for key in values:
+        if key not in allowed:
+            names = ", ".join(allowed)
+            raise UserError(f"{where}: unknown key {shown(key)} (expected one of {names})")
+
+
+def build_dataclass(cls: type[T], value: Any, where: str) -> T:
+    """The dataclass ``cls`` built from a TOML table of its fields (each key one field; the class
+    validates the values on construction); UserError ``"{where}: …"`` for a value that is not a
+    table, an unknown key, or a value the class refuses (ValueError or TypeError)."""
+    values = table(value, where)
+    check_keys(values, (f.name for f in dataclasses.fields(cls)), where)  # type: ignore[arg-type]
+    try:
+        return cls(**values)
+    except (ValueError, TypeError) as error:
+        raise UserError(f"{where}: {error}") from None
+
+
+def resolve_path(value: str, folder: Path) -> Path:
+    """The absolute, resolved path of ``value``, a path written in a config file whose folder is
+    ``folder`` (an absolute ``value`` stays where it points)."""
+    return (folder / value).resolve()

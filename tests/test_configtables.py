@@ -1,0 +1,90 @@
+"""The config-table conventions: one-line "where: problem" errors, the same from every loader."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from skidnav.configtables import build_dataclass, check_keys, resolve_path, table, table_array
+from skidnav.errors import EXCERPT_CHARS, UserError
+from skidnav.experiments.configfile import parse_config
+from skidnav.realtime.config import config_from_mapping
+from tests.experiments.exp_support import TINY_TOML
+
+
+@dataclass(frozen=True)
+class Settings:
+    count: int = 1
+    name: str = "a"
+
+    def __post_init__(self) -> None:
+        if self.count < 1:
+            raise ValueError(f"expected count >= 1, got {self.count}")
+
+
+def test_table_returns_a_table_and_refuses_anything_else() -> None:
+    assert table({"a": 1}, "[x]") == {"a": 1}
+    for value in (3, "s", [1], None):
+        with pytest.raises(UserError, match=r"^\[x\]: expected a table, got "):
+            table(value, "[x]")
+
+
+def test_table_array_names_the_item_that_is_not_a_table() -> None:
+    assert table_array([{"a": 1}, {}], "maps") == [{"a": 1}, {}]
+    with pytest.raises(UserError, match=r"^expected at least one \[\[maps\]\] table$"):
+        table_array([], "maps")
+    with pytest.raises(UserError, match=r"^\[\[maps\]\] #2: expected a table, got 3$"):
+        table_array([{}, 3], "maps")
+
+
+def test_check_keys_names_the_first_unknown_key_and_the_known_ones() -> None:
+    check_keys({"b": 1, "a": 2}, ("a", "b"), "[x]")
+    with pytest.raises(UserError) as caught:
+        check_keys({"a": 1, "zz": 2, "yy": 3}, ("a", "b"), "[x]")
+    assert str(caught.value) == "[x]: unknown key 'zz' (expected one of a, b)"
+
+
+def test_a_long_or_hostile_unknown_key_is_quoted_in_part_on_one_line() -> None:
+    with pytest.raises(UserError) as caught:
+        check_keys({"k\n" * 5000: 1}, ("a",), "[x]")
+    message = str(caught.value)
+    assert "\n" not in message and len(message) < 2 * EXCERPT_CHARS + 40, message
+
+
+def test_build_dataclass_checks_keys_then_the_class_validates() -> None:
+    assert build_dataclass(Settings, {"count": 3}, "[s]") == Settings(count=3)
+    assert build_dataclass(Settings, {}, "[s]") == Settings()
+    cases = {
+        "[s]: expected a table, got 3": 3,
+        "[s]: unknown key 'size' (expected one of count, name)": {"size": 3},
+        "[s]: expected count >= 1, got 0": {"count": 0},
+    }
+    for message, value in cases.items():
+        with pytest.raises(UserError) as caught:
+            build_dataclass(Settings, value, "[s]")
+        assert str(caught.value) == message
+    with pytest.raises(UserError, match=r"^\[s\]: "):  # a TypeError of the class, one line
+        build_dataclass(Settings, {"count": "many"}, "[s]")
+
+
+def test_resolve_path_is_relative_to_the_config_folder(tmp_path: Path) -> None:
+    folder = tmp_path / "configs"
+    assert resolve_path("maps/a.txt", folder) == folder.resolve() / "maps" / "a.txt"
+    assert resolve_path("../a.txt", folder) == tmp_path.resolve() / "a.txt"
+    absolute = str(tmp_path.resolve() / "b.txt")
+    assert resolve_path(absolute, folder) == Path(absolute)
+
+
+def test_both_loaders_word_the_same_faults_alike() -> None:
+    with pytest.raises(UserError) as experiment:
+        parse_config(TINY_TOML.replace("episodes = 6", "episods = 6"), "a.toml")
+    with pytest.raises(UserError) as realtime:
+        config_from_mapping({"run": {"episods": 6}})
+    assert str(experiment.value).startswith("a.toml: [experiment]: unknown key 'episods' (")
+    assert str(realtime.value).startswith("[run]: unknown key 'episods' (")
+    with pytest.raises(UserError, match=r"^a\.toml: \[env\]: expected a table, got 3$"):
+        parse_config("env = 3\n" + TINY_TOML, "a.toml")
+    with pytest.raises(UserError, match=r"^\[sim\]: expected a table, got 3$"):
+        config_from_mapping({"sim": 3})
