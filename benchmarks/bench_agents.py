@@ -25,15 +25,13 @@ from __future__ import annotations
 
 import heapq
 import math
-import os
 import random
-import subprocess
-import sys
 import time
 from collections import defaultdict
 from typing import Any
 
 import numpy as np
+from plain_python import interpreted
 
 from skidnav.agents.fast_training import train_agent_fast
 from skidnav.agents.registry import make_agent
@@ -250,15 +248,10 @@ WARM_UP = 4
 
 
 def plain_arena_rate(name: str) -> float:
-    """:func:`arena_planning_rate` as plain Python: the same kernels with the JIT disabled, in a
-    subprocess, :data:`PLAIN_ARENA` (budget, steps per episode), one timed episode."""
+    """:func:`arena_planning_rate` as plain Python (:func:`plain_python.interpreted`):
+    :data:`PLAIN_ARENA` (budget, steps per episode), one timed episode."""
     budget, steps = PLAIN_ARENA
-    code = f"import bench_agents as b; print(b.arena_planning_rate({name!r}, {budget}, 1, {steps}))"
-    result = subprocess.run(
-        [sys.executable, "-c", code], env=dict(os.environ, NUMBA_DISABLE_JIT="1"),
-        capture_output=True, text=True, check=True, cwd=os.path.dirname(os.path.abspath(__file__)),
-    )  # fmt: skip
-    return float(result.stdout.strip().splitlines()[-1])
+    return interpreted("bench_agents", f"arena_planning_rate({name!r}, {budget}, 1, {steps})")
 
 
 def print_arena_rates() -> None:

@@ -6,14 +6,12 @@ ratio, all measured in this run on one core."""
 
 from __future__ import annotations
 
-import os
 import statistics
-import subprocess
-import sys
 import time
 
 import gymnasium
 import numpy as np
+from plain_python import interpreted
 
 import skidnav  # noqa: F401  (registers the env)
 
@@ -47,18 +45,8 @@ def median_rate(n_steps: int, unwrapped: bool = False) -> float:
 
 
 def interpreted_rate() -> float:
-    """The made env's steps/s as plain Python, in a subprocess with the JIT disabled."""
-    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
-    code = "import bench_env; print(bench_env.steps_per_second(2_000))"
-    result = subprocess.run(
-        [sys.executable, "-c", code],
-        env=env,
-        capture_output=True,
-        text=True,
-        check=True,
-        cwd=os.path.dirname(os.path.abspath(__file__)),
-    )
-    return float(result.stdout.strip())
+    """The made env's steps/s as plain Python (:func:`plain_python.interpreted`)."""
+    return interpreted("bench_env", "steps_per_second(2_000)")
 
 
 def main() -> None:

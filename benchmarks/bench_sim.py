@@ -4,12 +4,10 @@ the same run. Prints one line per figure."""
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 import time
 
 import numpy as np
+from plain_python import interpreted
 
 from skidnav.envs.navigation import SkidSteerNavEnv
 from skidnav.kernels.navigation import simulate_batch
@@ -48,18 +46,8 @@ def api_steps_per_second(n_steps: int) -> float:
 
 
 def interpreted_actions_per_second() -> float:
-    """The batch kernel's actions/s as plain Python, in a subprocess with the JIT disabled."""
-    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
-    code = "import bench_sim; print(bench_sim.batch_actions_per_second(2_000, 1))"
-    result = subprocess.run(
-        [sys.executable, "-c", code],
-        env=env,
-        capture_output=True,
-        text=True,
-        check=True,
-        cwd=os.path.dirname(os.path.abspath(__file__)),
-    )
-    return float(result.stdout.strip())
+    """The batch kernel's actions/s as plain Python (:func:`plain_python.interpreted`)."""
+    return interpreted("bench_sim", "batch_actions_per_second(2_000, 1)")
 
 
 def main() -> None:

@@ -17,14 +17,12 @@ are compared.
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 import time
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from plain_python import interpreted
 
 import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents.fast_training import train_agent_fast
@@ -56,15 +54,8 @@ def steps_per_second(name: str, fused: bool, episodes: int) -> float:
 
 
 def plain_python_rate(name: str) -> float:
-    """:func:`steps_per_second` step by step with the JIT disabled, in a subprocess."""
-    code = (
-        f"import bench_training as b; print(b.steps_per_second({name!r}, False, {PLAIN_EPISODES}))"
-    )
-    result = subprocess.run(
-        [sys.executable, "-c", code], env=dict(os.environ, NUMBA_DISABLE_JIT="1"),
-        capture_output=True, text=True, check=True, cwd=os.path.dirname(os.path.abspath(__file__)),
-    )  # fmt: skip
-    return float(result.stdout.strip().splitlines()[-1])
+    """:func:`steps_per_second` step by step as plain Python (:func:`plain_python.interpreted`)."""
+    return interpreted("bench_training", f"steps_per_second({name!r}, False, {PLAIN_EPISODES})")
 
 
 def main() -> None:
