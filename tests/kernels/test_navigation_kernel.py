@@ -125,7 +125,7 @@ def test_log_replays_to_the_pose_with_the_region_of_each_substep_start() -> None
 
 
 def test_task_arrays_give_back_the_task() -> None:
-    from skidnav.kernels.navigation import task_arrays, task_from_arrays
+    from skidnav.kernels.navigation_api import task_arrays, task_from_arrays
     from skidnav.robot.params import RobotParams
 
     env = SkidSteerNavEnv(map_kind="maze", world_seed=2, slip="slippery", drift_amplitude=0.3,
@@ -141,7 +141,8 @@ def test_task_arrays_give_back_the_task() -> None:
 
 
 def test_step_arrays_is_transition() -> None:
-    from skidnav.kernels.navigation import draw_noise, step_arrays, task_arrays, transition
+    from skidnav.kernels.navigation import draw_noise, transition
+    from skidnav.kernels.navigation_api import step_arrays, task_arrays
 
     fast_env, env = _slippery_env(), _slippery_env()
     poses = _free_poses(env, 100, np.random.default_rng(4))
@@ -162,7 +163,8 @@ def test_step_arrays_is_transition() -> None:
 def test_drive_substep_is_the_actions_substep() -> None:
     """Driven sub-step by sub-step with an action's wheel speeds, a robot follows the action's
     logged path exactly, with either integrator, until a wall stops it."""
-    from skidnav.kernels.navigation import drive_substep, transition
+    from skidnav.kernels.navigation import transition
+    from skidnav.kernels.navigation_api import drive_substep
     from skidnav.robot.kinematics import commanded_wheel_speeds
     from skidnav.robot.params import RobotParams
 

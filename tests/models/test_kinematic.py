@@ -13,7 +13,8 @@ from skidnav.kernels.kinematic_prediction import (
     PREDICT_GOAL,
     collision_wall_cell,
 )
-from skidnav.kernels.navigation import build_task, pose_state, transition
+from skidnav.kernels.navigation import pose_state, transition
+from skidnav.kernels.navigation_api import build_task
 from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
 from skidnav.robot.kinematics import body_velocities
 from skidnav.robot.params import RobotParams

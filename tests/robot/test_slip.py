@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from skidnav.kernels.navigation import build_task
+from skidnav.kernels.navigation_api import build_task
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
 from skidnav.world.discretization import Discretization

@@ -12,13 +12,8 @@ from gymnasium import spaces
 
 from skidnav.envs import rendering
 from skidnav.envs.step_info import step_info
-from skidnav.kernels.navigation import (
-    NavigationTask,
-    RewardScheme,
-    build_task,
-    step_arrays,
-    task_arrays,
-)
+from skidnav.kernels.navigation import NavigationTask, RewardScheme
+from skidnav.kernels.navigation_api import build_task, step_arrays, task_arrays
 from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field

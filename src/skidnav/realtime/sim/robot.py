@@ -1,7 +1,7 @@
 """The physics of the simulated robot behind the sim server (hardware-in-the-loop stand-in).
 
 One control period of ``dt`` seconds of robot time is one sub-step of the simulator's own kernel
-(:func:`skidnav.kernels.navigation.drive_substep`, the env's sub-step driven by arbitrary
+(:func:`skidnav.kernels.navigation_api.drive_substep`, the env's sub-step driven by arbitrary
 wheel-speed commands instead of the four actions):
 
 1. commands whose latency has elapsed take effect (a FIFO of (due time, ω_L, ω_R));
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from skidnav.errors import UserError
-from skidnav.kernels.navigation import drive_substep, floor_task
+from skidnav.kernels.navigation_api import drive_substep, floor_task
 from skidnav.realtime.arena import build_map, seed_streams, start_pose
 from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.control.records import EventLog
