@@ -28,6 +28,7 @@ import numpy as np
 from skidnav.agents.core import TabularAgent
 from skidnav.agents.training import TrainingLog, log_from_rows, train_agent, train_for_steps
 from skidnav.kernels import env_steps, trainer
+from skidnav.kernels.learning import NO_LOG_ROWS, NO_POSE
 from skidnav.kernels.trainer import ELAPSED, ENDED, LENGTH, Limits
 
 logger = logging.getLogger(__name__)
@@ -97,11 +98,9 @@ class FusedNavigation(FusedEnv):
 class FusedMaze(FusedEnv):
     """A grid maze (known by its ``maze_arrays``)."""
 
-    _NO_POSE, _NO_LOG = np.full(3, -1.0), np.zeros((0, 6))
-
     def kernel_state(self) -> env_steps.MazeState:
         total = np.array([self.env.progress()[2]], dtype=np.int64)
-        return env_steps.MazeState(self.env.maze_arrays(), total, self._NO_POSE, self._NO_LOG)
+        return env_steps.MazeState(self.env.maze_arrays(), total, NO_POSE, NO_LOG_ROWS)
 
     def write_back(self, kernel: Any, state: int, elapsed: int) -> None:
         self.env.restore_progress(state, elapsed, int(kernel.total_steps[0]))
@@ -121,7 +120,7 @@ def _learn(
     stretch = trainer.learn_stretch if own else trainer.learn_stretch_uncached
     total = 0.0
     while tally[LENGTH] < budget and not tally[ENDED]:
-        chunk = int(min(STRETCH, budget - tally[LENGTH]))
+        chunk = int(min(STRETCH, budget - tally[LENGTH], fused.limit - tally[ELAPSED]))
         agent.reserve(chunk)
         limits = Limits(fused.limit, max_steps, int(tally[LENGTH]) + chunk)
         total, state = stretch(

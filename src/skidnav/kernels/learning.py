@@ -76,7 +76,10 @@ def learn(
     LEARNING_STEPS[type(arrays)](arrays, settings, counters, step, rng)
 
 
-_NO_LOG_ROWS = np.zeros((0, 6))
+NO_POSE = np.full(3, -1.0)
+"""``Experience.pose`` of an env that gives none (read, never written, by the kernels)."""
+NO_LOG_ROWS = np.zeros((0, 6))
+"""``Experience.log`` of an env that keeps no kinematic log."""
 
 
 def experience_from_info(
@@ -91,10 +94,10 @@ def experience_from_info(
     (``"pose"``, ``"collision"``, ``"kinematic_log"``, see :mod:`skidnav.envs.navigation`); an
     env without them (e.g. a grid maze) gives no pose, no collision and no log."""
     info = info or {}
-    pose = np.array(info["pose"], dtype=np.float64) if "pose" in info else np.full(3, -1.0)
+    pose = np.array(info["pose"], dtype=np.float64) if "pose" in info else NO_POSE
     log = info.get("kinematic_log")
     if log is None:
-        rows, n_logged = _NO_LOG_ROWS, NO_LOG
+        rows, n_logged = NO_LOG_ROWS, NO_LOG
     else:
         rows = np.ascontiguousarray(log, dtype=np.float64).reshape(-1, 6)
         n_logged = rows.shape[0]

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from skidnav.atomicfile import write_user_file
+from skidnav.envs.step_info import step_info
 from skidnav.errors import UserError
 from skidnav.realtime.arena import build_map, seed_streams
 from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
@@ -94,14 +95,7 @@ def warm_up_agent(
     agent = make_agent(
         name, n_states, N_ACTIONS, config.agents.get(name), np.random.default_rng(0), **context
     )
-    info = {
-        "pose": (0.0, 0.0, 0.0),
-        "cell": (0, 0, 0),
-        "collision": False,
-        "wheel_speeds": (0.0, 0.0),
-        "region": 0,
-        "kinematic_log": np.zeros((0, 6)),
-    }
+    info = step_info((0.0, 0.0, 0.0), (0, 0, 0), False, (0.0, 0.0), 0, np.zeros((0, 6)))
     for terminated in (False, True):
         action = agent.act(0)
         agent.observe(0, action, -1.0, 1, terminated, False, info)
