@@ -4,21 +4,34 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: venv demo test lint bench clean clean-cache
+.PHONY: venv gl demo test lint bench clean clean-cache
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[dev]"
+	$(PY) -m pip install --quiet -e ".[dev,physics]"
 	touch $(STAMP)
 
 venv: $(STAMP)
 
-demo: $(STAMP)
+# MuJoCo's offscreen renderer needs a GL library (EGL, else OSMesa). Where neither is found and
+# apt-get may be used (root), install Mesa's EGL; otherwise carry on: rendering then falls back to
+# the 2-D renderer (skidnav.physics.backend).
+gl:
+	-@if ! ldconfig -p 2>/dev/null | grep -q -e 'libEGL.so.1' -e 'libOSMesa.so'; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    echo "installing Mesa EGL for offscreen rendering"; \
+	    (apt-get install -y -q libegl1 libegl-mesa0 libgl1-mesa-dri >/dev/null 2>&1 || \
+	     (apt-get update -q >/dev/null 2>&1 && apt-get install -y -q libegl1 libegl-mesa0 libgl1-mesa-dri >/dev/null 2>&1)) || \
+	      echo "no GL library: MuJoCo pictures fall back to the 2-D renderer"; \
+	  else echo "no GL library: MuJoCo pictures fall back to the 2-D renderer"; fi; \
+	fi
+
+demo: $(STAMP) gl
 	$(VENV)/bin/skidnav run configs/quick.toml --out runs/quick
 	$(VENV)/bin/skidnav report runs/quick
 
-test: lint
+test: lint gl
 	$(PY) -m pytest
 
 lint: $(STAMP)

@@ -19,6 +19,7 @@ SUBCOMMAND_MODULES = {
     "reproduce": "skidnav.commands.reproduce",
     "robot": "skidnav.commands.robot",
     "camera": "skidnav.commands.camera",
+    "floors": "skidnav.commands.floors",
 }
 """Subcommand name → the module that adds it (``add_parser(subparsers)``)."""
 

@@ -10,7 +10,8 @@ one learning step per agent. Between stretches Python makes room in the agent's 
 (``reserve``); between episodes it does what the agent does in ``end_episode`` (ε decay,
 trajectory bookkeeping, kinematic refits with scikit-learn) and the greedy evaluation rollouts
 (also compiled). Same signature, same output, and the same numbers as the plain loop for the same
-seed (tested), except ``wall_time``. Other envs, or agents that are not a
+seed (tested), except ``wall_time``. Other envs (the navigation env with
+``dynamics="mujoco"`` among them: its physics is not compiled), or agents that are not a
 :class:`~skidnav.agents.core.TabularAgent`, fall back to the plain loop. The navigation env's
 ``trail`` (for rendering) is not recorded.
 """
@@ -76,7 +77,11 @@ class FusedEnv:
         layer, limit = _unwrapped(env)
         if callable(getattr(layer, "maze_arrays", None)):
             return FusedMaze(layer, limit)
-        if hasattr(layer, "task") and getattr(layer, "observation_kind", None) == "discrete":
+        if (
+            hasattr(layer, "task")
+            and getattr(layer, "observation_kind", None) == "discrete"
+            and getattr(layer, "dynamics", "kinematic") == "kinematic"  # compiled: ICR model only
+        ):
             return FusedNavigation(layer, limit)
         return None
 
@@ -233,7 +238,10 @@ def evaluate_q_fast(
     −1 where the goal was not reached."""
     fused = FusedEnv.find(env)
     if not isinstance(fused, FusedNavigation):
-        raise ValueError("expected the skid-steer navigation env with discrete observations")
+        raise ValueError(
+            "expected the skid-steer navigation env with discrete observations and "
+            "dynamics='kinematic'"
+        )
     q = np.ascontiguousarray(q, dtype=np.float64)
     return np.array([_greedy(q, fused, max_steps, int(s)) for s in seeds], np.int64)
 

@@ -14,6 +14,8 @@ from skidnav.envs import rendering
 from skidnav.envs.step_info import step_info
 from skidnav.kernels.navigation import NavigationTask, RewardScheme
 from skidnav.kernels.navigation_api import build_task, step_arrays, task_arrays
+from skidnav.physics.mdp import floor_materials, physics_transition
+from skidnav.physics.robot import PhysicsRobot
 from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
@@ -24,6 +26,7 @@ from skidnav.world.maps import build_map
 
 OBSERVATION_KINDS = ("discrete", "pose")
 VARIANCE_SOURCES = ("true", "observed")
+DYNAMICS = ("kinematic", "mujoco")
 
 
 class SkidSteerNavEnv(gymnasium.Env[Any, int]):
@@ -50,7 +53,7 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     +10 on ending an action in the goal cell; −10 for an action that ran into a wall; otherwise
     −1 − 10·var, var being the wheel-speed variance of the region the action ends in (the slip
     field's true η²/12 with ``variance="true"``, the default; the running variance measured in
-    forward actions with ``variance="observed"``, as the thesis).
+    forward actions with ``variance="observed"``, as the thesis). The same with either dynamics.
 
     ## Starting State
     The centre of the map's start cell, heading 0 (facing +x).
@@ -78,7 +81,15 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     ``slip`` preset ("thesis", "slippery", "rough") or ``slip_field``; ``drift_amplitude`` and
     ``drift_period`` [s] (non-stationary slip; the clock runs across episodes and restarts when
     ``reset`` is given a seed); ``robot`` (:class:`RobotParams`, e.g. ``integrator="exact"``);
-    ``discretization``; ``observation``; ``variance``; ``render_mode`` ("rgb_array" or "ansi").
+    ``discretization``; ``observation``; ``variance``; ``render_mode`` ("rgb_array" or "ansi");
+    ``dynamics``: "kinematic" (the ICR model of SPEC §1, the default) or "mujoco" (the MuJoCo
+    robot of :mod:`skidnav.physics`, the ``physics`` extra: the same spaces, rewards, walls and
+    episode rules, the slip field's wheel-speed loss applied to the servo set points, the motion
+    that of the physics — :mod:`skidnav.physics.mdp` — and the kinematic log filled from the
+    measured body twist; ``wheel_speeds`` are the measured ones; the MuJoCo state restarts at
+    every ``reset``); ``floor``: with "mujoco", one material of
+    :data:`skidnav.physics.materials.MATERIALS` for the whole floor, or None (default) for the
+    slip preset's materials (:func:`skidnav.physics.materials.region_materials`).
 
     >>> import gymnasium, skidnav
     >>> env = gymnasium.make("skidnav/SkidSteerNav-v0", map_kind="free", world_seed=1)
@@ -93,7 +104,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
 
     ## Version History
     v0: initial version; truncation moved from the env to Gymnasium's ``TimeLimit`` (same
-    limit, 500 actions, when made with ``gymnasium.make``).
+    limit, 500 actions, when made with ``gymnasium.make``); ``dynamics`` and ``floor`` added
+    (the default ``dynamics="kinematic"`` gives the same numbers as before).
     """
 
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 10}  # noqa: RUF012
@@ -114,8 +126,10 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         discretization: Discretization | None = None,
         observation: str = "discrete",
         variance: str = "true",
+        dynamics: str = "kinematic",
+        floor: str | None = None,
     ) -> None:
-        self._check_choices(render_mode, observation, variance)
+        self._check_choices(render_mode, observation, variance, dynamics)
         self.render_mode = render_mode
         self.robot = robot or RobotParams()
         world = streams(world_seed, ARENA_ROLES)
@@ -149,10 +163,17 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         self._log = np.zeros((self.robot.substeps, 6))
         self._noise = np.zeros(2 * self.robot.substeps)
         self._action_duration = self.robot.action_duration
+        self.dynamics, self.floor = dynamics, floor
+        self.physics_robot = self._physics_robot(slip) if dynamics == "mujoco" else None
+        if floor is not None and self.physics_robot is None:
+            raise ValueError(f"expected floor=None with dynamics={dynamics!r}, got {floor!r}")
 
     @classmethod
-    def _check_choices(cls, render_mode: str | None, observation: str, variance: str) -> None:
-        """ValueError unless the render mode, observation and variance source are known."""
+    def _check_choices(
+        cls, render_mode: str | None, observation: str, variance: str, dynamics: str
+    ) -> None:
+        """ValueError unless the render mode, observation, variance source and dynamics are
+        known."""
         if render_mode is not None and render_mode not in cls.metadata["render_modes"]:
             raise ValueError(
                 f"expected render_mode in {cls.metadata['render_modes']}, got {render_mode!r}"
@@ -161,6 +182,17 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
             raise ValueError(f"expected observation in {OBSERVATION_KINDS}, got {observation!r}")
         if variance not in VARIANCE_SOURCES:
             raise ValueError(f"expected variance in {VARIANCE_SOURCES}, got {variance!r}")
+        if dynamics not in DYNAMICS:
+            raise ValueError(f"expected dynamics in {DYNAMICS}, got {dynamics!r}")
+
+    def _physics_robot(self, preset: str) -> PhysicsRobot:
+        """The MuJoCo robot on this env's floor (materials of ``floor``, else of the slip preset
+        ``preset``); PhysicsUnavailable without MuJoCo. Its model leaves out the drawn wall
+        boxes: they take no part in the physics (the MDP's wall rule decides collisions, and
+        the trajectories are the same bit for bit) but cost about an eighth of the step time
+        on the obstacles arena."""
+        materials = floor_materials(preset, self.slip_field, self.floor, self.robot)
+        return PhysicsRobot(self.robot, materials)
 
     def _observation_space(self) -> spaces.Space[Any]:
         if self.observation_kind == "discrete":
@@ -188,6 +220,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         self.pose = self.start_pose()
         x, y, heading = self.pose.tolist()
         self.trail = [(x, y)]
+        if self.physics_robot is not None:
+            self.physics_robot.reset(x, y, heading)
         state = self.discretization.state(x, y, heading)
         region = self.discretization.region(x, y)
         return self._observation(state), self._info(state, False, (0.0, 0.0), region, 0)
@@ -199,9 +233,15 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
                 raise ValueError(f"expected an action in 0..3, got {action!r}")
             action = int(action)
         self.np_random.random(out=self._noise)  # the same draws as ``random(2 · substeps)``
-        reward, terminated, collided, n_logged, omega_left, omega_right, state, region = (
-            step_arrays(*self._task_arrays, self.pose, action, self.time, self._noise, self._log)
-        )
+        if self.physics_robot is None:
+            outcome = step_arrays(
+                *self._task_arrays, self.pose, action, self.time, self._noise, self._log
+            )
+        else:
+            outcome = physics_transition(
+                self.task, self.physics_robot, self.pose, action, self.time, self._noise, self._log
+            )
+        reward, terminated, collided, n_logged, omega_left, omega_right, state, region = outcome
         self.time += self._action_duration
         info = self._info(state, collided, (omega_left, omega_right), region, n_logged)
         self.trail.append(info["pose"][:2])

@@ -13,7 +13,8 @@ number.
 
 Training uses the compiled trainer ``skidnav.agents.fast_training.train_agent_fast`` for the
 skid-steer environment when it is installed and supports the agent, else
-``skidnav.agents.training.train_agent``.
+``skidnav.agents.training.train_agent`` (which it falls back to on its own, e.g. for
+``[env] dynamics = "mujoco"``, the physical robot; such runs have no oracle).
 """
 
 from __future__ import annotations
@@ -256,6 +257,7 @@ def warm_up(spec: ExperimentRun) -> None:
     greedy_rollout(agent, eval_env, 2, max(WARM_UP_LIMITS))
     if grid_map is not None:
         _world_arrays(agent.q, grid_map, env)
+    if grid_map is not None and _has_oracle(eval_env):
         compute_oracle(eval_env, 1, 0, [2], max(WARM_UP_LIMITS))
     _warmed_up.add(key)
 
@@ -283,7 +285,7 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     env.reset(seed=seed_int(run_streams["episodes"]))
     agent = _agent(spec, env, np.random.default_rng(run_streams["agent"]))
     oracle = None
-    if grid_map is not None:
+    if grid_map is not None and _has_oracle(eval_env):
         oracle_seed = seed_int(world_streams["oracle"])
         oracle = load_or_compute_oracle(
             eval_env, config.oracle_samples, oracle_seed, eval_seeds, max_steps
@@ -315,6 +317,12 @@ def _oracle_columns(reference: float, oracle: Oracle | None) -> dict[str, float]
     """The summary columns of the run's reference: L* and the oracle's own rollout mean."""
     rollout = oracle.rollout_mean if oracle is not None else float("nan")
     return {"oracle_length": reference, "oracle_rollout_length": rollout}
+
+
+def _has_oracle(env: gymnasium.Env[Any, Any]) -> bool:
+    """True unless the skid-steer env runs on physics (``[env] dynamics = "mujoco"``): the
+    oracle solves the kinematic MDP, so a physics run's L* and optimality gap are NaN."""
+    return getattr(env.unwrapped, "dynamics", "kinematic") == "kinematic"
 
 
 def _reference_length(oracle: Oracle | None, env: gymnasium.Env[Any, Any]) -> float:

@@ -1,0 +1,69 @@
+"""``skidnav floors calibrate``: fit the ICR model to the MuJoCo robot on each floor material
+(:mod:`skidnav.physics.calibration`), print the table and optionally write it as JSON."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from skidnav.atomicfile import write_user_file
+from skidnav.errors import UserError
+from skidnav.physics.backend import PhysicsUnavailable
+from skidnav.physics.materials import MATERIALS
+
+MAX_SEGMENTS = 10_000
+"""Most 1-s excitation segments per material."""
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+    """Add ``floors`` with its ``calibrate`` subcommand."""
+    parser = subparsers.add_parser("floors", help="floor materials of the physical robot")
+    actions = parser.add_subparsers(dest="floors_command", required=True)
+    calibrate = actions.add_parser(
+        "calibrate", help="fit the ICR model to the MuJoCo robot on each floor material"
+    )
+    calibrate.add_argument(
+        "--material", action="append", choices=sorted(MATERIALS), help="default: every one"
+    )
+    calibrate.add_argument("--seconds", type=int, default=60, help="driving per material [s]")
+    calibrate.add_argument("--seed", type=int, default=0, help="excitation and interval seed")
+    calibrate.add_argument("--out", type=Path, help="JSON file to write the fits to")
+    calibrate.set_defaults(func=_calibrate)
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    if not 2 <= args.seconds <= MAX_SEGMENTS:
+        raise UserError(f"expected --seconds in [2, {MAX_SEGMENTS}], got {args.seconds}")
+    if args.seed < 0:
+        raise UserError(f"expected --seed >= 0, got {args.seed}")
+    from skidnav.physics.calibration import calibrate
+
+    materials = args.material or list(MATERIALS)
+    try:
+        fits = calibrate(materials, np.random.default_rng(args.seed), segments=args.seconds)
+    except PhysicsUnavailable as error:
+        raise UserError(str(error)) from None
+    print(
+        f"{'material':12s} {'r [mm]':>22s} {'c [mm]':>24s} {'x_ICR [mm]':>22s} "
+        f"{'v_x noise [mm/s]':>17s} {'yaw noise [rad/s]':>18s} {'eta [rad/s]':>12s}"
+    )
+    for fit in fits:
+        print(
+            f"{fit.material:12s} {_mm(fit.wheel_radius, fit.wheel_radius_interval):>22s} "
+            f"{_mm(fit.half_track, fit.half_track_interval):>24s} "
+            f"{_mm(fit.x_icr, fit.x_icr_interval):>22s} {fit.vx_noise * 1000:17.2f} "
+            f"{fit.yaw_noise:18.4f} {fit.eta:12.3f}"
+        )
+    if args.out is not None:
+        document = {"seed": args.seed, "seconds": args.seconds, "fits": [f.as_dict() for f in fits]}
+        write_user_file(args.out, (json.dumps(document, indent=2) + "\n").encode(), "fits")
+        print(f"wrote {args.out}")
+    return 0
+
+
+def _mm(value: float, interval: tuple[float, float]) -> str:
+    """``value [low, high]`` in millimetres."""
+    return f"{value * 1000:.2f} [{interval[0] * 1000:.2f}, {interval[1] * 1000:.2f}]"

@@ -1,0 +1,7 @@
+"""The physical robot: the thesis's skid-steer robot as a MuJoCo model (SPEC §7, ours).
+
+:mod:`~skidnav.physics.materials` names the floor materials, :mod:`~skidnav.physics.mjcf` writes
+the robot, its arena and its floor as MJCF, :mod:`~skidnav.physics.robot` drives it. MuJoCo is
+an optional dependency (the ``physics`` extra); :func:`~skidnav.physics.backend.load_mujoco`
+says in one line when it is missing.
+"""

@@ -1,0 +1,83 @@
+"""Importing MuJoCo: the optional dependency, and the GL backend of its offscreen renderer.
+
+MuJoCo reads ``MUJOCO_GL`` when it is first imported and, given a backend whose library is
+missing, fails to import at all. :func:`load_mujoco` therefore chooses before that first import:
+a ``MUJOCO_GL`` the user set is kept; otherwise EGL where ``libEGL`` is found, else OSMesa where
+``libOSMesa`` is, else nothing (physics works, offscreen rendering does not:
+:func:`offscreen_rendering` says so and the report falls back to the 2-D renderer).
+"""
+
+from __future__ import annotations
+
+import ctypes.util
+import functools
+import importlib
+import os
+from types import ModuleType
+
+INSTALL_HINT = "pip install 'skidnav[physics]'"
+
+
+class PhysicsUnavailable(RuntimeError):
+    """MuJoCo is not installed (or does not import); the message is one line."""
+
+
+def gl_backend() -> str:
+    """The ``MUJOCO_GL`` value to use: the user's, else ``egl``, ``osmesa`` or ``""`` (none)."""
+    chosen = os.environ.get("MUJOCO_GL", "")
+    if chosen:
+        return chosen
+    if ctypes.util.find_library("EGL"):
+        return "egl"
+    if ctypes.util.find_library("OSMesa"):
+        return "osmesa"
+    return ""
+
+
+@functools.cache
+def load_mujoco() -> ModuleType:
+    """The ``mujoco`` module, imported once with :func:`gl_backend` chosen.
+
+    Raises:
+        PhysicsUnavailable: MuJoCo is not installed or fails to import.
+    """
+    backend = gl_backend()
+    if backend and "MUJOCO_GL" not in os.environ:
+        os.environ["MUJOCO_GL"] = backend
+        os.environ.setdefault("PYOPENGL_PLATFORM", backend)
+    try:
+        mujoco = importlib.import_module("mujoco")
+    except ImportError as error:
+        raise PhysicsUnavailable(f"MuJoCo is not installed ({error}); {INSTALL_HINT}") from None
+    except Exception as error:  # a broken GL backend makes the import itself fail
+        raise PhysicsUnavailable(
+            f"MuJoCo failed to import with MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r}: {error}"
+        ) from None
+    return mujoco
+
+
+def mujoco_available() -> bool:
+    """True when :func:`load_mujoco` succeeds."""
+    try:
+        load_mujoco()
+    except PhysicsUnavailable:
+        return False
+    return True
+
+
+@functools.cache
+def offscreen_rendering() -> str:
+    """``""`` when MuJoCo can render offscreen here, else the one-line reason it cannot."""
+    try:
+        mujoco = load_mujoco()
+    except PhysicsUnavailable as error:
+        return str(error)
+    if not os.environ.get("MUJOCO_GL"):
+        return "no GL backend (install libegl1 or libosmesa6, or set MUJOCO_GL)"
+    try:
+        model = mujoco.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
+        renderer = mujoco.Renderer(model, 8, 8)
+        renderer.close()
+    except Exception as error:
+        return f"MuJoCo cannot render with MUJOCO_GL={os.environ['MUJOCO_GL']}: {error}"
+    return ""
