@@ -288,6 +288,22 @@ def transition(
     collided, n_logged, omega_left, omega_right = simulate_action(
         task, pose, action, time, noise, log
     )
+    return score_action(task, pose, time, collided, n_logged, omega_left, omega_right)
+
+
+@inline_jit
+def score_action(
+    task: NavigationTask,
+    pose: np.ndarray,
+    time: float,
+    collided: bool,
+    n_logged: int,
+    omega_left: float,
+    omega_right: float,
+) -> Outcome:
+    """The :class:`Outcome` of an action that started at ``time`` [s] and left the robot at
+    ``pose`` (x [m], y [m], heading [rad]): state, region, goal and reward (module doc), for
+    any robot that moved it (this kernel's, or the physical one of :mod:`skidnav.physics`)."""
     i, j = cell_of(pose[0], pose[1], task.grid)
     state = state_of(pose[0], pose[1], pose[2], task.grid)
     region = region_of(pose[0], pose[1], task.grid)

@@ -20,8 +20,8 @@ sub-steps of ``dt`` seconds; in each, with the robot in slip region ρ at simula
 
 With the observed variance (``RewardScheme.observed_variance``) the wheel set points of forward
 actions feed the region's running statistics, as in the kinematic kernel. Reward, termination,
-state and region come from the kernels' functions (``action_reward``, ``region_variance``,
-``cell_of``, ``state_of``, ``region_of``): the rules exist once.
+state and region come from the kernels' ``score_action`` (and ``cell_of``, ``region_of``): the
+rules exist once.
 
 The caller owns the pose (x [m], y [m], heading [rad], the heading unwrapped as in the kinematic
 env); the MuJoCo robot holds the velocities. A pose changed outside (a reset) puts the robot
@@ -37,8 +37,7 @@ from skidnav.kernels.navigation import (
     Outcome,
     _log_row,
     _record_wheel_speed,
-    action_reward,
-    region_variance,
+    score_action,
     slip_scale,
 )
 from skidnav.physics.materials import MATERIALS, region_materials
@@ -47,7 +46,7 @@ from skidnav.physics.robot import PhysicsRobot
 from skidnav.robot.kinematics import commanded_wheel_speeds, wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField
-from skidnav.world.discretization import cell_of, region_of, state_of
+from skidnav.world.discretization import cell_of, region_of
 
 POSE_TOLERANCE = 1e-9
 """Largest difference [m, rad] between the caller's pose and the robot's still taken as equal."""
@@ -147,16 +146,9 @@ def physics_transition(
     log: np.ndarray,
 ) -> Outcome:
     """One step of the MDP on the physical robot: :func:`simulate_physics_action`, then scored
-    as :func:`skidnav.kernels.navigation.transition` scores (arguments as there)."""
+    by :func:`skidnav.kernels.navigation.score_action`, as the kinematic transition is
+    (arguments as there)."""
     collided, n_logged, omega_left, omega_right = simulate_physics_action(
         task, body, pose, action, time, noise, log
     )
-    x, y, heading = float(pose[0]), float(pose[1]), float(pose[2])
-    i, j = cell_of(x, y, task.grid)
-    state = state_of(x, y, heading, task.grid)
-    region = region_of(x, y, task.grid)
-    terminated = i == task.goal_i and j == task.goal_j
-    end_time = time + task.robot.dt * task.robot.substeps
-    variance = region_variance(task, region, end_time)
-    reward = action_reward(task.rewards, terminated, collided, variance)
-    return Outcome(reward, terminated, collided, n_logged, omega_left, omega_right, state, region)
+    return score_action(task, pose, time, collided, n_logged, omega_left, omega_right)
