@@ -20,6 +20,7 @@ SUBCOMMAND_MODULES = {
     "robot": "skidnav.commands.robot",
     "camera": "skidnav.commands.camera",
     "floors": "skidnav.commands.floors",
+    "transfer": "skidnav.commands.transfer",
 }
 """Subcommand name → the module that adds it (``add_parser(subparsers)``)."""
 

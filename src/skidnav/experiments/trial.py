@@ -104,7 +104,7 @@ def action_limit(env: gymnasium.Env[Any, Any]) -> int:
     return int(limit or 10_000)
 
 
-def _agent_context(name: str, env: gymnasium.Env[Any, Any]) -> dict[str, Any]:
+def agent_context(name: str, env: gymnasium.Env[Any, Any]) -> dict[str, Any]:
     """Extra constructor arguments an agent asks for by name (e.g. the navigation ``task``)."""
     parameters = inspect.signature(agent_class(name).__init__).parameters
     context = {}
@@ -222,7 +222,7 @@ def _agent(spec: ExperimentRun, env: gymnasium.Env[Any, Any], rng: np.random.Gen
     name = spec.agent.name
     n_states, n_actions = int(env.observation_space.n), int(env.action_space.n)  # type: ignore[attr-defined]
     return make_agent(
-        name, n_states, n_actions, spec.agent.params_dict(), rng, **_agent_context(name, env)
+        name, n_states, n_actions, spec.agent.params_dict(), rng, **agent_context(name, env)
     )
 
 
