@@ -21,6 +21,7 @@ import pytest
 from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.control.records import EventLog
 from skidnav.realtime.link import protocol as pr
+from skidnav.realtime.sim.lockstep import LockstepServer
 from skidnav.realtime.sim.robot import SimRobot, SimRobotConfig, build_robot, warm_up
 from skidnav.realtime.sim.server import SimServer, bind_listener
 from skidnav.robot.params import RobotParams
@@ -63,7 +64,8 @@ def wait_for(predicate: Callable[[], bool], timeout: float, what: str) -> None:
 class ServerThread:
     """A :class:`SimServer` serving TCP on a loopback port (a free one by default) in a
     background thread, optionally logging to ``log``, injecting ``faults``, with other
-    :class:`ServerOptions` from ``options``."""
+    :class:`ServerOptions` from ``options``, the robot moved by ``physics`` (kinematic or
+    mujoco), in ``lockstep`` if asked."""
 
     def __init__(
         self,
@@ -74,17 +76,21 @@ class ServerThread:
         map_spec: str = "free",
         port: int = 0,
         options: dict[str, Any] | None = None,
+        physics: str = "kinematic",
+        lockstep: bool = False,
         **robot_options: Any,
     ) -> None:
         config = SimRobotConfig(**robot_options)
         self.robot = build_robot(
-            slip="rough", drift=0.0, drift_period=600.0, map_spec=map_spec, seed=0, config=config
-        )
+            slip="rough", drift=0.0, drift_period=600.0, map_spec=map_spec, seed=0, config=config,
+            physics=physics,
+        )  # fmt: skip
         warm_up(self.robot)
         self.log = log
         self._stream = log.open("a", encoding="utf-8") if log else None
         settings = ServerOptions(time_scale=time_scale, faults=faults, **(options or {}))
-        self.server = SimServer(self.robot, settings, EventLog(self._stream))
+        server_class = LockstepServer if lockstep else SimServer
+        self.server = server_class(self.robot, settings, EventLog(self._stream))
         self.listener = bind_listener("127.0.0.1", port)
         self.port = int(self.listener.getsockname()[1])
         self.thread = threading.Thread(target=self.server.serve_tcp, args=(self.listener,))

@@ -59,6 +59,20 @@ def _add_sim_server(commands: Any) -> None:
         default="euler",
         help="pose integration of each 0.1 s sub-step, as the simulator's (default euler)",
     )
+    server.add_argument(
+        "--physics",
+        choices=("kinematic", "mujoco"),
+        default="kinematic",
+        help="what moves the robot: the ICR model, or the MuJoCo robot (default kinematic)",
+    )
+    server.add_argument(
+        "--floor", help="mujoco: one floor material everywhere (default: the slip preset's)"
+    )
+    server.add_argument(
+        "--lockstep",
+        action="store_true",
+        help="no wall clock: each command advances the robot one period (docs/protocol.md)",
+    )
     server.add_argument("--seed", type=int, default=0, help="root seed (map, slip, noise)")
     server.add_argument("--log", type=Path, help="JSON-lines log of received commands")
     server.add_argument("--link-timeout", type=float, default=0.5, help="quiet link stop [s]")
@@ -79,8 +93,10 @@ def _add_sim_server(commands: Any) -> None:
 def _run_sim_server(args: argparse.Namespace) -> int:
     from skidnav.realtime.control.records import EventLog
     from skidnav.realtime.sim import server as ss
+    from skidnav.realtime.sim.lockstep import LockstepServer
 
     robot, options = _sim_robot(args)
+    server_class = LockstepServer if args.lockstep else ss.SimServer
     with contextlib.ExitStack() as stack:
         try:
             listener = stack.enter_context(ss.bind_listener(args.host, args.port))
@@ -88,7 +104,7 @@ def _run_sim_server(args: argparse.Namespace) -> int:
             raise UserError(f"cannot listen on {args.host}:{args.port}: {error}") from None
         stream = stack.enter_context(_open_log(args.log)) if args.log else None
         watch = sys.stdin.fileno() if args.exit_with_stdin else None
-        server = ss.SimServer(robot, options, EventLog(stream), watch_fd=watch)
+        server = server_class(robot, options, EventLog(stream), watch_fd=watch)
 
         def on_signal(signum: int, frame: FrameType | None) -> None:
             if signum == signal.SIGUSR1:
@@ -108,6 +124,7 @@ def _run_sim_server(args: argparse.Namespace) -> int:
 def _sim_robot(args: argparse.Namespace) -> tuple[Any, Any]:
     """The simulated robot of the ``sim-server`` arguments (compiled, warmed up) and the
     server's options; UserError on a bad value."""
+    from skidnav.physics.backend import PhysicsUnavailable
     from skidnav.realtime.config import ServerOptions
     from skidnav.realtime.sim.robot import SimRobotConfig, build_robot, warm_up
     from skidnav.robot.params import RobotParams
@@ -122,10 +139,14 @@ def _sim_robot(args: argparse.Namespace) -> tuple[Any, Any]:
         )
     except ValueError as error:
         raise UserError(str(error)) from None
-    robot = build_robot(
-        slip=args.slip, drift=args.drift, drift_period=args.drift_period, map_spec=args.map,
-        seed=args.seed, config=config, robot=RobotParams(integrator=args.integrator),
-    )  # fmt: skip
+    try:
+        robot = build_robot(
+            slip=args.slip, drift=args.drift, drift_period=args.drift_period, map_spec=args.map,
+            seed=args.seed, config=config, robot=RobotParams(integrator=args.integrator),
+            physics=args.physics, floor=args.floor,
+        )  # fmt: skip
+    except PhysicsUnavailable as error:
+        raise UserError(f"--physics mujoco: {error}") from None
     warm_up(robot)
     return robot, options
 

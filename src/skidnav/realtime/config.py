@@ -17,6 +17,7 @@ from typing import Any
 
 from skidnav.configtables import build_dataclass, check_keys, resolve_path, table
 from skidnav.errors import UserError, shown
+from skidnav.physics.materials import MATERIALS
 from skidnav.realtime.link.protocol import MAX_LINE_BYTES
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.savedfile import parse_toml, read_config_text
@@ -111,6 +112,10 @@ class SimSettings:
         latency: command latency [s]. pose_noise: σ of x, y [m]. drop: pose drop probability.
         link_timeout: the server stops the wheels after this quiet time [s wall].
         idle_timeout: the server drops a client after this quiet time [s wall].
+        physics: what moves the robot, ``"kinematic"`` (the ICR model) or ``"mujoco"``.
+        floor: mujoco only: one floor material everywhere (``""``: the slip preset's).
+        lockstep: the server runs one control period per command and the loop waits for each
+            (no wall clock: as fast as the physics goes; docs/realtime.md, "Lockstep").
     """
 
     slip: str = "rough"
@@ -121,8 +126,20 @@ class SimSettings:
     drop: float = 0.0
     link_timeout: float = 0.5
     idle_timeout: float = 2.0
+    physics: str = "kinematic"
+    floor: str = ""
+    lockstep: bool = False
 
     def __post_init__(self) -> None:
+        if self.physics not in ("kinematic", "mujoco"):
+            raise ValueError(f"expected physics 'kinematic' or 'mujoco', got {shown(self.physics)}")
+        if self.floor and (self.physics != "mujoco" or self.floor not in MATERIALS):
+            raise ValueError(
+                f"expected floor one of {', '.join(MATERIALS)} with physics 'mujoco', "
+                f"got {shown(self.floor)}"
+            )
+        if not isinstance(self.lockstep, bool):
+            raise ValueError(f"expected lockstep true or false, got {shown(self.lockstep)}")
         if self.slip not in SLIP_PRESETS:
             raise ValueError(
                 f"expected slip one of {', '.join(SLIP_PRESETS)}, got {shown(self.slip)}"
@@ -156,6 +173,10 @@ class SimSettings:
             str(self.link_timeout),
             "--idle-timeout",
             str(self.idle_timeout),
+            "--physics",
+            self.physics,
+            *(["--floor", self.floor] if self.floor else []),
+            *(["--lockstep"] if self.lockstep else []),
         ]
 
 

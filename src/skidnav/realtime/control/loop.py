@@ -12,6 +12,10 @@ discrete states and the ``info`` dict (built by the env's
 :func:`~skidnav.envs.step_info.step_info`) follow the env's contract. Between episodes the robot
 drives back to the start (realtime/control/homing.py) or waits for the operator.
 
+Lockstep (a driver with ``lockstep`` set, docs/realtime.md): each ``cmd`` is one period of robot
+time, acknowledged after its pose; the loop waits for each ``ack`` instead of a pose stamp, so
+actions last exactly ``substeps`` commands whatever the wall clock does.
+
 Safety (realtime/control/safety.py) can abort an episode at any time: the episode is marked
 aborted, its unfinished action is not learned from, a checkpoint is written, and the run
 reconnects (link or pose faults, up to ``reconnect_timeout``) or ends (interrupt, robot outside
@@ -89,6 +93,10 @@ class RealtimeLoop:
         self.results: list[EpisodeResult] = []
         self.interrupted = False
         self.waiting_for_operator = False
+        self.lockstep = bool(getattr(driver, "lockstep", False))
+        self._last_command = (0.0, 0.0)
+        self._stamp_before = -math.inf  # lockstep: the robot stamp when the newest cmd left
+        self._stale_periods = 0  # lockstep: periods in a row that brought no new pose
         period_wall = self.settings.period_wall
         self.monitor = SafetyMonitor(
             driver,
@@ -152,8 +160,12 @@ class RealtimeLoop:
             raise Aborted(self.monitor.reason)
 
     def _command(self, omega_left: float, omega_right: float) -> None:
+        if self.lockstep:
+            measurement = getattr(self.driver, "latest_measurement", lambda: None)()
+            self._stamp_before = -math.inf if measurement is None else measurement[1]
         if not self.monitor.command(omega_left, omega_right):
             raise Aborted(self.monitor.reason)
+        self._last_command = (omega_left, omega_right)
         self.log.write("cmd", {"omega_left": omega_left, "omega_right": omega_right})
 
     def _measure(self) -> tuple[Pose, float]:
@@ -193,10 +205,15 @@ class RealtimeLoop:
         return self._blocked(pose.x, pose.y) or self._blocked(x, y)
 
     # --- one action ----------------------------------------------------------------------
-    def _wait_for_stamp(self, target: float, deadline: float) -> tuple[Pose, float]:
+    def _wait_for_stamp(
+        self, target: float, deadline: float, periods: int = 1
+    ) -> tuple[Pose, float]:
         """The newest pose once its robot-clock stamp reaches ``target`` [s], polling ten times
         per control period; at ``deadline`` (monotonic [s]) the newest pose whatever its stamp,
-        so a dropped pose never stalls an action (the watchdog handles a silent robot)."""
+        so a dropped pose never stalls an action (the watchdog handles a silent robot).
+        Lockstep: :meth:`_lockstep_periods` of ``periods`` instead."""
+        if self.lockstep:
+            return self._lockstep_periods(periods)
         poll = self.settings.period_wall / 10.0
         while True:
             pose, stamp = self._measure()
@@ -204,6 +221,27 @@ class RealtimeLoop:
             if stamp >= target - 1e-9 or now >= deadline:
                 return pose, stamp
             self._wait_until(min(deadline, now + poll))
+
+    def _lockstep_periods(self, periods: int) -> tuple[Pose, float]:
+        """Lockstep: the newest pose after the newest command's period and ``periods − 1`` more
+        of the same command, each ended by its ``ack``. A pose outside the arena, or
+        ``pose_timeout_periods`` periods in a row without a new pose (a silent tracker), trip
+        the monitor at once; the wall-clock watchdog still bounds each wait."""
+        answered = self.driver.wait_answered  # type: ignore[attr-defined]
+        for n in range(periods):
+            if n:
+                self._command(*self._last_command)
+            while not answered(self.monitor.limits.check_interval):
+                self._wait_until(time.monotonic())  # Aborted once the monitor tripped
+            pose, stamp = self._measure()
+            self._stale_periods = 0 if stamp > self._stamp_before else self._stale_periods + 1
+            reason = self.monitor.check()
+            if reason is None and self._stale_periods >= self.settings.pose_timeout_periods:
+                reason = f"pose stale for {self._stale_periods} lockstep periods"
+            if reason is not None:
+                self.monitor.trip(reason)
+                raise Aborted(reason)
+        return pose, stamp
 
     def _act(self, action: int) -> tuple[Pose, np.ndarray, bool]:
         """Execute one action; (end pose, kinematic log (n, 6), collided).
@@ -235,7 +273,7 @@ class RealtimeLoop:
         # let the robot come to rest so the end pose includes all motion of the action
         settle = max(1, self.settings.settle_periods)
         end, _ = self._wait_for_stamp(
-            stamp + settle * period, time.monotonic() + (settle + 1.0) * period_wall
+            stamp + settle * period, time.monotonic() + (settle + 1.0) * period_wall, settle
         )
         return end, np.array(rows, dtype=np.float64).reshape(-1, 6), collided
 

@@ -101,9 +101,11 @@ def make_driver(name: str, config: RealtimeConfig, server_log: Path | None = Non
     """The driver ``name`` configured from ``config`` (``[tcp]``, ``[serial]``, ``[ros2]``,
     ``[sim]`` and ``[run]``); ``server_log`` is the sim server's command log (sim only)."""
     options = config.drivers.get(name, {})
-    client = {
+    lockstep = config.sim.lockstep if name == "sim" else bool(options.get("lockstep", False))
+    client: dict[str, Any] = {
         "stop_timeout": max(0.05, 2 * config.run.period_wall),
         "command_ttl": config.run.pose_timeout,  # a command lives as long as a pose may lag
+        "lockstep": lockstep,
     }
     if name == "sim":
         run = config.run

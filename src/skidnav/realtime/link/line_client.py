@@ -129,6 +129,9 @@ class LineClient:
         command_ttl: validity of each ``cmd`` after it was sent [s] (the robot's lease).
         dead_timeout: a robot from which nothing at all arrived for this long is declared
             lost, and :meth:`stop` gives up [s].
+        lockstep: the robot runs one control period per ``cmd`` and acknowledges it after
+            that period's pose (docs/protocol.md, "Lockstep"); the loop then paces itself by
+            :meth:`wait_answered` instead of the wall clock.
     """
 
     def __init__(
@@ -140,6 +143,7 @@ class LineClient:
         heartbeat_interval: float = 0.05,
         command_ttl: float = 0.5,
         dead_timeout: float = 2.0,
+        lockstep: bool = False,
     ) -> None:
         if not (stop_timeout > 0 and command_ttl > 0 and dead_timeout > 0):
             raise ValueError("expected stop_timeout, command_ttl and dead_timeout > 0 s")
@@ -149,6 +153,7 @@ class LineClient:
         self.heartbeat_interval = heartbeat_interval
         self.command_ttl = command_ttl
         self.dead_timeout = dead_timeout
+        self.lockstep = lockstep
         self.robot_period: float | None = None
         self.fault: str | None = None
         self.on_fault: Callable[[str], None] | None = None
@@ -162,6 +167,8 @@ class LineClient:
         self._reply = threading.Condition()
         self._hello = threading.Event()
         self._stopped_up_to = -1  # the largest seq a ``stopped`` acknowledged
+        self._acked_up_to = -1  # the largest seq an ``ack`` acknowledged
+        self._last_command = -1  # seq of the newest ``cmd`` sent
         self._running = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -174,6 +181,7 @@ class LineClient:
         self._measurement = None
         self._hello.clear()
         self._stopped_up_to = -1
+        self._acked_up_to = self._last_command = -1
         self.link.open()
         self._last_rx = time.monotonic()
         self._running.set()
@@ -190,7 +198,7 @@ class LineClient:
     def command(self, omega_left: float, omega_right: float) -> None:
         """Send wheel speeds [rad/s], valid for ``command_ttl`` from now; a link error becomes
         a fault, not an exception."""
-        self._send(
+        seq = self._send(
             lambda seq: pr.Command(
                 seq=seq,
                 omega_left=omega_left,
@@ -199,6 +207,20 @@ class LineClient:
                 ttl=self.command_ttl,
             )
         )
+        if seq is not None:
+            self._last_command = seq
+
+    def wait_answered(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` [s] for the ``ack`` of the newest ``cmd`` (True), or False at
+        the timeout or when the link ends. A lockstep robot sends it after the period's pose."""
+        deadline = time.monotonic() + timeout
+        with self._reply:
+            while self._acked_up_to < self._last_command and self._running.is_set():
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    return False
+                self._reply.wait(remaining)
+            return self._acked_up_to >= self._last_command
 
     def latest_pose(self) -> Pose | None:
         """The newest pose, stamped on this process's monotonic clock at receipt."""
@@ -318,6 +340,10 @@ class LineClient:
         elif isinstance(message, pr.Stopped):
             with self._reply:
                 self._stopped_up_to = max(self._stopped_up_to, message.ack)
+                self._reply.notify_all()
+        elif isinstance(message, pr.Ack):
+            with self._reply:
+                self._acked_up_to = max(self._acked_up_to, message.ack)
                 self._reply.notify_all()
         elif isinstance(message, pr.Hello):
             self.robot_period = message.period

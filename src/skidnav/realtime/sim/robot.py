@@ -1,14 +1,16 @@
 """The physics of the simulated robot behind the sim server (hardware-in-the-loop stand-in).
 
-One control period of ``dt`` seconds of robot time is one sub-step of the simulator's own kernel
+One control period of ``dt`` seconds of robot time is one step of the robot's
+:class:`~skidnav.realtime.sim.dynamics.Dynamics` — by default the simulator's own kernel
 (:func:`skidnav.kernels.navigation_api.drive_substep`, the env's sub-step driven by arbitrary
-wheel-speed commands instead of the four actions):
+wheel-speed commands instead of the four actions), or the MuJoCo robot (``physics="mujoco"``):
 
 1. commands whose latency has elapsed take effect (a FIFO of (due time, ω_L, ω_R));
 2. each wheel loses U(0, η(ρ, t)) in magnitude (the slip field, possibly drifting, SPEC §2);
-3. the ICR model with x_ICR[ρ] gives the body twist; the robot's integrator
+3. kinematic: the ICR model with x_ICR[ρ] gives the body twist; the robot's integrator
    (``RobotParams.integrator``: explicit Euler or the exact constant-twist step) advances the
-   pose, clipped to the arena;
+   pose, clipped to the arena. MuJoCo: the slipped speeds are the wheel servos' set points and
+   the physics runs for the period on the floor's materials;
 4. a step that would end in a wall cell does not happen: walls physically block the robot
    (its heading still turns, as in the kernels).
 
@@ -35,6 +37,13 @@ from skidnav.realtime.arena import build_map, seed_streams, start_pose
 from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.control.records import EventLog
 from skidnav.realtime.link import protocol as pr
+from skidnav.realtime.sim.dynamics import (
+    PHYSICS,
+    Dynamics,
+    KinematicDynamics,
+    PhysicsDynamics,
+    floor_materials,
+)
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
 from skidnav.world.discretization import Discretization
@@ -75,6 +84,7 @@ class SimRobot:
         config: imperfections.
         rng: every random draw (slip, noise, drops).
         pose: initial (x [m], y [m], heading [rad]).
+        dynamics: what moves the robot (default: :class:`KinematicDynamics` of the floor task).
     """
 
     def __init__(
@@ -86,11 +96,13 @@ class SimRobot:
         config: SimRobotConfig,
         rng: np.random.Generator,
         pose: tuple[float, float, float],
+        dynamics: Dynamics | None = None,
     ) -> None:
         self.robot = robot
         self.slip = slip
         self.grid = grid
         self.task = floor_task(occupancy, slip, robot, grid)
+        self.dynamics = dynamics or KinematicDynamics(self.task)
         self.config = config
         self.rng = rng
         self.pose = (float(pose[0]), float(pose[1]), float(pose[2]))
@@ -126,16 +138,14 @@ class SimRobot:
         while self._queue and self._queue[0][0] <= self.time + 1e-12:
             _, left, right = self._queue.popleft()
             self.wheels = (left, right)
-        noise_left, noise_right = self.rng.random(), self.rng.random()
-        x, y, heading = (float(value) for value in self.pose)
-        self.pose = drive_substep(
-            self.task, (x, y, heading), self.wheels, self.time, noise_left, noise_right
-        )
+        noise = (self.rng.random(), self.rng.random())
+        self.pose = self.dynamics.advance(self.pose, self.wheels, self.time, noise)
         self.time += self.robot.dt
 
-    def measured_pose(self) -> tuple[float, float, float] | None:
-        """The pose as the tracker reports it (noisy), or None when this report is dropped."""
-        if self.config.drop > 0 and self.rng.random() < self.config.drop:
+    def measured_pose(self, droppable: bool = True) -> tuple[float, float, float] | None:
+        """The pose as the tracker reports it (noisy), or None when this report is dropped
+        (never when not ``droppable``: no draw is made for the drop then)."""
+        if droppable and self.config.drop > 0 and self.rng.random() < self.config.drop:
             return None
         x, y, heading = self.pose
         sigma = self.config.pose_noise
@@ -157,10 +167,23 @@ def build_robot(
     config: SimRobotConfig,
     robot: RobotParams | None = None,
     grid: Discretization | None = None,
+    physics: str = "kinematic",
+    floor: str | None = None,
 ) -> SimRobot:
     """A simulated robot at the start pose of the map ``map_spec`` (see
     :func:`skidnav.realtime.arena.build_map`), its floor the slip preset ``slip`` with relative
-    drift amplitude ``drift`` and period ``drift_period`` [s]; random streams from ``seed``."""
+    drift amplitude ``drift`` and period ``drift_period`` [s]; random streams from ``seed``.
+    ``physics`` (one of :data:`~skidnav.realtime.sim.dynamics.PHYSICS`) chooses what moves it;
+    for ``mujoco``, ``floor`` names one material for the whole floor (None: the preset's).
+
+    Raises:
+        UserError: an unknown preset, physics or material.
+        PhysicsUnavailable: ``mujoco`` without MuJoCo installed.
+    """
+    if physics not in PHYSICS:
+        raise UserError(f"expected physics one of {', '.join(PHYSICS)}, got {physics!r}")
+    if floor and physics == "kinematic":
+        raise UserError(f"a floor material ({floor!r}) needs physics 'mujoco'")
     robot = robot or RobotParams()
     grid = grid or Discretization()
     streams = seed_streams(seed)
@@ -174,22 +197,23 @@ def build_robot(
             drift_period=drift_period,
             robot=robot,
         )
+        materials = (
+            None if physics == "kinematic" else floor_materials(slip, field, robot, grid, floor)
+        )
     except ValueError as error:
         raise UserError(str(error)) from None
-    return SimRobot(
-        robot,
-        field,
-        grid_map.occupancy,
-        grid,
-        config,
-        streams["robot"],
-        start_pose(grid_map, grid),
-    )
+    pose = start_pose(grid_map, grid)
+    sim = SimRobot(robot, field, grid_map.occupancy, grid, config, streams["robot"], pose)
+    if materials is not None:
+        dynamics = PhysicsDynamics(sim.task, robot, materials, sim.pose)
+        sim.dynamics, sim.pose = dynamics, dynamics.physics.pose
+    return sim
 
 
 def warm_up(robot: SimRobot) -> None:
     """Compile the kinematics kernels now (numba), so the first periods are not late."""
     drive_substep(robot.task, robot.pose, (0.0, 0.0), robot.time, 0.0, 0.0)
+    robot.dynamics.warm_up()
     robot.grid.cell(0.0, 0.0)
     robot.grid.region(0.0, 0.0)
 
@@ -227,6 +251,7 @@ class Firmware:
         self.clock = pr.HostClock()
         self.last_valid = now
         self.lease: float | None = None
+        self.applied = 0  # commands run so far (a lockstep server steps one period per command)
 
     def stop(self) -> None:
         """Zero the wheels and end the lease."""
@@ -295,6 +320,7 @@ class Firmware:
             return
         self.robot.command(message.omega_left, message.omega_right)
         self.lease = deadline
+        self.applied += 1
         self.events.write(
             "cmd",
             seq=message.seq,

@@ -303,20 +303,33 @@ class SimServer:
         next_tick = time.monotonic()
         try:
             while not self.shutdown.is_set():
-                timeout = max(0.0, next_tick - time.monotonic())
-                ready = selector.select(timeout)  # the client first: a hangup frees the slot
-                for key, mask in sorted(ready, key=lambda pair: pair[0].data != "client"):
-                    self._dispatch(key.data, mask, listener)
-                now = time.monotonic()
-                if now >= next_tick:
-                    self.tick(late=now - next_tick)
-                    next_tick += self.period_wall
-                    if next_tick < now - self.period_wall:
-                        next_tick = now  # fell behind (machine busy): no burst of catch-up ticks
+                next_tick = self._cycle(selector, listener, next_tick)
         finally:
             if self.connected:
                 self._drop("server shutdown")
             self._selector = None
+
+    def _cycle(
+        self, selector: selectors.BaseSelector, listener: socket.socket | None, next_tick: float
+    ) -> float:
+        """Handle what is ready until the period due at ``next_tick`` (monotonic [s]), run it
+        if due; returns when the next one is due."""
+        ready = selector.select(max(0.0, next_tick - time.monotonic()))
+        self._handle_ready(ready, listener)
+        now = time.monotonic()
+        if now >= next_tick:
+            self.tick(late=now - next_tick)
+            next_tick += self.period_wall
+            if next_tick < now - self.period_wall:
+                next_tick = now  # fell behind (machine busy): no burst of catch-up ticks
+        return next_tick
+
+    def _handle_ready(
+        self, ready: list[tuple[selectors.SelectorKey, int]], listener: socket.socket | None
+    ) -> None:
+        """Serve the ready descriptors, the client first: a hangup frees the slot."""
+        for key, mask in sorted(ready, key=lambda pair: pair[0].data != "client"):
+            self._dispatch(key.data, mask, listener)
 
     def _dispatch(self, kind: str, mask: int, listener: socket.socket | None) -> None:
         if kind == "listener" and listener is not None:
