@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import io
 import json
 import re
 import subprocess
@@ -124,3 +125,21 @@ def test_report_cli_writes_one_self_contained_file(serial_results: Path, tmp_pat
         timeout=120,
     )
     assert missing.returncode == 2 and "nothing" in missing.stderr
+
+
+def test_report_animates_one_greedy_trajectory_per_cell(serial_results: Path) -> None:
+    from PIL import Image
+
+    from skidnav.experiments.report import build_report
+    from skidnav.physics.backend import offscreen_rendering
+
+    text = build_report(serial_results)
+    gifs = re.findall(r'src="data:image/gif;base64,([A-Za-z0-9+/=]+)"', text)
+    assert len(gifs) == 2  # one per map x preset cell
+    for encoded in gifs:
+        movie = Image.open(io.BytesIO(base64.b64decode(encoded)))
+        assert movie.format == "GIF" and movie.n_frames > 1
+        assert movie.info.get("loop") == 0
+    renderer = "MuJoCo offscreen renderer" if offscreen_rendering() == "" else "2-D renderer"
+    captions = re.findall(r"<figcaption[^>]*>Final greedy trajectory of ([^<]*)</figcaption>", text)
+    assert len(captions) == 2 and all(renderer in caption for caption in captions)

@@ -159,3 +159,20 @@ def test_missing_mujoco_is_one_line(monkeypatch: pytest.MonkeyPatch) -> None:
 def test_gl_backend_keeps_the_users_choice(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("MUJOCO_GL", "osmesa")
     assert backend.gl_backend() == "osmesa"
+
+
+def test_mujoco_imported_first_without_a_backend_degrades_instead_of_crashing() -> None:
+    import os
+    import subprocess
+
+    script = (
+        "import mujoco\n"
+        "from skidnav.physics.backend import offscreen_rendering\n"
+        "print(offscreen_rendering())\n"
+    )
+    environment = {key: value for key, value in os.environ.items() if key != "MUJOCO_GL"}
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, env=environment, timeout=60
+    )
+    assert done.returncode == 0, done.stderr
+    assert "imported before" in done.stdout

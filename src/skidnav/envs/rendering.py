@@ -93,9 +93,11 @@ def rgb_frame(
     trail: Sequence[tuple[float, float]],
     body_length: float = 0.10,
     wheel_speed: float = 1.7,
+    scale: float = PIXELS_PER_METRE,
 ) -> np.ndarray:
-    """The arena as an RGB image, uint8 array of shape (height, width, 3)."""
-    canvas = _Canvas(disc)
+    """The arena as an RGB image, uint8 array of shape (height, width, 3), at ``scale``
+    [pixels per metre]."""
+    canvas = _Canvas(disc, scale)
     image = Image.new("RGB", (canvas.width, canvas.height), (255, 255, 255))
     draw = ImageDraw.Draw(image)
     _draw_slip(draw, canvas, slip, wheel_speed)

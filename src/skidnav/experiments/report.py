@@ -2,9 +2,10 @@
 
 Sections: setup, metric definitions (with the convergence tolerance), thesis reproduction
 (speed-up, success-rate gain, final-length difference, rough vs slippery floor), aggregate
-tables, per-cell figures (learning curves, per-seed metrics, final greedy trajectories, value maps
-with preferred headings, greedy-policy maps), provenance (config, versions, sessions with their
-code versions). The numbers are what was measured.
+tables, per-cell figures (learning curves, per-seed metrics, final greedy trajectories and one of
+them animated (:mod:`skidnav.physics.render`), value maps with preferred headings, greedy-policy
+maps), provenance (config, versions, sessions with their code versions). The numbers are what
+was measured.
 """
 
 from __future__ import annotations
@@ -35,7 +36,11 @@ from skidnav.experiments.analysis import (
 from skidnav.experiments.config import ExperimentConfig, config_to_dict
 from skidnav.experiments.provenance import CODE_KEYS, describe_code
 from skidnav.experiments.reproduction import reproduction_section
-from skidnav.experiments.store import ResultStore
+from skidnav.experiments.store import ResultStore, TrialResult
+from skidnav.physics.materials import PRESET_MATERIALS, region_materials
+from skidnav.physics.render import Arena, animate, describe
+from skidnav.robot.params import RobotParams
+from skidnav.robot.slip import SlipField
 from skidnav.survival import performance_profile, profile_band
 
 logger = logging.getLogger(__name__)
@@ -69,6 +74,16 @@ def image(png: bytes, alt: str) -> str:
     """An <img> tag embedding ``png`` as base64."""
     encoded = base64.b64encode(png).decode("ascii")
     return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{encoded}">'
+
+
+ANIMATION_FRAMES = 90
+"""Frames of the report's animations (about 16 ms each for MuJoCo on a CPU renderer)."""
+
+
+def gif_image(gif: bytes, alt: str) -> str:
+    """An <img> tag embedding an animated GIF as base64."""
+    encoded = base64.b64encode(gif).decode("ascii")
+    return f'<img alt="{html.escape(alt)}" src="data:image/gif;base64,{encoded}">'
 
 
 def table(frame: pd.DataFrame) -> str:
@@ -255,6 +270,51 @@ def sessions_table(metadata: dict[str, object]) -> str:
     return warning + table(pd.DataFrame.from_records(rows))
 
 
+def animated_run(runs: list[TrialResult], baseline: str) -> tuple[TrialResult, str]:
+    """The run to animate, and why: the non-baseline agent whose final greedy rollout reached
+    the goal in the fewest actions, else the first run."""
+    reached = [
+        run
+        for run in runs
+        if run.coordinates["agent"] != baseline
+        and run.summary["final_length_m"] == run.summary["final_length_m"]  # not NaN
+    ]
+    if not reached:
+        return runs[0], "the first agent; no other agent's greedy rollout reached the goal"
+    best = min(reached, key=lambda run: len(run.arrays["greedy_poses"]))
+    return best, "the shortest final greedy path of the agents other than the baseline"
+
+
+def animation_figure(run: TrialResult, preset: str, why: str) -> str:
+    """The animated final greedy trajectory of ``run`` with its caption."""
+    robot = RobotParams()
+    eta = np.asarray(run.arrays["slip_eta"], dtype=np.float64)
+    start, goal = run.arrays["start"], run.arrays["goal"]
+    materials = None
+    if preset in PRESET_MATERIALS:
+        field = SlipField(eta, np.zeros_like(eta), drift_phase=np.zeros_like(eta))
+        materials = region_materials(preset, field, robot)
+    arena = Arena(
+        run.arrays["occupancy"],
+        (int(start[0]), int(start[1])),
+        (int(goal[0]), int(goal[1])),
+        slip_eta=eta,
+        materials=materials,
+        robot=robot,
+    )
+    poses = np.asarray(run.arrays["greedy_poses"], dtype=np.float64)
+    movie = animate(arena, poses, frames_per_action=3, max_frames=ANIMATION_FRAMES)
+    caption = (
+        f"Final greedy trajectory of {run.coordinates['agent']} (seed "
+        f"{run.coordinates['seed']}, {len(poses) - 1} actions; {why}), animated by the "
+        f"{describe(movie)}."
+    )
+    return (
+        f"<figure>{gif_image(movie.gif, 'animated greedy trajectory')}"
+        f"<figcaption class='note'>{html.escape(caption)}</figcaption></figure>"
+    )
+
+
 def figures_for_cell(
     store: ResultStore,
     config: ExperimentConfig,
@@ -291,6 +351,8 @@ def figures_for_cell(
             "trajectories",
         )
     )
+    animated, why = animated_run(runs, config.baseline)
+    parts.append(animation_figure(animated, preset, why))
     parts.append(
         image(plots.value_maps(runs, f"state values and preferred headings, {title}"), "value maps")
     )

@@ -13,6 +13,7 @@ import ctypes.util
 import functools
 import importlib
 import os
+import sys
 from types import ModuleType
 
 INSTALL_HINT = "pip install 'skidnav[physics]'"
@@ -34,6 +35,23 @@ def gl_backend() -> str:
     return ""
 
 
+_imported_before_choice: list[bool] = []
+"""Whether MuJoCo was already imported, without ``MUJOCO_GL``, when skidnav first loaded it
+(it then uses its default, a windowed GLFW context, which cannot render here)."""
+
+
+def choose_gl_backend() -> None:
+    """Set ``MUJOCO_GL`` to :func:`gl_backend` unless it is set (before MuJoCo is imported)."""
+    if not _imported_before_choice:
+        _imported_before_choice.append(
+            sys.modules.get("mujoco") is not None and "MUJOCO_GL" not in os.environ
+        )
+    backend = gl_backend()
+    if backend and "MUJOCO_GL" not in os.environ:
+        os.environ["MUJOCO_GL"] = backend
+        os.environ.setdefault("PYOPENGL_PLATFORM", backend)
+
+
 @functools.cache
 def load_mujoco() -> ModuleType:
     """The ``mujoco`` module, imported once with :func:`gl_backend` chosen.
@@ -41,10 +59,7 @@ def load_mujoco() -> ModuleType:
     Raises:
         PhysicsUnavailable: MuJoCo is not installed or fails to import.
     """
-    backend = gl_backend()
-    if backend and "MUJOCO_GL" not in os.environ:
-        os.environ["MUJOCO_GL"] = backend
-        os.environ.setdefault("PYOPENGL_PLATFORM", backend)
+    choose_gl_backend()
     try:
         mujoco = importlib.import_module("mujoco")
     except ImportError as error:
@@ -74,6 +89,8 @@ def offscreen_rendering() -> str:
         return str(error)
     if not os.environ.get("MUJOCO_GL"):
         return "no GL backend (install libegl1 or libosmesa6, or set MUJOCO_GL)"
+    if _imported_before_choice[0]:
+        return "MuJoCo was imported before skidnav.physics chose its GL backend (set MUJOCO_GL)"
     try:
         model = mujoco.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
         renderer = mujoco.Renderer(model, 8, 8)

@@ -92,6 +92,15 @@ def _wheels_xml(robot: RobotParams, physics: PhysicsParams) -> str:
     )
 
 
+def level_box(index: int, extent: float, levels: int) -> tuple[float, float]:
+    """(centre, half size) [m] along one axis of level ``index`` of ``levels`` over ``extent``,
+    as :mod:`skidnav.world.discretization` cuts it: levels of extent/(levels − 1) from 0. The
+    last level is the boundary line itself; it is drawn one level wide beyond it, as the 2-D
+    renderer draws it."""
+    size = extent / (levels - 1)
+    return (index + 0.5) * size, size / 2
+
+
 def _floor_xml(robot: RobotParams, materials: np.ndarray) -> str:
     """The collision plane and one drawn box per slip region."""
     width, height = robot.arena_width, robot.arena_height
@@ -100,11 +109,11 @@ def _floor_xml(robot: RobotParams, materials: np.ndarray) -> str:
     for i in range(n_x):
         for j in range(n_y):
             rgba = MATERIALS[str(materials[i, j])].rgba
-            centre = ((i + 0.5) * width / n_x, (j + 0.5) * height / n_y, -0.001)
+            (x, half_x), (y, half_y) = level_box(i, width, n_x), level_box(j, height, n_y)
             tiles.append(
                 f'<geom name="region_{i}_{j}" type="box" contype="0" conaffinity="0" '
-                f'size="{_numbers(width / n_x / 2, height / n_y / 2, 0.001)}" '
-                f'pos="{_numbers(*centre)}" rgba="{_numbers(*rgba)}"/>'
+                f'size="{_numbers(half_x, half_y, 0.001)}" '
+                f'pos="{_numbers(x, y, -0.001)}" rgba="{_numbers(*rgba)}"/>'
             )
     plane = (
         f'<geom name="floor" type="plane" pos="{_numbers(width / 2, height / 2, 0.0)}" '
@@ -114,15 +123,19 @@ def _floor_xml(robot: RobotParams, materials: np.ndarray) -> str:
 
 
 def _walls_xml(robot: RobotParams, occupancy: np.ndarray) -> str:
-    """One drawn box per wall cell of ``occupancy`` (uint8 (n_x, n_y), 1 = wall)."""
+    """One drawn box per wall cell of ``occupancy`` (uint8 (n_x, n_y), 1 = wall), named
+    ``wall_i_j``."""
     n_x, n_y = occupancy.shape
-    dx, dy = robot.arena_width / n_x, robot.arena_height / n_y
-    return "".join(
-        f'<geom type="box" contype="0" conaffinity="0" rgba="0.35 0.35 0.4 1" '
-        f'size="{_numbers(dx / 2, dy / 2, 0.02)}" '
-        f'pos="{_numbers((i + 0.5) * dx, (j + 0.5) * dy, 0.02)}"/>'
-        for i, j in np.argwhere(occupancy != 0)
-    )
+    boxes = []
+    for i, j in np.argwhere(occupancy != 0):
+        (x, half_x) = level_box(int(i), robot.arena_width, n_x)
+        (y, half_y) = level_box(int(j), robot.arena_height, n_y)
+        boxes.append(
+            f'<geom name="wall_{i}_{j}" type="box" contype="0" conaffinity="0" '
+            f'rgba="0.35 0.35 0.4 1" size="{_numbers(half_x, half_y, 0.02)}" '
+            f'pos="{_numbers(x, y, 0.02)}"/>'
+        )
+    return "".join(boxes)
 
 
 def arena_mjcf(

@@ -21,6 +21,7 @@ from skidnav.physics.materials import MATERIALS
 from skidnav.physics.mjcf import WHEELS, PhysicsParams, arena_mjcf
 from skidnav.robot.kinematics import apply_slip, wrap_angle
 from skidnav.robot.params import RobotParams
+from skidnav.world.discretization import level_index
 
 
 def heading_quaternion(heading: float) -> np.ndarray:
@@ -111,11 +112,13 @@ class PhysicsRobot:
         )
 
     def region_under(self, x: float, y: float) -> tuple[int, int]:
-        """Slip region (i, j) of a floor point [m] (clipped to the arena)."""
+        """Slip region (i, j) of a floor point [m], by the discretization's own rule
+        (:func:`~skidnav.world.discretization.level_index`: the MDP's slip regions)."""
         n_x, n_y = self.materials.shape
-        i = min(max(int(x / self.robot.arena_width * n_x), 0), n_x - 1)
-        j = min(max(int(y / self.robot.arena_height * n_y), 0), n_y - 1)
-        return i, j
+        return (
+            int(level_index(x, self.robot.arena_width, n_x)),
+            int(level_index(y, self.robot.arena_height, n_y)),
+        )
 
     def _set_wheel_friction(self) -> None:
         """Each wheel's friction := that of the region under its centre."""
