@@ -11,7 +11,9 @@ Prints (planning rates: best of three timings each):
   the 25 × 25 × 20 obstacles arena at a large planning budget (:data:`ARENA_BUDGETS` updates per
   real step, everything of the trainer timed: simulation, real steps, end-of-episode refits),
   against the identical kernels as plain Python (``NUMBA_DISABLE_JIT=1`` in a subprocess, on
-  the budget :data:`PLAIN_ARENA` and a short episode);
+  the budget :data:`PLAIN_ARENA` and a short episode), and for prioritized sweeping, whose
+  queue empties before the budget, its updates per second of planning time alone
+  (:func:`sweeping_planning_time_rate`);
 * the wall time of the 30 Dyna Maze runs of ``skidnav reproduce`` (Sutton & Barto (2018)
   Example 8.1, n = 0, 5, 50, without writing files; fused maze trainer) against the same runs of
   the plain-Python Dyna-Q (a few runs, scaled to 30).
@@ -222,26 +224,54 @@ def plain_dyna_maze_seconds(runs: int) -> float:
     return time.perf_counter() - start
 
 
-def arena_planning_rate(name: str, budget: int, episodes: int, max_steps: int = 500) -> float:
-    """Planning updates/s of ``name`` trained by ``train_agent_fast`` on the obstacles arena
-    (α 0.5, γ 0.95, ε 0.1, θ 1e-6), over ``episodes`` episodes after :data:`WARM_UP` at the same
-    budget (compilation, first model, first refits), all the trainer's time included."""
+def arena_run(
+    name: str, budget: int, episodes: int, max_steps: int = 500, epsilon: float = 0.1
+) -> tuple[int, int, float]:
+    """``name`` trained by ``train_agent_fast`` on the obstacles arena (α 0.5, γ 0.95, θ 1e-6),
+    timed over ``episodes`` episodes after :data:`WARM_UP` at the same budget (compilation,
+    first model, first refits), all the trainer's time included: (planning updates, real steps,
+    seconds) of the timed episodes."""
     import gymnasium as gym
 
     import skidnav.envs  # noqa: F401  (registers the env)
 
     env = gym.make("skidnav/SkidSteerNav-v0", map_kind="obstacles", world_seed=3, slip="slippery")
-    config = {"alpha": 0.5, "gamma": 0.95, "epsilon": 0.1, "planning_steps": budget}
+    config = {"alpha": 0.5, "gamma": 0.95, "epsilon": epsilon, "planning_steps": budget}
     if name == "prioritized-sweeping":
         config["theta"] = 1e-6
     context = {} if name in ("dyna-q", "prioritized-sweeping") else {"task": env.unwrapped.task}
     agent = make_agent(name, 12_500, 4, config, np.random.default_rng(5), **context)
     warm_up = WARM_UP if max_steps >= 500 else 1
     train_agent_fast(agent, env, warm_up, max_steps=max_steps, seed=1)
-    before = agent.planning_updates
+    updates, steps = agent.planning_updates, agent.steps
     start = time.perf_counter()
     train_agent_fast(agent, env, episodes, max_steps=max_steps)
-    return (agent.planning_updates - before) / (time.perf_counter() - start)
+    seconds = time.perf_counter() - start
+    return agent.planning_updates - updates, agent.steps - steps, seconds
+
+
+def arena_planning_rate(name: str, budget: int, episodes: int, max_steps: int = 500) -> float:
+    """Planning updates/s of :func:`arena_run` at ε 0.1, all the trainer's time included."""
+    updates, _, seconds = arena_run(name, budget, episodes, max_steps)
+    return updates / seconds
+
+
+def sweeping_planning_time_rate(budget: int, episodes: int) -> tuple[float, float]:
+    """Prioritized sweeping's updates per second of planning time on the arena, and its updates
+    per real step: :func:`arena_run` at ε 1 with ``budget`` and with no planning, best of
+    :data:`REPEATS` timings each. A most-probable sweep draws no random number and ε 1 acts
+    without reading ``q``, so both runs make the same real steps (checked); the difference of
+    their times is the planning's."""
+    planned = [arena_run("prioritized-sweeping", budget, episodes, epsilon=1.0)]
+    plain = [arena_run("prioritized-sweeping", 0, episodes, epsilon=1.0)]
+    for _ in range(REPEATS - 1):
+        planned.append(arena_run("prioritized-sweeping", budget, episodes, epsilon=1.0))
+        plain.append(arena_run("prioritized-sweeping", 0, episodes, epsilon=1.0))
+    updates, steps, _ = planned[0]
+    if {run[1] for run in planned + plain} != {steps}:
+        raise RuntimeError("the runs with and without planning made different real steps")
+    seconds = min(run[2] for run in planned) - min(run[2] for run in plain)
+    return updates / seconds, updates / steps
 
 
 WARM_UP = 4
@@ -270,6 +300,15 @@ def print_arena_rates() -> None:
             for n, rate in zip(ARENA_BUDGETS, rates, strict=True)
         )
         print(f"  {name:24s} plain {plain / 1e3:6.1f} k/s; {figures}", flush=True)
+    figures = []
+    for n in ARENA_BUDGETS:
+        rate, per_step = sweeping_planning_time_rate(n, ARENA_EPISODES[n])
+        figures.append(f"{n} updates/step {rate / 1e6:6.2f} M/s ({per_step:5.1f} per real step)")
+    print(
+        "  prioritized-sweeping, planning time only (ε 1: the same real steps with and without "
+        f"planning; the queue empties before the budget): {', '.join(figures)}",
+        flush=True,
+    )
 
 
 def main() -> None:

@@ -71,7 +71,10 @@ def run_with_full_disk(
 ) -> subprocess.CompletedProcess[str]:
     """``python ARGUMENTS`` in a subprocess that cannot grow any file past ``max_file_bytes``
     (``RLIMIT_FSIZE``: such a write fails with EFBIG, "File too large", as on a full disk;
-    Python ignores the SIGXFSZ that comes with it). Its output goes to pipes, not files."""
+    Python ignores the SIGXFSZ that comes with it). Its output goes to pipes, not files.
+    Matplotlib's font cache is built here first: written from the subprocess, it would be cut
+    short at the limit and break every later run."""
+    import matplotlib.font_manager  # noqa: F401  (builds and writes the font cache)
 
     def limit() -> None:
         resource.setrlimit(resource.RLIMIT_FSIZE, (max_file_bytes, max_file_bytes))

@@ -82,22 +82,40 @@ def test_the_compiled_call_and_the_inlined_target_equal_model_target(mode: int) 
                 assert most_probable_target(q, arrays, pair, 0.9, uniform) == expected
 
 
+def tie_expectation(arrays: Any, q: np.ndarray, pair: int) -> float:
+    """The most-probable target of ``pair`` averaged over its tie draw: the mean of
+    ``model_target`` over the uniforms that pick each tied outcome, in list order."""
+    n_ties = int(arrays.pair_ties[pair])
+    total = 0.0
+    for index in range(n_ties):
+        total += model_target(arrays, q, pair, MOST_PROBABLE, 0.9, (index + 0.5) / n_ties)
+    return total / n_ties
+
+
 def reference_sweeping(
     q: np.ndarray, model: MultinomialModel, queue: Any, n_steps: int, mode: int, rng: Any
 ) -> int:
     """Prioritized sweeping from its parts: pop, ``model_target``, update, then each predecessor
-    (newest first) queued at |target − q| > θ, its target expected for a sampling model."""
+    (newest first) queued at |target − q| > θ, its target expected for a sampling model; a
+    most-probable model's targets are averaged over its ties (no draw)."""
     arrays, updates = model.arrays, 0
     while updates < n_steps and queue.size[0] > 0:
         key, _ = heap_pop(queue)
         state, action = divmod(key, N_ACTIONS)
-        target = model_target(arrays, q, find_pair(arrays, state, action), mode, 0.9, rng.random())
+        pair = find_pair(arrays, state, action)
+        if mode == MOST_PROBABLE:
+            target = tie_expectation(arrays, q, pair)
+        else:
+            target = model_target(arrays, q, pair, mode, 0.9, rng.random())
         q[state, action] += 0.5 * (target - q[state, action])
         updates += 1
         for before, taken in model.predecessors(state):
             pair = find_pair(arrays, before, taken)
-            uniform, asked = (rng.random(), mode) if mode == MOST_PROBABLE else (0.0, EXPECTED)
-            priority = abs(model_target(arrays, q, pair, asked, 0.9, uniform) - q[before, taken])
+            if mode == MOST_PROBABLE:
+                target = tie_expectation(arrays, q, pair)
+            else:
+                target = model_target(arrays, q, pair, EXPECTED, 0.9, 0.0)
+            priority = abs(target - q[before, taken])
             if priority > 1e-3:
                 heap_push(queue, before * N_ACTIONS + taken, priority)
     return updates
@@ -128,3 +146,26 @@ def test_prioritized_sweeping_equals_its_definition(mode: int) -> None:
             getattr(queues[0], name)[:size], getattr(queues[1], name)[:size]
         )
     assert generators[0].random() == generators[1].random()  # the same number of draws
+
+
+def test_most_probable_sweeping_draws_nothing_and_its_queue_settles() -> None:
+    """Tied pairs get their expected target, so the queue empties (a redrawn tie kept it full)
+    at a fixed point of the tie-averaged targets, and the generator is never touched."""
+    model = stochastic_model(seed=11)
+    arrays = model.arrays
+    n_pairs = int(arrays.counters[0])
+    assert (arrays.pair_ties[:n_pairs] > 1).any()  # the case at stake
+    q, queue, rng = (
+        np.zeros((N_STATES, N_ACTIONS)),
+        make_heap(N_STATES * N_ACTIONS),
+        np.random.default_rng(3),
+    )
+    for key in model.visited_pairs().tolist():
+        heap_push(queue, int(key), 1.0)
+    updates = prioritized_sweeping(q, arrays, queue, 10**6, 1e-9, 0.5, 0.9, MOST_PROBABLE, rng)
+    assert 0 < updates < 10**6
+    assert queue.size[0] == 0
+    assert rng.random() == np.random.default_rng(3).random()
+    for pair in range(n_pairs):
+        state, action = divmod(int(arrays.pair_key[pair]), N_ACTIONS)
+        assert abs(tie_expectation(arrays, q, pair) - q[state, action]) < 1e-6

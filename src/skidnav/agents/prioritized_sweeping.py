@@ -11,6 +11,14 @@ After each real step (s, a, r, s′):
 As in the book's algorithm, real experience changes ``q`` only through the queue, so every value
 update is counted in ``planning_updates``. The priority is computed from the model (the book uses
 the sampled reward; both are equal on a deterministic MDP).
+
+Targets are expected over what the model leaves to chance, as the book's prioritized sweeping for
+stochastic environments uses expected updates (§8.4): with ``planning_mode = "most-probable"``
+(the default) a pair whose most probable outcome is tied gets the mean of the tied outcomes'
+targets — the expectation over the uniform tie draw — for its priority and its update, and
+planning draws no random number; with ``"sample"`` the priorities use the expected target. (A
+tie redrawn at every pop kept the tied pairs' priorities above θ for ever: the queue cycled over
+them, spending the whole planning budget, while the other pairs waited.)
 """
 
 from __future__ import annotations
@@ -24,8 +32,8 @@ from skidnav._jit import jit
 from skidnav.agents.config import PrioritizedSweepingConfig, QLearningConfig
 from skidnav.agents.dyna_q import DynaQAgent
 from skidnav.kernels.learning import PLANNING_UPDATES, Experience, learning_step
-from skidnav.kernels.multinomial import MultinomialArrays
-from skidnav.kernels.planning import sweep_step
+from skidnav.kernels.multinomial import MOST_PROBABLE, MultinomialArrays
+from skidnav.kernels.planning import sampled_sweep_step, sweep_step
 from skidnav.kernels.priority_queue import HeapArrays, heap_push, make_heap
 
 
@@ -56,13 +64,22 @@ def prioritized_sweeping_step(
     step: Experience,
     rng: np.random.Generator,
 ) -> None:
-    """The learning step of prioritized sweeping (:func:`~skidnav.kernels.planning.sweep_step`:
-    model count, priority of the pair, then up to ``planning_steps`` pops)."""
+    """The learning step of prioritized sweeping (:func:`~skidnav.kernels.planning.sweep_step`,
+    or ``sampled_sweep_step`` for the sampling modes: model count, priority of the pair, then up
+    to ``planning_steps`` pops)."""
     s = settings
-    counters[PLANNING_UPDATES] += sweep_step(
-        arrays.q, arrays.model, arrays.queue, step.state, step.action, step.reward,
-        step.next_state, step.terminated, s.planning_steps, s.theta, s.alpha, s.gamma, s.mode, rng,
-    )  # fmt: skip
+    if s.mode == MOST_PROBABLE:  # inlined, its arrays bound in this branch only
+        updates = sweep_step(
+            arrays.q, arrays.model, arrays.queue, step.state, step.action, step.reward,
+            step.next_state, step.terminated, s.planning_steps, s.theta, s.alpha, s.gamma,
+        )  # fmt: skip
+    else:
+        updates = sampled_sweep_step(
+            arrays.q, arrays.model, arrays.queue, step.state, step.action, step.reward,
+            step.next_state, step.terminated, s.planning_steps, s.theta, s.alpha, s.gamma, s.mode,
+            rng,
+        )  # fmt: skip
+    counters[PLANNING_UPDATES] += updates
 
 
 class PrioritizedSweepingAgent(DynaQAgent):

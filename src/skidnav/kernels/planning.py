@@ -2,7 +2,8 @@
 
 Each loop applies the one update rule of :mod:`skidnav.kernels.tabular` (``update_toward``) to
 targets computed by :func:`skidnav.kernels.multinomial.model_target`, and returns the number of
-value updates it made. All draws are ``rng.random()``.
+value updates it made. All draws are ``rng.random()``. Prioritized sweeping of a most-probable
+model averages a tie over its tied outcomes instead of drawing it (:func:`sweep`).
 """
 
 from __future__ import annotations
@@ -20,18 +21,19 @@ from skidnav.kernels.multinomial import (
     entry_target,
     expected_target,
     find_pair,
+    first_predecessor,
     hash_find,
     model_observe,
     model_target,
-    model_target_call,
     most_probable_entry,
-    most_probable_target,
+    observe_pair,
     pair_state_action,
     sample_entry,
     split_key,
+    tied_mean_target_call,
     unsigned_index,
 )
-from skidnav.kernels.priority_queue import HeapArrays, heap_push, pop, push
+from skidnav.kernels.priority_queue import HeapArrays, heap_pop, heap_push, pop, push
 from skidnav.kernels.tabular import td_target, update_toward
 
 
@@ -129,24 +131,113 @@ def dyna_plus_planning(
 
 
 @inline_jit
-def queue_pair(
+def sweep(
     q: np.ndarray,
     model: MultinomialArrays,
     heap: HeapArrays,
-    pair: int,
+    first: int,
+    n_steps: int,
     theta: float,
+    alpha: float,
+    gamma: float,
+) -> int:
+    """Prioritized sweeping (§8.4) of a most-probable model, inlined: if pair slot ``first`` ≥ 0,
+    queue it (as item s·n_actions + a) with priority |target − q[s, a]| if that exceeds
+    ``theta``; then up to ``n_steps`` times while the queue is not empty, pop the pair of highest
+    priority, update it toward its target, and queue each predecessor (s̄, ā) of s whose |TD
+    error| exceeds ``theta``. Returns the number of updates (popped pairs).
+
+    A target is the most probable outcome's, and for a pair whose most probable outcome is tied
+    the mean over the tied outcomes (:func:`tied_mean_target_call`): the expectation over the
+    uniform tie draw, as §8.4 uses expected updates in a stochastic environment. Nothing is
+    drawn, and a tied pair's priority falls below θ like any other's (with a redrawn tie it did
+    not, and the queue cycled over the tied pairs while the others waited).
+
+    Written over arrays bound once, with one exit: an inlined helper that binds an array it last
+    uses in a branch (or binds the 21-array model) pays an atomic increment and decrement per
+    array at every call (see :mod:`skidnav.kernels.multinomial`), so the target is written out
+    where it is needed; the tied case, rare, is a compiled call. Pair slots and keys index
+    through ``unsigned_index`` (no wrap of negative indices)."""
+    priority, item, position, size = heap.priority, heap.item, heap.position, heap.size
+    pair_table, pair_key, entry_pair = model.pair_table, model.pair_key, model.entry_pair
+    target_table, target_state = model.target_table, model.target_state
+    target_head, pred_link = model.target_head, model.entry_pred_link
+    ties, best_next = model.pair_ties, model.pair_best_next
+    best_reward, best_continuation = model.pair_best_reward, model.pair_best_continuation
+    cells = q.reshape(-1, 1)  # row s·n_actions + a is q[s, a]
+    n_actions = q.shape[1]
+    pair, entry, updates = first, -1, 0  # the real pair's priority, then each predecessor's
+    more = True
+    while more:
+        if pair >= 0:
+            index = unsigned_index(pair)
+            if ties[index] == 1:  # a unique most probable outcome: the model's cache
+                target = td_target(
+                    q, best_reward[index], unsigned_index(best_next[index]),
+                    best_continuation[index], gamma,
+                )  # fmt: skip
+            else:
+                target = tied_mean_target_call(model, q, pair, gamma)
+            key = pair_key[index]
+            value = abs(target - cells[unsigned_index(key), 0])
+            if value > theta:
+                push(priority, item, position, size, key, value)
+        entry = pred_link[unsigned_index(entry)] if entry >= 0 else -1
+        while entry < 0 and updates < n_steps and size[0] > 0:  # pop, update, predecessors
+            key, _ = pop(priority, item, position, size)
+            index = unsigned_index(hash_find(pair_table, pair_key, key))
+            if ties[index] == 1:
+                target = td_target(
+                    q, best_reward[index], unsigned_index(best_next[index]),
+                    best_continuation[index], gamma,
+                )  # fmt: skip
+            else:
+                target = tied_mean_target_call(model, q, index, gamma)
+            update_toward(cells, unsigned_index(key), 0, target, alpha)
+            updates += 1
+            slot = hash_find(target_table, target_state, split_key(key, n_actions)[0])
+            entry = target_head[unsigned_index(slot)] if slot >= 0 else -1
+        more = entry >= 0
+        pair = entry_pair[unsigned_index(entry)] if more else -1
+    return updates
+
+
+@jit
+def sweep_sampled(
+    q: np.ndarray,
+    model: MultinomialArrays,
+    heap: HeapArrays,
+    first: int,
+    n_steps: int,
+    theta: float,
+    alpha: float,
     gamma: float,
     mode: int,
-    uniform: float,
-) -> None:
-    """Queue pair slot ``pair`` (as item s·n_actions + a) with priority |target − q[s, a]| if that
-    exceeds ``theta``. A ``SAMPLE`` model is asked for its expected target (no noisy priority);
-    ``uniform`` ∈ [0, 1) breaks most-probable ties."""
-    state, action = pair_state_action(model, pair)
-    priority_mode = EXPECTED if mode == SAMPLE else mode
-    priority = abs(model_target(model, q, pair, priority_mode, gamma, uniform) - q[state, action])
-    if priority > theta:
-        heap_push(heap, model.pair_key[pair], priority)
+    rng: np.random.Generator,
+) -> int:
+    """:func:`sweep` of a ``SAMPLE`` or ``EXPECTED`` model: every priority from the expected
+    target (no sampling noise in the queue order), each update from ``mode``'s target with one
+    ``rng.random()`` drawn for it (unused by ``EXPECTED``)."""
+    pair, entry, updates = first, -1, 0
+    more = True
+    while more:
+        if pair >= 0:
+            state, action = pair_state_action(model, pair)
+            value = abs(model_target(model, q, pair, EXPECTED, gamma, 0.0) - q[state, action])
+            if value > theta:
+                heap_push(heap, model.pair_key[pair], value)
+        entry = model.entry_pred_link[entry] if entry >= 0 else -1
+        while entry < 0 and updates < n_steps and heap.size[0] > 0:
+            key, _ = heap_pop(heap)
+            state, action = split_key(key, model.n_actions)
+            pair = find_pair(model, state, action)
+            target = model_target(model, q, pair, mode, gamma, rng.random())
+            update_toward(q, state, action, target, alpha)
+            updates += 1
+            entry = first_predecessor(model, state)
+        more = entry >= 0
+        pair = model.entry_pair[entry] if more else -1
+    return updates
 
 
 @jit
@@ -161,71 +252,42 @@ def prioritized_sweeping(
     mode: int,
     rng: np.random.Generator,
 ) -> int:
-    """Prioritized sweeping (§8.4): up to ``n_steps`` times while the queue is not empty, pop the
-    pair of highest priority, update it toward its model target, then queue each predecessor
-    (s̄, ā) of s whose |TD error| exceeds ``theta`` (a most-probable model draws one
-    ``rng.random()`` per predecessor, a sampling one is asked for its expected target). Returns
-    the number of updates (popped pairs; the predecessors' priorities are not counted).
-
-    Same numbers as ``heap_pop``, ``model_target``, ``update_toward`` and :func:`queue_pair` per
-    predecessor, written out over arrays bound once: an inlined helper that binds an array it
-    last uses in a branch (or binds the 21-array model) pays an atomic increment and decrement
-    per array at every call, ~75 % of the time before (see :mod:`skidnav.kernels.multinomial`).
-    The most-probable target of a pair whose most probable outcome is unique comes from the
-    model's cache, as in :func:`dyna_planning` (its tie draw is still made, so that the stream
-    is the same); the other modes' come from a compiled call. Pair slots and keys index
-    through ``unsigned_index`` (no wrap of negative indices)."""
-    priority, item, position, size = heap.priority, heap.item, heap.position, heap.size
-    pair_table, pair_key, entry_pair = model.pair_table, model.pair_key, model.entry_pair
-    target_table, target_state = model.target_table, model.target_state
-    target_head, pred_link = model.target_head, model.entry_pred_link
-    ties, best_next = model.pair_ties, model.pair_best_next
-    best_reward, best_continuation = model.pair_best_reward, model.pair_best_continuation
-    cells = q.reshape(-1, 1)  # row s·n_actions + a is q[s, a]
-    n_actions = q.shape[1]
-    updates = 0
-    while updates < n_steps and size[0] > 0:
-        key, _ = pop(priority, item, position, size)
-        pair = hash_find(pair_table, pair_key, key)
-        index = unsigned_index(pair)
-        uniform = rng.random()
-        if mode != MOST_PROBABLE:
-            target = model_target_call(model, q, pair, mode, gamma, uniform)
-        elif ties[index] == 1:  # a unique most probable outcome: read the model's cache
-            target = td_target(
-                q, best_reward[index], unsigned_index(best_next[index]), best_continuation[index],
-                gamma,
-            )  # fmt: skip
-        else:
-            target = most_probable_target(q, model, pair, gamma, uniform)
-        update_toward(cells, unsigned_index(key), 0, target, alpha)
-        updates += 1
-        slot = hash_find(target_table, target_state, split_key(key, n_actions)[0])
-        entry = target_head[slot] if slot >= 0 else -1
-        while entry >= 0:  # queue the predecessors of the updated state
-            pair = entry_pair[entry]
-            index = unsigned_index(pair)
-            if mode != MOST_PROBABLE:
-                target = model_target_call(model, q, pair, EXPECTED, gamma, 0.0)
-            else:
-                uniform = rng.random()  # drawn for every predecessor, tied or not
-                if ties[index] == 1:
-                    target = td_target(
-                        q, best_reward[index], unsigned_index(best_next[index]),
-                        best_continuation[index], gamma,
-                    )  # fmt: skip
-                else:
-                    target = most_probable_target(q, model, pair, gamma, uniform)
-            key = pair_key[index]
-            value = abs(target - cells[unsigned_index(key), 0])
-            if value > theta:
-                push(priority, item, position, size, key, value)
-            entry = pred_link[entry]
+    """Prioritized sweeping's planning (§8.4) on the queue as it is (:func:`sweep`,
+    :func:`sweep_sampled`). Returns the number of value updates."""
+    if mode == MOST_PROBABLE:
+        updates = sweep(q, model, heap, -1, n_steps, theta, alpha, gamma)
+    else:
+        updates = sweep_sampled(q, model, heap, -1, n_steps, theta, alpha, gamma, mode, rng)
     return updates
 
 
-@jit
+@inline_jit
 def sweep_step(
+    q: np.ndarray,
+    model: MultinomialArrays,
+    heap: HeapArrays,
+    state: int,
+    action: int,
+    reward: float,
+    next_state: int,
+    terminated: bool,
+    n_steps: int,
+    theta: float,
+    alpha: float,
+    gamma: float,
+) -> int:
+    """Prioritized sweeping's whole learning step from one real transition, for a most-probable
+    model, inlined into the agent's compiled learning step: count it in the model (the caller has
+    reserved room for one more transition), then :func:`sweep` from its pair (queued first).
+    Inlined, with every parameter used on its one path: a compiled call with the model pays
+    ~0.25–0.45 µs of reference counting, ~1.3 µs of the step before. Returns the number of value
+    updates."""
+    pair = observe_pair(model, state, action, reward, next_state, terminated)
+    return sweep(q, model, heap, pair, n_steps, theta, alpha, gamma)
+
+
+@jit
+def sampled_sweep_step(
     q: np.ndarray,
     model: MultinomialArrays,
     heap: HeapArrays,
@@ -241,12 +303,6 @@ def sweep_step(
     mode: int,
     rng: np.random.Generator,
 ) -> int:
-    """Prioritized sweeping's whole learning step from one real transition, in one compiled call
-    (a call from Python pays ~20 µs for its arguments, the Generator most): count it in the model
-    (the caller has reserved room for one more transition), queue its pair (a most-probable model
-    draws one ``rng.random()`` for ties first), then :func:`prioritized_sweeping`. Returns the
-    number of value updates."""
+    """:func:`sweep_step` for a ``SAMPLE`` or ``EXPECTED`` model (:func:`sweep_sampled`)."""
     pair = model_observe(model, state, action, reward, next_state, terminated)
-    uniform = rng.random() if mode == MOST_PROBABLE else 0.0
-    queue_pair(q, model, heap, pair, theta, gamma, mode, uniform)
-    return prioritized_sweeping(q, model, heap, n_steps, theta, alpha, gamma, mode, rng)
+    return sweep_sampled(q, model, heap, pair, n_steps, theta, alpha, gamma, mode, rng)
