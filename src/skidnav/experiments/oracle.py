@@ -96,7 +96,8 @@ def _key(env: Any, n_samples: int, seed: int, seeds: Sequence[int], max_steps: i
     for part in (task.robot, task.grid, task.goal_i, task.goal_j, task.drift_amplitude,
                  task.drift_period, task.rewards, limit):  # fmt: skip
         digest.update(repr(part).encode())
-    for array in (task.occupancy, task.eta, task.x_icr, task.drift_phase, nav.start_pose()):
+    for array in (task.occupancy, task.eta, task.x_icr, task.wheel_radius, task.half_track,
+                  task.drift_phase, nav.start_pose()):  # fmt: skip
         digest.update(np.ascontiguousarray(array).tobytes())
     digest.update(repr((n_samples, seed, [int(s) for s in seeds], max_steps)).encode())
     return digest.hexdigest()[:32]

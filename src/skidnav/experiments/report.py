@@ -37,8 +37,9 @@ from skidnav.experiments.config import ExperimentConfig, config_to_dict
 from skidnav.experiments.provenance import CODE_KEYS, describe_code
 from skidnav.experiments.reproduction import reproduction_section
 from skidnav.experiments.store import ResultStore, TrialResult
-from skidnav.physics.materials import PRESET_MATERIALS, region_materials
+from skidnav.physics.materials import region_materials
 from skidnav.physics.render import Arena, animate, describe
+from skidnav.robot.floors import PRESET_FLOORS
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField
 from skidnav.survival import performance_profile, profile_band
@@ -291,7 +292,7 @@ def animation_figure(run: TrialResult, preset: str, why: str) -> str:
     eta = np.asarray(run.arrays["slip_eta"], dtype=np.float64)
     start, goal = run.arrays["start"], run.arrays["goal"]
     materials = None
-    if preset in PRESET_MATERIALS:
+    if preset in PRESET_FLOORS:
         field = SlipField(eta, np.zeros_like(eta), drift_phase=np.zeros_like(eta))
         materials = region_materials(preset, field, robot)
     arena = Arena(

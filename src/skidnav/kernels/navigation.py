@@ -13,7 +13,9 @@ robot in coarse region ρ at simulated time t:
    [0, 1) (two per sub-step: left, right). Callers fill ``noise`` with ``rng.random(2·substeps)``
    (the env) or the same draws one by one inside a compiled loop (the trainers): same stream,
    same numbers, and no Generator crosses the Python/numba boundary on every step;
-3. the ICR model with x_ICR[ρ] gives (v_x, v_y, yaw_rate); the robot's integrator (explicit Euler
+3. the ICR model with the region's x_ICR[ρ], effective wheel radius r[ρ] and half track c[ρ]
+   (the robot's own unless the floor was calibrated, :mod:`skidnav.robot.floors`) gives
+   (v_x, v_y, yaw_rate); the robot's integrator (explicit Euler
    or the exact constant-twist step, ``RobotParams.integrator``) advances the pose, which is
    clipped to the arena;
 4. if the new position lies in a wall cell the motion stops: the position stays at the last free
@@ -73,6 +75,8 @@ class NavigationTask(NamedTuple):
         goal_i, goal_j: goal cell.
         eta: base wheel-speed loss scale per flat region, shape (n_regions,) [rad/s].
         x_icr: ICR offset per flat region, shape (n_regions,) [m].
+        wheel_radius, half_track: effective wheel radius r and half track c per flat region,
+            shape (n_regions,) [m].
         drift_phase: drift phase per flat region, shape (n_regions,) [rad].
         drift_amplitude: relative drift amplitude A (0 = stationary slip).
         drift_period: drift period P [s].
@@ -89,6 +93,8 @@ class NavigationTask(NamedTuple):
     goal_j: int
     eta: np.ndarray
     x_icr: np.ndarray
+    wheel_radius: np.ndarray
+    half_track: np.ndarray
     drift_phase: np.ndarray
     drift_amplitude: float
     drift_period: float
@@ -129,6 +135,18 @@ def slip_scale(task: NavigationTask, region: int, time: float) -> float:
     return drifted_slip(
         task.eta[region], task.drift_phase[region], task.drift_amplitude, task.drift_period, time
     )
+
+
+@inline_jit
+def region_slip(
+    task: NavigationTask, region: int, time: float
+) -> tuple[float, float, float, float]:
+    """The floor of ``region`` at simulated time ``time`` [s] as :func:`substep` takes it: η
+    [rad/s], x_ICR [m], effective wheel radius r [m] and half track c [m]."""
+    return (
+        slip_scale(task, region, time), task.x_icr[region], task.wheel_radius[region],
+        task.half_track[region],
+    )  # fmt: skip
 
 
 @inline_jit
@@ -190,15 +208,16 @@ def _log_row(
 @inline_jit
 def substep(
     robot: KinematicConstants,
-    slip: tuple[float, float],
+    slip: tuple[float, float, float, float],
     pose: tuple[float, float, float],
     commands: tuple[float, float],
     noise: tuple[float, float],
 ) -> tuple[float, float, float, float, float, tuple[float, float, float]]:
     """One sub-step of ``robot.dt`` seconds (steps 2–3 of the module doc) from ``pose`` (x [m],
     y [m], heading [rad]) on a floor whose region there has ``slip`` (η [rad/s] at this time,
-    x_ICR [m]), driven by the wheel speeds ``commands`` (ω_L, ω_R) [rad/s]; ``noise``: (left,
-    right) uniforms in [0, 1). The caller checks the new position against the walls (step 4).
+    x_ICR [m], effective r and c [m]: :func:`region_slip`), driven by the wheel speeds
+    ``commands`` (ω_L, ω_R) [rad/s]; ``noise``: (left, right) uniforms in [0, 1). The caller
+    checks the new position against the walls (step 4).
 
     Returns:
         (x, y, heading) after the sub-step, clipped to the arena; ω_L and ω_R after slip
@@ -207,10 +226,10 @@ def substep(
     Scalars only: numba reference-counts every array an inlined helper receives, on every call
     (the occupancy grid here would cost a tenth of the batch simulator's speed).
     """
-    eta, x_icr = slip
+    eta, x_icr, wheel_radius, half_track = slip
     omega_left = apply_slip(commands[0], noise[0] * eta)
     omega_right = apply_slip(commands[1], noise[1] * eta)
-    twist = body_velocities(omega_left, omega_right, x_icr, robot.wheel_radius, robot.half_track)
+    twist = body_velocities(omega_left, omega_right, x_icr, wheel_radius, half_track)
     new_x, new_y, new_heading = integrate(robot, pose[0], pose[1], pose[2], twist)
     return new_x, new_y, new_heading, omega_left, omega_right, twist
 
@@ -243,7 +262,7 @@ def simulate_action(
     n_logged = 0
     collided = False
     for k in range(robot.substeps):
-        slip = (slip_scale(task, region, time + k * robot.dt), task.x_icr[region])
+        slip = region_slip(task, region, time + k * robot.dt)
         new_x, new_y, heading, omega_left, omega_right, twist = substep(
             robot, slip, (x, y, heading), commands, (noise[2 * k], noise[2 * k + 1])
         )

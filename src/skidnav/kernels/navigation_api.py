@@ -12,7 +12,7 @@ from skidnav._jit import inline_jit, jit
 from skidnav.kernels.navigation import (
     NavigationTask,
     RewardScheme,
-    slip_scale,
+    region_slip,
     substep,
     transition,
 )
@@ -60,7 +60,7 @@ def floor_task(
             f"regions, got {slip.shape[0]} × {slip.shape[1]}"
         )
     slip.check_x_icr(robot)
-    eta, x_icr, phase = slip.kernel_arrays()
+    eta, x_icr, wheel_radius, half_track, phase = slip.kernel_arrays(robot)
     return NavigationTask(
         robot=robot.kernel_constants(),
         grid=discretization.grid_shape(),
@@ -69,6 +69,8 @@ def floor_task(
         goal_j=-1,
         eta=eta,
         x_icr=x_icr,
+        wheel_radius=wheel_radius,
+        half_track=half_track,
         drift_phase=phase,
         drift_amplitude=float(slip.drift_amplitude),
         drift_period=float(slip.drift_period),
@@ -92,7 +94,7 @@ def drive_substep(
     sub-step is kept, as in an action). Returns the new pose."""
     x, y, _ = pose
     region = region_of(x, y, task.grid)
-    slip = (slip_scale(task, region, time), task.x_icr[region])
+    slip = region_slip(task, region, time)
     new_x, new_y, new_heading, _, _, _ = substep(
         task.robot, slip, pose, commands, (noise_left, noise_right)
     )
@@ -105,15 +107,18 @@ def drive_substep(
 N_TASK_SCALARS = 24
 """Length of the scalar vector of :func:`task_arrays`."""
 
-TaskArrays = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+TaskArrays = tuple[
+    np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray
+]
 """A task as :func:`task_arrays` gives it."""
 
 
 def task_arrays(task: NavigationTask) -> TaskArrays:
-    """``task`` as the six arrays :func:`step_arrays` takes: float64 (:data:`N_TASK_SCALARS`,) of
+    """``task`` as the eight arrays :func:`step_arrays` takes: float64 (:data:`N_TASK_SCALARS`,) of
     its scalars (the fields of ``robot`` and ``grid``, the goal cell, the drift amplitude and
     period, the fields of ``rewards``, in this order), then ``occupancy``, ``eta``, ``x_icr``,
-    ``drift_phase`` and ``variance_stats`` (shared, not copied: the kernel updates the last).
+    ``wheel_radius``, ``half_track``, ``drift_phase`` and ``variance_stats`` (shared, not
+    copied: the kernel updates the last).
 
     Why arrays: numba types a NamedTuple argument in Python on every call (about 4 µs for a task,
     more than the action's own work), an array in C (about 0.05 µs).
@@ -125,7 +130,8 @@ def task_arrays(task: NavigationTask) -> TaskArrays:
     )  # fmt: skip
     assert scalars.shape == (N_TASK_SCALARS,)
     return (
-        scalars, task.occupancy, task.eta, task.x_icr, task.drift_phase, task.variance_stats
+        scalars, task.occupancy, task.eta, task.x_icr, task.wheel_radius, task.half_track,
+        task.drift_phase, task.variance_stats,
     )  # fmt: skip
 
 
@@ -135,6 +141,8 @@ def task_from_arrays(
     occupancy: np.ndarray,
     eta: np.ndarray,
     x_icr: np.ndarray,
+    wheel_radius: np.ndarray,
+    half_track: np.ndarray,
     drift_phase: np.ndarray,
     variance_stats: np.ndarray,
 ) -> NavigationTask:
@@ -145,8 +153,8 @@ def task_from_arrays(
     grid = GridShape(int(s[8]), int(s[9]), int(s[10]), int(s[11]), int(s[12]), s[13], s[14])
     rewards = RewardScheme(s[19], s[20], s[21], s[22], s[23] != 0.0)
     return NavigationTask(
-        robot, grid, occupancy, int(s[15]), int(s[16]), eta, x_icr, drift_phase, s[17], s[18],
-        rewards, variance_stats,
+        robot, grid, occupancy, int(s[15]), int(s[16]), eta, x_icr, wheel_radius, half_track,
+        drift_phase, s[17], s[18], rewards, variance_stats,
     )  # fmt: skip
 
 
@@ -156,6 +164,8 @@ def step_arrays(
     occupancy: np.ndarray,
     eta: np.ndarray,
     x_icr: np.ndarray,
+    wheel_radius: np.ndarray,
+    half_track: np.ndarray,
     drift_phase: np.ndarray,
     variance_stats: np.ndarray,
     pose: np.ndarray,
@@ -166,7 +176,9 @@ def step_arrays(
 ) -> tuple[float, bool, bool, int, float, float, int, int]:
     """:func:`transition` on the task given as :func:`task_arrays`, for callers in Python (the
     env): the :class:`Outcome` fields as a plain tuple, which crosses back into Python faster."""
-    task = task_from_arrays(scalars, occupancy, eta, x_icr, drift_phase, variance_stats)
+    task = task_from_arrays(
+        scalars, occupancy, eta, x_icr, wheel_radius, half_track, drift_phase, variance_stats
+    )
     outcome = transition(task, pose, action, time, noise, log)
     return (
         outcome.reward, outcome.terminated, outcome.collided, outcome.n_logged,

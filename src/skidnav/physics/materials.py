@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from skidnav.robot.floors import CALIBRATED_PRESETS, PRESET_FLOORS, calibrated_floor
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField
 
@@ -74,10 +75,8 @@ MATERIALS: dict[str, Material] = {
 }
 """The named materials (see the module docstring for values and sources)."""
 
-PRESET_MATERIALS = {"thesis": "laminate", "rough": "rubber-mat", "slippery": "laminate"}
-"""The material of every region of a slip preset (``slippery`` adds wet-tile patches)."""
-
-PATCH_MATERIAL = "wet-tile"
+PATCH_MATERIAL = str(PRESET_FLOORS["slippery"][1])
+"""The material of the slippery floor's patches (:data:`skidnav.robot.floors.PRESET_FLOORS`)."""
 
 
 def material(name: str) -> Material:
@@ -97,14 +96,20 @@ def material(name: str) -> Material:
 def region_materials(preset: str, field: SlipField, robot: RobotParams | None = None) -> np.ndarray:
     """Material name of each slip region, object array of shape ``field.shape``.
 
-    ``slippery`` puts :data:`PATCH_MATERIAL` on the regions whose η reaches the robot's wheel
-    speed (the preset's patches) and laminate elsewhere; the other presets cover the floor with
-    one material (:data:`PRESET_MATERIALS`).
+    The field's own materials when it names them (the calibrated presets); otherwise the
+    preset's floor (:data:`~skidnav.robot.floors.PRESET_FLOORS`), with its patch material on the
+    patches: the regions whose η reaches the robot's wheel speed (``slippery``) or, for a
+    calibrated preset's field rebuilt from its η alone (a saved run), equals the patch
+    material's calibrated η.
     """
-    if preset not in PRESET_MATERIALS:
-        raise ValueError(f"expected a slip preset in {', '.join(PRESET_MATERIALS)}, got {preset!r}")
-    names = np.full(field.shape, PRESET_MATERIALS[preset], dtype=object)
-    if preset == "slippery":
-        wheel_speed = (robot or RobotParams()).wheel_speed
-        names[field.eta >= wheel_speed] = PATCH_MATERIAL
+    if field.materials is not None:
+        return np.array(field.materials, dtype=object)
+    if preset not in PRESET_FLOORS:
+        raise ValueError(f"expected a slip preset in {', '.join(PRESET_FLOORS)}, got {preset!r}")
+    floor, patch = PRESET_FLOORS[preset]
+    names = np.full(field.shape, floor, dtype=object)
+    if patch is not None and preset in CALIBRATED_PRESETS:
+        names[field.eta == calibrated_floor(patch).eta] = patch
+    elif patch is not None:
+        names[field.eta >= (robot or RobotParams()).wheel_speed] = patch
     return names

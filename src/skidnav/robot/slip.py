@@ -9,6 +9,10 @@ robot's coarse region (a 7 × 7 partition of the arena). A :class:`SlipField` ho
 with relative amplitude A, period P [s] and a seeded phase φ per region. x_ICR does not drift,
 so once within [−a, b] (SPEC §1, :meth:`SlipField.check_x_icr`) it stays there at every time.
 The true variance of a wheel's speed in a region is η²/12 (variance of U(0, η)).
+
+A field may also scale the robot's wheel radius and half track per region (the effective ICR
+model of a calibrated floor, :mod:`skidnav.robot.floors`; 1 everywhere otherwise) and name each
+region's floor material.
 """
 
 from __future__ import annotations
@@ -18,9 +22,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from skidnav.robot.floors import CALIBRATED_PRESETS, PRESET_FLOORS, calibrated_floor
 from skidnav.robot.params import RobotParams
 
-SLIP_PRESETS = ("thesis", "slippery", "rough")
+SLIP_PRESETS = ("thesis", "slippery", "rough", *CALIBRATED_PRESETS)
 
 
 @dataclass(frozen=True, eq=False)
@@ -33,6 +38,10 @@ class SlipField:
         drift_amplitude: relative drift amplitude A ≥ 0 (0: stationary).
         drift_period: drift period P [s] > 0.
         drift_phase: phase φ per region, shape (regions_x, regions_y) [rad].
+        wheel_radius_scale, half_track_scale: effective r and c per region relative to the
+            robot's, shape (regions_x, regions_y), > 0 (None: 1 everywhere).
+        materials: floor material name per region, shape (regions_x, regions_y) (None: the
+            preset's, :data:`skidnav.robot.floors.PRESET_FLOORS`).
     """
 
     eta: np.ndarray
@@ -40,6 +49,9 @@ class SlipField:
     drift_amplitude: float = 0.0
     drift_period: float = 600.0
     drift_phase: np.ndarray = field(default_factory=lambda: np.zeros((7, 7)))
+    wheel_radius_scale: np.ndarray | None = None
+    half_track_scale: np.ndarray | None = None
+    materials: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         eta = np.asarray(self.eta, dtype=np.float64)
@@ -54,11 +66,28 @@ class SlipField:
             if not np.all(np.isfinite(value)):
                 raise ValueError(f"expected {name} finite in every region")
             object.__setattr__(self, name, value)
+        self._check_floor(eta.shape)
         object.__setattr__(self, "eta", eta)
         if not self.drift_amplitude >= 0:
             raise ValueError(f"expected drift_amplitude >= 0, got {self.drift_amplitude}")
         if not self.drift_period > 0:
             raise ValueError(f"expected drift_period > 0 s, got {self.drift_period}")
+
+    def _check_floor(self, shape: tuple[int, ...]) -> None:
+        """Validate (and store as arrays) the optional scales and materials."""
+        for name in ("wheel_radius_scale", "half_track_scale"):
+            if getattr(self, name) is not None:
+                value = np.asarray(getattr(self, name), dtype=np.float64)
+                if value.shape != shape:
+                    raise ValueError(f"expected {name} of shape {shape}, got {value.shape}")
+                if not np.all(np.isfinite(value)) or np.any(value <= 0):
+                    raise ValueError(f"expected {name} finite and > 0 in every region")
+                object.__setattr__(self, name, value)
+        if self.materials is not None:
+            names = np.asarray(self.materials, dtype=object)
+            if names.shape != shape or not all(isinstance(n, str) for n in names.flat):
+                raise ValueError(f"expected materials as names of shape {shape}")
+            object.__setattr__(self, "materials", names)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -104,12 +133,20 @@ class SlipField:
                 f"got {self.x_icr[i, j]:g} m in region ({i}, {j}){more}"
             )
 
-    def kernel_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(eta, x_icr, drift_phase) flattened to shape (regions_x·regions_y,), region-major in x,
-        for the compiled kernels."""
+    def kernel_arrays(
+        self, robot: RobotParams
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(eta, x_icr, wheel_radius, half_track, drift_phase) of ``robot`` on this floor, each
+        flattened to shape (regions_x·regions_y,), region-major in x, for the compiled kernels
+        (wheel radius and half track in metres: the robot's times the field's scales)."""
+        ones = np.ones_like(self.eta)
+        radius = self.wheel_radius_scale if self.wheel_radius_scale is not None else ones
+        track = self.half_track_scale if self.half_track_scale is not None else ones
         return (
             np.ascontiguousarray(self.eta.ravel()),
             np.ascontiguousarray(self.x_icr.ravel()),
+            np.ascontiguousarray(robot.wheel_radius * radius.ravel()),
+            np.ascontiguousarray(robot.half_track * track.ravel()),
             np.ascontiguousarray(self.drift_phase.ravel()),
         )
 
@@ -132,6 +169,10 @@ def make_slip_field(
         η = 1.7 rad/s (up to 100 %, on average 50 % of wheel speed lost there); x_ICR drawn
         per region in [0, b] (shifted towards the centre).
         ``rough``: high friction, η = 0.05 rad/s (at most 3 % loss), nominal x_ICR.
+        ``rough-physics``, ``slippery-physics``: the floors of ``rough`` and ``slippery`` made of
+        their materials (:data:`~skidnav.robot.floors.PRESET_FLOORS`: rubber mat; laminate with
+        the same seeded wet-tile patches as ``slippery``), each region with its material's
+        calibrated η, x_ICR and effective r and c (:mod:`skidnav.robot.floors`).
 
     Args:
         preset: one of :data:`SLIP_PRESETS`.
@@ -148,12 +189,12 @@ def make_slip_field(
         eta = (ii + jj) / 1000.0
     elif preset == "slippery":
         eta = np.full(shape, 0.3)
-        n_patches = int(rng.integers(3, 6))
-        flat = rng.choice(shape[0] * shape[1], size=n_patches, replace=False)
-        eta.ravel()[flat] = robot.wheel_speed
+        eta.ravel()[_patches(rng, shape)] = robot.wheel_speed
         x_icr = rng.uniform(0.0, robot.rear_axle, size=shape)
     elif preset == "rough":
         eta = np.full(shape, 0.05)
+    elif preset in CALIBRATED_PRESETS:
+        return _calibrated_field(preset, rng, shape, drift_amplitude, drift_period)
     else:
         raise ValueError(f"expected slip preset one of {', '.join(SLIP_PRESETS)}, got {preset!r}")
     phase = rng.uniform(0.0, 2.0 * math.pi, size=shape)
@@ -163,4 +204,37 @@ def make_slip_field(
         drift_amplitude=drift_amplitude,
         drift_period=drift_period,
         drift_phase=phase,
+    )
+
+
+def _patches(rng: np.random.Generator, shape: tuple[int, int]) -> np.ndarray:
+    """Flat indices of 3–5 distinct seeded regions: the patches of a slippery floor."""
+    n_patches = int(rng.integers(3, 6))
+    return rng.choice(shape[0] * shape[1], size=n_patches, replace=False)
+
+
+def _calibrated_field(
+    preset: str,
+    rng: np.random.Generator,
+    shape: tuple[int, int],
+    drift_amplitude: float,
+    drift_period: float,
+) -> SlipField:
+    """A field of :data:`~skidnav.robot.floors.CALIBRATED_PRESETS`: the preset's materials
+    (patches drawn as for ``slippery``), each region with its material's calibrated floor."""
+    floor, patch = PRESET_FLOORS[preset]
+    names = np.full(shape, floor, dtype=object)
+    if patch is not None:
+        names.ravel()[_patches(rng, shape)] = patch
+    fits = [calibrated_floor(str(name)) for name in names.flat]
+    scales = np.array([fit.scales() for fit in fits]).reshape(*shape, 2)
+    return SlipField(
+        eta=np.array([fit.eta for fit in fits]).reshape(shape),
+        x_icr=np.array([fit.x_icr for fit in fits]).reshape(shape),
+        drift_amplitude=drift_amplitude,
+        drift_period=drift_period,
+        drift_phase=rng.uniform(0.0, 2.0 * math.pi, size=shape),
+        wheel_radius_scale=scales[..., 0],
+        half_track_scale=scales[..., 1],
+        materials=names,
     )
