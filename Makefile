@@ -3,13 +3,17 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
+# The CPU build of PyTorch, pinned and installed before the extras so that pip never resolves
+# a newer (CUDA, several-GB) torch for Stable-Baselines3.
+TORCH := torch==2.13.0
 
 .PHONY: venv gl demo test lint bench clean clean-cache
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[dev,physics]"
+	$(PY) -m pip install --quiet $(TORCH)
+	$(PY) -m pip install --quiet -e ".[dev,physics,deep]" $(TORCH)
 	touch $(STAMP)
 
 venv: $(STAMP)

@@ -1,0 +1,1 @@
+"""Agents on neural networks (Stable-Baselines3 on PyTorch: the ``deep`` extra)."""
