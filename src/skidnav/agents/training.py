@@ -1,4 +1,5 @@
-"""The plain training loop: any agent on any Gymnasium env with Discrete observations and actions.
+"""The plain training loop: any agent on any Gymnasium env with Discrete actions and Discrete
+(tabular agents) or Box (agents on continuous states) observations.
 
 :func:`train_agent` runs whole episodes and returns a :class:`TrainingLog` of per-episode arrays;
 :func:`train_for_steps` runs a fixed number of real steps across episodes (the cumulative-reward
@@ -19,20 +20,22 @@ from skidnav.errors import UserError
 
 
 class Learner(Protocol):
-    """What the loop needs from an agent (every :class:`~skidnav.agents.core.TabularAgent`)."""
+    """What the loop needs from an agent (every :class:`~skidnav.agents.core.TabularAgent`, and
+    the agents on continuous states). A state is what :func:`as_state` makes of an observation:
+    an int for a Discrete observation, a float64 array for a Box one."""
 
     planning_updates: int
 
-    def act(self, state: int) -> int: ...
+    def act(self, state: Any) -> int: ...
 
-    def greedy_action(self, state: int) -> int: ...
+    def greedy_action(self, state: Any) -> int: ...
 
     def observe(
         self,
-        state: int,
+        state: Any,
         action: int,
         reward: float,
-        next_state: int,
+        next_state: Any,
         terminated: bool,
         truncated: bool,
         info: dict[str, Any],
@@ -62,11 +65,19 @@ class TrainingLog(NamedTuple):
     a rollout did not terminate within the limit, or everywhere if no evaluation env was given."""
 
 
-def _check_discrete(env: gym.Env[Any, Any]) -> None:
-    if not isinstance(env.observation_space, gym.spaces.Discrete) or not isinstance(
-        env.action_space, gym.spaces.Discrete
+def _check_spaces(env: gym.Env[Any, Any]) -> None:
+    if not isinstance(env.observation_space, (gym.spaces.Discrete, gym.spaces.Box)) or not (
+        isinstance(env.action_space, gym.spaces.Discrete)
     ):
-        raise UserError("expected an env with Discrete observations and actions")
+        raise UserError("expected an env with Discrete actions and Discrete or Box observations")
+
+
+def as_state(observation: Any) -> Any:
+    """The state an agent takes for ``observation``: an int for a Discrete one (NumPy integers
+    included), a float64 array for a Box one."""
+    if isinstance(observation, np.ndarray) and observation.ndim > 0:
+        return np.asarray(observation, dtype=np.float64)
+    return int(observation)
 
 
 def greedy_rollout(
@@ -76,7 +87,7 @@ def greedy_rollout(
     ``env.reset(seed=seed)``; return the number of actions if the env terminated, else −1."""
     state, _ = env.reset(seed=seed)
     for step in range(1, max_steps + 1):
-        state, _, terminated, truncated, _ = env.step(agent.greedy_action(int(state)))
+        state, _, terminated, truncated, _ = env.step(agent.greedy_action(as_state(state)))
         if terminated:
             return step
         if truncated:
@@ -97,7 +108,7 @@ def greedy_evaluation(
 
 
 def run_episode(
-    agent: Learner, env: gym.Env[Any, Any], state: int, max_steps: int | None
+    agent: Learner, env: gym.Env[Any, Any], state: Any, max_steps: int | None
 ) -> tuple[float, int, bool, int]:
     """One learning episode from ``state`` (already reset); returns (return, length, terminated,
     collisions). The episode is truncated after ``max_steps`` actions if given."""
@@ -109,10 +120,9 @@ def run_episode(
         truncated = bool(truncated) or (max_steps is not None and length >= max_steps)
         collisions += int(bool(info.get("collision", False)))
         total += float(reward)
-        agent.observe(
-            state, action, float(reward), int(next_state), bool(terminated), truncated, info
-        )
-        state = int(next_state)
+        next_state = as_state(next_state)
+        agent.observe(state, action, float(reward), next_state, bool(terminated), truncated, info)
+        state = next_state
         if terminated or truncated:
             agent.end_episode()
             return total, length, bool(terminated), collisions
@@ -142,14 +152,14 @@ def train_agent(
         raise ValueError(
             f"expected n_episodes >= 0 and max_steps >= 1, got {n_episodes}, {max_steps}"
         )
-    _check_discrete(env)
+    _check_spaces(env)
     limit = greedy_max_steps or max_steps or 10_000
     columns: dict[str, list[Any]] = {name: [] for name in TrainingLog._fields}
     for episode in range(n_episodes):
         start = time.perf_counter()
         planned_before = agent.planning_updates
         state, _ = env.reset(seed=seed if episode == 0 else None)
-        total, length, success, collisions = run_episode(agent, env, int(state), max_steps)
+        total, length, success, collisions = run_episode(agent, env, as_state(state), max_steps)
         columns["wall_time"].append(time.perf_counter() - start)
         columns["returns"].append(total)
         columns["lengths"].append(length)
@@ -186,26 +196,21 @@ def train_for_steps(
     """Train for exactly ``n_steps`` real steps, starting new episodes as needed (an unfinished
     last episode is left open, without ``end_episode``). Returns the cumulative reward after each
     step, float64 (n_steps,)."""
-    _check_discrete(env)
+    _check_spaces(env)
     cumulative = np.zeros(n_steps, dtype=np.float64)
-    state, _ = env.reset(seed=seed)
-    total = 0.0
+    observation, _ = env.reset(seed=seed)
+    state, total = as_state(observation), 0.0
     for step in range(n_steps):
-        action = agent.act(int(state))
-        next_state, reward, terminated, truncated, info = env.step(action)
+        action = agent.act(state)
+        observation, reward, terminated, truncated, info = env.step(action)
         total += float(reward)
         cumulative[step] = total
+        next_state = as_state(observation)
         agent.observe(
-            int(state),
-            action,
-            float(reward),
-            int(next_state),
-            bool(terminated),
-            bool(truncated),
-            info,
+            state, action, float(reward), next_state, bool(terminated), bool(truncated), info
         )
         state = next_state
         if terminated or truncated:
             agent.end_episode()
-            state, _ = env.reset()
+            state = as_state(env.reset()[0])
     return cumulative
