@@ -11,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 
 from skidnav.envs import rendering
+from skidnav.envs.features import PoseFeatures
 from skidnav.envs.step_info import step_info
 from skidnav.kernels.navigation import NavigationTask, RewardScheme
 from skidnav.kernels.navigation_api import build_task, step_arrays, task_arrays
@@ -24,7 +25,7 @@ from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 from skidnav.world.maps import build_map
 
-OBSERVATION_KINDS = ("discrete", "pose")
+OBSERVATION_KINDS = ("discrete", "pose", "features")
 VARIANCE_SOURCES = ("true", "observed")
 DYNAMICS = ("kinematic", "mujoco")
 
@@ -47,7 +48,11 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     ``Discrete(n_x · n_y · n_headings)`` (12,500 by default): the flat index
     ``(i · n_y + j) · n_headings + heading_bin`` of the discretized pose (see
     :mod:`skidnav.world.discretization`). With ``observation="pose"``: ``Box`` of
-    (x [m], y [m], heading [rad] in [−π, π]).
+    (x [m], y [m], heading [rad] in [−π, π]). With ``observation="features"``: ``Box`` float64
+    (7 + k,) of x [m], y [m], cos ψ, sin ψ, the distance [m] to the goal cell's centre, cos and
+    sin of the goal's bearing from the heading, and k = ``lidar_rays`` range readings [m] to the
+    nearest wall or border, ray 0 ahead and the others counter-clockwise, clipped at
+    ``lidar_range`` (layout and bounds: :mod:`skidnav.envs.features`).
 
     ## Rewards
     +10 on ending an action in the goal cell; −10 for an action that ran into a wall; otherwise
@@ -78,10 +83,13 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     ## Arguments
     ``map_kind`` ("free", "obstacles", "maze") or ``map_file`` (plain-text map) or ``grid_map``;
     ``world_seed`` (draws the map and the slip field; the map does not change between episodes);
-    ``slip`` preset ("thesis", "slippery", "rough") or ``slip_field``; ``drift_amplitude`` and
+    ``slip`` preset ("thesis", "slippery", "rough", "rough-physics", "slippery-physics") or
+    ``slip_field``; ``drift_amplitude`` and
     ``drift_period`` [s] (non-stationary slip; the clock runs across episodes and restarts when
     ``reset`` is given a seed); ``robot`` (:class:`RobotParams`, e.g. ``integrator="exact"``);
-    ``discretization``; ``observation``; ``variance``; ``render_mode`` ("rgb_array" or "ansi");
+    ``discretization``; ``observation`` ("discrete", "pose", "features"); ``lidar_rays`` (k ≥ 0,
+    default 8) and ``lidar_range`` [m] (> 0, default 0.3) of the features; ``variance``;
+    ``render_mode`` ("rgb_array" or "ansi");
     ``dynamics``: "kinematic" (the ICR model of SPEC §1, the default) or "mujoco" (the MuJoCo
     robot of :mod:`skidnav.physics`, the ``physics`` extra: the same spaces, rewards, walls and
     episode rules, the slip field's wheel-speed loss applied to the servo set points, the motion
@@ -105,7 +113,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     ## Version History
     v0: initial version; truncation moved from the env to Gymnasium's ``TimeLimit`` (same
     limit, 500 actions, when made with ``gymnasium.make``); ``dynamics`` and ``floor`` added
-    (the default ``dynamics="kinematic"`` gives the same numbers as before).
+    (the default ``dynamics="kinematic"`` gives the same numbers as before);
+    ``observation="features"`` with ``lidar_rays`` and ``lidar_range`` added.
     """
 
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 10}  # noqa: RUF012
@@ -128,6 +137,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         variance: str = "true",
         dynamics: str = "kinematic",
         floor: str | None = None,
+        lidar_rays: int = 8,
+        lidar_range: float = 0.3,
     ) -> None:
         self._check_choices(render_mode, observation, variance, dynamics)
         self.render_mode = render_mode
@@ -155,6 +166,7 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         )
         self._task_arrays = task_arrays(self.task)
         self.observation_kind = observation
+        self.features = PoseFeatures(self.grid_map, self.discretization, lidar_rays, lidar_range)
         self.action_space = spaces.Discrete(4)  # type: ignore[assignment]
         self.observation_space = self._observation_space()
         self.pose = np.zeros(3)
@@ -197,6 +209,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     def _observation_space(self) -> spaces.Space[Any]:
         if self.observation_kind == "discrete":
             return spaces.Discrete(self.discretization.n_states)
+        if self.observation_kind == "features":
+            return self.features.space()
         return spaces.Box(
             low=np.array([0.0, 0.0, -math.pi]),
             high=np.array([self.robot.arena_width, self.robot.arena_height, math.pi]),
@@ -254,6 +268,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     def _observation(self, state: int) -> Any:
         if self.observation_kind == "discrete":
             return int(state)
+        if self.observation_kind == "features":
+            return self.features(self.pose)
         heading = wrap_angle(float(self.pose[2]))
         return np.array([self.pose[0], self.pose[1], heading])
 
