@@ -21,6 +21,7 @@ SUBCOMMAND_MODULES = {
     "camera": "skidnav.commands.camera",
     "floors": "skidnav.commands.floors",
     "transfer": "skidnav.commands.transfer",
+    "kinematic": "skidnav.commands.kinematic",
 }
 """Subcommand name → the module that adds it (``add_parser(subparsers)``)."""
 

@@ -44,6 +44,12 @@ class Learner(Protocol):
     def end_episode(self) -> None: ...
 
 
+class Greedy(Protocol):
+    """What a greedy evaluation needs from an agent: its greedy action in a state."""
+
+    def greedy_action(self, state: Any) -> int: ...
+
+
 class TrainingLog(NamedTuple):
     """Per-episode results, each an array of shape (n_episodes,)."""
 
@@ -81,7 +87,7 @@ def as_state(observation: Any) -> Any:
 
 
 def greedy_rollout(
-    agent: Learner, env: gym.Env[Any, Any], max_steps: int, *, seed: int | None = None
+    agent: Greedy, env: gym.Env[Any, Any], max_steps: int, *, seed: int | None = None
 ) -> int:
     """Run the greedy policy for at most ``max_steps`` actions (without learning) from
     ``env.reset(seed=seed)``; return the number of actions if the env terminated, else −1."""
@@ -96,7 +102,7 @@ def greedy_rollout(
 
 
 def greedy_evaluation(
-    agent: Learner, env: gym.Env[Any, Any], max_steps: int, seeds: Sequence[int] | None
+    agent: Greedy, env: gym.Env[Any, Any], max_steps: int, seeds: Sequence[int] | None
 ) -> list[int]:
     """The greedy rollouts of one evaluation (:func:`greedy_rollout` each): one per seed in
     ``seeds``, each from ``env.reset(seed=seed)`` — the same seeds at every evaluation, so every

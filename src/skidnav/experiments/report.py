@@ -354,9 +354,14 @@ def figures_for_cell(
     )
     animated, why = animated_run(runs, config.baseline)
     parts.append(animation_figure(animated, preset, why))
-    parts.append(
-        image(plots.value_maps(runs, f"state values and preferred headings, {title}"), "value maps")
-    )
+    tabular = [run for run in runs if "value_map" in run.arrays]  # agents with a Q table
+    if tabular:
+        parts.append(
+            image(
+                plots.value_maps(tabular, f"state values and preferred headings, {title}"),
+                "value maps",
+            )
+        )
     with_policy = [run for run in runs if "policy_map" in run.arrays]
     if with_policy:  # older run files have no policy map
         parts.append(

@@ -19,10 +19,10 @@ import gymnasium
 import numpy as np
 
 import skidnav.envs  # noqa: F401  (registers the env)
+from skidnav.agents.catalog import agent_context
 from skidnav.agents.fast_training import train_agent_fast
 from skidnav.agents.registry import make_agent
 from skidnav.agents.training import greedy_evaluation
-from skidnav.experiments.trial import agent_context
 from skidnav.seeding import seed_int
 
 ENV_ID = "skidnav/SkidSteerNav-v0"

@@ -11,16 +11,18 @@ numba compiles (or loads from its cache) every kernel the run will call before t
 starts. The warm-up draws from its own generators, never from the run's streams, so it changes no
 number.
 
-Training uses the compiled trainer ``skidnav.agents.fast_training.train_agent_fast`` for the
-skid-steer environment when it is installed and supports the agent, else
+Agents of every family (:mod:`skidnav.agents.catalog`: tabular, linear on continuous
+observations, deep) are built and trained through one door. Tabular agents train in the
+compiled trainer ``skidnav.agents.fast_training.train_agent_fast`` for the skid-steer
+environment when it is installed and supports the agent, else in
 ``skidnav.agents.training.train_agent`` (which it falls back to on its own, e.g. for
-``[env] dynamics = "mujoco"``, the physical robot; such runs have no oracle).
+``[env] dynamics = "mujoco"``, the physical robot, whose runs have no oracle, and for the linear
+agents); a deep agent trains in its own loop with the same evaluations.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import logging
 import math
 from pathlib import Path
@@ -29,9 +31,8 @@ from typing import Any
 import gymnasium
 import numpy as np
 
+from skidnav.agents.catalog import build_agent, check_params, observation_for, train
 from skidnav.agents.core import TabularAgent
-from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import agent_class, make_agent, make_config
 from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig, MapSpec
 from skidnav.experiments.metrics import ConvergenceRule, evaluation_summary, run_metrics
@@ -64,16 +65,20 @@ def build_map(spec: MapSpec, rng: np.random.Generator) -> GridMap:
     return build_world_map(rng, kind=spec.kind, file=spec.file or None, options=dict(spec.options))
 
 
-def make_env(spec: ExperimentRun, grid_map: GridMap, slip_seed: int) -> gymnasium.Env[Any, Any]:
+def make_env(
+    spec: ExperimentRun, grid_map: GridMap, slip_seed: int, observation: str | None = None
+) -> gymnasium.Env[Any, Any]:
     """The environment of a run, as ``gymnasium.make`` gives it (wrappers included).
 
     ``env_id`` is a registered Gymnasium id (e.g. ``skidnav/DynaMaze-v0``; Gymnasium's
     ``module:Env-v0`` form imports ``module`` for its registrations first), made with the
     ``[env]`` options: nothing named in a config is called. Only the skid-steer env receives the
-    map, slip preset and drift of the run. Gymnasium's ``TimeLimit`` truncates after the config's
-    ``max_steps`` actions, else its ``[env] max_episode_steps``, else the registered limit
-    (:func:`action_limit` reads it back). Runs train and evaluate on ``env.unwrapped``: the
-    trainer enforces that limit itself.
+    map, slip preset and drift of the run, and the observation its agent learns over
+    (:func:`skidnav.agents.catalog.observation_for`: the discrete state for a tabular agent,
+    else ``[env] observation``, "features" by default; ``observation`` overrides both).
+    Gymnasium's ``TimeLimit`` truncates after the config's ``max_steps`` actions, else its
+    ``[env] max_episode_steps``, else the registered limit (:func:`action_limit` reads it
+    back). Runs train and evaluate on ``env.unwrapped``: the trainer enforces that limit itself.
     """
     config = spec.config
     options: dict[str, Any] = dict(config.env_options)
@@ -85,6 +90,7 @@ def make_env(spec: ExperimentRun, grid_map: GridMap, slip_seed: int) -> gymnasiu
         raise ValueError(f"expected [env] max_episode_steps to be an integer >= 1, got {limit!r}")
     if config.env_id == SKID_ENV_ID:
         options.update(
+            observation=observation or observation_for(spec.agent.name, options.get("observation")),
             grid_map=grid_map,
             world_seed=slip_seed,
             slip=spec.preset,
@@ -102,15 +108,6 @@ def action_limit(env: gymnasium.Env[Any, Any]) -> int:
     (``env.spec.max_episode_steps``), or 10,000 for an env registered without one."""
     limit = env.spec.max_episode_steps if env.spec is not None else None
     return int(limit or 10_000)
-
-
-def agent_context(name: str, env: gymnasium.Env[Any, Any]) -> dict[str, Any]:
-    """Extra constructor arguments an agent asks for by name (e.g. the navigation ``task``)."""
-    parameters = inspect.signature(agent_class(name).__init__).parameters
-    context = {}
-    if "task" in parameters and hasattr(env, "task"):
-        context["task"] = env.task
-    return context
 
 
 def greedy_rollout(
@@ -169,22 +166,27 @@ def policy_map(q: np.ndarray, grid_map: GridMap, heading_index: int) -> np.ndarr
 
 
 def _world_arrays(
-    q: np.ndarray, grid_map: GridMap, env: gymnasium.Env[Any, Any]
+    agent: Any, grid_map: GridMap, env: gymnasium.Env[Any, Any]
 ) -> dict[str, np.ndarray]:
-    """Value, heading and policy maps, walls, start, goal and slip η of a skid-steer run."""
-    value, heading = value_maps(q, grid_map)
+    """Walls, start, goal and slip η of a skid-steer run, and of a tabular agent its value,
+    heading and policy maps."""
     start_heading = float(env.start_pose()[2])  # type: ignore[attr-defined]
-    n_headings = int(env.discretization.n_headings)  # type: ignore[attr-defined]
-    return {
-        "value_map": value,
-        "heading_map": heading,
-        "policy_map": policy_map(q, grid_map, heading_bin(start_heading, n_headings)),
+    arrays = {
         "start_heading": np.asarray(start_heading),
         "occupancy": grid_map.occupancy,
         "start": np.asarray(grid_map.start),
         "goal": np.asarray(grid_map.goal),
         "slip_eta": env.slip_field.eta,  # type: ignore[attr-defined]
     }
+    if isinstance(agent, TabularAgent):
+        value, heading = value_maps(agent.q, grid_map)
+        n_headings = int(env.discretization.n_headings)  # type: ignore[attr-defined]
+        arrays.update(
+            value_map=value,
+            heading_map=heading,
+            policy_map=policy_map(agent.q, grid_map, heading_bin(start_heading, n_headings)),
+        )
+    return arrays
 
 
 def _episode_arrays(log: Any) -> dict[str, np.ndarray]:
@@ -217,13 +219,23 @@ def _world(
     return grid_map, env.unwrapped, eval_env.unwrapped, action_limit(env)
 
 
-def _agent(spec: ExperimentRun, env: gymnasium.Env[Any, Any], rng: np.random.Generator) -> Any:
-    """A new agent of the run's variant for ``env``."""
-    name = spec.agent.name
-    n_states, n_actions = int(env.observation_space.n), int(env.action_space.n)  # type: ignore[attr-defined]
-    return make_agent(
-        name, n_states, n_actions, spec.agent.params_dict(), rng, **agent_context(name, env)
-    )
+def _oracle_env(
+    spec: ExperimentRun, grid_map: GridMap, slip_seed: int, eval_env: gymnasium.Env[Any, Any]
+) -> gymnasium.Env[Any, Any]:
+    """The evaluation env on the discrete state, which the oracle solves: ``eval_env`` itself
+    for a tabular agent, else a twin of it (same world and limit; the oracle and its cache are
+    the same for every agent of a world)."""
+    if isinstance(eval_env.observation_space, gymnasium.spaces.Discrete):
+        return eval_env
+    return make_env(spec, grid_map, slip_seed, observation="discrete").unwrapped
+
+
+def _agent(
+    spec: ExperimentRun, env: gymnasium.Env[Any, Any], seed: np.random.SeedSequence, max_steps: int
+) -> Any:
+    """A new agent of the run's variant for ``env``, of whichever family
+    (:func:`skidnav.agents.catalog.build_agent`)."""
+    return build_agent(spec.agent.name, env, spec.agent.params_dict(), seed, max_steps)
 
 
 def warm_up(spec: ExperimentRun) -> None:
@@ -243,8 +255,7 @@ def warm_up(spec: ExperimentRun) -> None:
     env, eval_env = (each.unwrapped for each in made)
     env.reset(seed=1)
     eval_env.reset(seed=2)
-    agent = _agent(spec, env, np.random.default_rng(3))
-    train = train_agent_fast
+    agent = _agent(spec, env, np.random.SeedSequence(3), max(WARM_UP_LIMITS))
     for limit in WARM_UP_LIMITS:
         train(
             agent,
@@ -256,9 +267,9 @@ def warm_up(spec: ExperimentRun) -> None:
         )
     greedy_rollout(agent, eval_env, 2, max(WARM_UP_LIMITS))
     if grid_map is not None:
-        _world_arrays(agent.q, grid_map, env)
+        _world_arrays(agent, grid_map, env)
     if grid_map is not None and _has_oracle(eval_env):
-        compute_oracle(eval_env, 1, 0, [2], max(WARM_UP_LIMITS))
+        compute_oracle(_oracle_env(spec, grid_map, 0, eval_env), 1, 0, [2], max(WARM_UP_LIMITS))
     _warmed_up.add(key)
 
 
@@ -279,19 +290,21 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     world_streams = child_sequences(spec.world_seed.sequence(), WORLD_ROLES)
     run_streams = child_sequences(spec.run_seed.sequence(), RUN_ROLES)
     map_rng = np.random.default_rng(world_streams["map"])
-    grid_map, env, eval_env, max_steps = _world(spec, map_rng, seed_int(world_streams["slip"]))
+    slip_seed = seed_int(world_streams["slip"])
+    grid_map, env, eval_env, max_steps = _world(spec, map_rng, slip_seed)
     evaluation = world_streams["evaluation"].spawn(config.eval_rollouts)
     eval_seeds = [seed_int(s) for s in evaluation]
     env.reset(seed=seed_int(run_streams["episodes"]))
-    agent = _agent(spec, env, np.random.default_rng(run_streams["agent"]))
+    agent = _agent(spec, env, run_streams["agent"], max_steps)
     oracle = None
     if grid_map is not None and _has_oracle(eval_env):
         oracle_seed = seed_int(world_streams["oracle"])
+        oracle_env = _oracle_env(spec, grid_map, slip_seed, eval_env)
         oracle = load_or_compute_oracle(
-            eval_env, config.oracle_samples, oracle_seed, eval_seeds, max_steps
+            oracle_env, config.oracle_samples, oracle_seed, eval_seeds, max_steps
         )
     reference = _reference_length(oracle, eval_env)
-    log = train_agent_fast(
+    log = train(
         agent,
         env,
         config.episodes,
@@ -303,7 +316,7 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     poses, reached = greedy_rollout(agent, eval_env, eval_seeds[0], max_steps)
     arrays = {"greedy_poses": poses}
     if grid_map is not None:
-        arrays.update(_world_arrays(agent.q, grid_map, env))
+        arrays.update(_world_arrays(agent, grid_map, env))
     rule = None
     if math.isfinite(reference) and config.greedy_eval:
         rule = ConvergenceRule(reference, config.convergence_tolerance, config.convergence_window)
@@ -349,7 +362,10 @@ def check_config(config: ExperimentConfig, path: Path | str | None = None) -> No
 
 def _check_config(config: ExperimentConfig) -> None:
     for agent in config.agents:
-        make_config(agent.name, agent.params_dict())
+        check_params(agent.name, agent.params_dict())
+        if config.env_id == SKID_ENV_ID:
+            requested = dict(config.env_options).get("observation")
+            observation_for(agent.name, None if requested is None else str(requested))
     for map_spec in config.maps:
         if map_spec.file:
             load_map(map_spec.file)

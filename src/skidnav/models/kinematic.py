@@ -27,6 +27,12 @@ for drifting slip. Only regions with new samples are refitted (plus the pooled m
 the newest ``window / n_active_regions`` samples of each active region). Forgetting: sample weights
 ``forgetting ** age`` (age in samples of the same region, newest 0) and a sliding window of the
 last ``window`` samples per region.
+
+Predictive distribution (:meth:`KinematicModel.predict_twist`): each regression's Gaussian
+posterior predictive (Bishop 2006 eqs. 3.58–3.59: noise variance plus parameter variance), with the
+parent fit held fixed; v_y given the commanded wheels propagates the yaw-rate prediction to first
+order. The fitted regressions are kept in memory only (not saved): a loaded model has no
+predictive spread until its next refit.
 """
 
 from __future__ import annotations
@@ -59,6 +65,8 @@ N_COEFFICIENTS = 8
 """Columns of :attr:`KinematicModel.coefficients`:
 ``[vx_wl, vx_wr, vx_b, yaw_wl, yaw_wr, yaw_b, vy_yaw, vy_b]``."""
 _FORMAT_VERSION = 1
+Posterior = tuple[BayesianRidge | None, BayesianRidge | None, BayesianRidge | None]
+"""The fitted regressions of a region (v_x, yaw_rate, v_y); None where nothing was fitted."""
 
 
 @dataclass(frozen=True)
@@ -100,6 +108,39 @@ def nominal_coefficients(robot: RobotParams) -> np.ndarray:
     return np.array([half, half, 0.0, -turn, turn, 0.0, -robot.x_icr, 0.0])
 
 
+def icr_parameters(
+    vx_coefficients: np.ndarray, yaw_coefficients: np.ndarray, vy_slope: np.ndarray | float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ICR model's reading of the thesis's three regressions (v_x and yaw rate on
+    (ω_L, ω_R), v_y on the yaw rate): effective wheel radius r = β_L + β_R [m], effective half
+    track c = r / (γ_R − γ_L) [m], x_ICR = −s [m] (Kozłowski & Pazderski 2004). Used by the
+    learned model (:meth:`KinematicModel.estimates`) and the floor calibration
+    (:mod:`skidnav.physics.calibration`).
+
+    Args:
+        vx_coefficients: (β_L, β_R) of v_x on (ω_L, ω_R) [m/rad], shape (..., 2).
+        yaw_coefficients: (γ_L, γ_R) of the yaw rate on (ω_L, ω_R) [1], shape (..., 2).
+        vy_slope: s of v_y on the yaw rate [m], shape (...) (a scalar for one fit).
+
+    Returns:
+        (r, c, x_ICR), each of shape (...): one set per fit or per posterior draw.
+
+    >>> r, c, x_icr = icr_parameters(np.array([0.01125, 0.01125]),
+    ...                              np.array([-0.1875, 0.1875]), -0.05)
+    >>> round(float(r), 4), round(float(c), 4), round(float(x_icr), 4)
+    (0.0225, 0.06, 0.05)
+    """
+    beta, gamma = np.asarray(vx_coefficients), np.asarray(yaw_coefficients)
+    radius = beta.sum(axis=-1)
+    return radius, radius / (gamma[..., 1] - gamma[..., 0]), -np.asarray(vy_slope)
+
+
+def window_slots(count: int, window: int) -> np.ndarray:
+    """Ring-buffer slots of the kept samples of a region that has received ``count`` samples
+    into a buffer of ``window``, oldest first: int64 (min(count, window),)."""
+    return np.arange(count - min(count, window), count) % window
+
+
 class KinematicModel:
     """Per-region Bayesian ridge kinematics with a compiled prediction table.
 
@@ -130,6 +171,7 @@ class KinematicModel:
         self.velocities = np.zeros((n_regions, N_ACTIONS, 3))
         self.refits = 0
         self._pooled_fitted = 0
+        self._posteriors: list[Posterior | None] = [None] * n_regions
         action_velocities(self.coefficients, robot.wheel_speed, self.velocities)
 
     # -- learning --------------------------------------------------------------------------
@@ -160,15 +202,16 @@ class KinematicModel:
         """Refit the pooled model and every region with at least ``min_samples`` new samples (or
         none fitted yet), then the velocity table."""
         prior = nominal_coefficients(self.robot)
-        pooled = self._fit_pooled(prior)
+        pooled, pooled_posterior = self._fit_pooled(prior)
         fresh = self.counts - self.fitted_counts
         minimum = self.config.min_samples
         for region in range(self.grid.n_regions):
             if self.counts[region] < minimum:
                 self.coefficients[region] = pooled
+                self._posteriors[region] = pooled_posterior
             elif fresh[region] >= minimum or self.fitted_counts[region] < minimum:
                 x, w = self._region_samples(region)
-                self.coefficients[region] = self._fit(x, w, pooled)
+                self.coefficients[region], self._posteriors[region] = self._fit(x, w, pooled)
                 self.fitted_counts[region] = self.counts[region]
         self.refits += 1
         self._pooled_fitted = int(self.counts.sum())
@@ -177,51 +220,79 @@ class KinematicModel:
 
     def _region_samples(self, region: int) -> tuple[np.ndarray, np.ndarray]:
         """Kept samples of a region (n, 5) and their forgetting weights (n,)."""
-        count = int(self.counts[region])
-        window = self.config.window
-        n = min(count, window)
-        slots = np.arange(count - n, count) % window
-        age = np.arange(n - 1, -1, -1, dtype=np.float64)
+        slots = window_slots(int(self.counts[region]), self.config.window)
+        age = np.arange(slots.size - 1, -1, -1, dtype=np.float64)
         return self.data[region, slots], self.config.forgetting**age
 
-    def _fit_pooled(self, prior: np.ndarray) -> np.ndarray:
+    def _fit_pooled(self, prior: np.ndarray) -> tuple[np.ndarray, Posterior | None]:
         """Fit on the newest ``window / n_active`` samples of each active region (so a pooled
         fit costs no more than a regional one)."""
         active = np.flatnonzero(self.counts)
         if int(self.counts.sum()) < self.config.min_samples:
-            return prior
+            return prior, None
         share = -(-self.config.window // active.size)
         parts = [self._region_samples(int(r)) for r in active]
         x = np.concatenate([p[0][-share:] for p in parts])
         w = np.concatenate([p[1][-share:] for p in parts])
         return self._fit(x, w, prior)
 
-    def _fit(self, samples: np.ndarray, weights: np.ndarray, base: np.ndarray) -> np.ndarray:
-        """Fit the three regressions on the residual of ``base`` coefficients; returns (8,)."""
+    def _fit(
+        self, samples: np.ndarray, weights: np.ndarray, base: np.ndarray
+    ) -> tuple[np.ndarray, Posterior]:
+        """Fit the three regressions on the residual of ``base`` coefficients; returns (8,) and
+        the fitted regressions (v_x, yaw_rate, v_y)."""
         wheels = samples[:, 0:2]
         v_x, v_y, yaw_rate = samples[:, 2], samples[:, 3], samples[:, 4]
         out = base.copy()
-        out[0:3] = self._ridge(wheels, v_x, weights, base[0:3])
-        out[3:6] = self._ridge(wheels, yaw_rate, weights, base[3:6])
-        out[6:8] = self._ridge(yaw_rate[:, None], v_y, weights, base[6:8])
-        return out
+        out[0:3], vx_fit = self._ridge(wheels, v_x, weights, base[0:3])
+        out[3:6], yaw_fit = self._ridge(wheels, yaw_rate, weights, base[3:6])
+        out[6:8], vy_fit = self._ridge(yaw_rate[:, None], v_y, weights, base[6:8])
+        return out, (vx_fit, yaw_fit, vy_fit)
 
     def _ridge(
         self, inputs: np.ndarray, target: np.ndarray, weights: np.ndarray, base: np.ndarray
-    ) -> np.ndarray:
-        """Bayesian ridge on ``target − base·[inputs, 1]``; returns base + (coef, intercept)."""
+    ) -> tuple[np.ndarray, BayesianRidge | None]:
+        """Bayesian ridge on ``target − base·[inputs, 1]``; returns base + (coef, intercept) and
+        the regression (None when the residual is zero: nothing to fit)."""
         slopes, intercept = base[:-1], base[-1]
         residual = target - inputs @ slopes - intercept
         if not np.any(np.abs(residual) > 1e-15):
-            return base.copy()
+            return base.copy(), None
         fit_intercept = self.config.fit_intercept
         regression = BayesianRidge(fit_intercept=fit_intercept)
         regression.fit(inputs, residual, sample_weight=weights)
         delta = np.append(regression.coef_, regression.intercept_ if fit_intercept else 0.0)
         coefficients: np.ndarray = base + delta
-        return coefficients
+        return coefficients, regression
 
     # -- prediction ------------------------------------------------------------------------
+
+    def predict_twist(
+        self, regions: np.ndarray, wheels: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Predictive mean and standard deviation of the body twist (module doc).
+
+        Args:
+            regions: flat slip region per query, shape (n,). wheels: commanded (ω_L, ω_R)
+                [rad/s], shape (n, 2).
+
+        Returns:
+            (mean, std), each shape (n, 3): (v_x [m/s], v_y [m/s], yaw_rate [rad/s]); std NaN
+            in a region not fitted since construction or load, 0 for an output fitted exactly.
+        """
+        regions = np.asarray(regions, dtype=np.int64).ravel()
+        wheels = np.asarray(wheels, dtype=np.float64).reshape(-1, 2)
+        c = self.coefficients[regions]
+        yaw = c[:, 3] * wheels[:, 0] + c[:, 4] * wheels[:, 1] + c[:, 5]
+        v_x = c[:, 0] * wheels[:, 0] + c[:, 1] * wheels[:, 1] + c[:, 2]
+        mean = np.stack([v_x, c[:, 6] * yaw + c[:, 7], yaw], axis=1)
+        std = np.full_like(mean, np.nan)
+        for region in np.unique(regions):
+            posterior = self._posteriors[int(region)]
+            if posterior is not None:
+                rows = regions == region
+                std[rows] = _twist_std(posterior, wheels[rows], yaw[rows], c[rows, 6])
+        return mean, std
 
     def estimates(self, region: int) -> tuple[float, float, float]:
         """Physical reading of a region's fit: (r [m], c [m], x_ICR [m]).
@@ -229,9 +300,8 @@ class KinematicModel:
         r = vx_wl + vx_wr; c = r / (yaw_wr − yaw_wl); x_ICR = −vy_yaw.
         """
         c = self.coefficients[region]
-        wheel_radius = float(c[0] + c[1])
-        half_track = wheel_radius / float(c[4] - c[3])
-        return wheel_radius, half_track, float(-c[6])
+        radius, half_track, x_icr = icr_parameters(c[0:2], c[3:5], c[6])
+        return float(radius), float(half_track), float(x_icr)
 
     def predict(
         self,
@@ -314,6 +384,7 @@ class KinematicModel:
         if refits.shape != (2,):
             raise CorruptFileError(f"kinematic model refits: unexpected shape {refits.shape}")
         self.refits, self._pooled_fitted = (int(v) for v in refits)
+        self._posteriors = [None] * self.grid.n_regions
         if (
             (self.fitted_counts < 0).any()
             or (self.fitted_counts > self.counts).any()
@@ -380,6 +451,24 @@ class KinematicModel:
                 f"{base}: cannot load kinematic model ({first_line(error)})"
             ) from None
         return model
+
+
+def _spread(regression: BayesianRidge | None, inputs: np.ndarray) -> np.ndarray:
+    """Posterior predictive standard deviation of one regression at ``inputs`` (n, k)."""
+    if regression is None:
+        return np.zeros(len(inputs))
+    _, std = regression.predict(inputs, return_std=True)
+    return np.asarray(std)
+
+
+def _twist_std(
+    posterior: Posterior, wheels: np.ndarray, yaw: np.ndarray, vy_yaw: np.ndarray
+) -> np.ndarray:
+    """(n, 3) standard deviations of (v_x, v_y, yaw_rate): v_y's adds vy_yaw² · var(yaw_rate)."""
+    vx_fit, yaw_fit, vy_fit = posterior
+    yaw_std = _spread(yaw_fit, wheels)
+    vy_std = np.hypot(_spread(vy_fit, yaw[:, None]), vy_yaw * yaw_std)
+    return np.stack([_spread(vx_fit, wheels), vy_std, yaw_std], axis=1)
 
 
 def _table(meta: dict[str, Any], key: str) -> dict[str, Any]:

@@ -28,6 +28,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from sklearn.linear_model import BayesianRidge
 
+from skidnav.models.kinematic import icr_parameters
 from skidnav.physics.mjcf import PhysicsParams, uniform_floor
 from skidnav.physics.robot import PhysicsRobot
 from skidnav.robot.kinematics import N_ACTIONS, commanded_wheel_speeds
@@ -114,27 +115,26 @@ def fit_floor(material: str, log: np.ndarray, rng: np.random.Generator) -> Floor
     betas = rng.multivariate_normal(beta, beta_cov, POSTERIOR_DRAWS)
     gammas = rng.multivariate_normal(gamma, gamma_cov, POSTERIOR_DRAWS)
     slopes = rng.normal(slope[0], math.sqrt(slope_cov[0, 0]), POSTERIOR_DRAWS)
-    radii = betas.sum(axis=1)
-    tracks = radii / (gammas[:, 1] - gammas[:, 0])
+    radii, tracks, icrs = icr_parameters(betas, gammas, slopes)
+    radius, half_track, x_icr = icr_parameters(beta, gamma, slope[0])
 
     def interval(values: np.ndarray) -> tuple[float, float]:
         low, high = np.percentile(values, [2.5, 97.5])
         return float(low), float(high)
 
-    radius = float(beta.sum())
     vx_noise = float(np.std(v_x - wheels @ beta))
     return FloorFit(
         material=material,
         samples=int(log.shape[0]),
-        wheel_radius=radius,
+        wheel_radius=float(radius),
         wheel_radius_interval=interval(radii),
-        half_track=radius / float(gamma[1] - gamma[0]),
+        half_track=float(half_track),
         half_track_interval=interval(tracks),
-        x_icr=float(-slope[0]),
-        x_icr_interval=interval(-slopes),
+        x_icr=float(x_icr),
+        x_icr_interval=interval(icrs),
         vx_noise=vx_noise,
         yaw_noise=float(np.std(yaw_rate - wheels @ gamma)),
-        eta=math.sqrt(24.0) * vx_noise / radius,
+        eta=math.sqrt(24.0) * vx_noise / float(radius),
     )
 
 

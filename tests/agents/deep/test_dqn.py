@@ -61,13 +61,13 @@ def greedy_episode(agent: DQNAgent, env: gym.Env[Any, Any], seed: int) -> tuple[
 @pytest.fixture(scope="module")
 def trained() -> tuple[DQNAgent, Any]:
     agent = DQNAgent(tiny_env(), CONFIG, seed=0)
-    return agent, agent.train(150)
+    return agent, agent.train_episodes(150)
 
 
 def test_dqn_learns_to_reach_a_near_goal(trained: tuple[DQNAgent, Any]) -> None:
     agent, log = trained
     assert len(log.returns) == 150 and agent.episodes == 150
-    assert log.success[-20:].mean() >= 0.8 > log.success[:20].mean() - 0.2  # measured 0.95, 0.6
+    assert log.successes[-20:].mean() >= 0.8 > log.successes[:20].mean() - 0.2  # measured 0.95, 0.6
     reached, actions = greedy_episode(agent, tiny_env(), seed=5)
     assert reached and actions <= 4
 

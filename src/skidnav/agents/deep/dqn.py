@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import json
 import math
+import time
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -35,6 +37,7 @@ import numpy as np
 from gymnasium.wrappers import RescaleObservation
 
 from skidnav.agents.core import save_paths
+from skidnav.agents.training import TrainingLog, greedy_evaluation, log_from_rows
 from skidnav.atomicfile import write_atomic, write_npz_atomic
 from skidnav.errors import CorruptFileError, first_line
 from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, read_json
@@ -105,15 +108,6 @@ class DQNConfig:
         return cls(**values)
 
 
-@dataclass(frozen=True)
-class EpisodeLog:
-    """Per-episode results of :meth:`DQNAgent.train`, arrays of shape (episodes,)."""
-
-    returns: np.ndarray
-    lengths: np.ndarray
-    success: np.ndarray
-
-
 class DQNAgent:
     """Stable-Baselines3 DQN on ``env`` (a ``Box`` observation, ``Discrete`` actions)."""
 
@@ -159,40 +153,62 @@ class DQNAgent:
         """Real steps taken in training."""
         return int(self.model.num_timesteps)
 
-    def train(self, episodes: int) -> EpisodeLog:
+    def train_episodes(
+        self,
+        episodes: int,
+        *,
+        greedy_eval_env: gymnasium.Env[Any, Any] | None = None,
+        greedy_seeds: Sequence[int] | None = None,
+        greedy_max_steps: int | None = None,
+    ) -> TrainingLog:
         """Learn for ``episodes`` more episodes (ε as :meth:`_epsilon`, counted from the first
-        episode of the first call)."""
+        episode of the first call); after each, the greedy policy is evaluated on
+        ``greedy_eval_env`` as the plain loop does
+        (:func:`~skidnav.agents.training.greedy_evaluation`, ``greedy_max_steps`` actions at
+        most, default 10,000). Returns the loop's log
+        (``planning_updates``: 0; wall time without the evaluations)."""
         from stable_baselines3.common.callbacks import BaseCallback
 
-        returns: list[float] = []
-        lengths: list[int] = []
-        success: list[bool] = []
+        agent = self
+        columns: dict[str, list[Any]] = {name: [] for name in TrainingLog._fields}
+        n_rollouts = 1 if greedy_seeds is None else len(greedy_seeds)
+        limit = greedy_max_steps or 10_000
 
         class _Episodes(BaseCallback):
-            """Records each finished episode and stops after ``episodes``."""
+            """Records each finished episode, evaluates it, stops after ``episodes``."""
 
             def __init__(self) -> None:
                 super().__init__()
-                self.total, self.length = 0.0, 0
+                self.total, self.length, self.collisions = 0.0, 0, 0
+                self.start = time.perf_counter()
 
             def _on_step(self) -> bool:
+                info = self.locals["infos"][0]
                 self.total += float(self.locals["rewards"][0])
                 self.length += 1
-                if self.locals["dones"][0]:
-                    info = self.locals["infos"][0]
-                    returns.append(self.total)
-                    lengths.append(self.length)
-                    success.append(not info.get("TimeLimit.truncated", False))
-                    self.total, self.length = 0.0, 0
-                return len(returns) < episodes
+                self.collisions += int(bool(info.get("collision", False)))
+                if not self.locals["dones"][0]:
+                    return True
+                columns["wall_time"].append(time.perf_counter() - self.start)
+                columns["returns"].append(self.total)
+                columns["lengths"].append(self.length)
+                columns["successes"].append(not info.get("TimeLimit.truncated", False))
+                columns["collisions"].append(self.collisions)
+                columns["planning_updates"].append(0)
+                greedy = [-1] * n_rollouts
+                if greedy_eval_env is not None:
+                    greedy = greedy_evaluation(agent, greedy_eval_env, limit, greedy_seeds)
+                columns["greedy_lengths"].append(greedy)
+                self.total, self.length, self.collisions = 0.0, 0, 0
+                self.start = time.perf_counter()
+                return len(columns["returns"]) < episodes
 
-        self.model.learn(
-            total_timesteps=MAX_TRAINING_STEPS,
-            callback=_Episodes(),
-            reset_num_timesteps=False,
-        )
-        self.episodes += len(returns)
-        return EpisodeLog(np.array(returns), np.array(lengths), np.array(success, dtype=bool))
+        if episodes > 0:
+            self.model.learn(
+                total_timesteps=MAX_TRAINING_STEPS, callback=_Episodes(), reset_num_timesteps=False
+            )
+        self.episodes += len(columns["returns"])
+        return log_from_rows(columns, n_rollouts)
 
     def greedy_action(self, observation: np.ndarray) -> int:
         """The action of highest Q at ``observation``."""
@@ -267,3 +283,7 @@ def load_dqn(path: str | Path, env: gymnasium.Env[Any, Any]) -> DQNAgent:
     agent.model.q_net.load_state_dict(state)
     agent.model.q_net_target.load_state_dict(state)
     return agent
+
+
+AGENT_CLASS = DQNAgent
+CONFIG_CLASS = DQNConfig
