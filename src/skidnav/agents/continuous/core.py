@@ -99,6 +99,11 @@ class LinearAgent:
         self._values = np.zeros((1, self.n_actions))
         self._chosen: tuple[np.ndarray, int] | None = None
         """(next observation, action) chosen by the last update, returned by the next act."""
+        self._allocate()
+
+    def _allocate(self) -> None:
+        """Allocate a subclass's own arrays (traces, models), once the base ones exist and
+        :meth:`_check_sizes` has passed. Nothing here."""
 
     def _check_sizes(self) -> None:
         """ValueError if the agent's arrays would exceed their bounds; called before any is

@@ -56,15 +56,8 @@ class LinearDynaAgent(LinearQAgent):
     name: ClassVar[str] = "linear-dyna"
     config_class: ClassVar[type[LinearConfig]] = LinearDynaConfig
 
-    def __init__(
-        self,
-        low: np.ndarray,
-        high: np.ndarray,
-        n_actions: int,
-        config: LinearConfig | None = None,
-        rng: np.random.Generator | None = None,
-    ) -> None:
-        super().__init__(low, high, n_actions, config, rng)
+    def _allocate(self) -> None:
+        super()._allocate()
         config = self.config
         assert isinstance(config, LinearDynaConfig)
         self.next_model = np.zeros((self.n_actions, self.n_features, self.n_features))

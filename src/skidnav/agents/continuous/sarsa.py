@@ -24,15 +24,8 @@ class LinearSarsaAgent(LinearAgent):
     name: ClassVar[str] = "linear-sarsa"
     config_class: ClassVar[type[LinearConfig]] = LinearSarsaConfig
 
-    def __init__(
-        self,
-        low: np.ndarray,
-        high: np.ndarray,
-        n_actions: int,
-        config: LinearConfig | None = None,
-        rng: np.random.Generator | None = None,
-    ) -> None:
-        super().__init__(low, high, n_actions, config, rng)
+    def _allocate(self) -> None:
+        super()._allocate()
         self.traces = np.zeros_like(self.w)
         """Eligibility traces z, float64 (n_actions, n_features), zero at an episode start."""
 
