@@ -262,11 +262,11 @@ def sweeping_planning_time_rate(budget: int, episodes: int) -> tuple[float, floa
     :data:`REPEATS` timings each. A most-probable sweep draws no random number and ε 1 acts
     without reading ``q``, so both runs make the same real steps (checked); the difference of
     their times is the planning's."""
-    planned = [arena_run("prioritized-sweeping", budget, episodes, epsilon=1.0)]
-    plain = [arena_run("prioritized-sweeping", 0, episodes, epsilon=1.0)]
-    for _ in range(REPEATS - 1):
-        planned.append(arena_run("prioritized-sweeping", budget, episodes, epsilon=1.0))
-        plain.append(arena_run("prioritized-sweeping", 0, episodes, epsilon=1.0))
+    pairs = [
+        tuple(arena_run("prioritized-sweeping", n, episodes, epsilon=1.0) for n in (budget, 0))
+        for _ in range(REPEATS)
+    ]  # interleaved, so that load on the machine falls on both alike
+    planned, plain = [pair[0] for pair in pairs], [pair[1] for pair in pairs]
     updates, steps, _ = planned[0]
     if {run[1] for run in planned + plain} != {steps}:
         raise RuntimeError("the runs with and without planning made different real steps")

@@ -27,17 +27,18 @@ from skidnav.robot.params import RobotParams
 FLOORS_FILE = ("data", "floors.json")
 """The calibration file inside the ``skidnav`` package."""
 
+CALIBRATED_PRESETS = {"rough-physics": "rough", "slippery-physics": "slippery"}
+"""The slip presets whose regions take the calibrated floor of their material → the hand-set
+preset whose materials (and patches) they have."""
+
 PRESET_FLOORS: dict[str, tuple[str, str | None]] = {
     "thesis": ("laminate", None),
     "rough": ("rubber-mat", None),
     "slippery": ("laminate", "wet-tile"),
-    "rough-physics": ("rubber-mat", None),
-    "slippery-physics": ("laminate", "wet-tile"),
 }
-"""Slip preset → (material of the floor, material of its patches or None)."""
-
-CALIBRATED_PRESETS = ("rough-physics", "slippery-physics")
-"""The slip presets whose regions take the calibrated floor of their material."""
+PRESET_FLOORS.update({name: PRESET_FLOORS[base] for name, base in CALIBRATED_PRESETS.items()})
+"""Slip preset → (material of the floor, material of its patches or None); a calibrated preset
+has its hand-set preset's."""
 
 
 class CalibratedFloor(NamedTuple):
