@@ -157,6 +157,26 @@ def test_walls_guessed_from_collisions_are_real_walls() -> None:
     assert env.unwrapped.grid_map.occupancy[walls].all()  # type: ignore[attr-defined]
 
 
+def test_reward_rows_follow_the_kinematic_table() -> None:
+    """After whole refreshes (refits) and local ones (walls found), every prediction's reward
+    row is the one its predicted state and outcome give (region, collision, goal)."""
+    env = gym.make("skidnav/SkidSteerNav-v0", map_kind="obstacles", world_seed=4, slip="slippery")
+    agent = make("dyna-kinematic", env, seed=0)
+    train_agent_fast(agent, env, 8, seed=0, max_steps=300)
+    planner, grid = agent.planner, agent.kernel_grid
+    assert agent.kinematic.refits >= 1 and planner.walls.sum() >= 5
+    n_regions = planner.reward_stats.shape[0] - 2
+    rows = [
+        kp.reward_row(int(next_state), int(outcome), n_regions, grid)
+        for next_state, outcome in zip(
+            planner.pred_next.ravel(), planner.pred_outcome.ravel(), strict=True
+        )
+    ]
+    np.testing.assert_array_equal(planner.pred_row.ravel(), rows)
+    assert {n_regions, n_regions + 1} <= set(rows)  # collisions and the goal occur
+    assert len(set(rows)) > n_regions // 2 + 2  # and free moves into most regions
+
+
 @pytest.mark.parametrize("name", MODEL_BASED)
 def test_save_load_round_trip_continues_identically(name: str, tmp_path: Path) -> None:
     env = small_env()

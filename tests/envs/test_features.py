@@ -91,7 +91,9 @@ def test_rays_start_at_the_heading_and_turn_counter_clockwise():
 )
 def test_ray_stops_where_the_mdp_cells_turn_to_wall(x, y, angle, seed):
     """Points just short of the reading lie in free cells of the arena (as the MDP's
-    ``cell_of`` sees them); the point just past it is in a wall cell or off the arena."""
+    ``cell_of`` sees them); the point just past it is in a wall cell or off the arena, whose
+    border lines x = 0 and y = 0 stop a ray (a ray along θ = −5e-324 from y = 0 reads 0, and
+    its point just past still has y = 0 in floating point)."""
     disc = Discretization()
     walls = (np.random.default_rng(seed).random((25, 25)) < 0.15).astype(np.uint8)
     walls[disc.cell(x, y)] = 0
@@ -103,7 +105,7 @@ def test_ray_stops_where_the_mdp_cells_turn_to_wall(x, y, angle, seed):
             assert walls[disc.cell(px, py)] == 0
     if reading < 0.5:
         px, py = np.array([x, y]) + (reading + 1e-9) * direction
-        off_arena = not (0.0 <= px < 0.62 and 0.0 <= py < 0.505)
+        off_arena = not (0.0 < px < 0.62 and 0.0 < py < 0.505)
         assert off_arena or walls[disc.cell(px, py)] == 1
 
 

@@ -221,6 +221,7 @@ class ModelBasedAgent(DynaQAgent):
         return kp.PlannerArrays(
             pred_next=np.zeros((n_table, self.n_actions), dtype=np.int32),
             pred_outcome=np.zeros((n_table, self.n_actions), dtype=np.int8),
+            pred_row=np.zeros((n_table, self.n_actions), dtype=np.int16),
             velocities=velocities,
             walls=np.zeros(shape, dtype=np.bool_),
             goals=np.zeros(shape, dtype=np.bool_),
@@ -332,6 +333,7 @@ class ModelBasedAgent(DynaQAgent):
             self.planner.pred_next, self.planner.pred_outcome, self.planner.walls,
             self.planner.goals,
         )  # fmt: skip
+        kp.fill_reward_rows(self.planner, self.kernel_grid)
 
     # --- saving -----------------------------------------------------------------------------
 

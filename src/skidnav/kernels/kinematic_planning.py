@@ -62,6 +62,8 @@ class PlannerArrays(NamedTuple):
         pred_next: int32 (n_states, n_actions) kinematic prediction of s′ from the cell centre.
         pred_outcome: int8 (n_states, n_actions) outcome codes of
             :mod:`skidnav.kernels.kinematic_prediction`.
+        pred_row: int16 (n_states, n_actions) the ``reward_stats`` row of each prediction
+            (:func:`reward_row`), derived from the two above wherever they are written.
         velocities: (n_regions, n_actions, 3) predicted body velocities [m/s, m/s, rad/s].
         walls, goals: bool (n_x, n_y), cells known to be walls (guessed from collisions) / goals.
         stale: bool (n_x, n_y), walls and goals found since the table was last refreshed.
@@ -76,6 +78,7 @@ class PlannerArrays(NamedTuple):
 
     pred_next: np.ndarray
     pred_outcome: np.ndarray
+    pred_row: np.ndarray
     velocities: np.ndarray
     walls: np.ndarray
     goals: np.ndarray
@@ -134,30 +137,47 @@ def mean_rewards(stats: np.ndarray) -> np.ndarray:
 
 
 @inline_jit
-def kinematic_value(
-    q: np.ndarray,
-    pred_next: np.ndarray,
-    pred_outcome: np.ndarray,
-    means: np.ndarray,
-    state: int,
-    action: int,
-    gamma: float,
-    grid: GridShape,
-) -> float:
-    """TD target of a pair from the kinematic table ``pred_next`` / ``pred_outcome`` with the
-    learned mean rewards ``means`` (:func:`mean_rewards`; a goal arrival is terminal). One path
-    for the arrays (a goal arrival is the target with continuation 0, i.e. its mean reward), so
-    numba prunes their reference counts in the planning loop."""
-    next_state = pred_next[state, action]
-    outcome = pred_outcome[state, action]
-    n_regions = means.shape[0] - 2
+def reward_row(next_state: int, outcome: int, n_regions: int, grid: GridShape) -> int:
+    """The ``reward_stats`` row whose mean rewards a predicted outcome: the region of the
+    predicted state for a free move, row R for a collision, R + 1 for a goal arrival."""
     row = n_regions
     if outcome == PREDICT_GOAL:
         row = n_regions + 1
     elif outcome != PREDICT_COLLISION:
         row = state_region(next_state, grid)
-    continuation = 0.0 if outcome == PREDICT_GOAL else 1.0
-    return td_target(q, means[row], next_state, continuation, gamma)
+    return row
+
+
+@jit
+def fill_reward_rows(planner: PlannerArrays, grid: GridShape) -> None:
+    """``pred_row`` of every prediction in the table (after the whole table was recomputed)."""
+    n_regions = planner.reward_stats.shape[0] - 2
+    for state in range(planner.pred_next.shape[0]):
+        for action in range(planner.pred_next.shape[1]):
+            planner.pred_row[state, action] = reward_row(
+                planner.pred_next[state, action], planner.pred_outcome[state, action],
+                n_regions, grid,
+            )  # fmt: skip
+
+
+@inline_jit
+def kinematic_value(
+    q: np.ndarray,
+    pred_next: np.ndarray,
+    pred_row: np.ndarray,
+    means: np.ndarray,
+    state: int,
+    action: int,
+    gamma: float,
+) -> float:
+    """TD target of a pair from the kinematic table ``pred_next`` / ``pred_row`` with the
+    learned mean rewards ``means`` (:func:`mean_rewards`; a goal arrival, the last row, is
+    terminal). The rows are precomputed (:func:`reward_row`): finding the predicted state's
+    region took five divisions, about half of a kinematic update. One path for the arrays, so
+    numba prunes their reference counts in the planning loop."""
+    row = pred_row[state, action]
+    continuation = 0.0 if row == means.shape[0] - 1 else 1.0
+    return td_target(q, means[row], pred_next[state, action], continuation, gamma)
 
 
 @inline_jit
@@ -192,8 +212,9 @@ def combined_planning(
     if n_pairs == 0:
         return 0
     counters, pair_key, pair_table = planner.counters, model.pair_key, model.pair_table
-    pred_next, pred_outcome, walls = planner.pred_next, planner.pred_outcome, planner.walls
+    pred_next, pred_row, walls = planner.pred_next, planner.pred_row, planner.walls
     trajectory_keys, neighbour_keys = planner.trajectory_keys, planner.neighbour_keys
+    walls_by_cell = walls.reshape(-1)  # cell i·n_y + j is walls[i, j]: one division fewer
     means = mean_rewards(planner.reward_stats)
     cells = q.reshape(-1, 1)  # row s·n_actions + a is q[s, a]
     n_actions, use_kinematic = model.n_actions, counters[USE_KINEMATIC] != 0
@@ -209,22 +230,21 @@ def combined_planning(
         else:
             pair = int(rng.random() * n_pairs)
             key = pair_key[pair]  # a visited pair: no need to look it up
-            if use_kinematic and (u - share) / (1.0 - share) < shares.kinematic_share:
-                predicted = pred_next[split_key(key, n_actions)[0], int(rng.random() * n_actions)]
-                key = predicted * n_actions + int(rng.random() * n_actions)
-                pair = -1
+        state, action = split_key(key, n_actions)
+        if pair >= 0 and use_kinematic and (u - share) / (1.0 - share) < shares.kinematic_share:
+            state = pred_next[state, int(rng.random() * n_actions)]
+            action = int(rng.random() * n_actions)
+            key = state * n_actions + action  # a frontier pair, split without dividing
+            pair = -1
         if pair < 0:
             pair = hash_find(pair_table, pair_key, key)
-        state, action = split_key(key, n_actions)
         if pair >= 0:
             if shares.mode == MOST_PROBABLE:
                 target = most_probable_target(q, model, pair, shares.gamma, rng.random())
             else:
                 target = model_target_call(model, q, pair, shares.mode, shares.gamma, rng.random())
-        elif use_kinematic and not walls[state // grid.n_headings // grid.n_y,
-                                         state // grid.n_headings % grid.n_y]:  # fmt: skip
-            target = kinematic_value(q, pred_next, pred_outcome, means, state, action,
-                                      shares.gamma, grid)  # fmt: skip
+        elif use_kinematic and not walls_by_cell[state // grid.n_headings]:
+            target = kinematic_value(q, pred_next, pred_row, means, state, action, shares.gamma)
         else:
             continue
         update_toward(cells, key, 0, target, shares.alpha)
@@ -236,25 +256,26 @@ def combined_planning(
 def _refresh_cell(
     planner: PlannerArrays, i: int, j: int, robot: KinematicConstants, grid: GridShape
 ) -> None:
-    """Recompute the kinematic table for every state of cell (i, j) (as
+    """Recompute the kinematic table and its reward rows for every state of cell (i, j) (as
     :func:`~skidnav.kernels.kinematic_prediction.prediction_table`)."""
     x0 = (i + 0.5) * grid.arena_width / (grid.n_x - 1)
     y0 = (j + 0.5) * grid.arena_height / (grid.n_y - 1)
     n_actions = planner.pred_next.shape[1]
+    n_regions = planner.reward_stats.shape[0] - 2
     for h in range(grid.n_headings):
         state = (i * grid.n_y + j) * grid.n_headings + h
         heading = -np.pi + (h + 0.5) * 2.0 * np.pi / grid.n_headings
         for action in range(n_actions):
-            if planner.walls[i, j]:
-                planner.pred_next[state, action] = state
-                planner.pred_outcome[state, action] = PREDICT_COLLISION
-                continue
-            x, y, end_heading, code = predict_action(
-                x0, y0, heading, action, planner.velocities, planner.walls, planner.goals,
-                robot, grid,
-            )  # fmt: skip
-            planner.pred_next[state, action] = state_of(x, y, end_heading, grid)
+            next_state, code = state, PREDICT_COLLISION
+            if not planner.walls[i, j]:
+                x, y, end_heading, code = predict_action(
+                    x0, y0, heading, action, planner.velocities, planner.walls, planner.goals,
+                    robot, grid,
+                )  # fmt: skip
+                next_state = state_of(x, y, end_heading, grid)
+            planner.pred_next[state, action] = next_state
             planner.pred_outcome[state, action] = code
+            planner.pred_row[state, action] = reward_row(next_state, code, n_regions, grid)
 
 
 @jit

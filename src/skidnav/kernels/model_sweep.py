@@ -68,7 +68,7 @@ def _sweep_once(
                 )
             elif kinematic:
                 target = kinematic_value(
-                    q, planner.pred_next, planner.pred_outcome, means, state, action, gamma, grid
+                    q, planner.pred_next, planner.pred_row, means, state, action, gamma
                 )
             else:
                 continue

@@ -359,27 +359,6 @@ def tied_mean_target(
     return value / n_ties
 
 
-@jit
-def tied_mean_target_call(
-    model: MultinomialArrays, q: np.ndarray, pair: int, gamma: float
-) -> float:
-    """The most-probable target of ``pair`` expected over its tie draw, as a compiled call: the
-    cache when the most probable outcome is unique, else :func:`tied_mean_target`."""
-    ties = model.pair_ties[pair]
-    if ties == 1:
-        target = td_target(
-            q, model.pair_best_reward[pair], model.pair_best_next[pair],
-            model.pair_best_continuation[pair], gamma,
-        )  # fmt: skip
-    else:
-        target = tied_mean_target(
-            q, model.pair_head, model.entry_count, model.entry_reward_sum,
-            model.entry_terminal_count, model.entry_next_state, model.entry_sibling, pair,
-            model.entry_count[model.pair_best[pair]], ties, gamma,
-        )  # fmt: skip
-    return target
-
-
 @inline_jit
 def sample_entry(
     pair_head: np.ndarray,

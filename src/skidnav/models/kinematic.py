@@ -1,9 +1,10 @@
 """Learned skid-steer kinematics: one Bayesian ridge regression per coarse slip region.
 
 The thesis (SPEC §4 item 3) learns the ICR model of Kozłowski & Pazderski (2004) online by
-Bayesian ridge regression (MacKay 1992; Tipping 2001; scikit-learn ``BayesianRidge``), one model
-per coarse region, and uses it to predict the outcome of actions at states never visited. Per
-region three regressions are fitted on the free sub-steps of the kinematic log:
+Bayesian ridge regression (MacKay 1992; Tipping 2001; :mod:`skidnav.models.bayesian_ridge`, with
+scikit-learn ``BayesianRidge``'s conventions), one model per coarse region, and uses it to
+predict the outcome of actions at states never visited. Per region three regressions are fitted
+on the free sub-steps of the kinematic log:
 
     v_x      ≈ vx_wl·ω_L + vx_wr·ω_R (+ vx_b)       (truth: r/2, r/2)
     yaw_rate ≈ yaw_wl·ω_L + yaw_wr·ω_R (+ yaw_b)    (truth: −r/2c, r/2c)
@@ -44,7 +45,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from sklearn.linear_model import BayesianRidge
 
 from skidnav.atomicfile import write_atomic, write_npz_atomic
 from skidnav.errors import CorruptFileError, first_line
@@ -54,6 +54,7 @@ from skidnav.kernels.kinematic_prediction import (
     predict_action,
     prediction_table,
 )
+from skidnav.models.bayesian_ridge import RidgePosterior, fit_bayesian_ridge
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
 from skidnav.savedfile import MAX_ARCHIVE_BYTES, READ_ERRORS, ArraySpec, SavedArchive, read_json
@@ -65,7 +66,7 @@ N_COEFFICIENTS = 8
 """Columns of :attr:`KinematicModel.coefficients`:
 ``[vx_wl, vx_wr, vx_b, yaw_wl, yaw_wr, yaw_b, vy_yaw, vy_b]``."""
 _FORMAT_VERSION = 1
-Posterior = tuple[BayesianRidge | None, BayesianRidge | None, BayesianRidge | None]
+Posterior = tuple[RidgePosterior | None, RidgePosterior | None, RidgePosterior | None]
 """The fitted regressions of a region (v_x, yaw_rate, v_y); None where nothing was fitted."""
 
 
@@ -251,18 +252,15 @@ class KinematicModel:
 
     def _ridge(
         self, inputs: np.ndarray, target: np.ndarray, weights: np.ndarray, base: np.ndarray
-    ) -> tuple[np.ndarray, BayesianRidge | None]:
+    ) -> tuple[np.ndarray, RidgePosterior | None]:
         """Bayesian ridge on ``target − base·[inputs, 1]``; returns base + (coef, intercept) and
         the regression (None when the residual is zero: nothing to fit)."""
         slopes, intercept = base[:-1], base[-1]
         residual = target - inputs @ slopes - intercept
         if not np.any(np.abs(residual) > 1e-15):
             return base.copy(), None
-        fit_intercept = self.config.fit_intercept
-        regression = BayesianRidge(fit_intercept=fit_intercept)
-        regression.fit(inputs, residual, sample_weight=weights)
-        delta = np.append(regression.coef_, regression.intercept_ if fit_intercept else 0.0)
-        coefficients: np.ndarray = base + delta
+        regression = fit_bayesian_ridge(inputs, residual, weights, self.config.fit_intercept)
+        coefficients: np.ndarray = base + np.append(regression.coef, regression.intercept)
         return coefficients, regression
 
     # -- prediction ------------------------------------------------------------------------
@@ -453,12 +451,11 @@ class KinematicModel:
         return model
 
 
-def _spread(regression: BayesianRidge | None, inputs: np.ndarray) -> np.ndarray:
+def _spread(regression: RidgePosterior | None, inputs: np.ndarray) -> np.ndarray:
     """Posterior predictive standard deviation of one regression at ``inputs`` (n, k)."""
     if regression is None:
         return np.zeros(len(inputs))
-    _, std = regression.predict(inputs, return_std=True)
-    return np.asarray(std)
+    return regression.predictive_std(inputs)
 
 
 def _twist_std(

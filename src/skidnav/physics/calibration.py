@@ -4,7 +4,7 @@ The robot drives over one material (the whole floor) under a seeded excitation: 
 alternating the four discrete actions and uniform random wheel-speed pairs in ±``wheel_speed``,
 each logged per 0.1-s sub-step as the kinematic log is (commanded ω_L, ω_R; the measured body
 twist). The thesis's regressions (SPEC §4 item 3) are then fitted by Bayesian ridge without
-intercepts (MacKay 1992; scikit-learn ``BayesianRidge``):
+intercepts (MacKay 1992; :mod:`skidnav.models.bayesian_ridge`):
 
     v_x ≈ β_L ω_L + β_R ω_R,   yaw_rate ≈ γ_L ω_L + γ_R ω_R,   v_y ≈ s · yaw_rate
 
@@ -26,8 +26,8 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from sklearn.linear_model import BayesianRidge
 
+from skidnav.models.bayesian_ridge import fit_bayesian_ridge
 from skidnav.models.kinematic import icr_parameters
 from skidnav.physics.mjcf import PhysicsParams, uniform_floor
 from skidnav.physics.robot import PhysicsRobot
@@ -102,8 +102,8 @@ def drive_log(
 
 def _posterior(inputs: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Bayesian ridge without intercept: posterior mean and covariance of the coefficients."""
-    regression = BayesianRidge(fit_intercept=False).fit(inputs, target)
-    return np.asarray(regression.coef_), np.asarray(regression.sigma_)
+    regression = fit_bayesian_ridge(inputs, target, np.ones(len(target)), fit_intercept=False)
+    return regression.coef, regression.covariance
 
 
 def fit_floor(material: str, log: np.ndarray, rng: np.random.Generator) -> FloorFit:
