@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 import skidnav  # noqa: F401  (registers the env)
 from skidnav.envs.navigation import SkidSteerNavEnv
 from skidnav.robot.slip import SlipField, make_slip_field
+from skidnav.world.discretization import Discretization
 from skidnav.world.mapfile import parse_map
 
 CORRIDOR = (
@@ -203,6 +204,10 @@ def test_drift_scales_eta_only_so_x_icr_stays_within_the_axles():
         (
             {"slip_field": SlipField(eta=np.zeros((7, 7)), x_icr=np.full((7, 7), -0.06))},
             r"expected x_icr in \[-a, b\] = \[-0.05, 0.05\] m in every region, got -0.06 m",
+        ),
+        (
+            {"discretization": Discretization(arena_width=1.0, arena_height=0.505)},
+            r"expected the discretization's arena 1 × 0.505 m to be the robot's 0.62 × 0.505 m",
         ),
     ],
 )

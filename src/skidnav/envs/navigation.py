@@ -152,6 +152,7 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
             arena_width=self.robot.arena_width,
             arena_height=self.robot.arena_height,
         )
+        _check_same_arena(self.robot, self.discretization)
         self.slip_field = slip_field or make_slip_field(
             slip,
             slip_rng,
@@ -300,6 +301,19 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
                 self.robot.body_length,
             )
         return None
+
+
+def _check_same_arena(robot: RobotParams, discretization: Discretization) -> None:
+    """ValueError unless the discretization's arena [m] is the robot's: the MDP clips poses to
+    the robot's arena and reads cells from the discretization's, so two sizes would put walls
+    and the goal where the robot is not."""
+    robot_size = (robot.arena_width, robot.arena_height)
+    grid_size = (discretization.arena_width, discretization.arena_height)
+    if not np.allclose(robot_size, grid_size, rtol=1e-12, atol=0.0):
+        raise ValueError(
+            f"expected the discretization's arena {grid_size[0]:g} × {grid_size[1]:g} m to be "
+            f"the robot's {robot_size[0]:g} × {robot_size[1]:g} m"
+        )
 
 
 def _resolve_map(
