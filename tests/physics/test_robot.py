@@ -123,6 +123,23 @@ def test_mjcf_has_four_servoed_wheels_and_one_box_per_wall_cell() -> None:
     assert len(wall_boxes) == int(occupancy.sum())
 
 
+def test_a_drawn_model_moves_exactly_as_the_simulated_one() -> None:
+    """The drawn-only geoms (wall boxes, floor tiles) change nothing in the motion."""
+    occupancy = np.zeros((25, 25), dtype=np.uint8)
+    occupancy[0, :] = 1
+    floor = region_materials("slippery", make_slip_field("slippery", np.random.default_rng(0)))
+    drawn = PhysicsRobot(ROBOT, floor, occupancy=occupancy)
+    simulated = PhysicsRobot(ROBOT, floor)
+    assert drawn.model.ngeom == simulated.model.ngeom + 49 + 25  # 7 × 7 tiles, 25 wall cells
+    poses = []
+    for robot in (drawn, simulated):
+        robot.reset(0.2, 0.25, 0.4)
+        for k in range(30):  # turns and runs across the wet patches
+            robot.substep((1.7, -1.7) if k % 4 else (1.7, 1.5), 0.3, (0.5, 0.2), 0.1)
+        poses.append((robot.pose, robot.body_twist()))
+    assert poses[0] == poses[1]
+
+
 def test_bad_inputs_are_refused_in_one_line() -> None:
     with pytest.raises(ValueError, match="expected floor materials"):
         arena_mjcf(ROBOT, PhysicsParams(), np.full((7, 7), "ice", dtype=object))

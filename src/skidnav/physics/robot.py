@@ -42,7 +42,8 @@ class PhysicsRobot:
         robot: geometry and arena size.
         materials: material name per slip region, shape (regions_x, regions_y).
         physics: masses, motors and timestep (defaults: :class:`PhysicsParams`).
-        occupancy: uint8 (n_x, n_y) wall map, drawn in the model (None: no walls).
+        occupancy: uint8 (n_x, n_y) wall map for a model to draw (walls and floor tiles), None
+            for one only to simulate (:func:`~skidnav.physics.mjcf.arena_mjcf`).
     """
 
     def __init__(

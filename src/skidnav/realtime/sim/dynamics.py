@@ -98,7 +98,7 @@ class PhysicsDynamics:
 
         self.task = task
         self.robot = robot
-        self.physics = PhysicsRobot(robot, materials, occupancy=task.occupancy)
+        self.physics = PhysicsRobot(robot, materials)  # not drawn: the lighter model
         self.physics.reset(*pose)
         self._pose = self.physics.pose
 
