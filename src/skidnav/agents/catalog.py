@@ -123,7 +123,8 @@ def build_agent(
         context = agent_context(name, env)
         return make_agent(name, int(space.n), n_actions, dict(params), rng, **context)  # type: ignore[union-attr]
     if kind == "linear":
-        return make_linear_agent(name, space, n_actions, dict(params), rng)  # type: ignore[arg-type]
+        context = agent_context(name, env)
+        return make_linear_agent(name, space, n_actions, dict(params), rng, **context)  # type: ignore[arg-type]
     module = _deep_module(name)
     config = module.CONFIG_CLASS.from_mapping(dict(params))
     deep_seed = int(seed.generate_state(1)[0])  # 32 bits: Stable-Baselines3 seeds legacy NumPy
@@ -131,8 +132,10 @@ def build_agent(
 
 
 def agent_context(name: str, env: gymnasium.Env[Any, Any]) -> dict[str, Any]:
-    """Extra constructor arguments a tabular agent asks for by name (the navigation ``task``)."""
-    parameters = inspect.signature(agent_class(name).__init__).parameters
+    """Extra constructor arguments a tabular or linear agent asks for by name (the navigation
+    ``task``)."""
+    cls = linear_agent_class(name) if family(name) == "linear" else agent_class(name)
+    parameters = inspect.signature(cls.__init__).parameters
     return {"task": env.task} if "task" in parameters and hasattr(env, "task") else {}
 
 

@@ -23,6 +23,7 @@ from typing import Any, TypeVar
 
 from skidnav.errors import shown
 from skidnav.kernels.multinomial import PLANNING_MODES
+from skidnav.models.kinematic import KinematicModelConfig
 
 MAX_PLANNING_STEPS = 10_000_000
 """Most planning updates per real step (10 M: about a second of compiled planning)."""
@@ -132,3 +133,32 @@ class PrioritizedSweepingConfig(DynaQConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         _check(self.theta >= 0.0 and math.isfinite(self.theta), "theta >= 0", self.theta)
+
+
+@dataclass(frozen=True)
+class KinematicModelFields:
+    """The learned kinematic model's hyperparameters as fields of an agent's config (those of
+    :class:`~skidnav.models.kinematic.KinematicModelConfig`, prefixed ``kinematic_``), for every
+    agent that learns one (``dyna-kinematic`` and its variants, ``linear-dyna-kinematic``); the
+    agent's ``__post_init__`` validates them by calling :meth:`kinematic_config`."""
+
+    kinematic_min_samples: int = 20
+    """Samples a region needs before its own regression is used."""
+    kinematic_refit_every: int = 500
+    """Minimum new sub-step samples between refits (checked at episode ends)."""
+    kinematic_refit_growth: float = 1.0
+    """Refits also wait for this fraction of the samples already fitted (0 for drifting slip)."""
+    kinematic_window: int = 500
+    """Samples kept per region (sliding window)."""
+    kinematic_forgetting: float = 1.0
+    """Per-sample weight decay of older samples, in (0, 1]."""
+
+    def kinematic_config(self) -> KinematicModelConfig:
+        """The kinematic model's config (ValueError for a bad field)."""
+        return KinematicModelConfig(
+            min_samples=self.kinematic_min_samples,
+            refit_every=self.kinematic_refit_every,
+            refit_growth=self.kinematic_refit_growth,
+            window=self.kinematic_window,
+            forgetting=self.kinematic_forgetting,
+        )

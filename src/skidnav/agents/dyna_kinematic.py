@@ -28,7 +28,7 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
-from skidnav.agents.config import DynaQConfig, QLearningConfig, _check
+from skidnav.agents.config import DynaQConfig, KinematicModelFields, QLearningConfig, _check
 from skidnav.agents.dyna_q import DynaQAgent
 from skidnav.errors import shown
 from skidnav.kernels import kinematic_planning as kp
@@ -36,7 +36,7 @@ from skidnav.kernels.learning import PLANNING_UPDATES, Experience, learning_step
 from skidnav.kernels.multinomial import MultinomialArrays, model_observe
 from skidnav.kernels.navigation import NavigationTask
 from skidnav.kernels.tabular import td_update
-from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+from skidnav.models.kinematic import KinematicModel
 from skidnav.robot.params import KinematicConstants, RobotParams
 from skidnav.world.discretization import Discretization, GridShape
 
@@ -44,24 +44,13 @@ logger = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
-class DynaKinematicConfig(DynaQConfig):
-    """Dyna-Q with kinematic-model planning (fields of :class:`KinematicModelConfig` prefixed
-    ``kinematic_``)."""
+class DynaKinematicConfig(DynaQConfig, KinematicModelFields):
+    """Dyna-Q with kinematic-model planning (:class:`KinematicModelFields` for the model)."""
 
     planning_steps: int = 10
     """Planning updates n after each real step."""
     kinematic_share: float = 0.5
     """Share of planning updates sent to the frontier of the visited set, in [0, 1]."""
-    kinematic_min_samples: int = 20
-    """Samples a region needs before its own regression is used."""
-    kinematic_refit_every: int = 500
-    """Minimum new sub-step samples between refits (checked at episode ends)."""
-    kinematic_refit_growth: float = 1.0
-    """Refits also wait for this fraction of the samples already fitted (0 for drifting slip)."""
-    kinematic_window: int = 500
-    """Samples kept per region (sliding window)."""
-    kinematic_forgetting: float = 1.0
-    """Per-sample weight decay of older samples, in (0, 1]."""
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -69,16 +58,6 @@ class DynaKinematicConfig(DynaQConfig):
             0.0 <= self.kinematic_share <= 1.0, "kinematic_share in [0, 1]", self.kinematic_share
         )
         self.kinematic_config()  # validates the kinematic fields
-
-    def kinematic_config(self) -> KinematicModelConfig:
-        """The kinematic model's config."""
-        return KinematicModelConfig(
-            min_samples=self.kinematic_min_samples,
-            refit_every=self.kinematic_refit_every,
-            refit_growth=self.kinematic_refit_growth,
-            window=self.kinematic_window,
-            forgetting=self.kinematic_forgetting,
-        )
 
 
 def geometry_from_task(task: NavigationTask) -> tuple[RobotParams, Discretization]:

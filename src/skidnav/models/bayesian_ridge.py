@@ -8,7 +8,7 @@ from α = 1 / var(y), λ = 1, each iteration
 
 1. computes the posterior mean w = (XᵀX + (λ/α) I)⁻¹ Xᵀy and the weighted squared error E,
 2. the number of well-determined parameters γ = Σᵢ α eᵢ / (λ + α eᵢ) over the eigenvalues eᵢ
-   of XᵀX (Bishop eq. 3.91),
+   of XᵀX (Bishop eq. 3.91), computed as k − (λ/α) · trace((XᵀX + (λ/α) I)⁻¹),
 3. re-estimates λ = (γ + 2·10⁻⁶) / (|w|² + 2·10⁻⁶) and α = (Σ weights − γ + 2·10⁻⁶) /
    (E + 2·10⁻⁶) (eqs. 3.92, 3.95 with the hyperpriors' terms),
 
@@ -22,6 +22,8 @@ Where the time goes: the kinematic model refits 3 regressions per slip region; t
 scikit-learn most of a refit was input validation (21 regions: ~0.3 s per refit, about half of
 dyna-kinematic's trainer time at 1000 planning steps). Here the data enter once as the k × k
 Gram matrix and the k-vector Xᵀy (k ≤ 2 in skidnav), and each iteration costs O(n·k) for E.
+Every sum is a plain loop (no BLAS or LAPACK, whose orders of summation differ between the
+libraries numba and NumPy call), so the fit is the same bit for bit with and without the JIT.
 
 >>> x = np.array([[1.0], [2.0], [3.0], [4.0]])
 >>> fit = fit_bayesian_ridge(x, 2.0 * x[:, 0] + np.array([0.01, -0.01, 0.01, -0.01]),
@@ -32,6 +34,7 @@ Gram matrix and the k-vector Xᵀy (k ≤ 2 in skidnav), and each iteration cost
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -73,6 +76,47 @@ class RidgePosterior(NamedTuple):
 
 
 @jit
+def _inverse_shifted(gram: np.ndarray, shift: float) -> np.ndarray:
+    """(gram + shift · I)⁻¹ of a symmetric positive semi-definite k × k matrix and shift > 0,
+    by a Cholesky factor L and forward substitution ((LLᵀ)⁻¹ = L⁻ᵀL⁻¹). Plain loops, not
+    LAPACK or BLAS: their summation orders differ between libraries, and the results must be
+    the same compiled and interpreted."""
+    k = gram.shape[0]
+    factor = np.zeros((k, k))
+    for i in range(k):
+        for j in range(i + 1):
+            value = gram[i, j] + (shift if i == j else 0.0)
+            for m in range(j):
+                value -= factor[i, m] * factor[j, m]
+            factor[i, j] = math.sqrt(value) if i == j else value / factor[j, j]
+    lower_inverse = np.zeros((k, k))
+    for column in range(k):
+        for i in range(column, k):
+            value = 1.0 if i == column else 0.0
+            for m in range(column, i):
+                value -= factor[i, m] * lower_inverse[m, column]
+            lower_inverse[i, column] = value / factor[i, i]
+    inverse = np.zeros((k, k))
+    for i in range(k):
+        for j in range(k):
+            total = 0.0
+            for m in range(max(i, j), k):
+                total += lower_inverse[m, i] * lower_inverse[m, j]
+            inverse[i, j] = total
+    return inverse
+
+
+@jit
+def _times(matrix: np.ndarray, vector: np.ndarray) -> np.ndarray:
+    """matrix (k, k) · vector (k,) in plain loops (see :func:`_inverse_shifted`)."""
+    out = np.zeros(matrix.shape[0])
+    for i in range(matrix.shape[0]):
+        for j in range(matrix.shape[1]):
+            out[i] += matrix[i, j] * vector[j]
+    return out
+
+
+@jit
 def _evidence_iterations(
     inputs: np.ndarray,
     target: np.ndarray,
@@ -80,38 +124,50 @@ def _evidence_iterations(
     target_variance: float,
     max_iter: int,
     tol: float,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, float, int]:
+) -> tuple[np.ndarray, np.ndarray, float, float, int]:
     """The evidence loop of the module docstring on prepared data: ``inputs`` (n, k) and
     ``target`` (n,) already centred if need be and multiplied by √w; ``weight_sum`` = Σ w.
-    Returns (coef (k,), covariance (k, k), eigenvalues (k,), α, λ, iterations)."""
+    With A = XᵀX + (λ/α) I: w = A⁻¹Xᵀy, γ = k − (λ/α) · trace(A⁻¹) (the eigenvalue sum of
+    the module docstring), Σ = A⁻¹ / α. Returns (coef (k,), covariance (k, k), α, λ,
+    iterations)."""
     n, k = inputs.shape
-    gram = inputs.T @ inputs
-    projected = inputs.T @ target
-    eigenvalues, vectors = np.linalg.eigh(gram)
-    along = vectors.T @ projected  # Xᵀy in the eigenbasis
+    gram = np.zeros((k, k))
+    projected = np.zeros(k)
+    for row in range(n):
+        for i in range(k):
+            projected[i] += inputs[row, i] * target[row]
+            for j in range(k):
+                gram[i, j] += inputs[row, i] * inputs[row, j]
     alpha = 1.0 / (target_variance + np.finfo(np.float64).eps)
     lam = 1.0
     coef = np.zeros(k)
     previous = np.zeros(k)
     iterations = max_iter
     for iteration in range(max_iter):
-        coef = vectors @ (along / (eigenvalues + lam / alpha))
+        inverse = _inverse_shifted(gram, lam / alpha)
+        coef = _times(inverse, projected)
         error = 0.0
         for row in range(n):
             residual = target[row]
             for column in range(k):
                 residual -= inputs[row, column] * coef[column]
             error += residual * residual
-        gamma = np.sum(alpha * eigenvalues / (lam + alpha * eigenvalues))
-        lam = (gamma + 2.0 * HYPERPRIOR) / (np.sum(coef**2) + 2.0 * HYPERPRIOR)
+        trace, norm = 0.0, 0.0
+        for i in range(k):
+            trace += inverse[i, i]
+            norm += coef[i] * coef[i]
+        gamma = k - lam / alpha * trace
+        lam = (gamma + 2.0 * HYPERPRIOR) / (norm + 2.0 * HYPERPRIOR)
         alpha = (weight_sum - gamma + 2.0 * HYPERPRIOR) / (error + 2.0 * HYPERPRIOR)
-        if iteration != 0 and np.sum(np.abs(previous - coef)) < tol:
+        moved = 0.0
+        for i in range(k):
+            moved += abs(previous[i] - coef[i])
+        if iteration != 0 and moved < tol:
             iterations = iteration + 1
             break
         previous[:] = coef
-    coef = vectors @ (along / (eigenvalues + lam / alpha))
-    covariance = vectors @ (vectors.T / (alpha * eigenvalues + lam)[:, None])
-    return coef, covariance, eigenvalues, alpha, lam, iterations
+    inverse = _inverse_shifted(gram, lam / alpha)
+    return _times(inverse, projected), inverse / alpha, alpha, lam, iterations
 
 
 def fit_bayesian_ridge(
@@ -146,7 +202,7 @@ def fit_bayesian_ridge(
     else:
         offset = np.zeros(inputs.shape[1])
     root = np.sqrt(weights)
-    coef, covariance, _, alpha, lam, iterations = _evidence_iterations(
+    coef, covariance, alpha, lam, iterations = _evidence_iterations(
         inputs * root[:, None], target * root, weight_sum, target_variance, max_iter, tol
     )
     intercept = target_mean - float(offset @ coef) if fit_intercept else 0.0

@@ -217,10 +217,22 @@ class LinearAgent:
             "config": self.config.to_dict(),
             "counters": {name: getattr(self, name) for name in COUNTERS},
             "rng": generator_state(self.rng),
+            **self._context_json(),
         }
         write_atomic(json_path, json.dumps(meta, indent=1).encode("utf-8"))
         logger.info("saved agent %s to %s", self.name, npz_path)
         return npz_path, json_path
+
+    def _context_json(self) -> dict[str, Any]:
+        """Extra JSON fields of a saved agent: what its constructor needs beyond the bounds,
+        actions and config (read back by :meth:`context_from_json`). None here."""
+        return {}
+
+    @classmethod
+    def context_from_json(cls, meta: Mapping[str, Any]) -> dict[str, Any]:
+        """The constructor's keyword arguments from a saved JSON (:meth:`_context_json`);
+        ValueError when they are malformed. None here."""
+        return {}
 
     def restore(
         self, counters: Mapping[str, Any], rng_state: Mapping[str, Any], arrays: Any

@@ -31,6 +31,7 @@ CONTINUOUS_AGENT_MODULES: dict[str, str] = {
     "linear-q": "skidnav.agents.continuous.q_learning",
     "linear-sarsa": "skidnav.agents.continuous.sarsa",
     "linear-dyna": "skidnav.agents.continuous.dyna",
+    "linear-dyna-kinematic": "skidnav.agents.continuous.dyna_kinematic",
 }
 """Registry name → module defining ``AGENT_NAME`` and ``AGENT_CLASS``."""
 MAX_AGENT_JSON_BYTES = 2**20
@@ -59,17 +60,19 @@ def make_linear_agent(
     n_actions: int,
     config: LinearConfig | Mapping[str, Any] | None = None,
     rng: np.random.Generator | None = None,
+    **context: Any,
 ) -> LinearAgent:
     """A new agent ``name`` for observations in ``observation_space`` (its bounds set the tile
-    coder) and ``n_actions`` actions; ``config`` a config, a mapping of its fields or None.
-    UserError naming the agent for a bad config or space."""
+    coder) and ``n_actions`` actions; ``config`` a config, a mapping of its fields or None;
+    ``context`` the keyword arguments its constructor asks for (``task=`` for
+    ``linear-dyna-kinematic``). UserError naming the agent for a bad config or space."""
     cls = linear_agent_class(name)
     if not isinstance(observation_space, spaces.Box):
         raise UserError(f"agent {name!r} expects a Box observation space, got {observation_space}")
     try:
         if not isinstance(config, LinearConfig):
             config = cls.config_class.from_mapping(config or {})
-        return cls(observation_space.low, observation_space.high, n_actions, config, rng)
+        return cls(observation_space.low, observation_space.high, n_actions, config, rng, **context)
     except (ValueError, TypeError) as error:
         raise UserError(f"agent {name!r}: {first_line(error)}") from None
 
@@ -125,7 +128,8 @@ def _fresh_agent(meta: Mapping[str, Any]) -> LinearAgent:
     config = meta["config"]
     if not isinstance(config, Mapping):
         raise ValueError("expected config to be a JSON object")
-    return cls(low, high, n_actions, cls.config_class.from_mapping(config), None)
+    context = cls.context_from_json(meta)
+    return cls(low, high, n_actions, cls.config_class.from_mapping(config), None, **context)
 
 
 def _bounds(value: Any) -> np.ndarray:
