@@ -353,7 +353,7 @@ class ModelBasedAgent(DynaQAgent):
             getattr(planner, name)[...] = saved
         sweeps = [_saved_keys(arrays, f"planner_{name}_keys", self.q.size)
                   for name in ("trajectory", "neighbour", "episode")]  # fmt: skip
-        _check_counters(
+        check_planner_counters(
             planner.counters, [keys.size for keys in sweeps], self.kinematic is not None
         )
         if not np.isfinite(planner.reward_stats).all() or (planner.reward_stats[:, 1] < 0).any():
@@ -384,7 +384,7 @@ def _saved_keys(arrays: Mapping[str, np.ndarray], name: str, n_keys: int) -> np.
     return keys
 
 
-def _check_counters(counters: np.ndarray, sizes: list[int], has_kinematic: bool) -> None:
+def check_planner_counters(counters: np.ndarray, sizes: list[int], has_kinematic: bool) -> None:
     """ValueError unless the planner counters agree with the saved sweep and episode lists
     (``sizes``: trajectory, neighbour, episode keys): the compiled planner indexes by them."""
     n_trajectory, n_neighbours, n_episode = sizes

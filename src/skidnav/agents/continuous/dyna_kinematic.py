@@ -44,7 +44,7 @@ from skidnav.agents.continuous.config import (
 )
 from skidnav.agents.continuous.dyna import LinearDynaAgent
 from skidnav.agents.dyna_kinematic import (
-    _check_counters,
+    check_planner_counters,
     geometry_from_json,
     geometry_from_task,
     geometry_json,
@@ -405,7 +405,7 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
         if (stats[:, 1] < 0).any():
             raise CorruptFileError("saved planner_reward_stats hold negative counts")
         try:
-            _check_counters(self.planner.counters, [0, 0, 0], has_kinematic=True)
+            check_planner_counters(self.planner.counters, [0, 0, 0], has_kinematic=True)
         except ValueError as error:
             raise CorruptFileError(str(error)) from None
         self.kinematic.load_arrays({name: np.asarray(arrays[name]) for name in arrays})
