@@ -13,7 +13,8 @@ Prints (planning rates: best of three timings each):
   against the identical kernels as plain Python (``NUMBA_DISABLE_JIT=1`` in a subprocess, on
   the budget :data:`PLAIN_ARENA` and a short episode), and for prioritized sweeping, whose
   queue empties before the budget, its updates per second of planning time alone
-  (:func:`sweeping_planning_time_rate`);
+  (:func:`sweeping_planning_time_rate`), and its rate later in learning, once the queue no
+  longer empties (:func:`sweeping_long_run`);
 * the wall time of the 30 Dyna Maze runs of ``skidnav reproduce`` (Sutton & Barto (2018)
   Example 8.1, n = 0, 5, 50, without writing files; fused maze trainer) against the same runs of
   the plain-Python Dyna-Q (a few runs, scaled to 30).
@@ -224,13 +225,9 @@ def plain_dyna_maze_seconds(runs: int) -> float:
     return time.perf_counter() - start
 
 
-def arena_run(
-    name: str, budget: int, episodes: int, max_steps: int = 500, epsilon: float = 0.1
-) -> tuple[int, int, float]:
-    """``name`` trained by ``train_agent_fast`` on the obstacles arena (α 0.5, γ 0.95, θ 1e-6),
-    timed over ``episodes`` episodes after :data:`WARM_UP` at the same budget (compilation,
-    first model, first refits), all the trainer's time included: (planning updates, real steps,
-    seconds) of the timed episodes."""
+def arena_agent(name: str, budget: int, epsilon: float = 0.1) -> tuple[Any, Any]:
+    """(agent ``name``, the obstacles arena it learns on): α 0.5, γ 0.95, θ 1e-6, ``budget``
+    planning updates per real step; the kernels of its first goal compiled beforehand."""
     import gymnasium as gym
 
     import skidnav.envs  # noqa: F401  (registers the env)
@@ -241,13 +238,30 @@ def arena_run(
         config["theta"] = 1e-6
     context = {} if name in ("dyna-q", "prioritized-sweeping") else {"task": env.unwrapped.task}
     agent = make_agent(name, 12_500, 4, config, np.random.default_rng(5), **context)
-    warm_up = WARM_UP if max_steps >= 500 else 1
-    train_agent_fast(agent, env, warm_up, max_steps=max_steps, seed=1)
+    compile_trajectory_kernels(env.unwrapped.task.grid)
+    return agent, env
+
+
+def timed_episodes(
+    agent: Any, env: Any, episodes: int, max_steps: int = 500
+) -> tuple[int, int, float]:
+    """(planning updates, real steps, seconds) of ``episodes`` more episodes of
+    ``train_agent_fast``, all the trainer's time included."""
     updates, steps = agent.planning_updates, agent.steps
     start = time.perf_counter()
     train_agent_fast(agent, env, episodes, max_steps=max_steps)
     seconds = time.perf_counter() - start
     return agent.planning_updates - updates, agent.steps - steps, seconds
+
+
+def arena_run(
+    name: str, budget: int, episodes: int, max_steps: int = 500, epsilon: float = 0.1
+) -> tuple[int, int, float]:
+    """:func:`timed_episodes` of :func:`arena_agent` after :data:`WARM_UP` episodes at the same
+    budget (compilation, first model, first refits)."""
+    agent, env = arena_agent(name, budget, epsilon)
+    train_agent_fast(agent, env, WARM_UP if max_steps >= 500 else 1, max_steps=max_steps, seed=1)
+    return timed_episodes(agent, env, episodes, max_steps)
 
 
 def arena_planning_rate(name: str, budget: int, episodes: int, max_steps: int = 500) -> float:
@@ -275,6 +289,33 @@ def sweeping_planning_time_rate(budget: int, episodes: int) -> tuple[float, floa
 
 
 WARM_UP = 4
+SWEEPING_LONG_RUN = (100, 6)  # episodes learned, then timed, at 1000 updates per real step
+
+
+def sweeping_long_run() -> tuple[float, float, float]:
+    """Prioritized sweeping's planning updates/s over the whole trainer later in learning: after
+    :data:`SWEEPING_LONG_RUN` episodes at ε 0.1 and 1000 updates per real step, (updates/s,
+    updates per real step, predecessor outcomes of the state a model outcome leads to, on
+    average: Σ n² / Σ n over the states' predecessor counts n). Each pop computes the priority
+    of every predecessor outcome of its state, which the rate does not count."""
+    learned, timed = SWEEPING_LONG_RUN
+    agent, env = arena_agent("prioritized-sweeping", 1000)
+    train_agent_fast(agent, env, learned, seed=1)
+    updates, steps, seconds = timed_episodes(agent, env, timed)
+    model = agent.model.arrays
+    predecessors = np.bincount(model.entry_next_state[: model.counters[1]])
+    per_target = float((predecessors**2).sum() / predecessors.sum())
+    return updates / seconds, updates / steps, per_target
+
+
+def compile_trajectory_kernels(grid: Any) -> None:
+    """Compile (or load from the cache) the kernels a model-based agent first calls when an
+    episode reaches the goal, which the warm-up episodes may not do: otherwise a cold cache puts
+    their compilation (~1.4 s) inside the timed episodes."""
+    from skidnav.kernels import kinematic_planning as kp
+
+    trajectory = kp.loop_erase(np.zeros(2, dtype=np.int64), 4, 12_500)
+    kp.neighbourhood_keys(trajectory, np.zeros((grid.n_x, grid.n_y), np.bool_), grid, 4, True)
 
 
 def plain_arena_rate(name: str) -> float:
@@ -307,6 +348,14 @@ def print_arena_rates() -> None:
     print(
         "  prioritized-sweeping, planning time only (ε 1: the same real steps with and without "
         f"planning; the queue empties before the budget): {', '.join(figures)}",
+        flush=True,
+    )
+    rate, per_step, per_target = sweeping_long_run()
+    learned, _ = SWEEPING_LONG_RUN
+    print(
+        f"  prioritized-sweeping after {learned} episodes, 1000 updates/step: {rate / 1e6:6.2f} "
+        f"M/s ({per_step:5.1f} per real step; a state reached has {per_target:4.1f} predecessor "
+        "outcomes, each a target computed for its priority when it is popped, not counted)",
         flush=True,
     )
 
