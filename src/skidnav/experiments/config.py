@@ -22,6 +22,7 @@ through JSON, which is how the resolved config is saved next to the results.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import math
@@ -47,6 +48,11 @@ MAX_STEPS = 1_000_000
 """Largest action limit per episode."""
 MAX_BOOTSTRAP = 1_000_000
 """Most bootstrap resamples per interval."""
+MAX_STATE_LEVELS = 1000
+"""Most position levels (n_x, n_y) and heading bins of a state grid."""
+MAX_GRID_STATES = 5_000_000
+"""Most states of a state grid (an agent's ``discretization`` or an optimum grid): its oracle
+holds (n_states, 4, samples) int32 outcomes."""
 MAX_TOTAL_EPISODES = 1_000_000_000
 """Most episodes of a whole experiment (runs × episodes): beyond it the work is absurd for any
 machine this runs on, and the config is refused before a run starts."""
@@ -61,6 +67,34 @@ def _check_params(name: str, params: Params) -> None:
             raise ValueError(
                 f"expected {name}.{key} to be a number, string or bool, got {shown(value)}"
             )
+
+
+Levels = tuple[int, ...]
+"""A state grid (n_x, n_y, n_headings), or () for the environment's own."""
+
+
+def check_levels(name: str, levels: Levels) -> None:
+    """ValueError unless ``levels`` is () or three integers (n_x, n_y, n_headings), the sides in
+    [3, :data:`MAX_STATE_LEVELS`], the bins in [1, :data:`MAX_STATE_LEVELS`], at most
+    :data:`MAX_GRID_STATES` states in all."""
+    if levels == ():
+        return
+    ok = (
+        isinstance(levels, tuple)
+        and len(levels) == 3
+        and all(isinstance(v, int) and not isinstance(v, bool) for v in levels)
+        and all(3 <= v <= MAX_STATE_LEVELS for v in levels[:2])
+        and 1 <= levels[2] <= MAX_STATE_LEVELS
+    )
+    if not ok:
+        raise ValueError(
+            f"expected {name} to be [n_x, n_y, n_headings] (sides 3 … {MAX_STATE_LEVELS}, "
+            f"bins 1 … {MAX_STATE_LEVELS}), got {shown(levels)}"
+        )
+    if math.prod(levels) > MAX_GRID_STATES:
+        raise ValueError(
+            f"expected {name} of at most {MAX_GRID_STATES:,} states, got {math.prod(levels):,}"
+        )
 
 
 def freeze_params(mapping: dict[str, Any] | Params | None) -> Params:
@@ -83,11 +117,15 @@ class AgentSpec:
         name: algorithm name understood by ``skidnav.agents.make_agent``.
         label: unique display name (default: the name, plus swept values).
         params: hyperparameters passed to the agent, as sorted (key, value) pairs.
+        discretization: the state grid (n_x, n_y, n_headings) a tabular agent learns over, a
+            refinement of the map's cells (:func:`skidnav.world.grid.refine_map`); () for the
+            map's own cells and the environment's heading bins (docs/discretization-gap.md).
     """
 
     name: str
     label: str
     params: Params = ()
+    discretization: Levels = ()
 
     def __post_init__(self) -> None:
         if not self.name:
@@ -95,6 +133,7 @@ class AgentSpec:
         if not self.label:
             raise ValueError(f"expected a non-empty agent label, got {shown(self.label)}")
         _check_params(f"agent {shown(self.label)} params", self.params)
+        check_levels(f"agent {shown(self.label)} discretization", self.discretization)
 
     def params_dict(self) -> dict[str, Scalar]:
         """The hyperparameters as a fresh dict."""
@@ -169,6 +208,13 @@ class ExperimentConfig:
         confidence: confidence level of every interval, in [0.5, 0.999].
         greedy_eval: evaluate the greedy policy after each episode (needed for the primary
             convergence definition).
+        optimum_grids: state grids (n_x, n_y, n_headings), coarse to fine, at which the
+            continuous optimum of every world is computed (:mod:`skidnav.experiments.optimum`;
+            the last is the reference, the one before it checks its convergence); () for none.
+        optimum_samples: sampled poses per state and action of the optimum's model, in [1, 1000]
+            (default 8).
+        optimum_rollouts: rollouts of the optimum's policy that measure its path length [m],
+            in [1, 10,000] (default 100).
         env_id: Gymnasium id of the environment.
         env_options: extra keyword arguments of the environment, as (key, value) pairs.
         description: free text shown in the report.
@@ -192,6 +238,9 @@ class ExperimentConfig:
     bootstrap_samples: int = 2000
     confidence: float = 0.95
     greedy_eval: bool = True
+    optimum_grids: tuple[Levels, ...] = ()
+    optimum_samples: int = 8
+    optimum_rollouts: int = 100
     env_id: str = DEFAULT_ENV_ID
     env_options: Params = ()
     description: str = ""
@@ -244,6 +293,10 @@ class ExperimentConfig:
         _check_range("oracle_samples", self.oracle_samples, 1, 1_000, integer=True)
         _check_range("bootstrap_samples", self.bootstrap_samples, 100, MAX_BOOTSTRAP, integer=True)
         _check_range("confidence", self.confidence, 0.5, 0.999, integer=False)
+        for levels in self.optimum_grids:
+            check_levels("each of optimum_grids", levels)
+        _check_range("optimum_samples", self.optimum_samples, 1, 1_000, integer=True)
+        _check_range("optimum_rollouts", self.optimum_rollouts, 1, 10_000, integer=True)
         if not isinstance(self.greedy_eval, bool):
             raise ValueError(
                 f"expected greedy_eval to be true or false, got {shown(self.greedy_eval)}"
@@ -272,7 +325,24 @@ class ExperimentConfig:
 
 
 def config_to_dict(config: ExperimentConfig) -> dict[str, Any]:
-    """The resolved config as a JSON-ready dict (inverse of :func:`config_from_dict`)."""
+    """The resolved config as a JSON-ready dict (inverse of :func:`config_from_dict`). The
+    optimum settings and an agent's discretization appear only when set, so a config without
+    them keeps the dict, and the fingerprint, it had before they existed."""
+    data = _base_dict(config)
+    optimum = {
+        "optimum_grids": [list(levels) for levels in config.optimum_grids],
+        "optimum_samples": config.optimum_samples,
+        "optimum_rollouts": config.optimum_rollouts,
+    }
+    defaults = {field.name: field.default for field in dataclasses.fields(config)}
+    data.update({k: v for k, v in optimum.items() if getattr(config, k) != defaults[k]})
+    for agent, saved in zip(config.agents, data["agents"], strict=True):
+        if agent.discretization:
+            saved["discretization"] = list(agent.discretization)
+    return data
+
+
+def _base_dict(config: ExperimentConfig) -> dict[str, Any]:
     return {
         "name": config.name,
         "description": config.description,
@@ -307,12 +377,17 @@ def config_from_dict(data: dict[str, Any]) -> ExperimentConfig:
     """Rebuild a config saved by :func:`config_to_dict`."""
     values = dict(data)
     agents = tuple(
-        AgentSpec(a["name"], a["label"], freeze_params(a["params"])) for a in values.pop("agents")
-    )
+        AgentSpec(
+            a["name"], a["label"], freeze_params(a["params"]),
+            tuple(a.get("discretization", ())),
+        )
+        for a in values.pop("agents")
+    )  # fmt: skip
     maps = tuple(
         MapSpec(m["label"], m["kind"], m["file"], freeze_params(m["options"]))
         for m in values.pop("maps")
     )
     values["presets"] = tuple(values["presets"])
+    values["optimum_grids"] = tuple(tuple(levels) for levels in values.get("optimum_grids", ()))
     values["env_options"] = freeze_params(values["env_options"])
     return ExperimentConfig(agents=agents, maps=maps, **values)

@@ -47,8 +47,11 @@ EXPERIMENT_KEYS = (
     "bootstrap_samples",
     "confidence",
     "greedy_eval",
+    "optimum_grids",
+    "optimum_samples",
+    "optimum_rollouts",
 )
-AGENT_KEYS = ("name", "label", "params", "sweep")
+AGENT_KEYS = ("name", "label", "params", "sweep", "discretization")
 MAP_KEYS = ("kind", "file", "label", "options")
 
 
@@ -116,6 +119,13 @@ def _build(data: dict[str, Any], path: Path) -> ExperimentConfig:
     if not isinstance(presets, list) or not all(isinstance(p, str) for p in presets):
         raise ValueError(f"[experiment] presets: expected a list of strings, got {shown(presets)}")
     values["presets"] = tuple(presets)
+    grids = values.get("optimum_grids", [])
+    if not isinstance(grids, list) or not all(isinstance(levels, list) for levels in grids):
+        raise ValueError(
+            f"[experiment] optimum_grids: expected a list of [n_x, n_y, n_headings], got "
+            f"{shown(grids)}"
+        )
+    values["optimum_grids"] = tuple(tuple(levels) for levels in grids)
     agents = tuple(
         itertools.chain.from_iterable(
             _agents(agent, f"[[agents]] #{n + 1}")
@@ -137,6 +147,11 @@ def _agents(agent: dict[str, Any], where: str) -> list[AgentSpec]:
     label = _string(agent, "label", where, default=name)
     params = table(agent.get("params", {}), f"{where} params")
     sweep = table(agent.get("sweep", {}), f"{where} sweep")
+    levels = agent.get("discretization", [])
+    if not isinstance(levels, list):
+        raise ValueError(
+            f"{where} discretization: expected [n_x, n_y, n_headings], got {shown(levels)}"
+        )
     for key, values in sweep.items():
         if not isinstance(values, list) or not values:
             raise ValueError(
@@ -151,7 +166,9 @@ def _agents(agent: dict[str, Any], where: str) -> list[AgentSpec]:
         suffix = ",".join(f"{key}={value}" for key, value in chosen.items())
         full_label = f"{label}[{suffix}]" if suffix else label
         try:
-            agents.append(AgentSpec(name, full_label, freeze_params({**params, **chosen})))
+            agents.append(
+                AgentSpec(name, full_label, freeze_params({**params, **chosen}), tuple(levels))
+            )
         except ValueError as error:
             raise ValueError(f"{where}: {error}") from None
     return agents

@@ -22,6 +22,12 @@ evaluation seeds and limit, :data:`ORACLE_VERSION`), written atomically and read
 after its arrays are checked against the world (a damaged file is computed again), so the runs
 of every agent on one world compute it once, in any process. The slip field is sampled at time
 0: with a drifting floor the oracle is that of the initial floor.
+
+**On a finer state grid** (``grid``: an agent's ``discretization`` that refines the map's cells,
+or a grid of the continuous optimum, :mod:`skidnav.experiments.optimum`) the same steps run on
+the world's task refined to that grid (:func:`skidnav.experiments.finegrid.refined_task`: the
+same walls in metres), and every fine state inside the map's goal cell counts as the goal, so
+the task stays the world's own: only the states a policy sees are finer.
 """
 
 from __future__ import annotations
@@ -37,9 +43,12 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from skidnav.agents.fast_training import evaluate_q_fast
+from skidnav.agents.training import greedy_rollout
 from skidnav.atomicfile import remove_stale_temporaries, write_atomic
 from skidnav.errors import CorruptFileError
+from skidnav.experiments.finegrid import TablePolicy, fine_grid, goal_states, refined_task
 from skidnav.kernels.oracle import (
+    GOAL_STATE,
     UNREACHABLE,
     expected_actions,
     oracle_q,
@@ -47,6 +56,7 @@ from skidnav.kernels.oracle import (
     start_costs,
 )
 from skidnav.savedfile import ArraySpec, SavedArchive
+from skidnav.world.discretization import Discretization
 
 logger = logging.getLogger(__name__)
 
@@ -86,9 +96,16 @@ def cache_dir() -> Path:
     return Path(os.environ.get("SKIDNAV_CACHE_DIR") or Path.home() / ".cache" / "skidnav")
 
 
-def _key(env: Any, n_samples: int, seed: int, seeds: Sequence[int], max_steps: int) -> str:
+def _key(
+    env: Any,
+    n_samples: int,
+    seed: int,
+    seeds: Sequence[int],
+    max_steps: int,
+    grid: Discretization | None = None,
+) -> str:
     """Hex digest of everything the oracle of ``env`` depends on (its world, its step limit, the
-    sampling and evaluation settings)."""
+    sampling and evaluation settings, the finer state grid if any)."""
     digest = hashlib.sha256(f"oracle-v{ORACLE_VERSION}".encode())
     nav = env.unwrapped
     limit = env.spec.max_episode_steps if env.spec is not None else None
@@ -100,7 +117,57 @@ def _key(env: Any, n_samples: int, seed: int, seeds: Sequence[int], max_steps: i
                   task.drift_phase, nav.start_pose()):  # fmt: skip
         digest.update(np.ascontiguousarray(array).tobytes())
     digest.update(repr((n_samples, seed, [int(s) for s in seeds], max_steps)).encode())
+    if grid is not None:  # absent for the map's own grid: the keys cached before stay valid
+        digest.update(repr(("grid", grid)).encode())
     return digest.hexdigest()[:32]
+
+
+class Solution(NamedTuple):
+    """The solved sampled model of a world (:func:`solve`).
+
+    Attributes:
+        q: float64 (n_states, n_actions), as :attr:`Oracle.q`.
+        start_value: as :attr:`Oracle.start_value` [actions].
+        sweeps: value-iteration sweeps made.
+    """
+
+    q: np.ndarray
+    start_value: float
+    sweeps: int
+
+
+def solve(
+    nav: Any, n_samples: int, rng: np.random.Generator, grid: Discretization | None = None
+) -> Solution:
+    """Steps 1–3 of the module docs for the unwrapped skid-steer env ``nav``: sample its model
+    (on ``grid``, a refinement of its map, when given; module docs), solve it, and evaluate the
+    exact start pose; every draw from ``rng``."""
+    task, goal = nav.task, None
+    if grid is not None:
+        task = refined_task(nav, grid)
+        goal = goal_states(grid, nav.grid_map)
+    n_states, n_actions = grid.n_states if grid else int(nav.observation_space.n), 4
+    outcomes = np.empty((n_states, n_actions, n_samples), dtype=np.int32)
+    sample_outcomes(task, n_samples, rng, outcomes)
+    if goal is not None:
+        _end_in_goal(outcomes, goal)
+    values, sweeps = expected_actions(outcomes, MAX_SWEEPS, SWEEP_TOLERANCE)
+    if goal is not None:
+        values[goal] = 0.0  # the first action from the start may end there (start_costs)
+    q = oracle_q(outcomes, values)
+    costs = start_costs(task, nav.start_pose(), values, n_samples, rng)
+    start_value = float(costs.min()) if costs.min() < UNREACHABLE / 2 else float("inf")
+    return Solution(q, start_value, int(sweeps))
+
+
+def _end_in_goal(outcomes: np.ndarray, goal: np.ndarray, chunk: int = 65_536) -> None:
+    """Make every sampled outcome in a ``goal`` state (bool (n_states,)) a goal arrival and the
+    goal states no sources, in place, ``chunk`` source states at a time (no copy of the whole
+    array)."""
+    for first in range(0, len(outcomes), chunk):
+        block = outcomes[first : first + chunk]
+        block[goal[np.maximum(block, 0)] & (block >= 0)] = GOAL_STATE
+    outcomes[goal] = -2
 
 
 def compute_oracle(
@@ -109,8 +176,9 @@ def compute_oracle(
     """The oracle of ``env``'s world (module docs), without the cache.
 
     Args:
-        env: a ``skidnav/SkidSteerNav-v0`` env (wrapped or not); its evaluation resets are used
-            for the rollouts.
+        env: a ``skidnav/SkidSteerNav-v0`` env (wrapped or not) with discrete observations, or
+            a :class:`~skidnav.experiments.finegrid.FineStates` view of one (the oracle on its
+            finer grid); its evaluation resets are used for the rollouts.
         n_samples: sampled poses per state (each tries every action), ≥ 1.
         seed: seed of the sampling generator.
         seeds: evaluation seeds (one rollout each).
@@ -118,18 +186,15 @@ def compute_oracle(
     """
     if n_samples < 1:
         raise ValueError(f"expected n_samples >= 1, got {n_samples}")
-    nav = env.unwrapped
-    n_states, n_actions = int(nav.observation_space.n), int(nav.action_space.n)
-    outcomes = np.empty((n_states, n_actions, n_samples), dtype=np.int32)
-    rng = np.random.default_rng(seed)
-    sample_outcomes(nav.task, n_samples, rng, outcomes)
-    values, sweeps = expected_actions(outcomes, MAX_SWEEPS, SWEEP_TOLERANCE)
-    q = oracle_q(outcomes, values)
-    costs = start_costs(nav.task, nav.start_pose(), values, n_samples, rng)
-    start_value = float(costs.min()) if costs.min() < UNREACHABLE / 2 else float("inf")
-    lengths = evaluate_q_fast(q, env, seeds, max_steps)
+    grid = fine_grid(env)
+    solution = solve(env.unwrapped, n_samples, np.random.default_rng(seed), grid)
+    if grid is None:
+        lengths = evaluate_q_fast(solution.q, env, seeds, max_steps)
+    else:
+        policy = TablePolicy(solution.q)
+        lengths = np.array([greedy_rollout(policy, env, max_steps, seed=int(s)) for s in seeds])
     rollout_mean = float(lengths.mean()) if (lengths > 0).all() else float("nan")
-    return Oracle(q, start_value, lengths, rollout_mean, int(sweeps))
+    return Oracle(solution.q, solution.start_value, lengths, rollout_mean, solution.sweeps)
 
 
 def load_or_compute_oracle(
@@ -137,9 +202,10 @@ def load_or_compute_oracle(
 ) -> Oracle:
     """:func:`compute_oracle`, read from the on-disk cache when it holds this world's oracle (a
     damaged cache file is logged and computed again)."""
-    path = cache_dir() / "oracles" / f"{_key(env, n_samples, seed, seeds, max_steps)}.npz"
-    nav = env.unwrapped
-    shape = (int(nav.observation_space.n), int(nav.action_space.n))
+    grid = fine_grid(env)
+    key = _key(env, n_samples, seed, seeds, max_steps, grid)
+    path = cache_dir() / "oracles" / f"{key}.npz"
+    shape = (int(env.observation_space.n), int(env.action_space.n))
     if path.is_file():
         try:
             return _load(path, shape, len(seeds))

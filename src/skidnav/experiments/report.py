@@ -34,6 +34,7 @@ from skidnav.experiments.analysis import (
     survival_columns,
 )
 from skidnav.experiments.config import ExperimentConfig, config_to_dict
+from skidnav.experiments.gap import gap_section
 from skidnav.experiments.provenance import CODE_KEYS, describe_code
 from skidnav.experiments.reproduction import reproduction_section
 from skidnav.experiments.store import ResultStore, TrialResult
@@ -391,6 +392,7 @@ def build_report(run_dir: Path | str) -> str:
         performance_profiles(summaries, config),
         budget_section(comparisons, aggregates, config),
         reproduction_section(comparisons, surfaces, summaries, config),
+        gap_section(summaries, config),
     ]
     if not surfaces.empty:
         body.append(image(plots.surface_bars(surfaces), "rough vs slippery"))

@@ -35,13 +35,14 @@ from skidnav.agents.catalog import build_agent, check_params, observation_for, t
 from skidnav.agents.core import TabularAgent
 from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig, MapSpec
+from skidnav.experiments.finegrid import FineStates, check_grids, refines_positions, state_grid
 from skidnav.experiments.metrics import ConvergenceRule, evaluation_summary, run_metrics
 from skidnav.experiments.oracle import Oracle, compute_oracle, load_or_compute_oracle
 from skidnav.experiments.runs import RunSpec, expand_runs
 from skidnav.experiments.store import EPISODE_COLUMNS, TrialResult
 from skidnav.seeding import RUN_ROLES, WORLD_ROLES, child_sequences, seed_int
-from skidnav.world.discretization import heading_bin
-from skidnav.world.grid import GridMap, border_walls
+from skidnav.world.discretization import Discretization, heading_bin
+from skidnav.world.grid import GridMap, border_walls, refine_map
 from skidnav.world.mapfile import load_map
 from skidnav.world.maps import build_map as build_world_map
 
@@ -55,8 +56,9 @@ WARM_UP_LIMITS = (10, 300, 10, 10, 60, 10)
 """Action limits of the :func:`warm_up` episodes. Its arena is 6 × 6 cells with the goal right
 ahead of the start, so short episodes end at the goal or run into walls between two model refits;
 the long one makes learned models outgrow their first arrays and refit. Milliseconds in all."""
-_warmed_up: set[tuple[str, str, str]] = set()
-"""(env id, agent name, parameters) of the agent variants this process has warmed up."""
+_warmed_up: set[tuple[Any, ...]] = set()
+"""(env id, agent name, parameters[, finer cells]) of the agent variants this process has warmed
+up."""
 
 
 def build_map(spec: MapSpec, rng: np.random.Generator) -> GridMap:
@@ -79,6 +81,12 @@ def make_env(
     Gymnasium's ``TimeLimit`` truncates after the config's ``max_steps`` actions, else its
     ``[env] max_episode_steps``, else the registered limit (:func:`action_limit` reads it
     back). Runs train and evaluate on ``env.unwrapped``: the trainer enforces that limit itself.
+
+    An agent's ``discretization`` (n_x, n_y, n_headings) with the map's cells becomes the env's
+    own discretization (finer heading bins, the compiled trainer); one with finer cells than
+    the map's leaves the env on poses, which :func:`agent_view` turns into the states of the
+    finer grid (:class:`~skidnav.experiments.finegrid.FineStates`). ``observation`` overrides
+    both.
     """
     config = spec.config
     options: dict[str, Any] = dict(config.env_options)
@@ -89,6 +97,12 @@ def make_env(
     ):
         raise ValueError(f"expected [env] max_episode_steps to be an integer >= 1, got {limit!r}")
     if config.env_id == SKID_ENV_ID:
+        levels = spec.agent.discretization
+        if levels and observation is None:
+            if refines_positions(levels, grid_map):
+                observation = "pose"
+            else:
+                options["discretization"] = Discretization(*levels)
         options.update(
             observation=observation or observation_for(spec.agent.name, options.get("observation")),
             grid_map=grid_map,
@@ -101,6 +115,16 @@ def make_env(
         return gymnasium.make(config.env_id, max_episode_steps=limit, **options)
     except ModuleNotFoundError as error:
         raise UserError(f"environment {config.env_id!r}: no module {error.name!r}") from None
+
+
+def agent_view(spec: ExperimentRun, env: gymnasium.Env[Any, Any]) -> gymnasium.Env[Any, Any]:
+    """What a run's agent trains and is evaluated on: ``env.unwrapped``, seen through the finer
+    states of the agent's ``discretization`` when it refines the map's cells (:func:`make_env`)."""
+    nav = env.unwrapped
+    levels = spec.agent.discretization
+    if refines_positions(levels, getattr(nav, "grid_map", None)):
+        return FineStates(nav, state_grid(nav, levels))
+    return nav
 
 
 def action_limit(env: gymnasium.Env[Any, Any]) -> int:
@@ -169,18 +193,24 @@ def _world_arrays(
     agent: Any, grid_map: GridMap, env: gymnasium.Env[Any, Any]
 ) -> dict[str, np.ndarray]:
     """Walls, start, goal and slip η of a skid-steer run, and of a tabular agent its value,
-    heading and policy maps."""
-    start_heading = float(env.start_pose()[2])  # type: ignore[attr-defined]
+    heading and policy maps (on the agent's finer grid, and the map refined to it, for an agent
+    seeing :class:`~skidnav.experiments.finegrid.FineStates`)."""
+    grid = getattr(env, "discretization", None)
+    nav: Any = env
+    if isinstance(env, FineStates):
+        grid_map = refine_map(grid_map, (env.discretization.n_x, env.discretization.n_y))
+        nav = env.unwrapped
+    start_heading = float(nav.start_pose()[2])
     arrays = {
         "start_heading": np.asarray(start_heading),
         "occupancy": grid_map.occupancy,
         "start": np.asarray(grid_map.start),
         "goal": np.asarray(grid_map.goal),
-        "slip_eta": env.slip_field.eta,  # type: ignore[attr-defined]
+        "slip_eta": nav.slip_field.eta,
     }
     if isinstance(agent, TabularAgent):
         value, heading = value_maps(agent.q, grid_map)
-        n_headings = int(env.discretization.n_headings)  # type: ignore[attr-defined]
+        n_headings = int(grid.n_headings)  # type: ignore[union-attr]
         arrays.update(
             value_map=value,
             heading_map=heading,
@@ -216,7 +246,7 @@ def _world(
     grid_map = build_map(spec.map, map_rng) if skid else None
     env = make_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
     eval_env = make_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
-    return grid_map, env.unwrapped, eval_env.unwrapped, action_limit(env)
+    return grid_map, agent_view(spec, env), agent_view(spec, eval_env), action_limit(env)
 
 
 def _oracle_env(
@@ -242,17 +272,26 @@ def warm_up(spec: ExperimentRun) -> None:
     """Train a throwaway copy of the run's agent variant for a few short episodes on a throwaway
     world, once per process and variant, so the kernels the run calls are compiled before its
     clock starts (module docs). Draws only from its own generators."""
-    key = (spec.config.env_id, spec.agent.name, repr(spec.agent.params))
+    key: tuple[Any, ...] = (spec.config.env_id, spec.agent.name, repr(spec.agent.params))
+    levels = spec.agent.discretization
+    if levels:  # the same kernels, or the plain loop over finer states (docs/discretization-gap.md)
+        fine = refines_positions(levels, build_map(spec.map, np.random.default_rng(0)))
+        key += (fine,)
     if key in _warmed_up:
         return
     grid_map = None
     if spec.config.env_id == SKID_ENV_ID:
         grid_map = GridMap(border_walls((6, 6)), start=(1, 1), goal=(2, 1))
+        agent = spec.agent
+        if levels:
+            side = 11 if fine else 6
+            agent = dataclasses.replace(agent, discretization=(side, side, levels[2]))
         spec = dataclasses.replace(
-            spec, config=dataclasses.replace(spec.config, max_steps=max(WARM_UP_LIMITS))
-        )
+            spec, agent=agent,
+            config=dataclasses.replace(spec.config, max_steps=max(WARM_UP_LIMITS)),
+        )  # fmt: skip
     made = (make_env(spec, grid_map, 0) for _ in range(2))  # type: ignore[arg-type]
-    env, eval_env = (each.unwrapped for each in made)
+    env, eval_env = (agent_view(spec, each) for each in made)
     env.reset(seed=1)
     eval_env.reset(seed=2)
     agent = _agent(spec, env, np.random.SeedSequence(3), max(WARM_UP_LIMITS))
@@ -304,6 +343,11 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
             oracle_env, config.oracle_samples, oracle_seed, eval_seeds, max_steps
         )
     reference = _reference_length(oracle, eval_env)
+    optima = {}
+    if grid_map is not None and config.optimum_grids and _has_oracle(eval_env):
+        from skidnav.experiments.optimum import world_optima  # it builds on this module
+
+        optima = world_optima(spec, grid_map, slip_seed, world_streams["oracle"], max_steps)
     log = train(
         agent,
         env,
@@ -323,6 +367,7 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     summary = run_metrics(episodes, poses, reached, rule)
     summary["action_limit"] = float(max_steps)
     summary.update(_oracle_columns(reference, oracle))
+    summary.update(optima)
     return TrialResult(spec.run_id, spec.coordinates, episodes, summary, arrays)
 
 
@@ -373,6 +418,7 @@ def _check_config(config: ExperimentConfig) -> None:
     try:
         for map_spec in config.maps:
             grid_map = build_map(map_spec, np.random.default_rng(0))
+            check_grids(config, grid_map, map_spec.label)
         make_env(first, grid_map, 0).close()
     except gymnasium.error.Error as error:
         raise UserError(f"environment {config.env_id!r}: {error}") from None

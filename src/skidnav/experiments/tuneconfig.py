@@ -283,6 +283,9 @@ def load_tune_config_and_text(path: Path | str) -> tuple[ExperimentConfig, TuneC
     config = config_from_tables(data, path)
     if "tune" not in data:
         raise UserError(f"{path}: no [tune] table (see docs/tuning.md)")
+    for agent in config.agents:
+        if agent.discretization:  # tuned.toml would lose it
+            raise UserError(f"{path}: agent {agent.label!r}: tuning takes no discretization")
     try:
         return config, parse_tune(data["tune"], config, Path(path)), text
     except (UserError, ValueError, TypeError) as error:

@@ -255,6 +255,58 @@ def generate_map(
     raise ValueError(f"could not place a connected start and goal on a {kind} map of {shape}")
 
 
+def refinement_factor(coarse: int, fine: int, axis: str) -> int:
+    """The integer f ≥ 1 with ``fine − 1 = f · (coarse − 1)`` levels along ``axis``; ValueError
+    otherwise. Only such a refinement nests every fine cell inside one coarse cell (cells are
+    W/(n − 1) wide, :mod:`skidnav.world.discretization`).
+
+    >>> refinement_factor(25, 49, "x")
+    2
+    >>> refinement_factor(25, 50, "x")
+    Traceback (most recent call last):
+    ...
+    ValueError: expected n_x − 1 to be a multiple of 24 (the map's 25 levels), got 50
+    """
+    factor, rest = divmod(fine - 1, coarse - 1)
+    if rest or factor < 1:
+        raise ValueError(
+            f"expected n_{axis} − 1 to be a multiple of {coarse - 1} (the map's {coarse} "
+            f"levels), got {fine}"
+        )
+    return factor
+
+
+def refine_map(grid_map: GridMap, shape: tuple[int, int]) -> GridMap:
+    """The same arena on a finer grid of ``shape`` (n_x′, n_y′) cells, each side a refinement
+    f of the map's (:func:`refinement_factor`).
+
+    Fine cell (i′, j′) covers part of coarse cell (i′ // f_x, j′ // f_y) and inherits its wall, so
+    the walls occupy the same metres (the zero-width last level maps to the last level). Start
+    and goal become the fine cells holding the centres of the coarse ones (for an even f the
+    centre lies on that cell's lower edge). The goal of the refined map is one fine cell, 1/(f_x ·
+    f_y) of the coarse goal's area, as the MDP defines a goal
+    (:mod:`skidnav.kernels.navigation`): users that keep the world's task take the coarse goal
+    cell instead (:func:`skidnav.experiments.finegrid.goal_states`).
+
+    >>> walls = border_walls((5, 5))
+    >>> fine = refine_map(GridMap(walls, start=(1, 1), goal=(2, 3)), (13, 13))
+    >>> fine.shape, fine.start, fine.goal, bool(fine.occupancy[2, 5]), bool(fine.occupancy[3, 3])
+    ((13, 13), (4, 4), (7, 10), True, False)
+    """
+    factors = [
+        refinement_factor(coarse, int(fine), axis)
+        for coarse, fine, axis in zip(grid_map.shape, _check_shape(shape), "xy", strict=True)
+    ]
+    rows = np.arange(shape[0]) // factors[0]
+    columns = np.arange(shape[1]) // factors[1]
+    occupancy = grid_map.occupancy[np.ix_(rows, columns)]
+
+    def centred(cell: tuple[int, int]) -> tuple[int, int]:
+        return (cell[0] * factors[0] + factors[0] // 2, cell[1] * factors[1] + factors[1] // 2)
+
+    return GridMap(occupancy, start=centred(grid_map.start), goal=centred(grid_map.goal))
+
+
 def _check_integer(name: str, value: object, low: int, high: int) -> None:
     if not (isinstance(value, int) and not isinstance(value, bool) and low <= value <= high):
         raise ValueError(f"expected {name} to be an integer in [{low}, {high:,}], got {value!r}")
