@@ -21,6 +21,7 @@ SUBCOMMAND_MODULES = {
     "camera": "skidnav.commands.camera",
     "floors": "skidnav.commands.floors",
     "transfer": "skidnav.commands.transfer",
+    "generalise": "skidnav.commands.generalise",
     "kinematic": "skidnav.commands.kinematic",
 }
 """Subcommand name → the module that adds it (``add_parser(subparsers)``)."""

@@ -17,6 +17,9 @@ Two consumers never share a stream (architecture.md, "Randomness").
   dropped poses; the env's ``reset`` seed in ``skidnav simulate``), the agent or random policy.
   The env's ``world_seed`` uses the first two, so the env and the sim server given one seed build
   the same map and floor.
+* :data:`GENERALISATION_ROLES` — the root seed of ``skidnav generalise``: the training worlds and
+  the held-out worlds (each spawned once per world), the runs (spawned once per seed, each with
+  :data:`RUN_ROLES`) and the evaluation rollouts' seeds (the same for every agent and run).
 """
 
 from __future__ import annotations
@@ -34,6 +37,8 @@ RUN_ROLES = ("agent", "episodes")
 """Children of one experiment run's stream."""
 ARENA_ROLES = ("map", "slip", "robot", "agent")
 """Children of the integer seed of one world outside an experiment."""
+GENERALISATION_ROLES = ("training", "held-out", "run", "evaluation")
+"""Children of the root seed of a generalisation study."""
 
 Seed = int | np.random.SeedSequence
 

@@ -9,6 +9,7 @@ view of Sutton & Barto (2018) Examples 8.2 and 8.3). A compiled trainer may repl
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Sequence
 from typing import Any, NamedTuple, Protocol
@@ -111,6 +112,13 @@ def greedy_evaluation(
     if seeds is None:
         return [greedy_rollout(agent, env, max_steps)]
     return [greedy_rollout(agent, env, max_steps, seed=int(seed)) for seed in seeds]
+
+
+def rollout_summary(lengths: Sequence[int]) -> tuple[float, float]:
+    """(share that reached the goal, mean length [actions] of those that did, NaN if none) of
+    greedy rollout lengths as :func:`greedy_rollout` returns them (−1: not reached)."""
+    reached = [length for length in lengths if length >= 0]
+    return len(reached) / len(lengths), (float(np.mean(reached)) if reached else math.nan)
 
 
 def run_episode(

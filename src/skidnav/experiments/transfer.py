@@ -10,8 +10,7 @@ does not obey it.
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -22,7 +21,7 @@ import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents.catalog import agent_context
 from skidnav.agents.fast_training import train_agent_fast
 from skidnav.agents.registry import make_agent
-from skidnav.agents.training import greedy_evaluation
+from skidnav.agents.training import greedy_evaluation, rollout_summary
 from skidnav.seeding import seed_int
 
 ENV_ID = "skidnav/SkidSteerNav-v0"
@@ -39,13 +38,6 @@ class TransferResult:
     success_physics: float
     length_kinematic: float
     length_physics: float
-
-
-def _summary(lengths: Sequence[int]) -> tuple[float, float]:
-    """(share reached, mean length of those that reached) of greedy rollout lengths (−1: not)."""
-    reached = [length for length in lengths if length >= 0]
-    share = len(reached) / len(lengths)
-    return share, (float(np.mean(reached)) if reached else math.nan)
 
 
 def transfer_run(
@@ -74,8 +66,8 @@ def transfer_run(
     )  # fmt: skip
     train_agent_fast(agent, kinematic, episodes, max_steps=max_steps, seed=seed_int(episode_stream))
     seeds = [int(s) for s in np.random.default_rng(evaluation).integers(0, 2**31, rollouts)]
-    on_kinematic = _summary(greedy_evaluation(agent, kinematic, max_steps, seeds))
-    on_physics = _summary(greedy_evaluation(agent, physical, max_steps, seeds))
+    on_kinematic = rollout_summary(greedy_evaluation(agent, kinematic, max_steps, seeds))
+    on_physics = rollout_summary(greedy_evaluation(agent, physical, max_steps, seeds))
     return TransferResult(
         agent_name, seed, on_kinematic[0], on_physics[0], on_kinematic[1], on_physics[1]
     )

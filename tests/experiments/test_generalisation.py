@@ -1,0 +1,128 @@
+"""The generalisation study: seeded splits of maps, training on a map set, evaluation on both
+sides, and ``skidnav generalise``."""
+
+from __future__ import annotations
+
+import csv
+import math
+import subprocess
+import sys
+from dataclasses import astuple
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skidnav.experiments import generalisation
+from skidnav.experiments.generalisation import (
+    GoalSeeker,
+    evaluate_on,
+    generalisation_run,
+    references,
+    split_worlds,
+)
+
+TINY = {"dimensions": [4, 5, 6], "tiles": [3]}
+
+
+def test_split_is_seeded_disjoint_and_sized() -> None:
+    split = split_worlds(3, 4, 2, 3)
+    assert split == split_worlds(3, 4, 2, 3)
+    assert len(split.training) == 4 and len(split.held_out) == 2 and len(split.evaluation) == 3
+    assert not set(split.training) & set(split.held_out)
+    assert split_worlds(4, 4, 2, 3).training != split.training
+
+
+def test_a_held_out_map_equal_to_a_training_map_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(generalisation, "seed_int", lambda _: 7)  # every world the same
+    with pytest.raises(ValueError, match="has the map of a training world"):
+        split_worlds(0, 2, 1, 1)
+
+
+class Spinner:
+    def greedy_action(self, observation: np.ndarray) -> int:
+        return 2
+
+
+def test_evaluation_tells_a_goal_seeker_from_a_spinner() -> None:
+    split = split_worlds(0, 3, 3, 2, {"map_kind": "free"})
+    options = {"map_kind": "free", "slip": "thesis", "observation": "features"}
+    seeker = evaluate_on(GoalSeeker(), split.held_out, split.evaluation, 300, **options)
+    spinner = evaluate_on(Spinner(), split.held_out, split.evaluation, 300, **options)
+    assert seeker[0] >= 0.8 and 0 < seeker[1] < 300
+    assert spinner[0] == 0.0 and math.isnan(spinner[1])
+
+
+def test_same_seed_same_run_and_shares_are_shares() -> None:
+    split = split_worlds(1, 2, 1, 2)
+    runs = [
+        generalisation_run("linear-q", 0, split, 4, root_seed=1, params=TINY, max_steps=40)
+        for _ in range(2)
+    ]
+    np.testing.assert_equal(astuple(runs[0]), astuple(runs[1]))  # NaN equals NaN here
+    assert runs[0].episodes == 4 and 4 <= runs[0].steps <= 160
+    for share in (runs[0].success_training_maps, runs[0].success_held_out_maps):
+        assert share in (0.0, 0.25, 0.5, 0.75, 1.0)  # 2 maps x 2 rollouts, 1 map x 2
+
+
+def test_dqn_trains_on_a_map_set() -> None:
+    pytest.importorskip("stable_baselines3")
+    split = split_worlds(2, 2, 1, 1)
+    params = {"learning_starts": 10, "buffer_size": 100, "hidden": [8]}
+    run = generalisation_run("dqn", 0, split, 2, root_seed=2, params=params, max_steps=20)
+    assert run.episodes == 2 and run.steps <= 40
+
+
+def test_command_writes_one_row_per_agent_and_seed(tmp_path: Path) -> None:
+    out = tmp_path / "generalisation.csv"
+    done = subprocess.run(
+        [sys.executable, "-m", "skidnav.cli", "generalise", "--agent", "linear-q", "--seeds", "2",
+         "--training-maps", "2", "--held-out-maps", "1", "--episodes", "2", "--max-steps", "20",
+         "--rollouts", "1", "--params", 'linear-q={"dimensions": [4, 5], "tiles": [2]}',
+         "--out", str(out)],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    rows = list(csv.DictReader(out.open()))
+    assert [(row["agent"], row["seed"]) for row in rows] == [("linear-q", "0"), ("linear-q", "1")]
+    assert "held-out − training" in done.stdout and "reference goal-seeker" in done.stdout
+
+
+def test_references_are_measured_on_the_split() -> None:
+    split = split_worlds(0, 2, 2, 2, {"map_kind": "free"})
+    random, seeker = references(split, 300, {"map_kind": "free"})
+    assert (random.policy, seeker.policy) == ("random", "goal-seeker")
+    assert seeker.success_held_out_maps >= 0.75 > random.success_held_out_maps
+
+
+@pytest.mark.parametrize(
+    "arguments, message",
+    [
+        (["--seeds", "0"], "--seeds"),
+        (["--eval-epsilon", "nan"], "--eval-epsilon"),
+        (["--params", "linear-q"], "AGENT=JSON"),
+        (["--params", "linear-q={"], "not JSON"),
+        (["--params", "linear-q=[1]"], "JSON object"),
+        (["--agent", "nobody"], "unknown agent"),
+        (["--agent", "linear-q", "--params", 'linear-q={"tiles": [0]}'], "linear-q"),
+    ],
+)
+def test_bad_arguments_are_one_line(arguments: list[str], message: str) -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "skidnav.cli", "generalise", *arguments],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert message in done.stderr
+
+
+def test_epsilon_greedy_evaluation_is_seeded_and_noisy() -> None:
+    split = split_worlds(0, 1, 2, 2, {"map_kind": "free"})
+    options = {"map_kind": "free", "slip": "thesis", "observation": "features"}
+    noisy = [evaluate_on(GoalSeeker(), split.held_out, split.evaluation, 300, 0.3, **options)
+             for _ in range(2)]  # fmt: skip
+    assert noisy[0] == noisy[1]
+    greedy = evaluate_on(GoalSeeker(), split.held_out, split.evaluation, 300, **options)
+    assert noisy[0][1] != greedy[1]  # the random actions lengthen the paths
+    policy = generalisation.EpsilonGreedy(Spinner(), 1.0, np.random.default_rng(0))
+    assert {policy.greedy_action(np.zeros(15)) for _ in range(50)} == {0, 1, 2, 3}
