@@ -53,11 +53,14 @@ def child_sequences(seed: Seed, roles: Sequence[str]) -> dict[str, np.random.See
     >>> a.spawn_key, b.spawn_key
     ((0,), (1,))
     """
+    return {role: child(seed, k) for k, role in enumerate(roles)}
+
+
+def child(seed: Seed, k: int) -> np.random.SeedSequence:
+    """Child ``k`` of ``seed`` (an integer root or a SeedSequence), ``SeedSequence(seed).spawn(
+    k + 1)[k]`` for an integer, built from the spawn key so that asking twice gives the same."""
     root = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
-    entropy, key = root.entropy, tuple(root.spawn_key)
-    return {
-        role: np.random.SeedSequence(entropy, spawn_key=(*key, k)) for k, role in enumerate(roles)
-    }
+    return np.random.SeedSequence(root.entropy, spawn_key=(*root.spawn_key, k))
 
 
 def streams(seed: Seed, roles: Sequence[str]) -> dict[str, np.random.Generator]:

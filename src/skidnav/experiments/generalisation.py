@@ -34,8 +34,9 @@ from gymnasium.wrappers import TimeLimit
 
 from skidnav.agents.catalog import build_agent, observation_for, train
 from skidnav.agents.training import greedy_rollout, rollout_summary
+from skidnav.envs.features import POSE_GOAL_NAMES
 from skidnav.envs.mapset import MapSetEnv, world_env
-from skidnav.seeding import GENERALISATION_ROLES, RUN_ROLES, child_sequences, seed_int
+from skidnav.seeding import GENERALISATION_ROLES, RUN_ROLES, child, child_sequences, seed_int
 
 DEFAULT_OPTIONS: Mapping[str, Any] = {"map_kind": "obstacles", "slip": "thesis"}
 """The worlds' env options unless a study sets them."""
@@ -93,9 +94,9 @@ def split_worlds(
     if n_training < 1 or n_held_out < 1 or rollouts < 1:
         raise ValueError("expected at least one training world, held-out world and rollout")
     children = child_sequences(root_seed, GENERALISATION_ROLES)
-    training = tuple(seed_int(child) for child in children["training"].spawn(n_training))
-    held_out = tuple(seed_int(child) for child in children["held-out"].spawn(n_held_out))
-    evaluation = tuple(seed_int(child) for child in children["evaluation"].spawn(rollouts))
+    training = tuple(seed_int(sequence) for sequence in children["training"].spawn(n_training))
+    held_out = tuple(seed_int(sequence) for sequence in children["held-out"].spawn(n_held_out))
+    evaluation = tuple(seed_int(sequence) for sequence in children["evaluation"].spawn(rollouts))
     options = {**DEFAULT_OPTIONS, **(env_options or {})}
     seen = {_map_key(world_env(seed, 1, **options)) for seed in training}
     for seed in held_out:
@@ -108,8 +109,7 @@ def run_streams(root_seed: int, seed: int) -> dict[str, np.random.SeedSequence]:
     """The :data:`~skidnav.seeding.RUN_ROLES` streams of run ``seed`` (child ``seed`` of the
     root's ``run`` child)."""
     runs = child_sequences(root_seed, GENERALISATION_ROLES)["run"]
-    run = np.random.SeedSequence(runs.entropy, spawn_key=(*runs.spawn_key, seed))
-    return child_sequences(run, RUN_ROLES)
+    return child_sequences(child(runs, seed), RUN_ROLES)
 
 
 class EpsilonGreedy:
@@ -134,9 +134,10 @@ class GoalSeeker:
     are, i.e. how hard the maps are for a learned policy."""
 
     cone = 0.3
+    bearing = (POSE_GOAL_NAMES.index("goal_cos_bearing"), POSE_GOAL_NAMES.index("goal_sin_bearing"))
 
     def greedy_action(self, observation: Any) -> int:
-        cos_bearing, sin_bearing = observation[5], observation[6]
+        cos_bearing, sin_bearing = observation[self.bearing[0]], observation[self.bearing[1]]
         if cos_bearing > math.cos(self.cone):
             return 0
         return 2 if sin_bearing > 0 else 3

@@ -27,20 +27,17 @@ key of the fine grid.
 
 from __future__ import annotations
 
-import io
 import logging
 import math
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
 
-from skidnav.atomicfile import remove_stale_temporaries, write_atomic
 from skidnav.errors import CorruptFileError
 from skidnav.experiments.finegrid import FineStates, TablePolicy, state_grid
 from skidnav.experiments.metrics import path_length
-from skidnav.experiments.oracle import _key, cache_dir, solve
+from skidnav.experiments.oracle import _key, cache_dir, solve, write_cache
 from skidnav.experiments.trial import ExperimentRun, greedy_rollout, make_env
 from skidnav.savedfile import ArraySpec, SavedArchive
 from skidnav.seeding import seed_int
@@ -118,21 +115,8 @@ def load_or_compute_optimum(
             logger.warning("optimum cache unreadable, computing it again: %s", error)
     logger.info("continuous optimum on %s × %s × %s states", *levels)
     optimum = compute_optimum(env, levels, n_samples, seed, seeds, max_steps)
-    _save(path, optimum)
+    write_cache(path, optimum._asdict(), "optimum")
     return optimum
-
-
-def _save(path: Path, optimum: Optimum) -> None:
-    """Write ``optimum`` atomically (a failure to cache is only logged)."""
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        remove_stale_temporaries(path.parent)
-        buffer = io.BytesIO()
-        arrays = {name: np.float64(value) for name, value in optimum._asdict().items()}
-        np.savez(buffer, **arrays)  # type: ignore[arg-type]
-        write_atomic(path, buffer.getvalue())
-    except OSError as error:
-        logger.warning("could not cache the optimum in %s: %s", path, error)
 
 
 def best_optimum(optima: Sequence[Optimum]) -> int:

@@ -33,10 +33,9 @@ the task stays the world's own: only the states a policy sees are finer.
 from __future__ import annotations
 
 import hashlib
-import io
 import logging
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
 
@@ -44,7 +43,7 @@ import numpy as np
 
 from skidnav.agents.fast_training import evaluate_q_fast
 from skidnav.agents.training import greedy_rollout
-from skidnav.atomicfile import remove_stale_temporaries, write_atomic
+from skidnav.atomicfile import remove_stale_temporaries, write_npz_atomic
 from skidnav.errors import CorruptFileError
 from skidnav.experiments.finegrid import TablePolicy, fine_grid, goal_states, refined_task
 from skidnav.kernels.oracle import (
@@ -212,7 +211,7 @@ def load_or_compute_oracle(
         except CorruptFileError as error:
             logger.warning("oracle cache unreadable, computing it again: %s", error)
     oracle = compute_oracle(env, n_samples, seed, seeds, max_steps)
-    _save(path, oracle)
+    write_cache(path, oracle._asdict(), "oracle")
     return oracle
 
 
@@ -235,14 +234,12 @@ def _load(path: Path, shape: tuple[int, int], n_seeds: int) -> Oracle:
     )  # fmt: skip
 
 
-def _save(path: Path, oracle: Oracle) -> None:
-    """Write ``oracle`` to ``path`` atomically (a failure to cache is only logged); first remove
-    the temporaries of cache writers that died."""
+def write_cache(path: Path, arrays: Mapping[str, Any], what: str) -> None:
+    """Write ``arrays`` to the cache file ``path`` atomically (a failure to cache is only logged,
+    naming ``what``); first remove the temporaries of cache writers that died."""
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         remove_stale_temporaries(path.parent)
-        buffer = io.BytesIO()
-        np.savez(buffer, **oracle._asdict())
-        write_atomic(path, buffer.getvalue())
+        write_npz_atomic(path, {name: np.asarray(value) for name, value in arrays.items()})
     except OSError as error:
-        logger.warning("could not cache the oracle in %s: %s", path, error)
+        logger.warning("could not cache the %s in %s: %s", what, path, error)
