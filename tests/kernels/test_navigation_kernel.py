@@ -143,6 +143,7 @@ def test_task_arrays_give_back_the_task() -> None:
 def test_step_arrays_is_transition() -> None:
     from skidnav.kernels.navigation import draw_noise, transition
     from skidnav.kernels.navigation_api import step_arrays, task_arrays
+    from skidnav.robot.kinematics import commanded_wheel_speeds
 
     fast_env, env = _slippery_env(), _slippery_env()
     poses = _free_poses(env, 100, np.random.default_rng(4))
@@ -153,7 +154,8 @@ def test_step_arrays_is_transition() -> None:
         pose, fast_pose = poses[k].copy(), poses[k].copy()
         draw_noise(rng, noise)
         outcome = transition(env.task, pose, int(action), 0.3 * k, noise, log)
-        fast = step_arrays(*arrays, fast_pose, int(action), 0.3 * k, noise, fast_log)
+        commands = commanded_wheel_speeds(int(action), env.robot.wheel_speed)
+        fast = step_arrays(*arrays, fast_pose, *commands, 0.3 * k, noise, fast_log)
         assert fast == tuple(outcome)
         assert pose.tobytes() == fast_pose.tobytes()
         assert log[: outcome.n_logged].tobytes() == fast_log[: outcome.n_logged].tobytes()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 from typing import Any
@@ -17,7 +18,7 @@ from skidnav.kernels.navigation import NavigationTask, RewardScheme
 from skidnav.kernels.navigation_api import build_task, step_arrays, task_arrays
 from skidnav.physics.mdp import floor_materials, physics_transition
 from skidnav.physics.robot import PhysicsRobot
-from skidnav.robot.kinematics import wrap_angle
+from skidnav.robot.kinematics import commanded_wheel_speeds, wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
 from skidnav.seeding import ARENA_ROLES, streams
@@ -26,6 +27,7 @@ from skidnav.world.grid import GridMap
 from skidnav.world.maps import build_map
 
 OBSERVATION_KINDS = ("discrete", "pose", "features")
+ACTION_KINDS = ("discrete", "continuous")
 VARIANCE_SOURCES = ("true", "observed")
 DYNAMICS = ("kinematic", "mujoco")
 
@@ -42,7 +44,11 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
 
     ## Action Space
     ``Discrete(4)``: 0 forward (both wheels +1.7 rad/s), 1 backward (both −1.7), 2 turn left
-    (ω_L −1.7, ω_R +1.7), 3 turn right (ω_L +1.7, ω_R −1.7).
+    (ω_L −1.7, ω_R +1.7), 3 turn right (ω_L +1.7, ω_R −1.7). With ``action="continuous"``:
+    ``Box(−1.7, 1.7, (2,), float32)`` of the wheel speeds (ω_L, ω_R) [rad/s] held through the
+    action (the thesis's range, ± ``robot.wheel_speed``); an action outside the box is clipped to
+    it (the motors saturate), a non-finite one refused. (1.7, 1.7) is the forward action, the
+    same trajectory bit for bit, and so on for the other three.
 
     ## Observation Space
     ``Discrete(n_x · n_y · n_headings)`` (12,500 by default): the flat index
@@ -89,7 +95,10 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     ``reset`` is given a seed); ``robot`` (:class:`RobotParams`, e.g. ``integrator="exact"``);
     ``discretization``; ``observation`` ("discrete", "pose", "features"); ``lidar_rays`` (k ≥ 0,
     default 8) and ``lidar_range`` [m] (> 0, default 0.3) of the features; ``variance``;
-    ``render_mode`` ("rgb_array" or "ansi");
+    ``render_mode`` ("rgb_array" or "ansi"); ``action`` ("discrete", the default, or
+    "continuous"); ``control_period`` [s]: the duration of one action, a whole number of the
+    robot's sub-steps of ``robot.dt`` (default ``robot.action_duration``, 1 s: the robot's
+    ``substeps`` are replaced by ``control_period / dt``);
     ``dynamics``: "kinematic" (the ICR model of SPEC §1, the default) or "mujoco" (the MuJoCo
     robot of :mod:`skidnav.physics`, the ``physics`` extra: the same spaces, rewards, walls and
     episode rules, the slip field's wheel-speed loss applied to the servo set points, the motion
@@ -114,7 +123,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     v0: initial version; truncation moved from the env to Gymnasium's ``TimeLimit`` (same
     limit, 500 actions, when made with ``gymnasium.make``); ``dynamics`` and ``floor`` added
     (the default ``dynamics="kinematic"`` gives the same numbers as before);
-    ``observation="features"`` with ``lidar_rays`` and ``lidar_range`` added.
+    ``observation="features"`` with ``lidar_rays`` and ``lidar_range`` added; ``action`` and
+    ``control_period`` added (the defaults give the same numbers as before).
     """
 
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 10}  # noqa: RUF012
@@ -139,10 +149,12 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         floor: str | None = None,
         lidar_rays: int = 8,
         lidar_range: float = 0.3,
+        action: str = "discrete",
+        control_period: float | None = None,
     ) -> None:
-        self._check_choices(render_mode, observation, variance, dynamics)
+        self._check_choices(render_mode, observation, variance, dynamics, action)
         self.render_mode = render_mode
-        self.robot = robot or RobotParams()
+        self.robot = with_control_period(robot or RobotParams(), control_period)
         world = streams(world_seed, ARENA_ROLES)
         map_rng, slip_rng = world["map"], world["slip"]
         self.grid_map = _resolve_map(grid_map, map_file, map_kind, map_rng, discretization)
@@ -168,7 +180,9 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         self._task_arrays = task_arrays(self.task)
         self.observation_kind = observation
         self.features = PoseFeatures(self.grid_map, self.discretization, lidar_rays, lidar_range)
-        self.action_space = spaces.Discrete(4)  # type: ignore[assignment]
+        self.action_kind = action
+        self.action_space = action_space(action, self.robot)
+        self._commands = [commanded_wheel_speeds(a, self.robot.wheel_speed) for a in range(4)]
         self.observation_space = self._observation_space()
         self.pose = np.zeros(3)
         self.time = 0.0
@@ -183,10 +197,10 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
 
     @classmethod
     def _check_choices(
-        cls, render_mode: str | None, observation: str, variance: str, dynamics: str
+        cls, render_mode: str | None, observation: str, variance: str, dynamics: str, action: str
     ) -> None:
-        """ValueError unless the render mode, observation, variance source and dynamics are
-        known."""
+        """ValueError unless the render mode, observation, variance source, dynamics and action
+        kind are known."""
         if render_mode is not None and render_mode not in cls.metadata["render_modes"]:
             raise ValueError(
                 f"expected render_mode in {cls.metadata['render_modes']}, got {render_mode!r}"
@@ -197,6 +211,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
             raise ValueError(f"expected variance in {VARIANCE_SOURCES}, got {variance!r}")
         if dynamics not in DYNAMICS:
             raise ValueError(f"expected dynamics in {DYNAMICS}, got {dynamics!r}")
+        if action not in ACTION_KINDS:
+            raise ValueError(f"expected action in {ACTION_KINDS}, got {action!r}")
 
     def _physics_robot(self, preset: str) -> PhysicsRobot:
         """The MuJoCo robot on this env's floor (materials of ``floor``, else of the slip preset
@@ -241,26 +257,36 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         region = self.discretization.region(x, y)
         return self._observation(state), self._info(state, False, (0.0, 0.0), region, 0)
 
-    def step(self, action: int) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         """Apply one action (10 sub-steps of 0.1 s by default); never truncates (see class doc)."""
-        if type(action) is not int or not 0 <= action < 4:  # the common case checked fast
-            if not self.action_space.contains(action):
-                raise ValueError(f"expected an action in 0..3, got {action!r}")
-            action = int(action)
+        commands = self.wheel_commands(action)
         self.np_random.random(out=self._noise)  # the same draws as ``random(2 · substeps)``
         if self.physics_robot is None:
             outcome = step_arrays(
-                *self._task_arrays, self.pose, action, self.time, self._noise, self._log
+                *self._task_arrays, self.pose, *commands, self.time, self._noise, self._log
             )
         else:
             outcome = physics_transition(
-                self.task, self.physics_robot, self.pose, action, self.time, self._noise, self._log
-            )
+                self.task, self.physics_robot, self.pose, commands, self.time, self._noise,
+                self._log,
+            )  # fmt: skip
         reward, terminated, collided, n_logged, omega_left, omega_right, state, region = outcome
         self.time += self._action_duration
         info = self._info(state, collided, (omega_left, omega_right), region, n_logged)
         self.trail.append(info["pose"][:2])
         return self._observation(state), float(reward), bool(terminated), False, info
+
+    def wheel_commands(self, action: Any) -> tuple[float, float]:
+        """The wheel speeds (ω_L, ω_R) [rad/s] an action of this env commands; ValueError for an
+        action the action space does not hold (continuous: a non-finite or misshapen one; a
+        finite one outside the box is clipped)."""
+        if self.action_kind == "continuous":
+            return clipped_wheel_speeds(action, self.robot.wheel_speed)
+        if type(action) is not int or not 0 <= action < 4:  # the common case checked fast
+            if not self.action_space.contains(action):
+                raise ValueError(f"expected an action in 0..3, got {action!r}")
+            action = int(action)
+        return self._commands[action]  # type: ignore[no-any-return]
 
     def state(self) -> int:
         """Flat discrete state of the current pose."""
@@ -301,6 +327,43 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
                 self.robot.body_length,
             )
         return None
+
+
+def with_control_period(robot: RobotParams, control_period: float | None) -> RobotParams:
+    """``robot`` with ``control_period`` [s] per action (its ``substeps`` replaced by
+    ``control_period / robot.dt``), or unchanged for None; ValueError unless the period is a
+    whole number ≥ 1 of sub-steps."""
+    if control_period is None:
+        return robot
+    substeps = round(control_period / robot.dt) if math.isfinite(control_period) else 0
+    if substeps < 1 or abs(substeps * robot.dt - control_period) > 1e-9:
+        raise ValueError(
+            f"expected control_period to be a whole number >= 1 of the robot's {robot.dt} s "
+            f"sub-steps, got {control_period!r}"
+        )
+    return dataclasses.replace(robot, substeps=substeps)
+
+
+def action_space(kind: str, robot: RobotParams) -> spaces.Space[Any]:
+    """The action space of ``kind``: ``Discrete(4)``, or for "continuous" the box of wheel
+    speeds (ω_L, ω_R) within ± ``robot.wheel_speed`` [rad/s], float32."""
+    if kind == "discrete":
+        return spaces.Discrete(4)
+    limit = np.float32(robot.wheel_speed)
+    return spaces.Box(low=-limit, high=limit, shape=(2,), dtype=np.float32)
+
+
+def clipped_wheel_speeds(action: Any, limit: float) -> tuple[float, float]:
+    """A continuous action (ω_L, ω_R) [rad/s] as two floats clipped to ± ``limit``; ValueError
+    unless it holds two finite numbers."""
+    try:
+        values = np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"expected an action of two wheel speeds, got {action!r}") from None
+    if values.shape != (2,) or not np.isfinite(values).all():
+        raise ValueError(f"expected an action of two finite wheel speeds, got {action!r}")
+    left, right = values.tolist()
+    return min(max(left, -limit), limit), min(max(right, -limit), limit)
 
 
 def _check_same_arena(robot: RobotParams, discretization: Discretization) -> None:

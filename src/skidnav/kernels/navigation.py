@@ -235,10 +235,18 @@ def substep(
 
 
 @inline_jit
+def records_variance(rewards: RewardScheme, commands: tuple[float, float]) -> bool:
+    """Whether an action commanding ``commands`` (ω_L, ω_R) [rad/s] adds its wheel speeds to the
+    observed variance (``variance="observed"``): a straight forward drive, equal positive
+    commands — the discrete forward action, as the thesis measured it."""
+    return rewards.observed_variance and commands[0] == commands[1] and commands[0] > 0.0
+
+
+@inline_jit
 def simulate_action(
     task: NavigationTask,
     pose: np.ndarray,
-    action: int,
+    commands: tuple[float, float],
     time: float,
     noise: np.ndarray,
     log: np.ndarray,
@@ -246,16 +254,17 @@ def simulate_action(
     """Move the robot through one action, updating ``pose`` (x, y, heading) in place.
 
     Args:
-        task: the MDP. pose: float64 (3,) [m, m, rad]. action: 0–3. time: simulated time at the
-            start of the action [s]. noise: float64 (2·substeps,) uniforms in [0, 1). log: float64
-            (≥ substeps, 6) receiving one row per free sub-step (see :data:`LOG_COLUMNS`).
+        task: the MDP. pose: float64 (3,) [m, m, rad]. commands: the wheel speeds (ω_L, ω_R)
+            [rad/s] held through the action (a discrete action's :func:`commanded_wheel_speeds`).
+            time: simulated time at the start of the action [s]. noise: float64 (2·substeps,)
+            uniforms in [0, 1). log: float64 (≥ substeps, 6) receiving one row per free sub-step
+            (see :data:`LOG_COLUMNS`).
 
     Returns:
         (collided, rows logged, ω_L and ω_R of the last sub-step [rad/s]).
     """
     robot, grid = task.robot, task.grid
-    commands = commanded_wheel_speeds(action, robot.wheel_speed)
-    record = action == 0 and task.rewards.observed_variance
+    record = records_variance(task.rewards, commands)
     x, y, heading = pose[0], pose[1], pose[2]
     region = region_of(x, y, grid)
     omega_left = omega_right = 0.0
@@ -295,6 +304,23 @@ def action_reward(rewards: RewardScheme, at_goal: bool, collided: bool, variance
 
 
 @inline_jit
+def command_transition(
+    task: NavigationTask,
+    pose: np.ndarray,
+    commands: tuple[float, float],
+    time: float,
+    noise: np.ndarray,
+    log: np.ndarray,
+) -> Outcome:
+    """One step of the MDP driven by the wheel speeds ``commands`` (ω_L, ω_R) [rad/s]: simulate
+    the action, then score it (see module doc); arguments as :func:`simulate_action`."""
+    collided, n_logged, omega_left, omega_right = simulate_action(
+        task, pose, commands, time, noise, log
+    )
+    return score_action(task, pose, time, collided, n_logged, omega_left, omega_right)
+
+
+@inline_jit
 def transition(
     task: NavigationTask,
     pose: np.ndarray,
@@ -303,11 +329,10 @@ def transition(
     noise: np.ndarray,
     log: np.ndarray,
 ) -> Outcome:
-    """One step of the MDP: simulate the action, then score it (see module doc)."""
-    collided, n_logged, omega_left, omega_right = simulate_action(
-        task, pose, action, time, noise, log
-    )
-    return score_action(task, pose, time, collided, n_logged, omega_left, omega_right)
+    """One step of the MDP for a discrete action 0–3 (:func:`command_transition` of its wheel
+    speeds, :func:`commanded_wheel_speeds`)."""
+    commands = commanded_wheel_speeds(action, task.robot.wheel_speed)
+    return command_transition(task, pose, commands, time, noise, log)
 
 
 @inline_jit

@@ -1,9 +1,11 @@
 """The navigation MDP on the physical robot: one action of the MuJoCo robot, scored by the
 kinematic MDP's own rules (SPEC §3, §7).
 
-:func:`physics_transition` is the physics twin of :func:`skidnav.kernels.navigation.transition`
-(and :func:`simulate_physics_action` of ``simulate_action``). One action = ``substeps``
-sub-steps of ``dt`` seconds; in each, with the robot in slip region ρ at simulated time t:
+:func:`physics_transition` is the physics twin of
+:func:`skidnav.kernels.navigation.command_transition` (and :func:`simulate_physics_action` of
+``simulate_action``): one action holds the wheel speeds (ω_L, ω_R) [rad/s] of a discrete action
+or of a continuous one for ``substeps`` sub-steps of ``dt`` seconds; in each, with the robot in
+slip region ρ at simulated time t:
 
 1. η of ρ at the sub-step's start (:func:`~skidnav.kernels.navigation.slip_scale`: the slip
    field, drifting or not);
@@ -19,9 +21,9 @@ sub-steps of ``dt`` seconds; in each, with the robot in slip region ρ at simula
    the sub-step's measured mean body twist, so the kinematic models learn the physics' slip.
 
 With the observed variance (``RewardScheme.observed_variance``) the wheel set points of forward
-actions feed the region's running statistics, as in the kinematic kernel. Reward, termination,
-state and region come from the kernels' ``score_action`` (and ``cell_of``, ``region_of``): the
-rules exist once.
+actions (:func:`~skidnav.kernels.navigation.records_variance`) feed the region's running
+statistics, as in the kinematic kernel. Reward, termination, state and region come from the
+kernels' ``score_action`` (and ``cell_of``, ``region_of``): the rules exist once.
 
 The caller owns the pose (x [m], y [m], heading [rad], the heading unwrapped as in the kinematic
 env); the MuJoCo robot holds the velocities. A pose changed outside (a reset) puts the robot
@@ -37,13 +39,14 @@ from skidnav.kernels.navigation import (
     Outcome,
     _log_row,
     _record_wheel_speed,
+    records_variance,
     score_action,
     slip_scale,
 )
 from skidnav.physics.materials import MATERIALS, region_materials
 from skidnav.physics.mjcf import uniform_floor
 from skidnav.physics.robot import PhysicsRobot
-from skidnav.robot.kinematics import commanded_wheel_speeds, wrap_angle
+from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField
 from skidnav.world.discretization import cell_of, region_of
@@ -89,7 +92,7 @@ def simulate_physics_action(
     task: NavigationTask,
     body: PhysicsRobot,
     pose: np.ndarray,
-    action: int,
+    commands: tuple[float, float],
     time: float,
     noise: np.ndarray,
     log: np.ndarray,
@@ -98,16 +101,16 @@ def simulate_physics_action(
 
     Args:
         task: the MDP (walls, slip field, robot timing, rewards). body: the MuJoCo robot.
-            pose: float64 (3,) [m, m, rad]. action: 0–3. time: simulated time at the start of
-            the action [s]. noise: float64 (2·substeps,) uniforms in [0, 1). log: float64
-            (≥ substeps, 6) receiving one row per free sub-step.
+            pose: float64 (3,) [m, m, rad]. commands: the wheel speeds (ω_L, ω_R) [rad/s] held
+            through the action. time: simulated time at the start of the action [s]. noise:
+            float64 (2·substeps,) uniforms in [0, 1). log: float64 (≥ substeps, 6) receiving
+            one row per free sub-step.
 
     Returns:
         (collided, rows logged, measured ω_L and ω_R at the end of the last sub-step [rad/s]).
     """
     robot, grid = task.robot, task.grid
-    commands = commanded_wheel_speeds(action, robot.wheel_speed)
-    record = action == 0 and task.rewards.observed_variance
+    record = records_variance(task.rewards, commands)
     synchronize(body, pose)
     x, y, heading = float(pose[0]), float(pose[1]), float(pose[2])
     region = region_of(x, y, grid)
@@ -140,7 +143,7 @@ def physics_transition(
     task: NavigationTask,
     body: PhysicsRobot,
     pose: np.ndarray,
-    action: int,
+    commands: tuple[float, float],
     time: float,
     noise: np.ndarray,
     log: np.ndarray,
@@ -149,6 +152,6 @@ def physics_transition(
     by :func:`skidnav.kernels.navigation.score_action`, as the kinematic transition is
     (arguments as there)."""
     collided, n_logged, omega_left, omega_right = simulate_physics_action(
-        task, body, pose, action, time, noise, log
+        task, body, pose, commands, time, noise, log
     )
     return score_action(task, pose, time, collided, n_logged, omega_left, omega_right)
