@@ -13,6 +13,7 @@ from skidnav.envs.navigation import SkidSteerNavEnv
 DIGEST_SCRIPT = """
 import hashlib, numpy as np, skidnav
 from skidnav.envs.navigation import SkidSteerNavEnv
+from skidnav.envs.vector import SkidSteerNavVectorEnv
 from skidnav.kernels.navigation import simulate_batch
 from skidnav.robot.params import RobotParams
 parts = []
@@ -32,6 +33,13 @@ for integrator in ("euler", "exact"):
     actions = np.arange(64) % 4
     simulate_batch(env.task, poses, actions, 3.0, np.random.default_rng(5), rewards, states)
     parts += [poses.tobytes(), rewards.tobytes(), states.tobytes()]
+    vector = SkidSteerNavVectorEnv(16, 30, map_kind="obstacles", world_seed=3, slip="slippery",
+                                   robot=RobotParams(integrator=integrator), variance="observed",
+                                   observation="features", action="continuous")
+    vector.reset(seed=4)
+    for commands in np.random.default_rng(3).uniform(-2, 2, (60, 16, 2)):
+        observations, rewards, terminated, truncated, _ = vector.step(commands)
+        parts += [observations.tobytes(), rewards.tobytes(), terminated.tobytes()]
 print(hashlib.sha256(b"".join(parts)).hexdigest())
 """
 

@@ -24,11 +24,13 @@ registered without a time limit, as the book runs them (episodes end at the goal
 
 def register_envs() -> None:
     """Register ``skidnav/SkidSteerNav-v0`` (truncated by Gymnasium's ``TimeLimit`` after
-    :data:`MAX_EPISODE_STEPS` actions) and the grid mazes (idempotent)."""
+    :data:`MAX_EPISODE_STEPS` actions; ``gymnasium.make_vec`` makes its compiled vector env,
+    :mod:`skidnav.envs.vector`) and the grid mazes (idempotent)."""
     if ENV_ID not in gymnasium.registry:
         gymnasium.register(
             id=ENV_ID,
             entry_point="skidnav.envs.navigation:SkidSteerNavEnv",
+            vector_entry_point="skidnav.envs.vector:make_vector_env",
             max_episode_steps=MAX_EPISODE_STEPS,
         )
     for env_id, entry_point in MAZE_IDS.items():
