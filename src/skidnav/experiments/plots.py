@@ -1,4 +1,5 @@
-"""Figures of an experiment, as PNG bytes (the only module of skidnav that imports matplotlib).
+"""Figures of an experiment, as PNG bytes (with :mod:`skidnav.experiments.trajectory_plot`, the
+only modules of skidnav that import matplotlib).
 
 Every figure function takes the tidy tables (or run arrays) and returns PNG bytes, so the report
 embeds them without touching matplotlib. The Agg backend is forced: no display is needed.
@@ -164,8 +165,6 @@ def metric_strips(
 def draw_arena(axes: Axes, run: TrialResult, *, slip: bool = True) -> None:
     """Walls, slip regions (η shading), start (green), goal (red) of one run's world."""
     occupancy = run.arrays["occupancy"].astype(bool)
-    n_x, n_y = occupancy.shape
-    cell_w, cell_h = ARENA[0] / (n_x - 1), ARENA[1] / (n_y - 1)
     if slip:
         eta = run.arrays["slip_eta"]
         region_w, region_h = ARENA[0] / (eta.shape[0] - 1), ARENA[1] / (eta.shape[1] - 1)
@@ -178,6 +177,17 @@ def draw_arena(axes: Axes, run: TrialResult, *, slip: bool = True) -> None:
             extent=(0, eta.shape[0] * region_w, 0, eta.shape[1] * region_h),
             alpha=0.6,
         )
+    draw_cells(axes, occupancy, tuple(run.arrays["start"]), tuple(run.arrays["goal"]))
+
+
+def draw_cells(
+    axes: Axes, occupancy: np.ndarray, start: tuple[int, int], goal: tuple[int, int]
+) -> None:
+    """Walls (``occupancy`` bool (n_x, n_y), True = wall), the start (green) and goal (red)
+    cells on the arena's cells (W / (n_x − 1) by H / (n_y − 1) [m], as the discretization's),
+    equal aspect."""
+    n_x, n_y = occupancy.shape
+    cell_w, cell_h = ARENA[0] / (n_x - 1), ARENA[1] / (n_y - 1)
     walls = np.ma.masked_where(~occupancy.T, np.ones_like(occupancy.T, dtype=float))
     axes.imshow(
         walls,
@@ -187,8 +197,7 @@ def draw_arena(axes: Axes, run: TrialResult, *, slip: bool = True) -> None:
         vmax=1.2,
         extent=(0, n_x * cell_w, 0, n_y * cell_h),
     )
-    for key, color in (("start", "green"), ("goal", "red")):
-        i, j = run.arrays[key]
+    for (i, j), color in ((start, "green"), (goal, "red")):
         axes.add_patch(Rectangle((i * cell_w, j * cell_h), cell_w, cell_h, color=color, alpha=0.8))
     axes.set_xlim(0, n_x * cell_w)
     axes.set_ylim(0, n_y * cell_h)
