@@ -22,6 +22,12 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument(
         "-o", "--output", type=Path, default=None, help="output file (default: RUN_DIR/report.html)"
     )
+    parser.add_argument(
+        "--study",
+        action="store_true",
+        help="instead: RUN_DIR/study.md, the real-robot study's tables (success per agent and "
+        "floor, rough vs slippery, minus the baseline), e.g. of configs/physics-study.toml",
+    )
     parser.set_defaults(func=report_command)
 
 
@@ -29,7 +35,19 @@ def report_command(args: argparse.Namespace) -> int:
     """Write the report; print its path."""
     if not args.run_dir.is_dir():
         raise UserError(f"{args.run_dir}: no such results directory")
+    if args.study:
+        return study_command(args.run_dir, args.output or args.run_dir / "study.md")
     from skidnav.experiments.report import write_report
 
     print(f"report: {write_report(args.run_dir, args.output)}")
+    return 0
+
+
+def study_command(run_dir: Path, output: Path) -> int:
+    """Write the study's tables of ``run_dir`` to ``output``; print its path."""
+    from skidnav.atomicfile import write_user_file
+    from skidnav.realtime.experiment_study import experiment_study_report
+
+    write_user_file(output, experiment_study_report(run_dir).encode("utf-8"), "study tables")
+    print(f"study tables: {output}")
     return 0
