@@ -23,6 +23,8 @@ SUBCOMMAND_MODULES = {
     "transfer": "skidnav.commands.transfer",
     "generalise": "skidnav.commands.generalise",
     "kinematic": "skidnav.commands.kinematic",
+    "continuity": "skidnav.commands.continuity",
+    "search": "skidnav.commands.search",
 }
 """Subcommand name → the module that adds it (``add_parser(subparsers)``)."""
 
