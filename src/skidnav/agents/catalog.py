@@ -10,7 +10,8 @@ Three families, each with its own registry:
   which the compiled trainer falls back for them);
 * **deep** (:data:`DEEP_AGENTS`, the ``deep`` extra): Stable-Baselines3 owns the loop, and the
   agent trains itself by episodes with the same greedy evaluations
-  (:meth:`skidnav.agents.deep.dqn.DQNAgent.train`).
+  (:meth:`skidnav.agents.deep.common.DeepAgent.train_episodes`); ``ppo`` and ``sac`` need the
+  env's ``action="continuous"`` and ``observation="features"``.
 
 Every family returns the same :class:`~skidnav.agents.training.TrainingLog`, and every agent
 answers ``greedy_action(observation)``, so the runner measures them alike.
@@ -37,7 +38,11 @@ from skidnav.agents.registry import AGENT_MODULES, agent_class, make_agent, make
 from skidnav.agents.training import TrainingLog
 from skidnav.errors import UserError, first_line, shown
 
-DEEP_AGENTS: dict[str, str] = {"dqn": "skidnav.agents.deep.dqn"}
+DEEP_AGENTS: dict[str, str] = {
+    "dqn": "skidnav.agents.deep.dqn",
+    "ppo": "skidnav.agents.deep.ppo",
+    "sac": "skidnav.agents.deep.sac",
+}
 """Registry name → module defining ``AGENT_NAME``, ``AGENT_CLASS`` and ``CONFIG_CLASS``."""
 
 
@@ -117,13 +122,14 @@ def build_agent(
             f"agent {name!r} learns over a {wanted.__name__} observation, the env gives "
             f"{type(space).__name__} (set [env] observation)"
         )
-    n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
     rng = np.random.default_rng(seed)
     if kind == "tabular":
         context = agent_context(name, env)
+        n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
         return make_agent(name, int(space.n), n_actions, dict(params), rng, **context)  # type: ignore[union-attr]
     if kind == "linear":
         context = agent_context(name, env)
+        n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
         return make_linear_agent(name, space, n_actions, dict(params), rng, **context)  # type: ignore[arg-type]
     module = _deep_module(name)
     config = module.CONFIG_CLASS.from_mapping(dict(params))
