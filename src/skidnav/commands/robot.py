@@ -1,8 +1,9 @@
 """``skidnav robot``: the real-time platform (docs/realtime.md).
 
 ``skidnav robot sim-server`` runs the simulated robot server; ``skidnav robot run`` runs an agent
-in real time against a robot driver; ``skidnav robot study`` runs agents × presets × seeds against
-the sim server through the experiment runner and tabulates success (realtime/study.py).
+(or a frozen continuous policy) in real time against a robot driver; ``skidnav robot study``
+runs agents × presets × seeds against the sim server through the experiment runner and
+tabulates success (realtime/study.py).
 """
 
 from __future__ import annotations
@@ -164,8 +165,15 @@ def _add_run(commands: Any) -> None:
     run.add_argument(
         "--driver", choices=("sim", "tcp", "serial", "ros2"), default="sim", help="robot link"
     )
-    run.add_argument(
-        "--agent", required=True, help="agent name (q-learning, dyna-q, dyna-kinematic, …)"
+    pilot = run.add_mutually_exclusive_group(required=True)
+    pilot.add_argument("--agent", help="agent name (q-learning, dyna-q, dyna-kinematic, …)")
+    pilot.add_argument(
+        "--policy", help="a continuous policy by name (goal-tracker), frozen: it does not learn"
+    )
+    pilot.add_argument(
+        "--policy-file",
+        type=Path,
+        help="a saved continuous policy (its JSON file), loaded by the loader of its format",
     )
     run.add_argument("--config", type=Path, help="real-time TOML config (configs/realtime.toml)")
     run.add_argument("--preset", help="a [presets.NAME] table of the config to apply")

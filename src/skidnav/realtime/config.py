@@ -1,7 +1,8 @@
 """Configuration of a real-time run, read from TOML (configs/realtime.toml, docs/realtime.md).
 
 Tables: ``[run]`` (:class:`RunSettings`), ``[sim]`` (:class:`SimSettings`), ``[tcp]``,
-``[serial]``, ``[ros2]`` (driver options), ``[agents.NAME]`` (the agent's hyperparameters) and
+``[serial]``, ``[ros2]`` (driver options), ``[agents.NAME]`` (the agent's hyperparameters),
+``[policies.NAME]`` (a named continuous policy's settings, realtime/policies.py) and
 ``[presets.NAME]`` (tables merged over the others when the preset is chosen). The sim server's
 own options (:class:`ServerOptions`, from ``skidnav robot sim-server``) are here too.
 """
@@ -25,7 +26,7 @@ from skidnav.world.grid import MAP_KINDS
 
 DRIVER_TABLES = ("tcp", "serial", "ros2")
 """The tables of driver options."""
-TOP_TABLES = ("run", "sim", *DRIVER_TABLES, "agents", "study")
+TOP_TABLES = ("run", "sim", *DRIVER_TABLES, "agents", "policies", "study")
 """The tables of a config besides ``[presets]`` (``[study]``: :mod:`skidnav.realtime.study`)."""
 FAULTS = ("silence", "garbage", "oversized", "escape", "hangup")
 """Faults the sim server can inject for tests (realtime/sim/server.py)."""
@@ -227,6 +228,7 @@ class RealtimeConfig:
     sim: SimSettings = field(default_factory=SimSettings)
     drivers: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     agents: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    policies: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
 
 
 def _merge(base: dict[str, Any], override: Mapping[str, Any]) -> dict[str, Any]:
@@ -251,11 +253,15 @@ def config_from_mapping(data: Mapping[str, Any], preset: str | None = None) -> R
         tables = _merge(tables, table(presets[preset], f"[presets.{preset}]"))
     check_keys(tables, TOP_TABLES, "top level")
     agents = table(tables.get("agents", {}), "[agents]")
+    policies = table(tables.get("policies", {}), "[policies]")
     return RealtimeConfig(
         run=build_dataclass(RunSettings, tables.get("run", {}), "[run]"),
         sim=build_dataclass(SimSettings, tables.get("sim", {}), "[sim]"),
         drivers={name: dict(table(tables.get(name, {}), f"[{name}]")) for name in DRIVER_TABLES},
         agents={name: dict(table(value, f"[agents.{name}]")) for name, value in agents.items()},
+        policies={
+            name: dict(table(value, f"[policies.{name}]")) for name, value in policies.items()
+        },
     )
 
 

@@ -2,7 +2,8 @@
 
 Layout under ``OUT/checkpoints/``::
 
-    ep-00004/agent.npz, agent.json   the agent (agent.save)
+    ep-00004/agent.npz, agent.json   the agent (agent.save; absent in a policy's run: it
+                                     does not learn)
     ep-00004/loop.json               the loop state (episode results, wheel-speed statistics, …)
     latest.json                      {"episode": 4, "directory": "ep-00004"}
 
@@ -56,15 +57,17 @@ class Checkpoints:
         self.root = root
         self.keep = keep
 
-    def save(self, episode: int, agent: TabularAgent, loop_state: dict[str, Any]) -> Path:
-        """Write the checkpoint after ``episode`` (0-based) and point ``latest.json`` to it."""
+    def save(self, episode: int, agent: TabularAgent | None, loop_state: dict[str, Any]) -> Path:
+        """Write the checkpoint after ``episode`` (0-based) and point ``latest.json`` to it;
+        ``agent`` None (a frozen policy) writes the loop state only."""
         name = directory_name(episode)
         directory = self.root / name
         if directory.exists():
             shutil.rmtree(directory)
         directory.mkdir(parents=True)
         remove_stale_temporaries(self.root, LATEST)
-        agent.save(directory / "agent")
+        if agent is not None:
+            agent.save(directory / "agent")
         _write_json(directory / "loop.json", loop_state)
         _write_json(self.root / LATEST, {"episode": episode, "directory": name})
         self._prune(name)

@@ -1,4 +1,5 @@
-"""Assembling a real-time run from the command line: config, map, agent, driver, loop, signals.
+"""Assembling a real-time run from the command line: config, map, agent or continuous policy,
+driver, loop, signals.
 
 Files written under ``--out`` (docs/realtime.md): ``run.jsonl`` (every command, pose, transition,
 safety event), ``checkpoints/`` (per episode), ``summary.json``, and for the ``sim`` driver the
@@ -22,12 +23,15 @@ import numpy as np
 
 from skidnav.atomicfile import write_user_file
 from skidnav.envs.step_info import step_info
-from skidnav.errors import UserError
+from skidnav.errors import UserError, shown
 from skidnav.realtime.arena import build_map, seed_streams
 from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
 from skidnav.realtime.control.checkpoint import Checkpoints
+from skidnav.realtime.control.episodes import EpisodeLoop
 from skidnav.realtime.control.loop import RealtimeLoop
+from skidnav.realtime.control.policy_loop import PolicyLoop
 from skidnav.realtime.link.drivers import make_driver
+from skidnav.realtime.policies import check_policy, select_policy
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
@@ -59,6 +63,11 @@ def _make_or_resume_agent(
         if latest is None:
             raise UserError(f"{args.out}: no checkpoint to resume from")
         episode, directory, state = latest
+        if "policy" in state:
+            raise UserError(
+                f"{directory}: checkpoint holds policy {shown(state['policy'])}, "
+                f"not agent {args.agent!r}"
+            )
         agent = load_agent(directory / "agent", **context)
         if agent.name != args.agent:
             raise UserError(
@@ -104,7 +113,7 @@ def warm_up_agent(
 
 
 @contextmanager
-def interrupt_handlers(loop: RealtimeLoop) -> Iterator[None]:
+def interrupt_handlers(loop: EpisodeLoop) -> Iterator[None]:
     """SIGINT and SIGTERM trip the safety monitor (and end an operator wait) while inside."""
 
     def handler(signum: int, frame: FrameType | None) -> None:
@@ -126,20 +135,30 @@ def run_from_args(
     progress: Callable[[str], None],
     wait_for_operator: Callable[[str], None],
 ) -> tuple[int, str]:
-    """Run ``skidnav robot run``; returns (exit code, one-line summary)."""
+    """Run ``skidnav robot run`` with ``--agent NAME``, or with a continuous policy
+    (``--policy NAME`` or ``--policy-file PATH``); returns (exit code, one-line summary)."""
     config = load_config(args.config, args.preset)
     config = with_overrides(
         config, episodes=args.episodes, time_scale=args.time_scale, reset=args.reset
     )
     robot, grid = RobotParams(), Discretization()
     grid_map = build_map(config.run.map, config.run.seed, grid)
-    out = output_directory(args.out)
-    context = agent_context(args.agent, robot, grid)
-    agent, first_episode, state = _make_or_resume_agent(args, config, context, grid)
-    warm_up_agent(args.agent, config, context, grid.n_states)
+    policy_name: str | None = None
+    if getattr(args, "agent", None) is None:
+        pilot, policy_name = select_policy(
+            getattr(args, "policy", None), getattr(args, "policy_file", None), config, robot
+        )
+        check_policy(pilot, policy_name, grid_map, grid)
+        out = output_directory(args.out)
+        first_episode, state = _resume_policy(args, policy_name)
+    else:
+        out = output_directory(args.out)
+        context = agent_context(args.agent, robot, grid)
+        pilot, first_episode, state = _make_or_resume_agent(args, config, context, grid)
+        warm_up_agent(args.agent, config, context, grid.n_states)
     code, loop = drive(
         args.driver,
-        agent,
+        pilot,
         grid_map,
         config,
         out,
@@ -148,8 +167,24 @@ def run_from_args(
         progress=progress,
         wait_for_operator=wait_for_operator,
         resume=(first_episode, state),
+        policy_name=policy_name,
     )
     return code, _summarize(loop, out, code)
+
+
+def _resume_policy(args: argparse.Namespace, label: str) -> tuple[int, dict[str, Any] | None]:
+    """(first episode, loop state to restore or None) of a policy's run; with ``--resume``
+    the newest checkpoint, which must be one of the same policy (UserError otherwise)."""
+    if not args.resume:
+        return 0, None
+    latest = Checkpoints(args.out / "checkpoints").latest()
+    if latest is None:
+        raise UserError(f"{args.out}: no checkpoint to resume from")
+    episode, directory, state = latest
+    if state.get("policy") != label:
+        holder = "an agent" if "policy" not in state else f"policy {shown(state['policy'])}"
+        raise UserError(f"{directory}: checkpoint holds {holder}, not policy {label!r}")
+    return episode + 1, state
 
 
 def drive(
@@ -164,11 +199,15 @@ def drive(
     progress: Callable[[str], None],
     wait_for_operator: Callable[[str], None] | None = None,
     resume: tuple[int, dict[str, Any] | None] = (0, None),
-) -> tuple[int, RealtimeLoop]:
+    policy_name: str | None = None,
+) -> tuple[int, EpisodeLoop]:
     """Connect driver ``driver_name`` (a sim server logs to ``out/sim-server.jsonl``), run the
     loop of ``agent`` with its files in ``out`` from episode ``resume[0]`` (loop state
     ``resume[1]`` restored first, if any), SIGINT and SIGTERM tripping its safety monitor, and
-    shut the driver down; returns (exit code of :meth:`RealtimeLoop.run`, the loop).
+    shut the driver down; returns (exit code of :meth:`EpisodeLoop.run`, the loop). With a
+    ``policy_name``, ``agent`` is a frozen continuous policy
+    (:class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`) run by :class:`PolicyLoop`;
+    else a tabular agent run by :class:`RealtimeLoop`.
 
     Raises:
         UserError: the robot cannot be reached.
@@ -181,17 +220,19 @@ def drive(
         shutdown()
         raise UserError(f"cannot connect to the robot ({driver_name}): {error}") from None
     try:
-        loop = RealtimeLoop(
-            driver,
-            agent,
-            grid_map,
-            config,
-            out,
-            robot=robot,
-            grid=grid,
-            progress=progress,
-            wait_for_operator=wait_for_operator,
-        )
+        common: dict[str, Any] = {
+            "robot": robot,
+            "grid": grid,
+            "progress": progress,
+            "wait_for_operator": wait_for_operator,
+        }
+        loop: EpisodeLoop
+        if policy_name is None:
+            loop = RealtimeLoop(driver, agent, grid_map, config, out, **common)
+        else:
+            loop = PolicyLoop(
+                driver, agent, grid_map, config, out, policy_name=policy_name, **common
+            )
         first_episode, state = resume
         if state is not None:
             loop.restore(state)
@@ -215,7 +256,7 @@ def output_directory(path: Path) -> Path:
     return path
 
 
-def _summarize(loop: RealtimeLoop, out: Path, code: int) -> str:
+def _summarize(loop: EpisodeLoop, out: Path, code: int) -> str:
     results = loop.results
     summary = {
         "exit_code": code,
