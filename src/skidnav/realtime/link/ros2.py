@@ -251,15 +251,16 @@ class Ros2Driver:
 
     def _on_pose(self, message: dict[str, Any]) -> None:
         """roslibpy's callback: keep the pose, or count and report why it was refused."""
+        # Each count follows its report: whoever sees a count has seen its on_fault call.
         try:
             self._accept(message)
         except PoseRefused as refusal:
-            self.refused_poses += 1
             self._report(f"refused pose on {self.config.pose_topic}: {refusal}")
+            self.refused_poses += 1
         except Exception as error:  # ValueError from the readers; the reader must outlive any
-            self.malformed_messages += 1
             detail = error if isinstance(error, ValueError) else f"{type(error).__name__}: {error}"
             self._report(f"malformed {self.config.pose_type} on {self.config.pose_topic}: {detail}")
+            self.malformed_messages += 1
 
     def _accept(self, message: Mapping[str, Any]) -> None:
         """Read, stamp and store one pose message (a tf message without our transform is skipped).
