@@ -54,6 +54,7 @@ from skidnav.kernels.vector_env import (
     observe_poses,
     vector_step,
 )
+from skidnav.robot.kinematics import commanded_wheel_speeds
 
 VECTOR_INFO_KEYS = ("pose", "collision", "wheel_speeds", "region")
 """The step-info keys a vector env gathers (the others vary in shape or are objects)."""
@@ -128,7 +129,8 @@ class SkidSteerNavVectorEnv(VectorEnv[Any, Any, Any]):
         self._kind = OBSERVATION_CODES[template.observation_kind]
         features = template.features
         self._geometry = (*features.arena, *features.goal, features.lidar_range)
-        self._commands_of = np.array(template._commands)  # (4, 2): a discrete action's speeds
+        speed = template.robot.wheel_speed
+        self._commands_of = np.array([commanded_wheel_speeds(a, speed) for a in range(4)])
         self._allocate(template)
         self._rngs: list[np.random.Generator | None] = [None] * num_envs
 
