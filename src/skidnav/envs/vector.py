@@ -45,6 +45,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from skidnav.checks import check_integer
 from skidnav.envs.navigation import SkidSteerNavEnv
 from skidnav.envs.registration import ENV_ID
 from skidnav.kernels.vector_env import (
@@ -108,15 +109,9 @@ class SkidSteerNavVectorEnv(VectorEnv[Any, Any, Any]):
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012
 
     def __init__(self, num_envs: int, max_episode_steps: int | None = None, **kwargs: Any):
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
-            raise ValueError(f"expected num_envs to be an integer >= 1, got {num_envs!r}")
-        if max_episode_steps is not None and not (
-            isinstance(max_episode_steps, int) and max_episode_steps >= 1
-        ):
-            raise ValueError(
-                f"expected max_episode_steps to be None or an integer >= 1, got "
-                f"{max_episode_steps!r}"
-            )
+        check_integer("num_envs", num_envs, 1)
+        if max_episode_steps is not None:
+            check_integer("max_episode_steps", max_episode_steps, 1)
         template = SkidSteerNavEnv(**kwargs)
         if template.dynamics != "kinematic" or template.render_mode is not None:
             raise ValueError("the compiled vector env simulates the kinematic robot, unrendered")

@@ -31,6 +31,7 @@ import gymnasium
 import numpy as np
 
 from skidnav.agents.goal_tracker import GoalTracker
+from skidnav.checks import check_integer
 from skidnav.envs.registration import ENV_ID
 from skidnav.experiments.continuity import (
     Policy,
@@ -84,9 +85,7 @@ class ComparisonConfig:
         if unknown or not self.learners:
             raise ValueError(f"expected learners from {', '.join(LEARNERS)}, got {unknown}")
         for name in ("seeds", "episodes", "generations", "population", "rollouts", "max_steps"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"expected {name} to be an integer >= 1, got {value!r}")
+            check_integer(name, getattr(self, name), 1)
 
     def env_kwargs(self, continuous: bool) -> dict[str, Any]:
         """The env's arguments for a learner of either kind of action."""

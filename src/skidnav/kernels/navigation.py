@@ -235,11 +235,19 @@ def substep(
 
 
 @inline_jit
+def is_forward_drive(commands: tuple[float, float]) -> bool:
+    """Whether the wheel speeds ``commands`` (ω_L, ω_R) [rad/s] drive straight forward: equal
+    and positive — the discrete forward action, or a continuous one at any speed. The thesis
+    measures the floor's wheel-speed variance during such drives (here, the env's and the
+    real-time loop's)."""
+    return commands[0] == commands[1] and commands[0] > 0.0
+
+
+@inline_jit
 def records_variance(rewards: RewardScheme, commands: tuple[float, float]) -> bool:
-    """Whether an action commanding ``commands`` (ω_L, ω_R) [rad/s] adds its wheel speeds to the
-    observed variance (``variance="observed"``): a straight forward drive, equal positive
-    commands — the discrete forward action, as the thesis measured it."""
-    return rewards.observed_variance and commands[0] == commands[1] and commands[0] > 0.0
+    """Whether an action commanding ``commands`` adds its wheel speeds to the observed variance
+    (``variance="observed"``): a forward drive (:func:`is_forward_drive`)."""
+    return rewards.observed_variance and is_forward_drive(commands)
 
 
 @inline_jit

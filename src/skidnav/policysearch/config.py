@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
+from skidnav.checks import check_integer
 from skidnav.envs.navigation import with_control_period
 from skidnav.policysearch.policy import MAX_HIDDEN, MAX_LIDAR_RAYS
 from skidnav.robot.params import RobotParams
@@ -89,11 +90,7 @@ class SearchConfig:
             "eval_every": (1, MAX_GENERATIONS), "seed": (0, MAX_SEED),
         }  # fmt: skip
         for name, (low, high) in integers.items():
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-                raise ValueError(
-                    f"expected {name} to be an integer in [{low}, {high}], got {value!r}"
-                )
+            check_integer(name, getattr(self, name), low, high)
         for name in ("control_period", "lidar_range", "sigma0"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float):

@@ -32,6 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from skidnav.checks import check_integer
+
 MAX_HIDDEN = 1024
 """Widest hidden layer accepted (a saved file announcing more is refused before allocation)."""
 MAX_LIDAR_RAYS = 1024
@@ -62,8 +64,8 @@ class PolicyLayout:
     def __post_init__(self) -> None:
         low = np.array(self.observation_low, dtype=np.float64).reshape(-1)
         high = np.array(self.observation_high, dtype=np.float64).reshape(-1)
-        _check_int("hidden", self.hidden, 0, MAX_HIDDEN)
-        _check_int("lidar_rays", self.lidar_rays, 0, MAX_LIDAR_RAYS)
+        check_integer("hidden", self.hidden, 0, MAX_HIDDEN)
+        check_integer("lidar_rays", self.lidar_rays, 0, MAX_LIDAR_RAYS)
         if low.shape != (7 + self.lidar_rays,) or high.shape != low.shape:
             raise ValueError(
                 f"expected observation bounds of shape ({7 + self.lidar_rays},), "
@@ -160,12 +162,6 @@ def parameter_count(n_inputs: int, hidden: int) -> int:
     if hidden == 0:
         return (n_inputs + 1) * 2
     return (n_inputs + 1) * hidden + (hidden + 1) * 2
-
-
-def _check_int(name: str, value: object, low: int, high: int) -> None:
-    """ValueError unless ``value`` is an integer (not a bool) in [low, high]."""
-    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-        raise ValueError(f"expected {name} to be an integer in [{low}, {high}], got {value!r}")
 
 
 class TanhPolicy:

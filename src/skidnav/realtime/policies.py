@@ -19,6 +19,7 @@ from skidnav.configtables import build_dataclass
 from skidnav.envs.features import PoseFeatures
 from skidnav.envs.navigation import clipped_wheel_speeds
 from skidnav.errors import UserError, first_line, shown
+from skidnav.kernels.navigation import is_forward_drive
 from skidnav.realtime.config import RealtimeConfig
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
@@ -59,13 +60,15 @@ def check_policy(
     policy: WheelSpeedPolicy, label: str, grid_map: GridMap, grid: Discretization
 ) -> None:
     """Ask ``policy`` once for the wheel speeds at the map's start (centre of the start cell,
-    heading 0) before the robot is contacted: this compiles the feature kernels, whose
-    compilation would hold the GIL and starve the driver's reader mid-episode, and refuses a
-    policy that fails there (UserError) before anything moves."""
+    heading 0) before the robot is contacted: this compiles the feature kernels and the
+    forward-drive rule the loop scores each action with, whose compilation would hold the GIL
+    and starve the driver's reader mid-episode, and refuses a policy that fails there
+    (UserError) before anything moves."""
     try:
         features = PoseFeatures(grid_map, grid, policy.lidar_rays, policy.lidar_range)
         x, y = grid.cell_centre(*grid_map.start)
         # only checked (two finite numbers): the limit plays no part here
-        clipped_wheel_speeds(policy.wheel_speeds(features(np.array([x, y, 0.0]))), 1.0)
+        command = clipped_wheel_speeds(policy.wheel_speeds(features(np.array([x, y, 0.0]))), 1.0)
+        is_forward_drive(command)
     except Exception as error:  # a policy's own failure, whatever it is, ends here in one line
         raise UserError(f"policy {label}: fails at the start pose ({first_line(error)})") from None

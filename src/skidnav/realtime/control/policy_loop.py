@@ -29,6 +29,7 @@ from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.envs.features import PoseFeatures
 from skidnav.envs.navigation import clipped_wheel_speeds
 from skidnav.errors import first_line
+from skidnav.kernels.navigation import is_forward_drive
 from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.control.episodes import EpisodeLoop
 from skidnav.realtime.control.periods import Aborted
@@ -80,7 +81,6 @@ class PolicyLoop(EpisodeLoop):
         )  # fmt: skip
         self.policy, self.policy_name = policy, policy_name
         self.features = PoseFeatures(grid_map, self.grid, policy.lidar_rays, policy.lidar_range)
-        self._forward = (self.robot.wheel_speed, self.robot.wheel_speed)
 
     def state_dict(self) -> dict[str, Any]:
         """The loop state of :class:`EpisodeLoop`, with the policy's name."""
@@ -106,7 +106,7 @@ class PolicyLoop(EpisodeLoop):
         before = self._pose()
         decision = self.decide(before)
         end, rows, collided = self._hold(decision.command, stop=False)
-        forward = decision.command == self._forward
+        forward = is_forward_drive(decision.command)
         reward, terminated = self._score(end, rows, collided, forward, result)
         truncated = last and not terminated
         if (terminated or truncated) and not collided:  # a collision has stopped the wheels
