@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import itertools
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -194,3 +196,29 @@ def test_homing_with_the_estimated_icr_reaches_the_start_on_a_shifted_floor() ->
     robot.pose = (x, y, 2.0)
     home(robot, controller)
     assert GRID.state(*robot.pose) == GRID.state(*start_pose(grid_map, GRID))
+
+
+SCORING_KERNELS = """
+from skidnav.kernels.navigation import action_reward
+from skidnav.realtime.arena import build_map
+from skidnav.realtime.control.transition import compile_scoring
+from skidnav.robot.kinematics import wrap_angle
+from skidnav.robot.params import RobotParams
+from skidnav.world.discretization import Discretization, cell_of, region_of, state_of
+
+kernels = (state_of, cell_of, region_of, wrap_angle, action_reward)
+assert not any(kernel.signatures for kernel in kernels)
+grid = Discretization()
+compile_scoring(build_map("obstacles", 0, grid), grid, RobotParams())
+print([kernel.__name__ for kernel in kernels if not kernel.signatures])
+"""
+
+
+def test_the_loop_scoring_kernels_are_compiled_before_the_robot_is_contacted() -> None:
+    """A fresh process: after ``compile_scoring`` every kernel an action is scored with has a
+    compiled signature, so none compiles (holding the GIL) inside the first action."""
+    result = subprocess.run(
+        [sys.executable, "-c", SCORING_KERNELS], capture_output=True, text=True, timeout=120
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "[]"

@@ -168,7 +168,10 @@ def test_lost_poses_stop_a_continuous_policy_and_the_run_goes_on(
         for e in events
         if e["event"] == "cmd" and _in_homing(events, e)
     }
-    assert driven <= commands | homing | {(0.0, 0.0)}
+    aborted = _aborted_action_commands(events)
+    assert len(aborted) == 1  # one action's command, within the box
+    assert all(abs(speed) <= LIMIT for command in aborted for speed in command)
+    assert driven <= commands | homing | aborted | {(0.0, 0.0)}
     moved = {tuple(t["command"]) for t in transitions if not t["collision"]}
     assert moved <= driven  # every decision that could move reached the robot
 
@@ -178,6 +181,14 @@ def test_lost_poses_stop_a_continuous_policy_and_the_run_goes_on(
     assert state["policy"] == f"file:{policy_path.resolve()}"
     assert not (directory / "agent.npz").exists()
     assert [r["aborted"] for r in state["results"]].count(True) == 1
+
+
+def _aborted_action_commands(events: list[dict[str, Any]]) -> set[tuple[float, float]]:
+    """The wheel commands the run log sent between the last transition before the trip and the
+    trip: those of the action the trip aborted, which no transition records."""
+    trip = next(i for i, e in enumerate(events) if e["event"] == "trip")
+    last = max(i for i, e in enumerate(events[:trip]) if e["event"] == "transition")
+    return {(e["omega_left"], e["omega_right"]) for e in events[last:trip] if e["event"] == "cmd"}
 
 
 def _in_homing(events: list[dict[str, Any]], command: dict[str, Any]) -> bool:

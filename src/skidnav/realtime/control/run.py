@@ -30,6 +30,7 @@ from skidnav.realtime.control.checkpoint import Checkpoints
 from skidnav.realtime.control.episodes import EpisodeLoop
 from skidnav.realtime.control.loop import RealtimeLoop
 from skidnav.realtime.control.policy_loop import PolicyLoop
+from skidnav.realtime.control.transition import compile_scoring
 from skidnav.realtime.link.drivers import make_driver
 from skidnav.realtime.policies import check_policy, select_policy
 from skidnav.robot.kinematics import N_ACTIONS
@@ -204,14 +205,16 @@ def drive(
     """Connect driver ``driver_name`` (a sim server logs to ``out/sim-server.jsonl``), run the
     loop of ``agent`` with its files in ``out`` from episode ``resume[0]`` (loop state
     ``resume[1]`` restored first, if any), SIGINT and SIGTERM tripping its safety monitor, and
-    shut the driver down; returns (exit code of :meth:`EpisodeLoop.run`, the loop). With a
-    ``policy_name``, ``agent`` is a frozen continuous policy
+    shut the driver down, the loop's scoring kernels compiled before connecting; returns (exit
+    code of :meth:`EpisodeLoop.run`, the loop). With a ``policy_name``, ``agent`` is a frozen
+    continuous policy
     (:class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`) run by :class:`PolicyLoop`;
     else a tabular agent run by :class:`RealtimeLoop`.
 
     Raises:
         UserError: the robot cannot be reached.
     """
+    compile_scoring(grid_map, grid, robot)
     driver = make_driver(driver_name, config, server_log=out / "sim-server.jsonl")
     shutdown = getattr(driver, "shutdown", driver.close)
     try:

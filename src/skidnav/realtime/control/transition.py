@@ -31,6 +31,7 @@ from skidnav.realtime.link.interface import Pose
 from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
+from skidnav.world.grid import GridMap
 
 assert len(LOG_COLUMNS) == 6
 
@@ -175,3 +176,15 @@ def reward_of(
     variance = stats.variance(grid.region(pose.x, pose.y))
     reward = action_reward(scheme or RewardScheme(), at_goal, bool(collided), variance)
     return float(reward), at_goal
+
+
+def compile_scoring(grid_map: GridMap, grid: Discretization, robot: RobotParams) -> None:
+    """Compile (numba) what the control loop scores every action with, before the robot is
+    contacted: the state, cell and region of a pose, the kinematic log row and the reward of
+    :func:`reward_of`. On a cold cache their compilation (~0.25 s, holding the GIL) otherwise
+    fell at the end of the first action, whose command then expired with the robot stopped."""
+    x, y = grid.cell_centre(*grid_map.start)
+    before, after = Pose(0.0, x, y, 0.0), Pose(0.1, x, y, 0.1)
+    grid.state(after.x, after.y, after.heading)
+    log_row(before, after, 0.1, grid.region(before.x, before.y), (0.0, 0.0))
+    reward_of(after, False, grid_map.goal, grid, WheelSpeedStats(grid.n_regions, robot))
