@@ -54,18 +54,9 @@ def _write_csv(path: Path, header: Sequence[str], rows: list[Sequence[Any]]) -> 
 
 
 def _plot(path: Path, curves: dict[str, np.ndarray], xlabel: str, ylabel: str, x0: int = 1) -> None:
-    import matplotlib.pyplot as plt
+    from skidnav.experiments.plots import line_plot  # matplotlib only when a figure is drawn
 
-    from skidnav.experiments.plots import to_png  # the Agg backend; PNG bytes in memory
-
-    figure, axes = plt.subplots(figsize=(6, 4))
-    for label, values in curves.items():
-        axes.plot(np.arange(x0, x0 + len(values)), values, label=label)
-    axes.set_xlabel(xlabel)
-    axes.set_ylabel(ylabel)
-    axes.legend()
-    figure.tight_layout()
-    write_user_file(path, to_png(figure, dpi=100), "plot")
+    write_user_file(path, line_plot(curves, xlabel, ylabel, x0), "plot")
 
 
 PLANNING_STEPS = (0, 5, 50)

@@ -43,6 +43,19 @@ def to_png(figure: Figure, dpi: int = DPI) -> bytes:
     return buffer.getvalue()
 
 
+def line_plot(curves: dict[str, np.ndarray], xlabel: str, ylabel: str, x0: int = 1) -> bytes:
+    """PNG bytes of one line per named curve (float (n,) values at x = x0, x0 + 1, …), with a
+    legend: the figures of ``skidnav reproduce``."""
+    figure, axes = plt.subplots(figsize=(6, 4))
+    for label, values in curves.items():
+        axes.plot(np.arange(x0, x0 + len(values)), values, label=label)
+    axes.set_xlabel(xlabel)
+    axes.set_ylabel(ylabel)
+    axes.legend()
+    figure.tight_layout()
+    return to_png(figure, dpi=100)
+
+
 def _colors(labels: list[str]) -> dict[str, tuple[float, ...]]:
     cmap = plt.get_cmap("tab10")
     return {label: tuple(cmap(n % 10)) for n, label in enumerate(labels)}
