@@ -1,0 +1,31 @@
+"""Every config shipped in configs/ loads with its loader: a preset that no longer parses (a
+renamed agent, a bound tightened) fails here, not in a user's long run."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from skidnav.experiments.configfile import load_config
+from skidnav.experiments.tuneconfig import load_tune_config
+from skidnav.realtime.config import load_config as load_realtime_config
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+SHIPPED = sorted(CONFIGS.glob("*.toml"))
+
+
+def test_configs_are_shipped() -> None:
+    assert len(SHIPPED) >= 10
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=[path.name for path in SHIPPED])
+def test_shipped_config_loads(path: Path) -> None:
+    if path.name == "realtime.toml":
+        assert load_realtime_config(path).run.episodes > 0
+    elif path.name.startswith("tune-"):
+        experiment, tune = load_tune_config(path)
+        assert experiment.agents and tune is not None
+    else:
+        config = load_config(path)
+        assert config.agents and config.seeds > 0 and config.episodes > 0
