@@ -129,6 +129,10 @@ def test_what_the_compiled_step_does_not_simulate_gets_single_envs() -> None:
     [
         ({}, np.array([0, 1, 4]), "actions in 0..3"),
         ({}, np.array([[0, 1, 2]]), "actions in 0..3"),
+        ({}, np.array([0.0, 1.0, 2.0]), "integer actions"),  # as the single env refuses them
+        ({}, np.array([True, False, True]), "integer actions"),
+        ({"action": "continuous"}, {"a": 1}, "finite wheel speeds"),
+        ({"action": "continuous"}, [[0.0, 1.0], [0.0], [1.0, 1.0]], "finite wheel speeds"),
         ({"action": "continuous"}, np.ones((3, 3)), "finite wheel speeds"),
         ({"action": "continuous"}, np.array([[0.0, np.nan]] * 3), "finite wheel speeds"),
     ],
@@ -152,3 +156,17 @@ def test_bad_construction_and_resets_are_refused() -> None:
         envs.reset(seed=[1, 2, 3])
     with pytest.raises(ValueError, match="reset_mask"):
         envs.reset(options={"reset_mask": np.ones(3, dtype=bool)})
+
+
+@pytest.mark.parametrize("render_mode", [None, "ansi"])  # the native env, the SyncVectorEnv
+def test_max_episode_steps_means_what_it_means_for_gymnasium_make(
+    render_mode: str | None,
+) -> None:
+    """None: the registered 500 actions; −1: no limit; on either path of ``make_vec``."""
+    for limit, expected in ((None, 1), (-1, 0), (200, 2)):
+        envs = gymnasium.make_vec(
+            ENV_ID, num_envs=1, map_kind="free", max_episode_steps=limit, render_mode=render_mode
+        )
+        envs.reset(seed=0)
+        truncations = sum(int(envs.step(np.array([2]))[3][0]) for _ in range(501))
+        assert truncations == expected, (limit, render_mode)

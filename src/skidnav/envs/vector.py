@@ -74,13 +74,17 @@ def make_vector_env(
 ) -> VectorEnv[Any, Any, Any]:
     """The vector entry point of ``skidnav/SkidSteerNav-v0`` (``gymnasium.make_vec``):
     :class:`SkidSteerNavVectorEnv`, or a ``SyncVectorEnv`` of single envs for what it does not
-    simulate (``dynamics="mujoco"``, a ``render_mode``)."""
+    simulate (``dynamics="mujoco"``, a ``render_mode``). ``max_episode_steps`` as for
+    ``gymnasium.make``, on either path: None the registered limit, −1 no limit."""
     if kwargs.get("dynamics", "kinematic") != "kinematic" or kwargs.get("render_mode"):
         single = {"max_episode_steps": max_episode_steps, **kwargs}
         return gymnasium.vector.SyncVectorEnv(
             [lambda: GatheredInfo(gymnasium.make(ENV_ID, **single))] * num_envs
         )
-    return SkidSteerNavVectorEnv(num_envs, max_episode_steps, **kwargs)
+    if max_episode_steps is None:
+        max_episode_steps = gymnasium.spec(ENV_ID).max_episode_steps
+    limit = None if max_episode_steps == -1 else max_episode_steps
+    return SkidSteerNavVectorEnv(num_envs, limit, **kwargs)
 
 
 class GatheredInfo(gymnasium.Wrapper[Any, Any, Any, Any]):
@@ -232,16 +236,19 @@ class SkidSteerNavVectorEnv(VectorEnv[Any, Any, Any]):
         """The wheel speeds float64 (N, 2) [rad/s] of the batch of actions; ValueError for a
         batch the action space does not hold (continuous: clipped to the box)."""
         if self.template.action_kind == "continuous":
-            values = np.asarray(actions, dtype=np.float64)
+            message = f"expected ({self.num_envs}, 2) finite wheel speeds, got {actions!r}"
+            try:
+                values = np.asarray(actions, dtype=np.float64)
+            except (TypeError, ValueError):  # not numbers, or ragged
+                raise ValueError(message) from None
             if values.shape != (self.num_envs, 2) or not np.isfinite(values).all():
-                raise ValueError(
-                    f"expected ({self.num_envs}, 2) finite wheel speeds, got {actions!r}"
-                )
+                raise ValueError(message)
             limit = self.template.robot.wheel_speed
             return np.clip(values, -limit, limit)
         indices = np.asarray(actions)
-        if indices.shape != (self.num_envs,) or not np.isin(indices, (0, 1, 2, 3)).all():
-            raise ValueError(f"expected {self.num_envs} actions in 0..3, got {actions!r}")
+        valid = indices.shape == (self.num_envs,) and indices.dtype.kind in "iu"
+        if not valid or not np.isin(indices, (0, 1, 2, 3)).all():
+            raise ValueError(f"expected {self.num_envs} integer actions in 0..3, got {actions!r}")
         return self._commands_of[indices.astype(np.int64)]
 
     def _outputs(self) -> tuple[np.ndarray, np.ndarray]:
