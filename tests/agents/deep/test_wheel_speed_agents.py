@@ -220,8 +220,28 @@ def test_a_saved_policy_loads_without_its_world(
     for observation in (space.sample() for _ in range(5)):
         assert policy.wheel_speeds(observation) == agent.policy().wheel_speeds(observation)
     meta = json.loads(json_path.read_text())
-    for key, value in [("lidar_rays", 7), ("lidar_range", "far"), ("action_high", [-2, -2])]:
+    huge = 10**400  # no float holds it
+    low = meta["observation_low"]
+    edits = [
+        ("lidar_rays", 7, "cannot load policy"),
+        ("lidar_range", "far", "cannot load policy"),
+        ("action_high", [-2, -2], "cannot load policy"),
+        ("observation_low", [huge, *low[1:]], "cannot load policy"),
+        ("action_low", [huge, -1.7], "cannot load policy"),
+        ("seed", "7", "seed '7' is not an integer"),
+        ("version", 1.0, "file of version"),
+        ("config", {**meta["config"], "batch_size": huge}, "batch_size = .* out of range"),
+        ("config", {**meta["config"], "hidden": [4096] * 8}, "hidden = .* out of range"),
+    ]
+    if name == "sac":
+        edits += [
+            ("config", {**meta["config"], "ent_coef": huge}, "ent_coef = .* out of range"),
+            ("config", {**meta["config"], "buffer_size": 10**13}, "buffer_size = .* range"),
+        ]
+    else:
+        edits.append(("config", {**meta["config"], "n_steps": 10**13}, "n_steps = .* range"))
+    for key, value, match in edits:
         json_path.write_text(json.dumps({**meta, key: value}))
-        with pytest.raises(CorruptFileError, match="cannot load policy") as error:
+        with pytest.raises(CorruptFileError, match=match) as error:
             policy_files.load_policy(json_path)
         assert "\n" not in str(error.value)

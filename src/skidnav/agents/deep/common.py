@@ -23,6 +23,7 @@ Stable-Baselines3 model and says which network acts; everything else lives here:
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import random
@@ -40,7 +41,7 @@ from gymnasium.wrappers.utils import rescale_box
 from skidnav.agents.core import save_paths
 from skidnav.agents.training import TrainingLog, greedy_evaluation, log_from_rows
 from skidnav.atomicfile import write_atomic, write_npz_atomic
-from skidnav.errors import CorruptFileError, first_line
+from skidnav.errors import CorruptFileError, first_line, shown
 from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, read_json
 
 if TYPE_CHECKING:
@@ -52,16 +53,23 @@ SAVE_VERSION = 1
 MAX_LAYER_WIDTH = 4096
 MAX_LAYERS = 8
 MAX_TRAINING_STEPS = 10**12
+MAX_COUNT = 10**7
+"""Upper bound of every integer setting (buffer and rollout sizes, steps): a 10⁷-transition
+replay buffer of a 15-dimensional observation is already ~1.2 GB."""
+MAX_HIDDEN_WEIGHTS = 1 << 24
+"""Weights between the hidden layers of one network at most (64 MiB of float32)."""
 """The step budget handed to Stable-Baselines3: training ends by episodes, not by it."""
-MAX_META_BYTES = 1 << 16
+MAX_META_BYTES = 1 << 20
 """Largest ``.json`` of a saved agent read [bytes]."""
 
 
 def hidden_ok(hidden: tuple[int, ...]) -> bool:
-    """True for 1 to :data:`MAX_LAYERS` hidden widths, each an int in 1..:data:`MAX_LAYER_WIDTH`."""
-    return 1 <= len(hidden) <= MAX_LAYERS and all(
+    """True for 1 to :data:`MAX_LAYERS` hidden widths, each an int in 1..:data:`MAX_LAYER_WIDTH`,
+    with at most :data:`MAX_HIDDEN_WEIGHTS` weights between consecutive hidden layers."""
+    shaped = 1 <= len(hidden) <= MAX_LAYERS and all(
         type(width) is int and 1 <= width <= MAX_LAYER_WIDTH for width in hidden
     )
+    return shaped and sum(a * b for a, b in itertools.pairwise(hidden)) <= MAX_HIDDEN_WEIGHTS
 
 
 class DeepConfig:
@@ -87,14 +95,22 @@ class DeepConfig:
             value, default = getattr(self, field.name), field.default
             number = isinstance(value, int | float) and not isinstance(value, bool)
             if type(default) is int and type(value) is not int:
-                raise ValueError(f"{self.agent_name}: {field.name} = {value!r} is not an integer")
+                raise ValueError(
+                    f"{self.agent_name}: {field.name} = {shown(value)} is not an integer"
+                )
+            if type(value) is int and not -MAX_COUNT <= value <= MAX_COUNT:
+                raise ValueError(
+                    f"{self.agent_name}: {field.name} = {shown(value)} is out of range"
+                )
             if isinstance(default, float) and not number:
-                raise ValueError(f"{self.agent_name}: {field.name} = {value!r} is not a number")
+                raise ValueError(
+                    f"{self.agent_name}: {field.name} = {shown(value)} is not a number"
+                )
         checks = {**self.ranges(), "hidden": hidden_ok(self.hidden)}
         for name, ok in checks.items():
             value = getattr(self, name)
             if (isinstance(value, float) and not math.isfinite(value)) or not ok:
-                raise ValueError(f"{self.agent_name}: {name} = {value!r} is out of range")
+                raise ValueError(f"{self.agent_name}: {name} = {shown(value)} is out of range")
 
     @classmethod
     def from_mapping(cls, values: dict[str, Any]) -> Self:
@@ -384,16 +400,19 @@ def load_agent(agent_class: type[AgentT], path: str | Path, env: gymnasium.Env[A
     npz_path, json_path = save_paths(path)
     meta = read_json(json_path, max_bytes=MAX_META_BYTES, what="agent file")
     try:
+        version, seed = meta.get("version"), meta.get("seed")
         if meta.get("format") != f"skidnav-{agent_class.name}" or (
-            meta.get("version") != SAVE_VERSION
+            type(version) is not int or version != SAVE_VERSION
         ):
             raise ValueError(
                 f"not a skidnav {agent_class.name.upper()} file of version {SAVE_VERSION}"
             )
         config = agent_class.config_class.from_mapping(dict(meta["config"]))
         check_spaces(meta, env)
-        agent = agent_class(env, config, seed=int(meta["seed"]))
-    except (KeyError, TypeError, ValueError) as error:
+        if type(seed) is not int or not 0 <= seed < 2**63:
+            raise ValueError(f"seed {shown(seed)} is not an integer in [0, 2**63)")
+        agent = agent_class(env, config, seed=seed)
+    except (KeyError, TypeError, ValueError, OverflowError) as error:
         raise CorruptFileError(f"{json_path}: cannot load agent: {first_line(error)}") from None
     import torch
 

@@ -123,6 +123,6 @@ def saved_policy(
     content), without the env it learned in; CorruptFileError in one line naming the file."""
     try:
         spaces = SavedSpaces(meta)
-    except (KeyError, TypeError, ValueError) as error:
+    except (KeyError, TypeError, ValueError, OverflowError) as error:  # overflow: a huge integer
         raise CorruptFileError(f"{json_path}: cannot load policy: {first_line(error)}") from None
     return load_agent(agent_class, json_path, spaces).policy()
