@@ -68,7 +68,13 @@ def test_the_command_writes_the_table_and_the_picture(tmp_path: Path) -> None:
     ("argv", "message"),
     [
         (["--learners", "dqn"], "expected learners from"),
-        (["--seeds", "0"], "expected seeds to be an integer >= 1"),
+        (["--seeds", "0"], "expected seeds to be an integer in [1, 1000]"),
+        (["--control-period", "0.15"], "the env refuses these settings"),
+        (["--control-period", "nan"], "the env refuses these settings"),
+        (["--world-seed", "-1"], "expected world_seed to be an integer >= 0"),
+        (["--root-seed", "-1"], "expected root_seed to be an integer >= 0"),
+        (["--max-steps", "200000"], "expected max_steps to be an integer in [1, 100000]"),
+        (["--learners", "cmaes", "--population", "1"], "population"),
     ],
 )
 def test_bad_arguments_are_one_line(
@@ -77,3 +83,30 @@ def test_bad_arguments_are_one_line(
     assert main(["continuity", "--out", str(tmp_path / "x"), *argv]) == 2
     error = capsys.readouterr().err.strip()
     assert message in error and "\n" not in error
+
+
+def test_an_out_that_is_a_file_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "file").write_text("")
+    assert main(["continuity", "--out", str(tmp_path / "file"), "--learners", "q-learning"]) == 2
+    assert "not a directory" in capsys.readouterr().err
+
+
+def test_a_discrete_agent_does_not_draw_the_env_s_numbers(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The agent's stream is not the one the env's episodes are reset from (both on
+    ``default_rng(seed)``, exploration repeated the slip noise's numbers)."""
+    from skidnav.agents import registry
+
+    states: list[dict[str, object]] = []  # each agent's generator as it was given
+    make_agent = registry.make_agent
+
+    def recording(*args: object, **kwargs: object) -> object:
+        states.append(args[4].bit_generator.state)  # type: ignore[attr-defined]
+        return make_agent(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(registry, "make_agent", recording)
+    config = dataclasses.replace(TINY, learners=("q-learning",), seeds=1, episodes=1)
+    (run,) = run_comparison(config)
+    env_stream = np.random.default_rng(run.seed).bit_generator.state
+    assert states and states[0] != env_stream

@@ -64,6 +64,8 @@ def continuity_command(args: argparse.Namespace) -> int:
         )  # fmt: skip
     except ValueError as error:
         raise UserError(f"continuity: {error}") from None
+    if args.out.exists() and not args.out.is_dir():
+        raise UserError(f"{args.out}: not a directory")
     if args.out.exists() and any(args.out.iterdir()):
         raise UserError(f"{args.out}: not empty (choose a new --out)")
     try:

@@ -33,6 +33,7 @@ import numpy as np
 from skidnav.agents.goal_tracker import GoalTracker
 from skidnav.checks import check_integer
 from skidnav.envs.registration import ENV_ID
+from skidnav.errors import first_line
 from skidnav.experiments.continuity import (
     Policy,
     Trace,
@@ -40,7 +41,7 @@ from skidnav.experiments.continuity import (
     tabular_policy,
     wheel_speed_policy,
 )
-from skidnav.seeding import child, seed_int
+from skidnav.seeding import RUN_ROLES, child, seed_int, streams
 
 DISCRETE_PARAMS = {
     "q-learning": {"alpha": 0.5, "gamma": 0.95, "epsilon": 0.1},
@@ -49,6 +50,11 @@ DISCRETE_PARAMS = {
 """The discrete learners and their settings (the thesis's, with 100 planning updates)."""
 WHEEL_LEARNERS = ("cmaes", "ppo", "sac")
 LEARNERS = (*DISCRETE_PARAMS, *WHEEL_LEARNERS, "goal-tracker")
+MAX_COUNTS = {
+    "seeds": 1000, "episodes": 10**6, "generations": 10**6, "population": 10**4,
+    "rollouts": 10**4, "max_steps": 10**5,
+}  # fmt: skip
+"""Upper bounds of the comparison's counts."""
 COMPARISON_ROLES = ("run", "evaluation")
 """Children of the root seed: one per seed index (every learner's run of that index), the
 evaluation seeds (shared by every learner and run)."""
@@ -85,7 +91,18 @@ class ComparisonConfig:
         if unknown or not self.learners:
             raise ValueError(f"expected learners from {', '.join(LEARNERS)}, got {unknown}")
         for name in ("seeds", "episodes", "generations", "population", "rollouts", "max_steps"):
-            check_integer(name, getattr(self, name), 1)
+            check_integer(name, getattr(self, name), 1, MAX_COUNTS[name])
+        check_integer("world_seed", self.world_seed, 0)
+        check_integer("root_seed", self.root_seed, 0)
+        # everything a learner will build, built once now: a bad setting ends the command before
+        # any learner has trained, not after the first ones
+        for continuous in {learner not in DISCRETE_PARAMS for learner in self.learners}:
+            try:
+                gymnasium.make(ENV_ID, **self.env_kwargs(continuous)).close()
+            except (TypeError, ValueError) as error:
+                raise ValueError(f"the env refuses these settings: {first_line(error)}") from None
+        if "cmaes" in self.learners:
+            search_config(self, seed=0)
 
     def env_kwargs(self, continuous: bool) -> dict[str, Any]:
         """The env's arguments for a learner of either kind of action."""
@@ -105,6 +122,19 @@ class LearnerRun(NamedTuple):
     episodes_used: int
     episodes_to_learn: float
     wall_time: float
+
+
+def search_config(config: ComparisonConfig, seed: int) -> Any:
+    """The CMA-ES search of ``config`` with run seed ``seed`` (a ``SearchConfig``: ValueError
+    for settings it refuses)."""
+    from skidnav.policysearch.config import SearchConfig
+
+    return SearchConfig(
+        map_kind=config.map_kind, world_seed=config.world_seed, slip=config.slip,
+        max_episode_steps=config.max_steps, control_period=config.control_period,
+        population=config.population, generations=config.generations,
+        eval_episodes=config.rollouts, eval_every=5, seed=seed,
+    )  # fmt: skip
 
 
 def evaluation_seeds(config: ComparisonConfig) -> list[int]:
@@ -152,7 +182,9 @@ def _train_discrete(
     nav = env.unwrapped
     context = {} if learner == "q-learning" else {"task": nav.task}
     agent = make_agent(learner, nav.discretization.n_states, 4, DISCRETE_PARAMS[learner],
-                       np.random.default_rng(seed), **context)  # fmt: skip
+                       streams(seed, RUN_ROLES)["agent"], **context)  # fmt: skip
+    # (the env's episodes are reset from ``seed`` itself: an agent on default_rng(seed) drew the
+    # very numbers of the env's slip noise)
     checks = gymnasium.make(ENV_ID, **config.env_kwargs(False))
     log = train_agent_fast(agent, env, config.episodes, greedy_eval_env=checks,
                            greedy_max_steps=config.max_steps,
@@ -181,16 +213,9 @@ def _train_deep(
 def _train_cmaes(
     config: ComparisonConfig, learner: str, seed: int, env: Any
 ) -> tuple[Policy, int, float]:
-    from skidnav.policysearch.config import SearchConfig
     from skidnav.policysearch.search import run_search
 
-    search = SearchConfig(
-        map_kind=config.map_kind, world_seed=config.world_seed, slip=config.slip,
-        max_episode_steps=config.max_steps, control_period=config.control_period,
-        population=config.population, generations=config.generations,
-        eval_episodes=config.rollouts, eval_every=5, seed=seed,
-    )  # fmt: skip
-    result = run_search(search)
+    result = run_search(search_config(config, seed))
     learned = [r.episodes for r in result.records if r.mean_success == 1.0]
     first = float(learned[0]) if learned else math.nan
     return wheel_speed_policy(result.policy, env), result.records[-1].episodes, first
