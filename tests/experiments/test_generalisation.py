@@ -126,3 +126,23 @@ def test_epsilon_greedy_evaluation_is_seeded_and_noisy() -> None:
     assert noisy[0][1] != greedy[1]  # the random actions lengthen the paths
     policy = generalisation.EpsilonGreedy(Spinner(), 1.0, np.random.default_rng(0))
     assert {policy.greedy_action(np.zeros(15)) for _ in range(50)} == {0, 1, 2, 3}
+
+
+def test_exploration_does_not_draw_the_rollout_s_slip_noise(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The ε draws of a rollout reset with seed s do not come from ``default_rng(s)``, the
+    stream the env's reset draws the slip noise from (exploration repeated the noise)."""
+    states: list[dict[str, object]] = []  # each policy's generator as it was given
+    original = generalisation.EpsilonGreedy
+
+    def recording(agent: object, epsilon: float, rng: np.random.Generator) -> object:
+        states.append(rng.bit_generator.state)
+        return original(agent, epsilon, rng)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(generalisation, "EpsilonGreedy", recording)
+    split = split_worlds(0, 1, 1, 1, {"map_kind": "free"})
+    options = {"map_kind": "free", "slip": "thesis", "observation": "features"}
+    evaluate_on(GoalSeeker(), split.held_out, split.evaluation, 20, 0.3, **options)
+    env_streams = [np.random.default_rng(int(s)).bit_generator.state for s in split.evaluation]
+    assert states and all(a != b for a, b in zip(states, env_streams, strict=True))

@@ -179,17 +179,23 @@ def evaluate_on(
 ) -> tuple[float, float]:
     """(share of rollouts reaching the goal, their mean length) of ``agent``'s greedy policy,
     one rollout per seed of ``seeds`` on each world of ``worlds``; with ``epsilon`` > 0 the
-    policy is :class:`EpsilonGreedy`, its draws from a generator seeded by the rollout's seed
-    (the same draws for every agent)."""
+    policy is :class:`EpsilonGreedy`, its draws from :func:`exploration_stream` of the rollout's
+    seed (the same draws for every agent)."""
     lengths: list[int] = []
     for world in worlds:
         env = world_env(world, max_steps, **options)
         for seed in seeds:
             policy = agent
             if epsilon > 0.0:
-                policy = EpsilonGreedy(agent, epsilon, np.random.default_rng(seed))
+                policy = EpsilonGreedy(agent, epsilon, exploration_stream(int(seed)))
             lengths.append(greedy_rollout(policy, env, max_steps, seed=int(seed)))
     return rollout_summary(lengths)
+
+
+def exploration_stream(seed: int) -> np.random.Generator:
+    """The ε-greedy draws of a rollout reset with ``seed``: its first child, not the stream of
+    ``default_rng(seed)``, from which the env's reset draws the rollout's slip noise."""
+    return np.random.default_rng(child(seed, 0))
 
 
 def generalisation_run(
