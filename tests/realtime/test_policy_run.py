@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 import threading
+import time
 from pathlib import Path
 from typing import Any
 
@@ -267,6 +268,8 @@ def test_a_failing_policy_stops_the_robot_and_ends_the_run(
         (["--policy", "goal-tracker", "--agent", "dyna-q"], "not allowed with argument"),
         (["--policy", "wall-follower"], "unknown policy 'wall-follower'; expected one of"),
         (["--policy-file", "missing.json"], "missing.json: no such policy file"),
+        (["--policy-file", ""], "not the path of a policy file"),
+        (["--policy-file", "/"], "not the path of a policy file"),
     ],
 )
 def test_bad_policy_choices_are_one_line_errors(
@@ -323,3 +326,112 @@ def test_lockstep_runs_of_a_policy_are_identical(tmp_path: Path) -> None:
         assert len(commands) == 10 * len(transitions) + 1  # and the closing stop
         runs.append([{k: v for k, v in t.items() if k != "mono"} for t in transitions])
     assert runs[0] == runs[1]
+
+
+WALL_AHEAD = """\
+skidnav-map 1
+width 25
+height 25
+map
+#########################
+#.......................#
+#.......................#
+#.......................#
+#.......................#
+#.......................#
+#.......................#
+#.......................#
+#.......................#
+#.......................#
+#..............G........#
+#.......................#
+#........#..............#
+#........#..............#
+#........#..............#
+#........#..............#
+#....S...#..............#
+#........#..............#
+#........#..............#
+#........#..............#
+#........#..............#
+#.......................#
+#.......................#
+#.......................#
+#########################
+"""
+"""A wall four cells ahead of the start (heading 0)."""
+
+
+class SlowForward:
+    """Full speed ahead, answering after ``delay`` seconds of wall time."""
+
+    lidar_rays, lidar_range = 8, 0.3
+
+    def __init__(self, delay: float) -> None:
+        self.delay = delay
+
+    def wheel_speeds(self, observation: np.ndarray) -> tuple[float, float]:
+        time.sleep(self.delay)
+        return LIMIT, LIMIT
+
+
+def load_slow_forward(path: Path, data: dict[str, Any]) -> SlowForward:
+    """The loader of the test format ``test-slow-forward``: ``{"delay": seconds}``."""
+    return SlowForward(data["delay"])
+
+
+def test_a_slow_policy_is_not_driven_into_a_wall(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The command held while the policy answers is checked by the virtual bumper too: a policy
+    taking 20 ms (a third of a period at this time scale) never pushes the robot against the
+    wall; the bumper stops it before, as a collision."""
+    monkeypatch.setitem(
+        policy_files.POLICY_LOADERS, "test-slow-forward", f"{__name__}:load_slow_forward"
+    )
+    (tmp_path / "wall.txt").write_text(WALL_AHEAD, encoding="utf-8")
+    policy = tmp_path / "slow.json"
+    policy.write_text(json.dumps({"format": "test-slow-forward", "delay": 0.02}))
+    pushed = 0
+    with ServerThread(TIME_SCALE, map_spec=str(tmp_path / "wall.txt")) as server:
+        advance = server.robot.dynamics.advance
+
+        def counting(pose: Any, wheels: Any, time_: Any, noise: Any) -> Any:
+            nonlocal pushed
+            new = advance(pose, wheels, time_, noise)
+            if wheels[0] > 0 and wheels[1] > 0 and tuple(new[:2]) == tuple(pose[:2]):
+                pushed += 1  # driving forward without moving: against the wall
+            return new
+
+        monkeypatch.setattr(server.robot.dynamics, "advance", counting)
+        config = run_config(tmp_path, server.port, episodes=1, max_actions=6,
+                            map=f'"{tmp_path / "wall.txt"}"')  # fmt: skip
+        argv = ["robot", "run", "--quiet", "--driver", "tcp", "--config", str(config)]
+        assert main([*argv, "--policy-file", str(policy), "--out", str(tmp_path / "out")]) == 0
+    transitions = [e for e in read_events(tmp_path / "out" / "run.jsonl")
+                   if e["event"] == "transition"]  # fmt: skip
+    assert any(t["collision"] for t in transitions)
+    assert pushed == 0
+
+
+def test_a_trip_while_stopping_at_the_goal_leaves_results_and_log_agreeing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The action that reached the goal is logged before the wheels stop: a trip during that
+    stop aborts the episode with as many actions counted as transitions logged."""
+    from skidnav.realtime.control.periods import Aborted
+    from skidnav.realtime.control.policy_loop import PolicyLoop
+
+    def tripping(self: PolicyLoop, stamp: float) -> Any:
+        self.monitor.trip("test: trip while settling")
+        raise Aborted("test: trip while settling")
+
+    monkeypatch.setattr(PolicyLoop, "_stop_and_settle", tripping)
+    out = tmp_path / "out"
+    config = run_config(tmp_path, episodes=1)
+    argv = ["robot", "run", "--quiet", "--driver", "sim", "--config", str(config)]
+    main([*argv, "--policy", "goal-tracker", "--out", str(out)])
+    events = read_events(out / "run.jsonl")
+    (end,) = [e for e in events if e["event"] == "episode_end"]
+    assert end["aborted"]
+    assert end["actions"] == sum(e["event"] == "transition" for e in events)

@@ -46,7 +46,10 @@ MAX_POLICY_JSON_BYTES = 16 * 2**20
 
 def policy_json(path: str | Path) -> Path:
     """The JSON file of a saved policy: ``path`` itself if it ends in ``.json``, else
-    ``path`` + ``.json`` (a ``.npz`` suffix replaced), as for saved agents."""
+    ``path`` + ``.json`` (a ``.npz`` suffix replaced), as for saved agents; UserError for a
+    path that names no file (empty, ``.``, ``/``)."""
+    if not Path(path).name:
+        raise UserError(f"{str(path)!r}: not the path of a policy file")
     return save_paths(path)[1]
 
 

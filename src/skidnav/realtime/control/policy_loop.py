@@ -8,9 +8,12 @@ policy's ``lidar_rays`` and ``lidar_range``), asks the policy for (ω_L, ω_R), 
 and holds them for ``substeps`` control periods — one action of the continuous env with
 ``control_period = substeps · period`` — through the same periods, virtual bumper, watchdog and
 lockstep as a tabular agent (:mod:`.periods`). A frozen policy does not learn: nothing is
-observed, and the wheels are not stopped between its actions, only after a collision and when
-the episode ends (goal or ``max_actions``). Each action is scored by the env's rule and logged
-as a ``transition`` with the observation, the policy's output and the command sent.
+observed, and the wheels are not stopped between its actions, only after a collision, when the
+episode ends (goal or ``max_actions``: the last action ends at rest, as an agent's), and before
+the policy is asked when the held command would enter a wall within a period or the policy's
+previous answer took over half a period (:data:`SLOW_DECISION`). Each action is scored by the
+env's rule and logged as a ``transition`` with the observation, the policy's output and the
+command sent, before the wheels stop at the goal.
 
 A policy that raises, or returns anything but two finite numbers, trips the safety monitor
 (``policy failed: …``): the robot stops and the run ends with exit code 3.
@@ -19,6 +22,7 @@ A policy that raises, or returns anything but two finite numbers, trips the safe
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -40,6 +44,12 @@ from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 
 log = logging.getLogger(__name__)
+
+
+SLOW_DECISION = 0.5
+"""A policy answering in more than this share of a control period (wall time) decides its next
+action with the wheels stopped: the virtual bumper checks one period ahead of each command, and
+the command held while the policy answers would otherwise run unchecked."""
 
 
 class Decision(NamedTuple):
@@ -80,6 +90,7 @@ class PolicyLoop(EpisodeLoop):
             wait_for_operator=wait_for_operator,
         )  # fmt: skip
         self.policy, self.policy_name = policy, policy_name
+        self._slow_decision = False  # the policy's last answer took over SLOW_DECISION periods
         self.features = PoseFeatures(grid_map, self.grid, policy.lidar_rays, policy.lidar_range)
 
     def state_dict(self) -> dict[str, Any]:
@@ -104,13 +115,35 @@ class PolicyLoop(EpisodeLoop):
     def _step(self, result: EpisodeResult, last: bool) -> bool:
         """Decide, drive, score and log one action; True if the episode is over."""
         before = self._pose()
+        if self._last_command != (0.0, 0.0) and (
+            self._slow_decision or self._would_collide(before, self._last_command)
+        ):  # the held command would run unchecked by the bumper while the policy answers
+            self._command(0.0, 0.0)
+        started = time.monotonic()
         decision = self.decide(before)
-        end, rows, collided = self._hold(decision.command, stop=False)
+        self._slow_decision = time.monotonic() - started > SLOW_DECISION * self.settings.period_wall
+        end, rows, collided = self._hold(decision.command, stop=last)
         forward = is_forward_drive(decision.command)
         reward, terminated = self._score(end, rows, collided, forward, result)
         truncated = last and not terminated
-        if (terminated or truncated) and not collided:  # a collision has stopped the wheels
+        self._log_transition(result, before, decision, end, reward, terminated, truncated,
+                             collided, len(rows))  # fmt: skip
+        if terminated and not collided and not last:  # stopped already otherwise
             self._stop_and_settle(self._measure()[1])
+        return terminated or truncated
+
+    def _log_transition(
+        self,
+        result: EpisodeResult,
+        before: Pose,
+        decision: Decision,
+        end: Pose,
+        reward: float,
+        terminated: bool,
+        truncated: bool,
+        collided: bool,
+        log_rows: int,
+    ) -> None:
         self.log.write(
             "transition",
             {
@@ -126,10 +159,9 @@ class PolicyLoop(EpisodeLoop):
                 "truncated": truncated,
                 "collision": collided,
                 "pose": [end.x, end.y, end.heading],
-                "log_rows": len(rows),
+                "log_rows": log_rows,
             },
         )
-        return terminated or truncated
 
     def _play(self, result: EpisodeResult) -> None:
         for t in range(self.settings.max_actions):
