@@ -1,13 +1,25 @@
-"""Validation of settings written once: the integer checks of config dataclasses and arguments.
+"""Validation of settings written once: the integer and number checks of config dataclasses,
+arguments and saved files.
 
 >>> check_integer("seeds", 3, 1)
 >>> check_integer("hidden", True, 0, 64)
 Traceback (most recent call last):
 ...
 ValueError: expected hidden to be an integer in [0, 64], got True
+>>> check_number("sigma0", 0.5, 0.0, 1e30)
+0.5
+>>> check_number("wheel_speed", 10**400, 0.0)  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+ValueError: expected wheel_speed to be a finite number > 0, got '1000...'…
 """
 
 from __future__ import annotations
+
+import contextlib
+import math
+
+from skidnav.errors import shown
 
 
 def check_integer(name: str, value: object, low: int, high: int | None = None) -> None:
@@ -18,3 +30,24 @@ def check_integer(name: str, value: object, low: int, high: int | None = None) -
         return
     bounds = f">= {low}" if high is None else f"in [{low}, {high}]"
     raise ValueError(f"expected {name} to be an integer {bounds}, got {value!r}")
+
+
+def check_number(
+    name: str, value: object, low: float, high: float = math.inf, *, closed: bool = False
+) -> float:
+    """``value`` as a float if it is an ``int`` or ``float`` (a bool is not), finite, above ``low``
+    (at least ``low`` when ``closed``) and at most ``high``; else ValueError
+    ``"expected NAME to be a finite number > LOW, got …"`` (``in (LOW, HIGH]`` with a finite
+    ``high``). An integer too large for a float is a ValueError too, never an OverflowError."""
+    number = math.nan
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        with contextlib.suppress(OverflowError):  # an integer beyond the floats
+            number = float(value)
+    above = low <= number if closed else low < number
+    if above and number <= high and math.isfinite(number):
+        return number
+    if math.isinf(high):
+        bounds = f"{'>=' if closed else '>'} {low:g}"
+    else:
+        bounds = f"in {'[' if closed else '('}{low:g}, {high:g}]"
+    raise ValueError(f"expected {name} to be a finite number {bounds}, got {shown(value)}")

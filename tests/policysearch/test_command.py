@@ -49,7 +49,14 @@ def test_search_writes_the_policy_and_the_learning_curve(
     [
         (["--population", "1"], "expected --population to be an integer in [2, 10000], got 1"),
         (["--control-period", "0.15"], "expected --control-period to be a whole number"),
-        (["--sigma", "nan"], "expected --sigma to be a finite number > 0"),
+        (["--sigma", "nan"], "expected --sigma to be a finite number in (0, 1e+30]"),
+        (["--sigma", "1e40"], "expected --sigma to be a finite number in (0, 1e+30], got 1e+40"),
+        (["--control-period", "1e300"], "expected --control-period to be a finite number in"),
+        (
+            ["--population", "10000", "--episodes", "10000"],
+            "827 GiB for the episodes of --population 10000 × --episodes 10000",
+        ),
+        (["--hidden", "1024", "--lidar-rays", "1024"], "parameters from --hidden 1024 and"),
         (["--resume"], "no checkpoint.json to resume from"),
         (["--map", "cave"], "invalid choice"),
     ],
@@ -71,4 +78,19 @@ def test_a_folder_holding_a_search_is_not_overwritten(
     assert main([*TINY, "--out", str(out)]) == 2
     assert "holds a search already" in capsys.readouterr().err
     assert main([*TINY, "--out", str(out), "--resume"]) == 2
-    assert "not a skidnav CMA-ES checkpoint" in capsys.readouterr().err
+    assert "checkpoint.npz: no such file" in capsys.readouterr().err
+
+
+def test_a_hand_edited_checkpoint_is_one_line_and_exit_code_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The review's edit: a 400-digit wall time in the readable copy (an OverflowError)."""
+    out = tmp_path / "run"
+    assert main([*TINY, "--out", str(out)]) == 0
+    copy = out / "checkpoint.json"
+    huge = '"wall_time": 1' + "0" * 400 + ', "w": '
+    copy.write_text(copy.read_text().replace('"wall_time": ', huge, 1))
+    capsys.readouterr()
+    assert main([*TINY, "--out", str(out), "--resume"]) == 2
+    error = capsys.readouterr().err
+    assert "checkpoint.json: does not match checkpoint.npz" in error and error.count("\n") == 1

@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 import skidnav  # noqa: F401  (registers the env)
+from skidnav.agents.policy_files import load_policy as load_any_policy
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
-from skidnav.errors import CorruptFileError
+from skidnav.errors import CorruptFileError, UserError
 from skidnav.policysearch.policy import PolicyLayout, TanhPolicy, parameter_count
 from skidnav.policysearch.policyfile import load_policy, save_policy
 from tests.saved_file_support import arrays_of, write_npz
@@ -37,7 +38,7 @@ def random_policy(layout: PolicyLayout, seed: int = 0, scale: float = 1.0) -> Ta
 def observations(layout: PolicyLayout, shape: tuple[int, ...], seed: int = 1) -> np.ndarray:
     rng = np.random.default_rng(seed)
     low, high = layout.observation_low, layout.observation_high
-    return low + (high - low) * rng.random((*shape, layout.n_inputs))
+    return np.asarray(low + (high - low) * rng.random((*shape, layout.n_inputs)))
 
 
 def test_the_parameter_count_is_that_of_the_layers(layout: PolicyLayout) -> None:
@@ -121,6 +122,8 @@ def _edit_json(path: Path, **changes: object) -> None:
         (lambda base: _edit_json(base / "p.json", hidden=4), "n_parameters 92 does not fit"),
         (lambda base: _edit_json(base / "p.json", wheel_speed=-1.0), "wheel_speed"),
         (lambda base: _edit_json(base / "p.json", wheel_speed="fast"), "wheel_speed"),
+        (lambda base: _edit_json(base / "p.json", wheel_speed=10**400), "wheel_speed to be a"),
+        (lambda base: _edit_json(base / "p.json", lidar_range=10**400), "lidar_range to be a"),
         (lambda base: (base / "p.json").write_text("{"), "invalid JSON"),
         (lambda base: (base / "p.npz").unlink(), "no such file"),
         (lambda base: (base / "p.npz").write_bytes(b"PK\x03\x04 cut"), "not a readable .npz"),
@@ -155,3 +158,14 @@ def test_policy_archives_that_do_not_fit_are_refused(
     write_npz(tmp_path / "p.npz", members)
     with pytest.raises(CorruptFileError, match=message):
         load_policy(tmp_path / "p")
+
+
+def test_a_huge_integer_in_a_policy_file_is_one_line_for_robot_run(
+    layout: PolicyLayout, tmp_path: Path
+) -> None:
+    """``skidnav robot run --policy-file`` loads through the registry of policy formats: a
+    400-digit wheel speed is one line there too (it was an OverflowError)."""
+    save_policy(random_policy(layout), tmp_path / "p")
+    _edit_json(tmp_path / "p.json", wheel_speed=10**400)
+    with pytest.raises(UserError, match="expected wheel_speed to be a finite number > 0"):
+        load_any_policy(tmp_path / "p.json")

@@ -26,13 +26,12 @@ policy that stands still.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from skidnav.checks import check_integer
+from skidnav.checks import check_integer, check_number
 
 MAX_HIDDEN = 1024
 """Widest hidden layer accepted (a saved file announcing more is refused before allocation)."""
@@ -74,14 +73,10 @@ class PolicyLayout:
         if not (np.isfinite(low).all() and np.isfinite(high).all() and (high > low).all()):
             raise ValueError("expected finite observation bounds with high > low")
         for name in ("wheel_speed", "lidar_range"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ValueError(f"expected {name} to be a finite number > 0, got {value!r}")
+            object.__setattr__(self, name, check_number(name, getattr(self, name), 0.0))
         low.flags.writeable = high.flags.writeable = False
         object.__setattr__(self, "observation_low", low)
         object.__setattr__(self, "observation_high", high)
-        object.__setattr__(self, "wheel_speed", float(self.wheel_speed))
-        object.__setattr__(self, "lidar_range", float(self.lidar_range))
 
     @property
     def n_inputs(self) -> int:

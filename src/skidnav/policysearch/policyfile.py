@@ -28,6 +28,7 @@ from typing import Any
 
 from skidnav.agents.core import save_paths
 from skidnav.atomicfile import write_atomic, write_npz_atomic
+from skidnav.checks import check_number
 from skidnav.errors import CorruptFileError, first_line, shown
 from skidnav.policysearch.policy import (
     MAX_HIDDEN,
@@ -109,8 +110,8 @@ def policy_from_file(json_path: Path, meta: Mapping[str, Any]) -> TanhPolicy:
     try:
         layout = PolicyLayout(
             arrays["observation_low"], arrays["observation_high"], hidden=hidden,
-            wheel_speed=_number(meta, "wheel_speed"), lidar_rays=rays,
-            lidar_range=_number(meta, "lidar_range"),
+            wheel_speed=check_number("wheel_speed", meta.get("wheel_speed"), 0.0),
+            lidar_rays=rays, lidar_range=check_number("lidar_range", meta.get("lidar_range"), 0.0),
         )  # fmt: skip
         return TanhPolicy(layout, arrays["parameters"])
     except ValueError as error:
@@ -126,11 +127,3 @@ def _integer(meta: Mapping[str, Any], name: str, high: int, where: Path) -> int:
             f"{where}: expected {name} to be an integer in [0, {high}], got {shown(value)}"
         )
     return value
-
-
-def _number(meta: Mapping[str, Any], name: str) -> float:
-    """``meta[name]`` as a float (PolicyLayout checks its range); ValueError if not a number."""
-    value = meta.get(name)
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"expected {name} to be a number, got {shown(value)}")
-    return float(value)

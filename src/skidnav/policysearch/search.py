@@ -13,9 +13,11 @@ moves m, σ and C toward the better ones. Here (docs/agents/cmaes.md):
    told the negated scores; the learning curve reports plain returns;
 3. every candidate of a generation meets the same E episode seeds (common random numbers: the
    ranking compares policies, not slip noise); the seeds change from one generation to the next;
-4. the distribution's mean m is the search's policy: after the generations given in
-   ``eval_every`` (and the last one) it runs ``eval_episodes`` episodes on fixed evaluation seeds,
-   the same for the whole search, for its mean return and success rate;
+4. the distribution's mean m is the search's policy: after every ``eval_every``-th generation
+   (and generation 0) it runs ``eval_episodes`` episodes on fixed evaluation seeds, the same for
+   the whole search, for its mean return and success rate; after the last generation too, when
+   that one is off the schedule, but that evaluation is in the result alone, never in the
+   checkpoint, so a search extended with ``--resume`` records what one run would;
 5. one root seed ``config.seed`` gives every random number, through three child streams
    (:data:`SEARCH_ROLES`): generation g's episode seeds are drawn from child g of the first,
    the evaluation seeds from the second, and the optimizer's generator is reseeded at
@@ -39,9 +41,12 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from skidnav.agents.core import save_paths
-from skidnav.errors import CorruptFileError, UserError
+from skidnav.errors import UserError, first_line
 from skidnav.policysearch.checkpoint import load_checkpoint, new_optimizer, save_checkpoint
-from skidnav.policysearch.config import SearchConfig
+from skidnav.policysearch.config import MAX_PARAMETER, SearchConfig
+from skidnav.policysearch.curve import GenerationRecord as GenerationRecord
+from skidnav.policysearch.curve import record_rows as record_rows
+from skidnav.policysearch.curve import scheduled
 from skidnav.policysearch.policy import TanhPolicy
 from skidnav.policysearch.rollouts import PopulationRollouts
 from skidnav.seeding import child, child_sequences
@@ -51,29 +56,6 @@ logger = logging.getLogger(__name__)
 SEARCH_ROLES = ("episodes", "evaluation", "sampler")
 """Children of ``SeedSequence(config.seed)``: per-generation episode seeds (child g of it for
 generation g), the fixed evaluation seeds, the optimizer's per-generation reseeding."""
-
-
-class GenerationRecord(NamedTuple):
-    """One point of the learning curve (generation 0: the initial mean, before any episode)."""
-
-    generation: int
-    """Generations done."""
-    episodes: int
-    """Real episodes the search has consumed: λ · E · generation."""
-    evaluation_episodes: int
-    """Episodes of the mean's evaluations so far (not part of ``episodes``)."""
-    wall_time: float
-    """Seconds since the search started, its evaluations included (summed over resumed runs)."""
-    best_return: float
-    """This generation's best candidate score (mean return over its E episodes); NaN at 0."""
-    population_return: float
-    """The mean of this generation's λ scores; NaN at 0."""
-    sigma: float
-    """The step size σ after this generation's update."""
-    mean_return: float
-    """The mean policy's mean return on the evaluation seeds; NaN when not evaluated."""
-    mean_success: float
-    """The mean policy's share of evaluation episodes that reached the goal; NaN likewise."""
 
 
 class SearchResult(NamedTuple):
@@ -120,10 +102,12 @@ class CMAESSearch:
             raise ValueError("expected a checkpoint to resume from")
         self.config, self.checkpoint = config, checkpoint
         options = config.env_options()
-        self.rollouts = PopulationRollouts(
-            config.population, config.episodes_per_candidate, options
-        )
-        self.evaluation = PopulationRollouts(1, config.eval_episodes, options)
+        self.rollouts = _rollouts(config.population, config.episodes_per_candidate, options)
+        try:
+            self.evaluation = _rollouts(1, config.eval_episodes, options)
+        except BaseException:
+            self.rollouts.close()
+            raise
         self.layout = self.rollouts.layout(config.hidden)
         self.evaluation_seeds = evaluation_seeds(config)
         self.records: list[GenerationRecord] = []
@@ -139,7 +123,7 @@ class CMAESSearch:
 
     def _resume(self, checkpoint: str | Path) -> None:
         optimizer, saved, records = load_checkpoint(checkpoint, self.layout.n_parameters)
-        where = save_paths(checkpoint)[1]
+        where = save_paths(checkpoint)[0]
         if not self.config.resumes(saved):
             raise UserError(f"{where}: saved for another search (only generations may differ)")
         if optimizer.generation > self.config.generations:
@@ -147,10 +131,7 @@ class CMAESSearch:
                 f"{where}: already {optimizer.generation} generations, more than the "
                 f"{self.config.generations} asked for"
             )
-        try:
-            self.records = [GenerationRecord(**record) for record in records]
-        except TypeError as error:
-            raise CorruptFileError(f"{where}: cannot resume: bad record ({error})") from None
+        self.records = records
         self.optimizer = optimizer
         self._clock_offset = self.records[-1].wall_time
 
@@ -164,23 +145,48 @@ class CMAESSearch:
         return TanhPolicy(self.layout, self.optimizer.mean)
 
     def run(self, on_generation: Callable[[GenerationRecord], None] | None = None) -> SearchResult:
-        """Run the generations left; ``on_generation`` is called with every new record."""
+        """Run the generations left; ``on_generation`` is called with every new record, the
+        last one after the mean's final evaluation.
+
+        The evaluations after generation g are those of :func:`~skidnav.policysearch.curve.
+        scheduled` (g a multiple of ``eval_every``), whatever the search's length: the records
+        and the checkpoint hold those alone, so a search resumed with more generations records
+        what one run of them would. The mean after the last generation is evaluated besides when
+        that generation is not scheduled: its record, in the result only, gets the evaluation.
+        """
         start = time.perf_counter() - self._clock_offset
-        if not self.records:
-            self._record(start, math.nan, math.nan, on_generation)
+        report = on_generation if on_generation is not None else _ignore
+        unreported = not self.records  # the last record is this run's, not yet reported
+        if unreported:
+            self._record(start, math.nan, math.nan)
         while self.generation < self.config.generations:
+            if unreported:  # another generation follows: that record is final
+                report(self.records[-1])
             scores = self._generation()
-            self._record(start, float(scores.max()), float(scores.mean()), on_generation)
+            self._record(start, float(scores.max()), float(scores.mean()))
+            unreported = True
             if self.checkpoint is not None:
-                rows = record_rows(self.records)
-                save_checkpoint(self.checkpoint, self.optimizer, self.config, rows)
-        return SearchResult(self.mean_policy(), tuple(self.records), self.config)
+                save_checkpoint(self.checkpoint, self.optimizer, self.config, self.records)
+        records = list(self.records)
+        if not scheduled(self.generation, self.config.eval_every):
+            records[-1] = self._evaluated(records[-1], start)
+            unreported = True
+        if unreported:
+            report(records[-1])
+        return SearchResult(self.mean_policy(), tuple(records), self.config)
 
     def _generation(self) -> np.ndarray:
-        """One ask / score / tell; the λ scores, float64 (λ,)."""
+        """One ask / score / tell; the λ scores, float64 (λ,). UserError when a candidate
+        reaches :data:`~skidnav.policysearch.config.MAX_PARAMETER` (the search diverged)."""
         generation = self.generation + 1
         self.optimizer.reseed_rng(sampler_seed(self.config, generation))
         candidates = np.array([self.optimizer.ask() for _ in range(self.config.population)])
+        if not (np.abs(candidates) < MAX_PARAMETER).all():  # NaN fails too
+            raise UserError(
+                f"generation {generation}: a candidate's parameter is not below "
+                f"{MAX_PARAMETER:g} in magnitude (σ {self.optimizer._sigma:.3g}): the search "
+                "diverged; start it with a smaller sigma0"
+            )
         batch = self.rollouts.run(
             self.layout, candidates, generation_seeds(self.config, generation)
         )
@@ -188,38 +194,51 @@ class CMAESSearch:
         self.optimizer.tell([(x, -float(f)) for x, f in zip(candidates, fitness, strict=True)])
         return batch.mean_returns
 
-    def _record(
-        self,
-        start: float,
-        best: float,
-        population_mean: float,
-        on_generation: Callable[[GenerationRecord], None] | None,
-    ) -> None:
+    def _record(self, start: float, best: float, population_mean: float) -> None:
+        """Append the record of the generation just done (``start``: the clock's zero [s]), with
+        the mean's evaluation if :func:`~skidnav.policysearch.curve.scheduled`."""
         generation = self.generation
         evaluated = self.records[-1].evaluation_episodes if self.records else 0
-        mean_return = mean_success = math.nan
-        due = generation % self.config.eval_every == 0 or generation == self.config.generations
-        if due:
-            batch = self.evaluation.run(
-                self.layout, self.optimizer.mean[None, :], self.evaluation_seeds
-            )
-            mean_return, mean_success = float(batch.returns.mean()), float(batch.successes.mean())
-            evaluated += self.config.eval_episodes
         record = GenerationRecord(
             generation, generation * self.config.episodes_per_generation, evaluated,
             time.perf_counter() - start, best, population_mean,
             float(self.optimizer._sigma),  # cmaes has no public σ; the checkpoint saves it too
-            mean_return, mean_success,
+            math.nan, math.nan,
         )  # fmt: skip
+        if scheduled(generation, self.config.eval_every):
+            record = self._evaluated(record, start)
         self.records.append(record)
         logger.info("generation %d: %s", generation, record)
-        if on_generation is not None:
-            on_generation(record)
+
+    def _evaluated(self, record: GenerationRecord, start: float) -> GenerationRecord:
+        """``record`` with the current mean's evaluation on the evaluation seeds (its return,
+        success rate and episode count) and the wall time after it."""
+        mean = self.optimizer.mean[None, :]
+        batch = self.evaluation.run(self.layout, mean, self.evaluation_seeds)
+        return record._replace(
+            evaluation_episodes=record.evaluation_episodes + self.config.eval_episodes,
+            wall_time=time.perf_counter() - start,
+            mean_return=float(batch.returns.mean()),
+            mean_success=float(batch.successes.mean()),
+        )
 
     def close(self) -> None:
         """Close both vector envs."""
         self.rollouts.close()
         self.evaluation.close()
+
+
+def _ignore(record: GenerationRecord) -> None:
+    """No report."""
+
+
+def _rollouts(population: int, episodes: int, options: dict[str, Any]) -> PopulationRollouts:
+    """The :class:`PopulationRollouts` of ``population`` × ``episodes`` sub-envs of the env
+    ``options``; UserError in one line when the env refuses them."""
+    try:
+        return PopulationRollouts(population, episodes, options)
+    except ValueError as error:
+        raise UserError(f"cannot build the search's env: {first_line(error)}") from None
 
 
 def run_search(
@@ -241,14 +260,3 @@ def run_search(
             return search.run(on_generation)
     finally:
         search.close()
-
-
-def record_rows(records: tuple[GenerationRecord, ...] | list[GenerationRecord]) -> list[Any]:
-    """The records as JSON-able dicts, NaN as None (for JSON, CSV and the checkpoint)."""
-    return [
-        {
-            key: None if isinstance(v, float) and math.isnan(v) else v
-            for key, v in r._asdict().items()
-        }
-        for r in records
-    ]
