@@ -91,9 +91,11 @@ planning_steps = 10
 def test_resume_without_checkpoint_is_a_user_error(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    argv = ["robot", "run", "--driver", "tcp", "--agent", "q-learning", "--resume"]
-    assert main([*argv, "--out", str(tmp_path)]) == 2
-    assert "no checkpoint to resume from" in capsys.readouterr().err
+    argv = ["robot", "run", "--driver", "tcp", "--resume", "--out", str(tmp_path / "out")]
+    for chosen in (["--agent", "q-learning"], ["--policy", "goal-tracker"]):
+        assert main([*argv, *chosen]) == 2
+        assert "no checkpoint to resume from" in capsys.readouterr().err
+        assert not (tmp_path / "out").exists()  # refused before anything was written
 
 
 def test_shipped_config_presets_load() -> None:

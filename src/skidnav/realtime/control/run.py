@@ -150,13 +150,12 @@ def run_from_args(
             getattr(args, "policy", None), getattr(args, "policy_file", None), config, robot
         )
         check_policy(pilot, policy_name, grid_map, grid)
-        out = output_directory(args.out)
         first_episode, state = _resume_policy(args, policy_name)
     else:
-        out = output_directory(args.out)
         context = agent_context(args.agent, robot, grid)
         pilot, first_episode, state = _make_or_resume_agent(args, config, context, grid)
         warm_up_agent(args.agent, config, context, grid.n_states)
+    out = output_directory(args.out)  # a refused --resume has written nothing
     code, loop = drive(
         args.driver,
         pilot,
