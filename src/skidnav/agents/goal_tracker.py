@@ -45,13 +45,12 @@ and with 0.1 s ones (tests/agents/test_goal_tracker.py tests a few).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from skidnav.checks import check_number
 from skidnav.envs.features import POSE_GOAL_NAMES, check_lidar
-from skidnav.errors import shown
 from skidnav.robot.params import RobotParams
 
 POLICY_NAME = "goal-tracker"
@@ -81,14 +80,7 @@ class GoalTrackerConfig:
 
     def __post_init__(self) -> None:
         for name in ("distance_gain", "turn_gain"):
-            value = getattr(self, name)
-            if not (
-                isinstance(value, int | float)
-                and not isinstance(value, bool)
-                and math.isfinite(value)
-                and value > 0
-            ):
-                raise ValueError(f"expected {name} to be a finite number > 0, got {shown(value)}")
+            check_number(name, getattr(self, name), 0.0)
         check_lidar(self.lidar_rays, self.lidar_range)
 
 
