@@ -106,7 +106,7 @@ def test_speedup_plain_and_lower_bound() -> None:
     agent = base / 4
     ones = np.ones(30)
     plain = speedup_interval(base, ones, agent, ones, _rng())
-    assert isinstance(plain, SpeedupInterval) and not plain.lower_bound
+    assert isinstance(plain, SpeedupInterval) and plain.bound == ""
     assert plain.estimate == pytest.approx(km_median(base, ones) / km_median(agent, ones))
     assert plain.low <= plain.estimate <= plain.high
     # Baseline censored at 100 in 20 of 30 runs: its median is inf, the largest censoring time
@@ -115,14 +115,21 @@ def test_speedup_plain_and_lower_bound() -> None:
     base_censored = np.where(censored == 0, 100.0, base)
     bound = speedup_interval(base_censored, censored, agent, ones, _rng())
     assert math.isinf(km_median(base_censored, censored))
-    assert bound.lower_bound
+    assert bound.bound == "lower" and bound.high == math.inf  # no upper end
     assert bound.estimate == pytest.approx(100.0 / km_median(agent, ones))
     assert bound.interval.estimate == bound.estimate
+    assert bound.words(1).startswith("≥ ") and bound.words(1).endswith("∞)")
 
 
-def test_speedup_agent_censored_is_zero() -> None:
+def test_speedup_agent_censored_is_an_upper_bound_and_both_censored_unknown() -> None:
     result = speedup_interval([5, 6, 7], [1, 1, 1], [50, 50, 50], [0, 0, 0], _rng())
-    assert result == SpeedupInterval(0.0, 0.0, 0.0, False)
+    assert result.bound == "upper" and result.low == 0.0
+    assert result.estimate == pytest.approx(6 / 50)  # at most: the agent converges after 50
+    assert result.words(2).startswith("≤ 0.12× (0, ")
+    # Both mostly censored: neither "slower" nor "faster", and never 0×.
+    both = speedup_interval([50] * 6, [0, 0, 0, 0, 1, 1], [50] * 6, [0, 0, 0, 1, 0, 0], _rng())
+    assert both.bound == "unknown" and math.isnan(both.estimate)
+    assert both.words() == "unknown (both mostly censored)"
 
 
 def test_speedup_paired_is_narrower_and_nan_seeds_drop() -> None:
@@ -237,7 +244,7 @@ def test_plots_return_png() -> None:
             "speedup": [1.0, 3.0, 6.0, 1.2, 4.0, 9.0],
             "speedup_low": [0.8, 2.0, 4.0, 1.0, 3.0, 7.0],
             "speedup_high": [1.3, 4.0, 8.0, 1.5, 5.0, np.nan],
-            "lower_bound": [False, False, False, False, False, True],
+            "bound": ["", "", "", "", "upper", "lower"],
             "wall_time": [1.0, 2.0, 9.0, 1.5, 3.0, 12.0],
             "wall_time_low": [0.9, 1.8, 8.0, 1.4, 2.7, 11.0],
             "wall_time_high": [1.1, 2.2, 10.0, 1.6, 3.3, 13.0],

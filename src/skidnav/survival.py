@@ -43,23 +43,55 @@ HALF = 0.5 + 1e-9
 """S(t) ≤ 0.5 test with a rounding margin: a per-run product such as 3/4 · 2/3 must count as 0.5."""
 
 
+SPEEDUP_BOUNDS = ("", "lower", "upper", "unknown")
+"""What a speed-up's estimate is: "" a ratio of two medians, "lower" a lower bound (the
+baseline's median is censored), "upper" an upper bound (the agent's is), "unknown" (both are)."""
+
+
 class SpeedupInterval(NamedTuple):
     """Speed-up KM-median(baseline) / KM-median(agent) (> 1: the agent converges sooner).
 
-    ``lower_bound`` is True when the baseline's median is infinite (more than half of its runs
-    censored): its largest censoring time stands in for it, so the true speed-up is at least
-    ``estimate``. The interval [low, high] uses the same substitution in every resample.
+    ``bound`` (one of :data:`SPEEDUP_BOUNDS`) says what ``estimate`` is when a median is
+    infinite (more than half of the runs censored): that side's largest censoring time stands
+    in for it, so with the baseline censored the speed-up is at least ``estimate`` (``high`` is
+    then inf: no upper end), with the agent censored at most ``estimate`` (``low`` is 0), and
+    with both censored it is unknown (every field NaN). Every resample makes the same
+    substitutions.
     """
 
     estimate: float
     low: float
     high: float
-    lower_bound: bool
+    bound: str = ""
 
     @property
     def interval(self) -> Interval:
-        """The same numbers as a plain :class:`~skidnav.stats.Interval` (flag dropped)."""
+        """The same numbers as a plain :class:`~skidnav.stats.Interval` (bound dropped)."""
         return Interval(self.estimate, self.low, self.high)
+
+    def words(self, digits: int = 2) -> str:
+        """The speed-up as a reader should take it; no interval with one seed.
+
+        >>> SpeedupInterval(12.3, 8.1, 20.0).words(1)
+        '12.3× [8.1, 20.0]'
+        >>> SpeedupInterval(4.0, 2.5, math.inf, "lower").words(1)
+        '≥ 4.0× [2.5, ∞)'
+        >>> SpeedupInterval(0.5, 0.0, 0.9, "upper").words(1)
+        '≤ 0.5× (0, 0.9]'
+        >>> SpeedupInterval(math.nan, math.nan, math.nan, "unknown").words()
+        'unknown (both mostly censored)'
+        """
+        if self.bound == "unknown" or self.estimate != self.estimate:
+            return "unknown (both mostly censored)"
+        sign = {"lower": "≥ ", "upper": "≤ "}.get(self.bound, "")
+        text = f"{sign}{self.estimate:.{digits}f}×"
+        if self.low != self.low or self.high != self.high:  # one seed: no interval
+            return text
+        if self.bound == "lower":
+            return f"{text} [{self.low:.{digits}f}, ∞)"
+        if self.bound == "upper":
+            return f"{text} (0, {self.high:.{digits}f}]"
+        return f"{text} [{self.low:.{digits}f}, {self.high:.{digits}f}]"
 
 
 class _Sample(NamedTuple):
@@ -200,16 +232,23 @@ def median_interval(
 
 def _speedups(
     base: tuple[np.ndarray, np.ndarray], agent: tuple[np.ndarray, np.ndarray]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Row-wise speed-up and lower-bound flag from sorted rows (times, observed), shape (m, n)."""
-    base_median = _rowwise_median(*base)
-    agent_median = _rowwise_median(*agent)
-    last_censoring = np.where(base[1], -np.inf, base[0]).max(axis=-1)
-    substituted = np.isinf(base_median)
-    numerator = np.where(substituted, last_censoring, base_median)
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Row-wise speed-up from sorted rows (times, observed), shape (m, n), an infinite median
+    replaced by the largest censoring time of its side; and whether the baseline's and the
+    agent's medians were replaced, each (m,)."""
+    base_median, base_censored = _censored_median(*base)
+    agent_median, agent_censored = _censored_median(*agent)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(np.isinf(agent_median), 0.0, numerator / agent_median)
-    return ratio, substituted
+        return base_median / agent_median, base_censored, agent_censored
+
+
+def _censored_median(times: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row-wise KM median, or the row's largest censoring time where the median is infinite;
+    and where it was, shapes (m, n) → (m,)."""
+    median = _rowwise_median(times, observed)
+    censored = np.isinf(median)
+    last_censoring = np.where(observed, -np.inf, times).max(axis=-1)
+    return np.where(censored, last_censoring, median), censored
 
 
 def _two_samples(
@@ -261,29 +300,38 @@ def speedup_interval(
         paired: resample seed indices jointly (needs equal lengths; a seed with a NaN time on
             either side is dropped from both); otherwise each sample on its own.
 
-    An infinite baseline median is replaced by the baseline's largest censoring time (the result
-    is then a lower bound, see :class:`SpeedupInterval`); an infinite agent median gives 0.0 (a
-    censored agent is no evidence of a speed-up), also inside every resample.
+    An infinite median is replaced by the largest censoring time of its side, and the result
+    is then a bound, or unknown when both are (see :class:`SpeedupInterval`), also inside every
+    resample.
 
     >>> fast = speedup_interval([40] * 4, [1] * 4, [10] * 4, [1] * 4, np.random.default_rng(0))
-    >>> fast.estimate, fast.lower_bound
-    (4.0, False)
+    >>> fast.estimate, fast.bound
+    (4.0, '')
+    >>> speedup_interval([40] * 4, [0] * 4, [10] * 4, [1] * 4, np.random.default_rng(0)).high
+    inf
     """
     base, agent, paired = _two_samples(
         (base_times, base_observed), (agent_times, agent_observed), paired
     )
     if base.times.size == 0 or agent.times.size == 0:
-        return SpeedupInterval(math.nan, math.nan, math.nan, False)
-    ratio, substituted = _speedups(
+        return SpeedupInterval(math.nan, math.nan, math.nan, "unknown")
+    ratio, base_censored, agent_censored = _speedups(
         (base.times[None, :], base.observed[None, :]),
         (agent.times[None, :], agent.observed[None, :]),
     )
-    estimate, lower_bound = float(ratio[0]), bool(substituted[0])
-    if min(base.times.size, agent.times.size) < 2:
-        return SpeedupInterval(estimate, math.nan, math.nan, lower_bound)
-    base_positions, agent_positions = _draw_positions(base, agent, rng, paired, n_resamples)
-    resampled, _ = _speedups(_rows(base, base_positions), _rows(agent, agent_positions))
-    return SpeedupInterval(estimate, *_inf_percentiles(resampled, confidence), lower_bound)
+    bound = SPEEDUP_BOUNDS[int(base_censored[0]) + 2 * int(agent_censored[0])]
+    if bound == "unknown":
+        return SpeedupInterval(math.nan, math.nan, math.nan, bound)
+    low, high = math.nan, math.nan
+    if min(base.times.size, agent.times.size) >= 2:
+        base_positions, agent_positions = _draw_positions(base, agent, rng, paired, n_resamples)
+        resampled = _speedups(_rows(base, base_positions), _rows(agent, agent_positions))[0]
+        low, high = _inf_percentiles(resampled, confidence)
+    if bound == "lower":
+        high = math.inf
+    elif bound == "upper":
+        low = 0.0
+    return SpeedupInterval(float(ratio[0]), low, high, bound)
 
 
 def gehan_scores(

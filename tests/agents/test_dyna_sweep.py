@@ -43,14 +43,17 @@ def _convergence(name: str, episodes: int) -> tuple[int, bool, object]:
         agent, env, episodes, max_steps=300, greedy_eval_env=evaluation, greedy_seeds=[0, 1, 2]
     )
     mean, share = evaluation_summary(log.greedy_lengths)
-    rule = ConvergenceRule(oracle.start_value, 0.1, 5)
-    episode, converged = convergence_episode(within_tolerance(mean, share, rule), rule.window)
+    rule = ConvergenceRule(oracle.start_value, 0.1, 5, level=0.9)
+    passed = within_tolerance(mean, share, rule)
+    episode, converged = convergence_episode(passed, rule.window, rule.level)
     return episode, converged, agent
 
 
 def test_dyna_sweep_converges_where_q_learning_has_not_started() -> None:
     episode, converged, agent = _convergence("dyna-sweep", 40)
-    assert converged and episode <= 30  # measured: 3
+    # measured: 31. Its first 10 passes in a row start at episode 3, but evaluations 17–30 fail:
+    # a policy that did not stay converged there.
+    assert converged and episode <= 35
     assert agent.planning_updates > 10 * agent.steps  # the solutions, beyond 10 per real step
     q_episode, q_converged, _ = _convergence("q-learning", 40)
     assert not q_converged and q_episode == 36  # censored at N − W + 1

@@ -9,6 +9,7 @@ from skidnav.experiments.metrics import (
     ConvergenceRule,
     convergence_episode,
     evaluation_summary,
+    first_window,
     moving_average,
     path_length,
     run_metrics,
@@ -31,26 +32,61 @@ def test_within_tolerance_needs_every_rollout_and_a_short_enough_mean() -> None:
     assert within_tolerance(mean, share, rule).tolist() == [True, True, False, False, False]
 
 
-def test_convergence_needs_a_full_window() -> None:
-    within = np.array([0, 1, 1, 0, 1, 1, 1, 1, 0, 0], dtype=bool)
-    assert convergence_episode(within, 3) == (5, True)
-    assert convergence_episode(within, 4) == (5, True)
-    assert convergence_episode(within, 5) == (6, False)  # censored at N − W + 1 = 6
-    assert convergence_episode(within, 1) == (2, True)
-    assert convergence_episode(within[:2], 3) == (1, False)  # shorter than the window
+def test_convergence_is_the_first_pass_from_which_the_share_stays() -> None:
+    passed = np.array([0, 1, 1, 0, 1, 1, 1, 1, 1, 1], dtype=bool)
+    assert convergence_episode(passed, 3) == (5, True)
+    assert convergence_episode(passed, 1) == (5, True)  # level 1: every later evaluation passes
+    assert convergence_episode(passed, 3, level=2 / 3) == (2, True)  # one miss in 3 allowed
+    assert convergence_episode(passed[:2], 3) == (1, False)  # shorter than the window
+    # The last evaluation fails: at level 1 censored at N − W + 1, whatever came before; at a
+    # level the whole run keeps (8 of 11 from episode 2 on), converged as before.
+    assert convergence_episode(np.append(passed, [0, 0]), 3) == (10, False)
+    assert convergence_episode(np.append(passed, [0, 0]), 3, level=2 / 3) == (2, True)
 
 
-def test_convergence_does_not_depend_on_the_horizon() -> None:
+def test_a_run_that_converges_and_then_degrades_is_not_converged() -> None:
+    # 200 passing evaluations, then the greedy policy drifts away for good.
+    passed = np.concatenate([np.zeros(30), np.ones(200), np.zeros(100)]).astype(bool)
+    assert first_window(passed, 10) == 31  # the first-window rule would call it converged
+    assert convergence_episode(passed, 10, level=0.9) == (321, False)
+    # A policy that keeps failing now and then, at random, stays converged at its level.
+    noisy = np.random.default_rng(1).random(5000) > 0.03
+    episode, converged = convergence_episode(noisy, 10, level=0.9)
+    assert converged and episode < 20
+    metrics = run_metrics(
+        _episodes(np.where(passed, 20.0, 40.0), np.ones(passed.size)),
+        np.zeros((1, 3)),
+        False,
+        ConvergenceRule(20.0, 0.1, 10, 0.9),
+    )
+    assert metrics["converged"] == 0.0 and np.isnan(metrics["pass_share_after"])
+    assert metrics["first_window_episode"] == 31
+    assert metrics["pass_share_after_first_window"] == pytest.approx(200 / 300)
+    assert metrics["pass_share_last10"] == 0.0
+    # A brief relapse within the level does not undo convergence.
+    blip = np.concatenate([np.zeros(30), np.ones(300)]).astype(bool)
+    blip[100] = False
+    assert convergence_episode(blip, 10, level=0.9) == (31, True)
+    assert convergence_episode(blip, 10, level=1.0) == (102, True)
+
+
+def test_longer_runs_only_reveal_whether_a_policy_stayed() -> None:
     rng = np.random.default_rng(4)
+    seen_converged = 0
     for _ in range(200):
-        within = rng.random(60) < rng.uniform(0.3, 0.95)
-        episode, converged = convergence_episode(within, 5)
-        for horizon in range(5, 60):
-            short, short_converged = convergence_episode(within[:horizon], 5)
+        passed = rng.random(80) < rng.uniform(0.5, 0.99)
+        level = rng.choice([0.6, 0.8, 1.0])
+        episode, converged = convergence_episode(passed, 5, level)
+        for horizon in range(5, 80):
+            short, short_converged = convergence_episode(passed[:horizon], 5, level)
             if converged and episode + 4 <= horizon:
-                assert (short, short_converged) == (episode, True)
-            else:  # not yet seen: censored where the short run could no longer confirm it
-                assert (short, short_converged) == (horizon - 4, False)
+                assert short_converged and short <= episode  # never later over a shorter run
+                seen_converged += 1
+            if not short_converged:
+                assert short == horizon - 4
+        if level == 1.0 and converged:  # every evaluation from e on passes: exact
+            assert convergence_episode(passed[: episode + 4], 5, level) == (episode, True)
+    assert seen_converged > 100
 
 
 def _episodes(greedy_length: np.ndarray, greedy_success: np.ndarray) -> dict[str, np.ndarray]:
@@ -74,6 +110,9 @@ def test_run_metrics_values() -> None:
     metrics = run_metrics(_episodes(greedy, share), poses, True, ConvergenceRule(20.0, 0.1, 3))
     assert metrics["convergence_episode"] == 7  # 21, 20, 19 from episode 7; 30 broke the first
     assert metrics["converged"] == 1.0
+    assert metrics["pass_share_after"] == 1.0
+    assert metrics["first_window_episode"] == 7
+    assert metrics["pass_share_last10"] == 1.0
     assert metrics["optimality_gap"] == pytest.approx((20 + 19 + 20) / 3 / 20 - 1)  # last W = 3
     assert metrics["first_success_episode"] == 3
     assert metrics["success_rate"] == pytest.approx(0.8)

@@ -29,11 +29,20 @@ from skidnav.stats import (
     rowwise_iqm,
     rowwise_mean,
 )
-from skidnav.survival import median_interval, probability_of_improvement, speedup_interval
+from skidnav.survival import (
+    SpeedupInterval,
+    median_interval,
+    probability_of_improvement,
+    speedup_interval,
+)
 
 METRICS = {
     "convergence_episode": "convergence episode (censored runs at their censoring time)",
+    "convergence_steps": "real actions until convergence (censored runs until censoring)",
     "converged": "converged share",
+    "pass_share_after": "pass share after convergence",
+    "pass_share_after_first_window": "pass share after the first good window",
+    "pass_share_last10": "pass share (last 10 %)",
     "optimality_gap": "optimality gap (last evaluations / oracle − 1)",
     "oracle_length": "oracle expected length L* [actions]",
     "first_success_episode": "first successful episode",
@@ -87,12 +96,14 @@ def aggregate(
     summaries: pd.DataFrame, config: StatsSettings, metrics: Iterable[str] = METRICS
 ) -> pd.DataFrame:
     """Mean and IQM with bootstrap intervals of every metric (summary column, default
-    :data:`METRICS`) per (map, preset, agent).
+    :data:`METRICS`) per (map, preset, agent); a metric the summaries lack (runs recorded before
+    it existed) is left out.
 
     Returns a long table: map, preset, agent, metric, n, mean, mean_low, mean_high, iqm,
     iqm_low, iqm_high.
     """
     records = []
+    metrics = [metric for metric in metrics if metric in summaries.columns]
     for map_label, preset, rows in cells(summaries):
         for agent in config.agent_labels:
             agent_rows = rows[rows["agent"] == agent]
@@ -145,9 +156,11 @@ def compare_to_baseline(summaries: pd.DataFrame, config: ExperimentConfig) -> pd
     """Each agent against the baseline, per (map, preset), paired by seed.
 
     Columns: ``speedup`` (Kaplan–Meier median convergence episode of the baseline / of the agent;
-    > 1 = faster) and ``speedup_lower_bound`` (True when more than half of the baseline's runs
-    are censored: its largest censoring time stands in for its median, so the speed-up is at
-    least the value shown), ``improvement_probability`` (Agarwal et al. (2021) probability that
+    > 1 = faster) and ``speedup_bound`` (:data:`~skidnav.survival.SPEEDUP_BOUNDS`: "lower" when
+    more than half of the baseline's runs are censored, its largest censoring time standing in
+    for its median, so the speed-up is at least the value shown; "upper" when the agent's are;
+    "unknown" when both are), the same in real actions (``speedup_steps``,
+    ``speedup_steps_bound``), ``improvement_probability`` (Agarwal et al. (2021) probability that
     an agent run converges before a baseline run, censoring by Gehan's scores),
     ``success_gain`` (success rate agent − baseline, absolute), ``success_gain_relative``
     (agent / baseline − 1), ``success_gain_last10``, ``length_difference`` (final greedy length
@@ -178,31 +191,44 @@ def compare_to_baseline(summaries: pd.DataFrame, config: ExperimentConfig) -> pd
     return pd.DataFrame.from_records(records)
 
 
-def survival_columns(rows: pd.DataFrame, agent: str) -> tuple[np.ndarray, np.ndarray]:
-    """(convergence episodes, converged flags) of an agent's runs, by seed (each (n,))."""
-    times = _by_seed(rows, agent, "convergence_episode").to_numpy()
+def speedup_of(row: pd.Series, name: str = "speedup") -> SpeedupInterval:
+    """The speed-up ``name`` (``speedup`` in episodes, ``speedup_steps`` in real actions) of a
+    row of :func:`compare_to_baseline`."""
+    return SpeedupInterval(
+        float(row[name]), float(row[f"{name}_low"]), float(row[f"{name}_high"]),
+        str(row[f"{name}_bound"]),
+    )  # fmt: skip
+
+
+def survival_columns(
+    rows: pd.DataFrame, agent: str, time: str = "convergence_episode"
+) -> tuple[np.ndarray, np.ndarray]:
+    """(convergence times, converged flags) of an agent's runs, by seed (each (n,)); times in
+    episodes, or in real actions with ``time = "convergence_steps"``."""
+    times = _by_seed(rows, agent, time).to_numpy()
     return times, _by_seed(rows, agent, "converged").to_numpy() > 0.5
 
 
 def _speedup(
     rows: pd.DataFrame, agent: str, base: str, config: ExperimentConfig, *cell: str
 ) -> dict[str, object]:
-    """Speed-up of ``agent`` over ``base`` (ratio of Kaplan–Meier medians), paired by seed."""
-    base_times, base_seen = survival_columns(rows, base)
-    times, seen = survival_columns(rows, agent)
+    """Speed-up of ``agent`` over ``base`` (ratio of Kaplan–Meier medians), paired by seed, in
+    episodes (``speedup``) and, where recorded, in real actions (``speedup_steps``)."""
     paired = list(_by_seed(rows, agent, "converged").index) == list(
         _by_seed(rows, base, "converged").index
     )
-    ratio = speedup_interval(
-        base_times, base_seen, times, seen, stats_rng(config, *cell, agent, "speedup"),
-        paired=paired, n_resamples=config.bootstrap_samples, confidence=config.confidence,
-    )  # fmt: skip
-    return {
-        "speedup": ratio.estimate,
-        "speedup_low": ratio.low,
-        "speedup_high": ratio.high,
-        "speedup_lower_bound": ratio.lower_bound,
-    }
+    record: dict[str, object] = {}
+    for time, name in (("convergence_episode", "speedup"), ("convergence_steps", "speedup_steps")):
+        if time not in rows.columns:
+            continue
+        ratio = speedup_interval(
+            *survival_columns(rows, base, time), *survival_columns(rows, agent, time),
+            stats_rng(config, *cell, agent, name), paired=paired,
+            n_resamples=config.bootstrap_samples, confidence=config.confidence,
+        )  # fmt: skip
+        record.update({name: ratio.estimate, f"{name}_low": ratio.low,
+                       f"{name}_high": ratio.high, f"{name}_bound": ratio.bound})  # fmt: skip
+    return record
 
 
 def convergence_table(summaries: pd.DataFrame, config: ExperimentConfig) -> pd.DataFrame:
@@ -368,8 +394,8 @@ def budget_rows(
 ) -> pd.DataFrame:
     """Speed-up and wall time against the planning budget, one row per (map, preset, agent)
     whose parameters set ``planning_steps``: map, preset, algorithm, planning_steps, speedup,
-    speedup_low, speedup_high, lower_bound, wall_time, wall_time_low, wall_time_high (mean wall
-    time per run [s] with its interval)."""
+    speedup_low, speedup_high, bound (as ``speedup_bound``), wall_time, wall_time_low,
+    wall_time_high (mean wall time per run [s] with its interval)."""
     steps = {
         agent.label: (agent.name, int(agent.params_dict()["planning_steps"]))  # type: ignore[arg-type]
         for agent in config.agents
@@ -388,7 +414,7 @@ def budget_rows(
             "map": row["map"], "preset": row["preset"], "algorithm": algorithm,
             "planning_steps": planning_steps, "speedup": row["speedup"],
             "speedup_low": row["speedup_low"], "speedup_high": row["speedup_high"],
-            "lower_bound": bool(row["speedup_lower_bound"]), "wall_time": wall["mean"],
+            "bound": row["speedup_bound"], "wall_time": wall["mean"],
             "wall_time_low": wall["mean_low"], "wall_time_high": wall["mean_high"],
         })  # fmt: skip
     return pd.DataFrame.from_records(records)

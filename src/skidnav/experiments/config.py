@@ -194,10 +194,13 @@ class ExperimentConfig:
         drift_amplitude: relative slip drift amplitude A ≥ 0 (``SlipField``; 0: stationary).
         drift_period: slip drift period [s] > 0.
         convergence_tolerance: relative band above the oracle's expected length L* within which
-            an evaluation counts as converged, in (0, 1) (default 0.10 = 10 %;
+            an evaluation passes, in (0, 1) (default 0.10 = 10 %;
             :mod:`skidnav.experiments.metrics`).
-        convergence_window: consecutive evaluations, W, that must all be within tolerance,
-            in [1, 10,000] (default 10).
+        convergence_window: W, the evaluations from the convergence episode on that must
+            already hold a share ``convergence_level`` of passes (the least evidence), in
+            [1, 10,000] (default 10).
+        convergence_level: p, the share of passing evaluations that must hold from the
+            convergence episode to every later episode, in (0, 1] (default 0.9).
         eval_rollouts: greedy rollouts per evaluation, R, each from its own fixed evaluation
             seed, in [1, 100] (default 5).
         oracle_samples: sampled poses per state (each tries every action) of the oracle's
@@ -232,6 +235,7 @@ class ExperimentConfig:
     drift_period: float = 600.0
     convergence_tolerance: float = 0.10
     convergence_window: int = 10
+    convergence_level: float = 0.9
     eval_rollouts: int = 5
     oracle_samples: int = 64
     baseline: str = ""
@@ -289,6 +293,7 @@ class ExperimentConfig:
             "convergence_tolerance", self.convergence_tolerance, 1e-6, 0.999, integer=False
         )
         _check_range("convergence_window", self.convergence_window, 1, 10_000, integer=True)
+        _check_range("convergence_level", self.convergence_level, 1e-6, 1.0, integer=False)
         _check_range("eval_rollouts", self.eval_rollouts, 1, 100, integer=True)
         _check_range("oracle_samples", self.oracle_samples, 1, 1_000, integer=True)
         _check_range("bootstrap_samples", self.bootstrap_samples, 100, MAX_BOOTSTRAP, integer=True)
@@ -357,6 +362,7 @@ def _base_dict(config: ExperimentConfig) -> dict[str, Any]:
         "drift_period": config.drift_period,
         "convergence_tolerance": config.convergence_tolerance,
         "convergence_window": config.convergence_window,
+        "convergence_level": config.convergence_level,
         "eval_rollouts": config.eval_rollouts,
         "oracle_samples": config.oracle_samples,
         "baseline": config.baseline,

@@ -41,6 +41,7 @@ EXPERIMENT_KEYS = (
     "drift_period",
     "convergence_tolerance",
     "convergence_window",
+    "convergence_level",
     "eval_rollouts",
     "oracle_samples",
     "baseline",

@@ -1,4 +1,4 @@
-"""Per-run metrics (SPEC §5): convergence, trajectory length, success rate, returns.
+"""Per-run metrics: convergence, trajectory length, success rate, returns.
 
 Episodes are numbered from 1. Definitions (also in docs/experiments.md and in every report):
 
@@ -6,15 +6,22 @@ Episodes are numbered from 1. Definitions (also in docs/experiments.md and in ev
   start, each rollout from a reset with one of R fixed evaluation seeds (the same seeds after
   every episode and for every agent of a world: common random numbers), so one slip-noise
   outlier does not decide.
-* **Within tolerance** after episode e: every one of the R rollouts reached the goal and their
-  mean length [actions] is at most (1 + tol) · L*, L* being the oracle's expected number of
-  actions from the start under the true simulator (:mod:`skidnav.experiments.oracle`).
-* **Convergence episode**: the first episode e such that the evaluations after episodes
-  e, e + 1, …, e + W − 1 are all within tolerance (a window of fixed length W, not a share of the
-  run). It depends only on the first e + W − 1 episodes, so the same run stopped at N or at 2N
-  episodes has the same convergence episode once it converged before N − W + 1. A run with no
-  such window is **censored** at N − W + 1 (it did not converge at any episode up to there);
-  aggregates treat it as censored (Kaplan–Meier), never as converged at the last episode.
+* **Pass**: the evaluation after episode e passes when every one of its R rollouts reached the
+  goal and their mean length [actions] is at most (1 + tol) · L*, L* being the oracle's expected
+  number of actions from the start under the true simulator (:mod:`skidnav.experiments.oracle`).
+* **Convergence episode** (*converged means it stays converged*): the first passing episode e
+  from which the share of passing evaluations stays at least p (``level``) to the end of the
+  run: over e … k for every k from e + W − 1 (at least W evaluations of evidence) to N. A run
+  that passes for a while and then falls apart is therefore not converged at its first good
+  stretch; a run with no such episode up to N − W + 1 is **censored** there, and aggregates
+  treat it as censored (Kaplan–Meier), never as converged at the last episode. A policy that
+  stays keeps its share as the run goes on, so its convergence episode does not depend on the
+  horizon; longer runs can only reveal that a policy did not stay: a run that converged at e
+  over N episodes converged at e or earlier over any first N′ ≥ e + W − 1 of them.
+* **Pass share after convergence**: share of the evaluations from the convergence episode to
+  the end that pass (converged runs only); **after the first good window**: the same from the
+  first episode of the first W passes in a row (the earlier, first-window definition, kept as a
+  diagnostic of drift); **last 10 %**: share of passing evaluations in the last 10 % of the run.
 * **Optimality gap**: the mean greedy length over the last W evaluations (each the mean of its
   rollouts that reached the goal; evaluations where none did are left out) / L* − 1; NaN when
   none of the last W evaluations reached the goal.
@@ -41,12 +48,16 @@ class ConvergenceRule(NamedTuple):
     Attributes:
         reference: L*, the oracle's expected actions from the start [actions] (> 0).
         tolerance: relative band above L* (e.g. 0.1 = 10 %).
-        window: consecutive evaluations that must all be within tolerance, W ≥ 1.
+        window: W ≥ 1, the evaluations from the convergence episode on that must already hold
+            a share ``level`` of passes (the least evidence of a convergence).
+        level: p in (0, 1], the share of passes that must hold from the convergence episode to
+            every later episode (1: every evaluation from it on passes).
     """
 
     reference: float
     tolerance: float
     window: int
+    level: float = 1.0
 
 
 def evaluation_summary(greedy_lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -61,10 +72,15 @@ def evaluation_summary(greedy_lengths: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return mean, counts / lengths.shape[1]
 
 
+SHARE_MARGIN = 1e-9
+"""Rounding margin of share comparisons: 9 of 10 evaluations must count as a share of 0.9."""
+
+
 def within_tolerance(
     mean_length: np.ndarray, success_share: np.ndarray, rule: ConvergenceRule
 ) -> np.ndarray:
-    """bool (N,): every rollout reached the goal and the mean length ≤ (1 + tol) · L*.
+    """bool (N,): the evaluation passes (module docs): every rollout reached the goal and their
+    mean length ≤ (1 + tol) · L*.
 
     >>> rule = ConvergenceRule(reference=10.0, tolerance=0.1, window=2)
     >>> within_tolerance(np.array([9.0, 11.0, 12.0, 10.0]), np.array([1, 1, 1, 0.8]), rule)
@@ -86,23 +102,54 @@ def optimality_gap(mean_lengths: np.ndarray, reference: float) -> float:
     return float(finite.mean() / reference - 1.0) if finite.size else float("nan")
 
 
-def convergence_episode(within: np.ndarray, window: int) -> tuple[int, bool]:
-    """(episode, converged): the first 1-based episode e whose evaluations e … e + W − 1 are all
-    within tolerance, or the censoring time N − W + 1 (at least 1) and False.
+def first_window(passed: np.ndarray, window: int) -> int:
+    """The first 1-based episode e whose evaluations e … e + W − 1 all pass, 0 if none.
 
-    >>> convergence_episode(np.array([0, 1, 1, 0, 1, 1, 1, 0], bool), 3)
-    (5, True)
-    >>> convergence_episode(np.array([0, 1, 1, 0, 1, 1, 0, 0], bool), 3)
-    (6, False)
+    >>> first_window(np.array([0, 1, 1, 0, 1, 1, 1, 0], bool), 3)
+    5
     """
-    within = np.asarray(within, dtype=bool)
-    n = len(within)
-    if n >= window:
-        runs = np.convolve(within.astype(np.int64), np.ones(window, dtype=np.int64), "valid")
-        full = np.flatnonzero(runs == window)
-        if full.size:
-            return int(full[0]) + 1, True
-    return max(1, n - window + 1), False
+    passed = np.asarray(passed, dtype=bool)
+    if len(passed) < window:
+        return 0
+    runs = np.convolve(passed.astype(np.int64), np.ones(window, dtype=np.int64), "valid")
+    full = np.flatnonzero(runs == window)
+    return int(full[0]) + 1 if full.size else 0
+
+
+def convergence_episode(passed: np.ndarray, window: int, level: float = 1.0) -> tuple[int, bool]:
+    """(episode, converged): the first 1-based passing episode e such that the share of passing
+    evaluations over e … k is at least ``level`` for every k from e + W − 1 to the end (module
+    docs), or the censoring time N − W + 1 (at least 1) and False.
+
+    >>> convergence_episode(np.array([0, 1, 1, 0, 1, 1, 1, 1], bool), 3)
+    (5, True)
+    >>> convergence_episode(np.array([1, 1, 1, 1, 1, 0, 0, 1], bool), 3)
+    (6, False)
+    >>> convergence_episode(np.array([1, 1, 1, 0, 1, 1, 1, 1, 0, 1], bool), 3, level=0.75)
+    (1, True)
+    """
+    passed = np.asarray(passed, dtype=bool)
+    n = len(passed)
+    censored = max(1, n - window + 1), False
+    if n < window:
+        return censored
+    # share(e … k) ≥ p  ⟺  S[k] ≥ S[e − 1], S the running sum of (pass − p), S[0] = 0.
+    running = np.concatenate([[0.0], np.cumsum(passed - level)])
+    lowest_after = np.minimum.accumulate(running[::-1])[::-1]  # min over k ≥ j of S[k]
+    starts = np.arange(1, n - window + 2)
+    stays = lowest_after[starts + window - 1] >= running[starts - 1] - SHARE_MARGIN
+    candidates = np.flatnonzero(stays & passed[starts - 1])
+    return (int(starts[candidates[0]]), True) if candidates.size else censored
+
+
+def pass_share_from(passed: np.ndarray, episode: int) -> float:
+    """Share of the evaluations from 1-based ``episode`` to the end that pass; NaN for 0 (none).
+
+    >>> pass_share_from(np.array([0, 1, 1, 0], bool), 2)
+    0.6666666666666666
+    """
+    passed = np.asarray(passed, dtype=bool)
+    return float(passed[episode - 1 :].mean()) if 1 <= episode <= len(passed) else float("nan")
 
 
 def moving_average(values: np.ndarray, window: int) -> np.ndarray:
@@ -149,8 +196,7 @@ def run_metrics(
     n = len(success)
     first_success = np.flatnonzero(success > 0)
     nan = float("nan")
-    metrics = {
-        "convergence_episode": nan, "converged": nan, "optimality_gap": nan,
+    metrics = dict.fromkeys(CONVERGENCE_COLUMNS, nan) | {
         "first_success_episode": float(first_success[0] + 1) if first_success.size else float(n),
         "final_length_actions": float(len(greedy_poses) - 1) if greedy_reached else nan,
         "final_length_m": path_length(greedy_poses) if greedy_reached else nan,
@@ -164,9 +210,36 @@ def run_metrics(
         "wall_time": float(episodes["wall_time"].sum()),
     }  # fmt: skip
     if rule is not None and n > 0 and math.isfinite(rule.reference):
-        mean, share = episodes["greedy_length"], episodes["greedy_success"]
-        episode, converged = convergence_episode(within_tolerance(mean, share, rule), rule.window)
-        metrics["convergence_episode"] = float(episode)
-        metrics["converged"] = float(converged)
-        metrics["optimality_gap"] = optimality_gap(mean[-rule.window :], rule.reference)
+        metrics.update(convergence_metrics(episodes, rule))
     return metrics
+
+
+CONVERGENCE_COLUMNS = (
+    "convergence_episode", "convergence_steps", "converged", "pass_share_after",
+    "first_window_episode",
+    "pass_share_after_first_window", "pass_share_last10", "optimality_gap",
+)  # fmt: skip
+"""The summary columns of :func:`convergence_metrics` (NaN without a rule)."""
+
+
+def convergence_metrics(episodes: dict[str, np.ndarray], rule: ConvergenceRule) -> dict[str, float]:
+    """The convergence columns of a run (module docs) from its ``greedy_length`` and
+    ``greedy_success`` and ``length`` per episode, shape (N,) each: ``convergence_episode`` and
+    ``converged`` (1.0 / 0.0), ``convergence_steps`` (real actions taken in episodes 1 … e, the
+    convergence or censoring episode: the experience it cost), ``pass_share_after`` (NaN when
+    censored), ``first_window_episode`` (NaN when no window passed),
+    ``pass_share_after_first_window``, ``pass_share_last10``, ``optimality_gap``."""
+    mean, share = episodes["greedy_length"], episodes["greedy_success"]
+    passed = within_tolerance(mean, share, rule)
+    episode, converged = convergence_episode(passed, rule.window, rule.level)
+    first = first_window(passed, rule.window)
+    return {
+        "convergence_episode": float(episode),
+        "convergence_steps": float(np.sum(episodes["length"][:episode])),
+        "converged": float(converged),
+        "pass_share_after": pass_share_from(passed, episode) if converged else math.nan,
+        "first_window_episode": float(first) if first else math.nan,
+        "pass_share_after_first_window": pass_share_from(passed, first),
+        "pass_share_last10": float(last_share(passed).mean()),
+        "optimality_gap": optimality_gap(mean[-rule.window :], rule.reference),
+    }

@@ -396,8 +396,9 @@ def _speedup_panel(axes: Axes, rows: pd.DataFrame, color: tuple[float, ...], lab
         capsize=3,
         marker="",
     )
-    flags = rows["lower_bound"].to_numpy(bool)
-    for marks, marker, size in ((~flags, "o", 5), (flags, "^", 9)):
+    bounds = rows["bound"].to_numpy(str)
+    for bound, marker, size in (("", "o", 5), ("lower", "^", 9), ("upper", "v", 9)):
+        marks = bounds == bound
         axes.plot(
             rows["planning_steps"][marks], rows["speedup"][marks], marker, color=color, ms=size
         )
@@ -409,8 +410,9 @@ def speedup_vs_budget(rows: pd.DataFrame) -> bytes:
 
     Args:
         rows: one row per algorithm × planning steps, columns ``algorithm``, ``planning_steps``,
-            ``speedup``, ``speedup_low``, ``speedup_high``, ``lower_bound`` (bool: the speed-up
-            is a lower bound, drawn ▲), ``wall_time``, ``wall_time_low``, ``wall_time_high`` [s].
+            ``speedup``, ``speedup_low``, ``speedup_high``, ``bound`` (a lower bound is drawn
+            ▲, an upper bound ▼, an unknown one not at all), ``wall_time``,
+            ``wall_time_low``, ``wall_time_high`` [s].
 
     The x axes are symmetric-log so that 0 planning steps (model-free) shows at 0.
     """

@@ -30,6 +30,7 @@ from skidnav.experiments.analysis import (
     compare_surfaces,
     compare_to_baseline,
     convergence_table,
+    speedup_of,
     stats_rng,
     survival_columns,
 )
@@ -110,8 +111,9 @@ def aggregate_table(aggregates: pd.DataFrame, map_label: str, preset: str) -> st
 
 def definitions(config: ExperimentConfig) -> str:
     """The metric definitions, with this experiment's tolerance, window and interval settings."""
-    tol, window, rollouts = (
-        config.convergence_tolerance, config.convergence_window, config.eval_rollouts
+    tol, window, rollouts, level = (
+        config.convergence_tolerance, config.convergence_window, config.eval_rollouts,
+        config.convergence_level,
     )  # fmt: skip
     return f"""<ul class="note">
 <li><b>Oracle</b> L*: the expected number of actions from the start under the best policy of the
@@ -120,14 +122,25 @@ true transition model of the discretized MDP, estimated from the simulator itsel
 <li><b>Evaluation</b>: after every training episode the greedy policy is rolled out
 <b>{rollouts}</b> times from the start, each from a reset with one of {rollouts} fixed evaluation
 seeds (the same after every episode and for every agent of a world).</li>
-<li><b>Convergence episode</b>: the first episode e such that the evaluations after episodes
-e … e + {window - 1} (a window of <b>{window}</b>) all reach the goal in every rollout with a
-mean length within <b>{tol:.0%}</b> above L*. It does not depend on how long the run lasts.
-A run with no such window is <b>censored</b> at episode {config.episodes} − {window} + 1: medians
-are Kaplan–Meier estimates, and a median shown as ∞ means more than half of the runs never
-converged. Speed-up: KM median of the baseline / KM median of the agent; when more than half of
-the baseline's runs are censored its largest censoring time stands in for its median and the
-speed-up is a <b>lower bound</b> (marked ≥). Probability of improvement (Agarwal et al. 2021):
+<li><b>Pass</b>: an evaluation passes when every rollout reaches the goal with a mean length
+within <b>{tol:.0%}</b> above L*. (The oracle's own greedy policy over cells can loop from the
+exact start pose; the share of its rollouts that reached the goal is the column
+<code>oracle_rollout_success</code>: L* is a reference, not a policy every world lets a cell
+policy follow.)</li>
+<li><b>Convergence episode</b> (converged means it stays converged): the first passing episode e
+from which the share of passing evaluations stays at least <b>{level:.0%}</b> to the end of the
+run (over e … k for every k from e + {window - 1} on: at least <b>{window}</b> evaluations of
+evidence). A run that passed for a while and then fell apart is not converged at its first good
+stretch; a run with no such episode is <b>censored</b> at episode {config.episodes} − {window} + 1.
+A longer run can only reveal that a policy did not stay (its convergence episode is the same or
+later). Medians are Kaplan–Meier estimates; ∞ means more than half of the runs never converged.
+<b>Pass share after convergence</b>: share of passing evaluations from the convergence episode
+to the end; <b>after the first good window</b>: the same from the first {window} passes in a row
+(the drift a first-window rule would hide); <b>last 10 %</b>: share of passing evaluations in
+the last 10 % of episodes. Speed-up: KM median of the baseline / KM median of the agent; where
+more than half of one side's runs are censored, its largest censoring time stands in for its
+median and the speed-up is a bound: <b>≥</b> (baseline censored; no upper end), <b>≤</b> (agent
+censored), or <b>unknown</b> (both). Probability of improvement (Agarwal et al. 2021):
 the chance that a run of the agent converges before a run of the baseline, censored pairs scored
 by Gehan's rule. The mean and IQM of the convergence episode below count censored runs at their
 censoring time (biased low); use the medians for claims.</li>
@@ -176,7 +189,31 @@ def convergence_section(
             "speed-up": speedup, "P(improvement)": improvement,
         })  # fmt: skip
     frame = pd.DataFrame.from_records(records)
-    return "<h2>Convergence</h2>" + frame.to_html(index=False, escape=False, border=0)
+    return (
+        "<h2>Convergence</h2>" + frame.to_html(index=False, escape=False, border=0)
+        + calibration_text(summaries)
+    )  # fmt: skip
+
+
+def calibration_text(summaries: pd.DataFrame) -> str:
+    """One paragraph on what the best computable policies do from the exact start of the
+    experiment's worlds (:mod:`skidnav.experiments.start_plan`); empty for runs without it."""
+    if "start_plan_length" not in summaries.columns:
+        return ""
+    worlds = summaries.drop_duplicates(["map", "preset", "seed"])
+    plans = worlds[np.isfinite(worlds["start_plan_length"])]
+    if plans.empty:
+        return ""
+    ratio = (plans["start_plan_length"] / plans["oracle_length"]).median()
+    passes = int((plans["start_plan_passes"] > 0.5).sum())
+    oracle_all = int((worlds["oracle_rollout_success"] >= 1.0).sum())
+    return (
+        f"<p class='note'>Calibration over {len(worlds)} worlds: the fewest actions from the exact"
+        f" start (the start plan, no slip noise) is a median {ratio:.0%} of L*; replayed from the"
+        f" evaluation seeds it passes the test in {passes} of {len(plans)} worlds where it was"
+        f" found. The oracle's greedy policy over cells reaches the goal from every evaluation"
+        f" seed in {oracle_all} of {len(worlds)} worlds (from one exact pose it can loop).</p>"
+    )
 
 
 def performance_profiles(summaries: pd.DataFrame, config: ExperimentConfig) -> str:
@@ -221,13 +258,9 @@ def budget_section(
 
 
 def speedup_text(row: pd.Series) -> str:
-    """``"≥ 12.3 [8.1, 20.0]"`` (lower bound) or ``"12.3 [8.1, 20.0]"``, with a colour class:
-    green when the interval excludes 1 from above."""
-    text = interval_text(
-        float(row["speedup"]), float(row["speedup_low"]), float(row["speedup_high"]), 1
-    )
-    if row["speedup_lower_bound"]:
-        text = "≥ " + text
+    """The speed-up of a comparison row in words (:meth:`SpeedupInterval.words`), with a colour
+    class: green when its interval excludes 1 from above."""
+    text = speedup_of(row).words(1)
     faster = float(row["speedup_low"]) > 1.0
     return f"<span class='{'yes' if faster else 'no'}'>{html.escape(text)}</span>"
 

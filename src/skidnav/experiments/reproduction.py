@@ -12,6 +12,7 @@ import html
 
 import pandas as pd
 
+from skidnav.experiments.analysis import speedup_of
 from skidnav.experiments.config import ExperimentConfig
 
 MIN_PAIRS = 10
@@ -99,20 +100,25 @@ def _surface_claim(surfaces: pd.DataFrame) -> tuple[str, str, str]:
     return THESIS["surfaces"], measured, f"mixed: 2× within {int(contains.sum())} of {len(rates)}"
 
 
-def _speedup_claim(comparisons: pd.DataFrame) -> tuple[str, str, str] | None:
+def _speedup_claim(comparisons: pd.DataFrame) -> tuple[str, str, str]:
     """Largest speed-up (ratio of Kaplan–Meier medians), how many comparisons are significant,
     and the censoring behind them."""
     best = _best(comparisons, "speedup")
     if best is None:
-        return None
+        return (
+            THESIS["speedup"],
+            "unknown: in every comparison both the baseline and the agent stayed censored in "
+            "more than half of their runs",
+            "undetermined",
+        )
     faster = comparisons[comparisons["speedup_low"] > 1.0]
-    bound = "≥ " if best["speedup_lower_bound"] else ""
     measured = (
-        f"largest: {_name(best)}, {bound}{_ci(best, 'speedup', unit='×')}; {len(faster)} of "
+        f"largest: {_name(best)}, {speedup_of(best).words()}; {len(faster)} of "
         f"{len(comparisons)} agent × cell comparisons significantly faster. The baseline "
         f"converged in {comparisons['baseline_converged'].min():.0%}–"
         f"{comparisons['baseline_converged'].max():.0%} of its runs (the others are censored; "
-        "where more than half are, the speed-up is a lower bound, marked ≥)"
+        "where more than half of the baseline's are, the speed-up is a lower bound, marked ≥; "
+        "of the agent's, an upper bound, marked ≤; of both, unknown)"
     )
     return (
         THESIS["speedup"],
@@ -153,8 +159,10 @@ def _details(comparisons: pd.DataFrame) -> pd.DataFrame:
                 "map": row["map"],
                 "preset": row["preset"],
                 "agent": row["agent"],
-                "speed-up": ("≥ " if row["speedup_lower_bound"] else "")
-                + _ci(row, "speedup", unit="×"),
+                "speed-up": speedup_of(row).words(),
+                "speed-up, real actions": speedup_of(row, "speedup_steps").words()
+                if "speedup_steps" in row
+                else "–",
                 "P(improvement)": _ci(row, "improvement_probability"),
                 "success gain": _ci(row, "success_gain", 100, " pp"),
                 "relative gain": _ci(row, "success_gain_relative", 100, " %"),
@@ -182,8 +190,9 @@ def reproduction_section(
         f"<p class='note'>Baseline: <b>{html.escape(config.baseline)}</b>. Intervals: "
         f"{config.confidence:.0%} bootstrap, paired by seed. {config.seeds} seeds per cell "
         f"(the thesis's claims need ≥ 30). Convergence: within "
-        f"{config.convergence_tolerance:.0%} of the oracle for {config.convergence_window} "
-        "evaluations in a row (definitions above).</p>",
+        f"{config.convergence_tolerance:.0%} of the oracle, staying there in at least "
+        f"{config.convergence_level:.0%} of the evaluations to the end of the run "
+        "(definitions above).</p>",
     ]
     if comparisons.empty:
         parts.append("<p>Only one agent: nothing to compare.</p>")

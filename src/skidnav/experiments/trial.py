@@ -36,9 +36,15 @@ from skidnav.agents.core import TabularAgent
 from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig, MapSpec
 from skidnav.experiments.finegrid import FineStates, check_grids, refines_positions, state_grid
-from skidnav.experiments.metrics import ConvergenceRule, evaluation_summary, run_metrics
+from skidnav.experiments.metrics import (
+    ConvergenceRule,
+    evaluation_summary,
+    run_metrics,
+    within_tolerance,
+)
 from skidnav.experiments.oracle import Oracle, compute_oracle, load_or_compute_oracle
 from skidnav.experiments.runs import RunSpec, expand_runs
+from skidnav.experiments.start_plan import StartPlan, start_plan
 from skidnav.experiments.store import EPISODE_COLUMNS, TrialResult
 from skidnav.seeding import RUN_ROLES, WORLD_ROLES, child_sequences, seed_int
 from skidnav.world.discretization import Discretization, heading_bin
@@ -309,6 +315,7 @@ def warm_up(spec: ExperimentRun) -> None:
         _world_arrays(agent, grid_map, env)
     if grid_map is not None and _has_oracle(eval_env):
         compute_oracle(_oracle_env(spec, grid_map, 0, eval_env), 1, 0, [2], max(WARM_UP_LIMITS))
+        start_plan(eval_env, [2], max(WARM_UP_LIMITS))
     _warmed_up.add(key)
 
 
@@ -343,6 +350,7 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
             oracle_env, config.oracle_samples, oracle_seed, eval_seeds, max_steps
         )
     reference = _reference_length(oracle, eval_env)
+    plan = start_plan(eval_env, eval_seeds, max_steps) if oracle is not None else None
     optima = {}
     if grid_map is not None and config.optimum_grids and _has_oracle(eval_env):
         from skidnav.experiments.optimum import world_optima  # it builds on this module
@@ -363,18 +371,50 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
         arrays.update(_world_arrays(agent, grid_map, env))
     rule = None
     if math.isfinite(reference) and config.greedy_eval:
-        rule = ConvergenceRule(reference, config.convergence_tolerance, config.convergence_window)
+        rule = ConvergenceRule(
+            reference, config.convergence_tolerance, config.convergence_window,
+            config.convergence_level,
+        )  # fmt: skip
     summary = run_metrics(episodes, poses, reached, rule)
     summary["action_limit"] = float(max_steps)
     summary.update(_oracle_columns(reference, oracle))
+    summary.update(_plan_columns(plan, rule))
     summary.update(optima)
     return TrialResult(spec.run_id, spec.coordinates, episodes, summary, arrays)
 
 
 def _oracle_columns(reference: float, oracle: Oracle | None) -> dict[str, float]:
-    """The summary columns of the run's reference: L* and the oracle's own rollout mean."""
-    rollout = oracle.rollout_mean if oracle is not None else float("nan")
-    return {"oracle_length": reference, "oracle_rollout_length": rollout}
+    """The summary columns of the run's reference: L*, the mean of the oracle's own rollouts
+    (NaN when any of them failed), the share of them that reached the goal and the mean length
+    of those that did: from one exact pose a greedy policy over cells can loop (an action that
+    works on average over the cell hits a wall from that point, and is chosen again), so the
+    oracle's expected length is a reference, not a policy every agent could follow."""
+    lengths = oracle.rollout_lengths if oracle is not None else np.zeros(0, np.int64)
+    reached = lengths[lengths > 0]
+    nan = float("nan")
+    return {
+        "oracle_length": reference,
+        "oracle_rollout_length": oracle.rollout_mean if oracle is not None else nan,
+        "oracle_rollout_success": float(reached.size / lengths.size) if lengths.size else nan,
+        "oracle_reached_length": float(reached.mean()) if reached.size else nan,
+    }
+
+
+def _plan_columns(plan: StartPlan | None, rule: ConvergenceRule | None) -> dict[str, float]:
+    """The summary columns of the world's start plan (:mod:`skidnav.experiments.start_plan`):
+    its length [actions] (NaN when none was found), the share of its replays that reached the
+    goal, and whether its replays pass the run's convergence test (1.0 / 0.0)."""
+    nan = float("nan")
+    if plan is None or not len(plan.actions):
+        return {"start_plan_length": nan, "start_plan_success": nan, "start_plan_passes": nan}
+    lengths = plan.rollout_lengths
+    mean, share = evaluation_summary(lengths[None, :])
+    passes = within_tolerance(mean, share, rule)[0] if rule is not None else nan
+    return {
+        "start_plan_length": float(len(plan.actions)),
+        "start_plan_success": float(share[0]),
+        "start_plan_passes": float(passes),
+    }
 
 
 def _has_oracle(env: gymnasium.Env[Any, Any]) -> bool:
