@@ -28,7 +28,13 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
-from skidnav.agents.config import DynaQConfig, KinematicModelFields, QLearningConfig, _check
+from skidnav.agents.config import (
+    MODEL_BASED_PLANNING_MODE,
+    DynaQConfig,
+    KinematicModelFields,
+    QLearningConfig,
+    _check,
+)
 from skidnav.agents.dyna_q import DynaQAgent
 from skidnav.errors import shown
 from skidnav.kernels import kinematic_planning as kp
@@ -49,6 +55,8 @@ class DynaKinematicConfig(DynaQConfig, KinematicModelFields):
 
     planning_steps: int = 10
     """Planning updates n after each real step."""
+    planning_mode: str = MODEL_BASED_PLANNING_MODE
+    """How the model answers (:data:`~skidnav.agents.config.MODEL_BASED_PLANNING_MODE`)."""
     kinematic_share: float = 0.5
     """Share of planning updates sent to the frontier of the visited set, in [0, 1]."""
 

@@ -14,7 +14,8 @@ shortest start→goal trajectories found so far; its exact procedure is not know
    action at states one cell or one heading bin away), visited pairs only for this agent;
 4. each planning update takes, with probability ``trajectory_share``, the next pair of a sweep
    list (half the draws per list, each cycling), otherwise a visited pair drawn uniformly
-   (Dyna-Q); every update uses the multinomial model's target (most probable outcome by default).
+   (Dyna-Q); every update uses the multinomial model's target (the expected update by default,
+   :data:`~skidnav.agents.config.MODEL_BASED_PLANNING_MODE`).
 
 Before the first success it is exactly Dyna-Q with uniform replay.
 """
@@ -24,7 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from skidnav.agents.config import DynaQConfig, QLearningConfig, _check
+from skidnav.agents.config import MODEL_BASED_PLANNING_MODE, DynaQConfig, QLearningConfig, _check
 from skidnav.agents.dyna_kinematic import ModelBasedAgent
 
 
@@ -34,6 +35,8 @@ class TrajectoryPrioritizedConfig(DynaQConfig):
 
     planning_steps: int = 10
     """Planning updates n after each real step."""
+    planning_mode: str = MODEL_BASED_PLANNING_MODE
+    """How the model answers (:data:`~skidnav.agents.config.MODEL_BASED_PLANNING_MODE`)."""
     n_trajectories: int = 5
     """K: how many of the shortest loop-erased successful trajectories are kept (≥ 1)."""
     trajectory_share: float = 0.5
