@@ -188,7 +188,7 @@ def compute_oracle(
     grid = fine_grid(env)
     solution = solve(env.unwrapped, n_samples, np.random.default_rng(seed), grid)
     if grid is None:
-        lengths = evaluate_q_fast(solution.q, env, seeds, max_steps)
+        lengths, _ = evaluate_q_fast(solution.q, env, seeds, max_steps)
     else:
         policy = TablePolicy(solution.q)
         lengths = np.array([greedy_rollout(policy, env, max_steps, seed=int(s)) for s in seeds])
