@@ -221,8 +221,12 @@ def _world_arrays(
 
 def _episode_arrays(log: Any) -> dict[str, np.ndarray]:
     """The TrainingLog as record columns: each evaluation's R rollouts become their mean length
-    over those that reached the goal (NaN if none) and the share that did."""
+    and their mean cost over those that reached the goal (NaN if none) and the share that did."""
     greedy, reached = evaluation_summary(log.greedy_lengths)
+    # A rollout that reached the goal costs at least one per action (> 0, as a length), so the
+    # same summary of the costs in its place averages the costs of the same rollouts.
+    lengths = np.asarray(log.greedy_lengths)
+    cost, _ = evaluation_summary(np.where(lengths > 0, log.greedy_costs, -1.0))
     arrays = {
         "return": np.asarray(log.returns, dtype=np.float64),
         "length": np.asarray(log.lengths, dtype=np.int64),
@@ -232,6 +236,7 @@ def _episode_arrays(log: Any) -> dict[str, np.ndarray]:
         "wall_time": np.asarray(log.wall_time, dtype=np.float64),
         "greedy_length": greedy,
         "greedy_success": reached,
+        "greedy_cost": cost,
     }
     assert set(arrays) == set(EPISODE_COLUMNS)
     return arrays
@@ -372,9 +377,20 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
 
 
 def _oracle_columns(reference: float, oracle: Oracle | None) -> dict[str, float]:
-    """The summary columns of the run's reference: L* and the oracle's own rollout mean."""
-    rollout = oracle.rollout_mean if oracle is not None else float("nan")
-    return {"oracle_length": reference, "oracle_rollout_length": rollout}
+    """The summary columns of the run's references: L* and C* (:mod:`~skidnav.experiments.oracle`;
+    without an oracle, C* = L*: a grid maze's moves cost one each, and elsewhere both are NaN),
+    and the means of the oracle's own rollouts, of the action-optimal policy's lengths and the
+    cost-optimal policy's costs (NaN without an oracle)."""
+    if oracle is None:
+        nan = float("nan")
+        return {
+            "oracle_length": reference, "oracle_rollout_length": nan,
+            "oracle_cost": reference, "oracle_rollout_cost": nan,
+        }  # fmt: skip
+    return {
+        "oracle_length": reference, "oracle_rollout_length": oracle.rollout_mean,
+        "oracle_cost": oracle.start_cost, "oracle_rollout_cost": oracle.rollout_cost,
+    }  # fmt: skip
 
 
 def _has_oracle(env: gymnasium.Env[Any, Any]) -> bool:
