@@ -16,17 +16,17 @@ For a skid-steer world (map, slip field, robot, discretization) the oracle
    L*, and the expected cost from the exact start pose as the **reference cost** C*: the optimum
    of the reward the agents maximise (−1 − 10·var per step, −10 per collision, +10 at the goal,
    undiscounted), up to the goal bonus, the same on every path. On a floor with var ≈ 0, C* is
-   L* plus 9 per expected collision; on a slippery floor C* > L*, and the cheapest path may take
-   more actions than the shortest;
+   at most L* plus 9 per collision the action-optimal policy expects; on a slippery floor
+   C* > L*, and the cheapest path may take more actions than the shortest;
 4. for information, rolls each objective's greedy policy out in the simulator from the start,
    once per evaluation seed — the evaluation every agent gets after each of its episodes
    (:func:`skidnav.agents.fast_training.evaluate_q_fast`). A greedy policy over cells can loop
    from one exact pose (an action that works on average over a cell fails from that point), so
    these rollouts are a diagnostic, not the reference.
 
-The oracle keeps both greedy policies: ``q``, the action-optimal one (L*, ``rollout_lengths``,
-as before the costs were solved), and ``cost_q``, the cost-optimal one (C*, ``rollout_costs``),
-whose objective is the agents' own. Its costs use the slip field's true variance η²/12 even when
+The oracle keeps both greedy policies: ``q``, the action-optimal one (L*, ``rollout_lengths``),
+and ``cost_q``, the cost-optimal one (C*, ``rollout_costs``), whose objective is the agents'
+own. Its costs use the slip field's true variance η²/12 even when
 the env rewards the observed variance (``variance="observed"``), which estimates it.
 
 Results are cached on disk (``$SKIDNAV_CACHE_DIR``, default ``~/.cache/skidnav``) under a hash of
