@@ -14,10 +14,11 @@ import numpy as np
 import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
+from skidnav.agents.fast_training import evaluate_q_fast, train_agent_fast, train_for_steps_fast
 from skidnav.agents.registry import make_agent
 from skidnav.agents.training import TrainingLog, train_agent, train_for_steps
 from skidnav.envs.mazes import blocking_maze, dyna_maze
+from skidnav.experiments.oracle import compute_oracle
 from skidnav.world.discretization import Discretization
 
 AGENTS = (
@@ -55,6 +56,41 @@ def test_fast_trainer_matches_the_python_loop(name: str) -> None:
     assert fast_agent.steps == slow_agent.steps == slow.lengths.sum()
     assert fast_agent.planning_updates == slow_agent.planning_updates
     assert fast_agent.rng.random() == slow_agent.rng.random()
+
+
+def _step_by_step_cost(q: np.ndarray, env: Any, seed: int, max_steps: int) -> tuple[float, int]:
+    """The cost of the greedy rollout of ``q`` re-run with the plain env: minus the sum of its
+    rewards, the goal's +10 replaced by what a free step ending there costs, 1 + 10·η²/12 of
+    the goal's region (NaN if the goal is not reached); and the collisions on the way. Each
+    step's ``info["cost"]`` must be that cost."""
+    nav = env.unwrapped
+    state, _ = nav.reset(seed=seed)
+    cost, collisions = 0.0, 0
+    for _ in range(max_steps):
+        state, reward, terminated, _, info = nav.step(int(np.argmax(q[state])))
+        if terminated:
+            eta = nav.slip_field.eta.ravel()[info["region"]]
+            assert info["cost"] == 1.0 + 10.0 * (eta * eta / 12.0)
+            return cost + info["cost"], collisions
+        assert info["cost"] == -reward
+        cost += -reward
+        collisions += info["collision"]
+    return float("nan"), collisions
+
+
+def test_the_evaluation_costs_are_the_env_rewards_without_the_goal_bonus() -> None:
+    evaluation = gym.make("skidnav/SkidSteerNav-v0", map_kind="obstacles", world_seed=14,
+                          slip="slippery", max_episode_steps=300)  # fmt: skip
+    q = compute_oracle(evaluation, 8, 0, [0], 300).q  # a policy that reaches the goal, mostly
+    seeds = list(range(10))
+    lengths, costs = evaluate_q_fast(q, evaluation, seeds, 100)
+    replayed = np.array([_step_by_step_cost(q, evaluation, s, 100) for s in seeds])
+    np.testing.assert_array_equal(costs, replayed[:, 0])
+    collisions = replayed[:, 1]
+    reached = lengths > 0
+    assert 2 <= reached.sum() < len(seeds) and collisions[reached].max() > 0
+    assert (costs[reached] > lengths[reached]).all()  # the slippery floor costs more
+    assert np.isnan(costs[~reached]).all()
 
 
 def test_other_envs_fall_back_to_the_python_loop() -> None:
@@ -152,7 +188,7 @@ def test_identical_without_numba() -> None:
 _MAZE_SCRIPT = """
 import json
 import numpy as np
-from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
+from skidnav.agents.fast_training import evaluate_q_fast, train_agent_fast, train_for_steps_fast
 from skidnav.agents.registry import make_agent
 from skidnav.envs.mazes import dyna_maze, shortcut_maze
 out = {}

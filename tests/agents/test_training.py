@@ -37,6 +37,7 @@ def test_cliff_walking_learns_the_cliff_path() -> None:
     )
     log = train_agent(agent, env, 60, max_steps=500, greedy_eval_env=gym.make("CliffWalking-v1"))
     assert log.greedy_lengths[-1, 0] == 13  # Q-learning's optimal path along the cliff
+    assert np.isnan(log.greedy_costs).all()  # the env reports no cost
 
 
 @pytest.mark.parametrize("name", available_agents())
@@ -93,6 +94,18 @@ def test_truncation_by_max_steps_reaches_the_agent() -> None:
     assert log.lengths.tolist() == [4, 4] and not log.successes.any()
     assert seen[:5] == [(False, False)] * 3 + [(False, True), (False, False)]
     assert log.greedy_lengths.tolist() == [[-1], [-1]]
+    assert np.isnan(log.greedy_costs).all() and log.greedy_costs.shape == (2, 1)
+
+
+def test_a_maze_move_costs_one() -> None:
+    agent = make_agent("dyna-q", 54, 4, {"planning_steps": 10}, np.random.default_rng(3))
+    log = train_agent(agent, dyna_maze(), 12, max_steps=400, greedy_eval_env=dyna_maze(),
+                      greedy_seeds=[0, 1], seed=3)  # fmt: skip
+    reached = log.greedy_lengths > 0
+    assert reached.any() and not reached.all()
+    assert log.greedy_costs.dtype == np.float64 and log.greedy_costs.shape == (12, 2)
+    assert np.array_equal(log.greedy_costs[reached], log.greedy_lengths[reached])
+    assert np.isnan(log.greedy_costs[~reached]).all()
 
 
 def test_train_for_steps_counts_cumulative_reward() -> None:

@@ -56,6 +56,9 @@ def test_records_and_summaries(serial_results: Path) -> None:
     assert episodes.loc[reached, "greedy_length"].between(1, 60).all()
     assert episodes.loc[~reached, "greedy_length"].isna().all()
     assert (summaries["oracle_length"] > 1).all()
+    assert episodes.loc[~reached, "greedy_cost"].isna().all()
+    assert (summaries["oracle_cost"] > summaries["oracle_length"]).all()  # rough and slippery
+    assert "oracle_rollout_cost" in summaries
 
 
 def test_metadata_and_saved_config(serial_results: Path) -> None:

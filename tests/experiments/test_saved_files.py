@@ -174,3 +174,18 @@ def test_run_file_documents_keep_nonfinite_summaries(results_copy: Path) -> None
     document["summary"]["oracle_length"] = float("inf")
     _corrupt(results_copy, _document(json.dumps(document)))
     assert ResultStore(results_copy).read_run(RUN).summary["oracle_length"] == float("inf")
+
+
+def test_a_run_file_without_greedy_costs_reads_them_as_nan(results_copy: Path) -> None:
+    """A run file written before the evaluations' costs were recorded: its other columns as
+    saved, ``greedy_cost`` NaN (not measured), in the tables too."""
+    intact = ResultStore(results_copy).read_run(RUN)
+    _corrupt(results_copy, lambda members: members.pop("episode.greedy_cost"))
+    old = ResultStore(results_copy).read_run(RUN)
+    assert np.isnan(old.episodes["greedy_cost"]).all()
+    assert len(old.episodes["greedy_cost"]) == len(old.episodes["length"])
+    for key in intact.episodes.keys() - {"greedy_cost"}:
+        assert np.array_equal(old.episodes[key], intact.episodes[key], equal_nan=True), key
+    episodes, _ = ResultStore(results_copy).consolidate()
+    assert episodes.loc[episodes["run_id"] == RUN, "greedy_cost"].isna().all()
+    assert len(episodes) == 8 * 6

@@ -14,6 +14,7 @@ import pytest
 from skidnav import cli
 from skidnav._jit import jit_disabled
 from skidnav.agents.registry import available_agents
+from skidnav.agents.training import TrainingLog
 from skidnav.errors import UserError
 from skidnav.experiments import trial
 from skidnav.experiments.configfile import parse_config
@@ -139,3 +140,69 @@ def test_invalid_agent_params_name_the_config_file(
     lines = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(lines) == 1
     assert lines[0].startswith(f"skidnav: error: {path}: agent 'dyna-q'")
+
+
+def test_an_evaluation_costs_the_mean_of_its_rollouts_that_reached_the_goal() -> None:
+    nan = float("nan")
+    log = TrainingLog(
+        np.zeros(3), np.ones(3, np.int64), np.ones(3, bool), np.zeros(3, np.int64),
+        np.zeros(3, np.int64), np.zeros(3),
+        np.array([[10, -1, 12], [-1, -1, -1], [7, 7, 7]]),
+        np.array([[11.5, nan, 13.5], [nan, nan, nan], [9.0, 8.0, 7.0]]),
+    )  # fmt: skip
+    arrays = trial._episode_arrays(log)
+    assert arrays["greedy_length"].tolist()[::2] == [11.0, 7.0]
+    assert arrays["greedy_cost"].tolist()[::2] == [12.5, 8.0]
+    assert np.isnan(arrays["greedy_cost"][1]) and np.isnan(arrays["greedy_length"][1])
+    assert arrays["greedy_success"].tolist() == [2 / 3, 0.0, 1.0]
+
+
+def test_without_an_oracle_the_reference_cost_is_the_length() -> None:
+    maze = trial._oracle_columns(14.0, None)  # a grid maze: every move costs one
+    assert maze["oracle_cost"] == maze["oracle_length"] == 14.0
+    assert np.isnan(maze["oracle_rollout_cost"]) and np.isnan(maze["oracle_rollout_length"])
+    other = trial._oracle_columns(float("nan"), None)
+    assert np.isnan(other["oracle_cost"])
+
+
+COSTS_TOML = """
+[experiment]
+name = "costs"
+episodes = 12
+max_steps = 60
+seeds = 1
+root_seed = 5
+presets = ["slippery"]
+oracle_samples = 4
+eval_rollouts = 3
+convergence_window = 2
+
+[[maps]]
+kind = "free"
+options = { shape = [7, 7], min_distance = 3 }
+
+[[agents]]
+name = "dyna-q"
+params = { planning_steps = 10 }
+
+[[agents]]
+name = "dyna-q"
+label = "finer cells"
+discretization = [13, 13, 20]
+params = { planning_steps = 10 }
+"""
+
+
+def test_a_run_records_what_its_evaluations_cost() -> None:
+    """On a slippery floor every action costs more than one; the compiled evaluation (the map's
+    own cells) and the plain one (finer cells) record the costs, the oracle its C*."""
+    coarse, fine = (trial.run_trial(spec) for spec in expand_runs(parse_config(COSTS_TOML)))
+    lengths, costs = coarse.episodes["greedy_length"], coarse.episodes["greedy_cost"]
+    reached = coarse.episodes["greedy_success"] > 0
+    assert 0 < reached.sum() < len(reached)
+    assert (costs[reached] > lengths[reached]).all()
+    assert np.isnan(costs[~reached]).all()
+    for result in (coarse, fine):
+        summary = result.summary
+        assert summary["oracle_cost"] > summary["oracle_length"] > 1.0
+        assert summary["oracle_rollout_cost"] > 1.0  # every oracle rollout reached the goal

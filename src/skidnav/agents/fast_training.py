@@ -27,7 +27,15 @@ import gymnasium as gym
 import numpy as np
 
 from skidnav.agents.core import TabularAgent
-from skidnav.agents.training import TrainingLog, log_from_rows, train_agent, train_for_steps
+from skidnav.agents.training import (
+    NOT_REACHED,
+    Rollout,
+    TrainingLog,
+    log_from_rows,
+    record_evaluation,
+    train_agent,
+    train_for_steps,
+)
 from skidnav.kernels import env_steps, trainer
 from skidnav.kernels.learning import NO_LOG_ROWS, NO_POSE
 from skidnav.kernels.trainer import ELAPSED, ENDED, LENGTH, Limits
@@ -152,15 +160,16 @@ def _episode(
     )  # fmt: skip
 
 
-def _greedy(q: np.ndarray, fused: FusedEnv, max_steps: int, seed: int | None) -> int:
-    """One compiled greedy rollout from ``reset(seed=seed)``: its length, or −1."""
+def _greedy(q: np.ndarray, fused: FusedEnv, max_steps: int, seed: int | None) -> Rollout:
+    """One compiled greedy rollout from ``reset(seed=seed)``: its length and cost, or −1 and
+    NaN (:class:`~skidnav.agents.training.Rollout`)."""
     state = fused.reset(seed)
     kernel = fused.kernel_state()
-    length, state, taken = trainer.greedy_stretch(
+    length, cost, state, taken = trainer.greedy_stretch(
         kernel, state, q, max_steps, fused.limit, fused.env.np_random
     )
     fused.write_back(kernel, state, taken)
-    return int(length)
+    return Rollout(int(length), float(cost))
 
 
 _NO_REWARDS = np.zeros(0)
@@ -216,12 +225,12 @@ def train_agent_fast(
         columns["wall_time"].append(time.perf_counter() - start)
         for name, value in zip(_EPISODE_FIELDS, result, strict=True):
             columns[name].append(value)
-        greedy = [-1] * len(seeds)
+        greedy = [NOT_REACHED] * len(seeds)
         if evaluation is not None:
             if episode == 0 and seed is not None and greedy_seeds is None:
                 evaluation.reset(seed + 1)
             greedy = [_greedy(agent.q, evaluation, limit, s) for s in seeds]
-        columns["greedy_lengths"].append(greedy)
+        record_evaluation(columns, greedy)
     return log_from_rows(columns, len(seeds))
 
 
@@ -231,11 +240,11 @@ _EPISODE_FIELDS = ("returns", "lengths", "successes", "collisions", "planning_up
 
 def evaluate_q_fast(
     q: np.ndarray, env: gym.Env[Any, Any], seeds: Sequence[int], max_steps: int
-) -> np.ndarray:
+) -> tuple[np.ndarray, np.ndarray]:
     """Greedy rollouts of the Q table ``q`` (n_states, n_actions) on the navigation env, one per
     seed (each from ``reset(seed=seed)``, at most ``max_steps`` actions), compiled: the
-    evaluation every agent gets after each episode. Returns the lengths, int64 (len(seeds),),
-    −1 where the goal was not reached."""
+    evaluation every agent gets after each episode. Returns (lengths int64 (len(seeds),), −1
+    where the goal was not reached; costs float64 (len(seeds),), NaN there)."""
     fused = FusedEnv.find(env)
     if not isinstance(fused, FusedNavigation):
         raise ValueError(
@@ -243,7 +252,9 @@ def evaluate_q_fast(
             "dynamics='kinematic'"
         )
     q = np.ascontiguousarray(q, dtype=np.float64)
-    return np.array([_greedy(q, fused, max_steps, int(s)) for s in seeds], np.int64)
+    rollouts = [_greedy(q, fused, max_steps, int(s)) for s in seeds]
+    lengths = np.array([rollout.length for rollout in rollouts], np.int64)
+    return lengths, np.array([rollout.cost for rollout in rollouts], np.float64)
 
 
 def train_for_steps_fast(

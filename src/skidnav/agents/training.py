@@ -70,6 +70,23 @@ class TrainingLog(NamedTuple):
     """Lengths of the greedy rollouts on the evaluation env after the episode, int64
     (n_episodes, n_rollouts): one column per evaluation seed (one column without seeds); −1 where
     a rollout did not terminate within the limit, or everywhere if no evaluation env was given."""
+    greedy_costs: np.ndarray
+    """Costs of the same rollouts, float64 (n_episodes, n_rollouts): the sum of the costs the
+    evaluation env reports for its actions (``info["cost"]``: on the navigation env minus the
+    reward without the goal bonus, :func:`skidnav.kernels.navigation.action_cost`); NaN where the
+    length is −1, and where the env reports no cost."""
+
+
+class Rollout(NamedTuple):
+    """One greedy rollout: its ``length`` [actions] and ``cost`` (the sum of ``info["cost"]`` over
+    its actions) if it reached the goal, else −1 and NaN."""
+
+    length: int
+    cost: float
+
+
+NOT_REACHED = Rollout(-1, math.nan)
+"""A rollout that did not reach the goal (or was not run)."""
 
 
 def _check_spaces(env: gym.Env[Any, Any]) -> None:
@@ -87,31 +104,48 @@ def as_state(observation: Any) -> Any:
     return int(observation)
 
 
+def greedy_run(
+    agent: Greedy, env: gym.Env[Any, Any], max_steps: int, *, seed: int | None = None
+) -> Rollout:
+    """Run the greedy policy for at most ``max_steps`` actions (without learning) from
+    ``env.reset(seed=seed)``; its :class:`Rollout` (the costs summed in step order, NaN for an
+    env whose info has no ``"cost"``)."""
+    state, _ = env.reset(seed=seed)
+    cost = 0.0
+    for step in range(1, max_steps + 1):
+        state, _, terminated, truncated, info = env.step(agent.greedy_action(as_state(state)))
+        cost += float(info.get("cost", math.nan))
+        if terminated:
+            return Rollout(step, cost)
+        if truncated:
+            return NOT_REACHED
+    return NOT_REACHED
+
+
 def greedy_rollout(
     agent: Greedy, env: gym.Env[Any, Any], max_steps: int, *, seed: int | None = None
 ) -> int:
-    """Run the greedy policy for at most ``max_steps`` actions (without learning) from
-    ``env.reset(seed=seed)``; return the number of actions if the env terminated, else −1."""
-    state, _ = env.reset(seed=seed)
-    for step in range(1, max_steps + 1):
-        state, _, terminated, truncated, _ = env.step(agent.greedy_action(as_state(state)))
-        if terminated:
-            return step
-        if truncated:
-            return -1
-    return -1
+    """The length of :func:`greedy_run`: the number of actions if the env terminated, else −1."""
+    return greedy_run(agent, env, max_steps, seed=seed).length
 
 
 def greedy_evaluation(
     agent: Greedy, env: gym.Env[Any, Any], max_steps: int, seeds: Sequence[int] | None
-) -> list[int]:
-    """The greedy rollouts of one evaluation (:func:`greedy_rollout` each): one per seed in
+) -> list[Rollout]:
+    """The greedy rollouts of one evaluation (:func:`greedy_run` each): one per seed in
     ``seeds``, each from ``env.reset(seed=seed)`` — the same seeds at every evaluation, so every
     evaluation meets the same slip noise (common random numbers) — or, without seeds, one rollout
     that continues the env's own generator."""
     if seeds is None:
-        return [greedy_rollout(agent, env, max_steps)]
-    return [greedy_rollout(agent, env, max_steps, seed=int(seed)) for seed in seeds]
+        return [greedy_run(agent, env, max_steps)]
+    return [greedy_run(agent, env, max_steps, seed=int(seed)) for seed in seeds]
+
+
+def record_evaluation(columns: dict[str, list[Any]], rollouts: Sequence[Rollout]) -> None:
+    """Append one evaluation's ``rollouts`` to the ``greedy_lengths`` and ``greedy_costs``
+    lists of ``columns`` (:func:`log_from_rows`)."""
+    columns["greedy_lengths"].append([rollout.length for rollout in rollouts])
+    columns["greedy_costs"].append([rollout.cost for rollout in rollouts])
 
 
 def rollout_summary(lengths: Sequence[int]) -> tuple[float, float]:
@@ -180,28 +214,32 @@ def train_agent(
         columns["successes"].append(success)
         columns["collisions"].append(collisions)
         columns["planning_updates"].append(agent.planning_updates - planned_before)
-        greedy = [-1] * (1 if greedy_seeds is None else len(greedy_seeds))
+        greedy = [NOT_REACHED] * (1 if greedy_seeds is None else len(greedy_seeds))
         if greedy_eval_env is not None:
             if episode == 0 and seed is not None and greedy_seeds is None:
                 greedy_eval_env.reset(seed=seed + 1)
             greedy = greedy_evaluation(agent, greedy_eval_env, limit, greedy_seeds)
-        columns["greedy_lengths"].append(greedy)
+        record_evaluation(columns, greedy)
     return log_from_rows(columns, 1 if greedy_seeds is None else len(greedy_seeds))
 
 
-LOG_DTYPES = (np.float64, np.int64, np.bool_, np.int64, np.int64, np.float64, np.int64)
+LOG_DTYPES = (
+    np.float64, np.int64, np.bool_, np.int64, np.int64, np.float64, np.int64, np.float64,
+)  # fmt: skip
 """dtypes of the :class:`TrainingLog` fields, in order."""
 
 
 def log_from_rows(columns: dict[str, list[Any]], n_rollouts: int) -> TrainingLog:
     """A :class:`TrainingLog` from per-episode lists keyed by field name (``greedy_lengths``
-    holds one list of ``n_rollouts`` lengths per episode)."""
-    arrays: list[np.ndarray] = [
-        np.array(columns[name], dtype=dtype)
+    and ``greedy_costs`` hold one list of ``n_rollouts`` values per episode:
+    :func:`record_evaluation`)."""
+    arrays: dict[str, np.ndarray] = {
+        name: np.array(columns[name], dtype=dtype)
         for name, dtype in zip(TrainingLog._fields, LOG_DTYPES, strict=True)
-    ]
-    arrays[-1] = arrays[-1].reshape(-1, n_rollouts)
-    return TrainingLog(*arrays)
+    }
+    for name in ("greedy_lengths", "greedy_costs"):
+        arrays[name] = arrays[name].reshape(-1, n_rollouts)
+    return TrainingLog(**arrays)
 
 
 def train_for_steps(

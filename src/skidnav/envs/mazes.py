@@ -21,7 +21,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from skidnav.kernels.maze_trainer import MazeArrays
+from skidnav.kernels.maze_trainer import MOVE_COST, MazeArrays
 
 Cell = tuple[int, int]
 MOVES = ((-1, 0), (1, 0), (0, -1), (0, 1))
@@ -44,7 +44,9 @@ class GridMazeEnv(gym.Env[int, int]):
     ``Discrete(n_rows · n_cols)``: the flat cell ``row · n_cols + column``.
 
     ## Rewards
-    +1 on reaching the goal, 0 for every other step.
+    +1 on reaching the goal, 0 for every other step. ``info["cost"]`` is 1 for every move
+    (:data:`~skidnav.kernels.maze_trainer.MOVE_COST`): the discounted goal reward is earned
+    soonest on the shortest path.
 
     ## Starting State
     Always ``start``.
@@ -57,7 +59,7 @@ class GridMazeEnv(gym.Env[int, int]):
     (steps) and ``walls_after``; ``max_episode_steps``; ``render_mode`` ("ansi" or None).
 
     ## Version History
-    v0: first version.
+    v0: first version; ``info["cost"]`` added.
     """
 
     metadata = {"render_modes": ["ansi"]}  # noqa: RUF012 (Gymnasium's convention)
@@ -139,7 +141,8 @@ class GridMazeEnv(gym.Env[int, int]):
             and self.max_episode_steps is not None
             and self._episode_steps >= self.max_episode_steps
         )
-        return self.state_of(self._cell), 1.0 if terminated else 0.0, terminated, truncated, {}
+        reward = 1.0 if terminated else 0.0
+        return self.state_of(self._cell), reward, terminated, truncated, {"cost": MOVE_COST}
 
     def maze_arrays(self) -> MazeArrays:
         """The maze for the compiled loop of :mod:`skidnav.kernels.maze_trainer` (walls arrays

@@ -65,6 +65,10 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     −1 − 10·var, var being the wheel-speed variance of the region the action ends in (the slip
     field's true η²/12 with ``variance="true"``, the default; the running variance measured in
     forward actions with ``variance="observed"``, as the thesis). The same with either dynamics.
+    ``info["cost"]`` is the action's cost, minus its reward without the goal bonus: 1 + 10·var,
+    10 for a collision, and the action that reaches the goal costs what a free step ending there
+    would (:func:`skidnav.kernels.navigation.action_cost`); summed over an episode that reaches
+    the goal it ranks paths as the return does.
 
     ## Starting State
     The centre of the map's start cell, heading 0 (facing +x).
@@ -83,7 +87,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     ``wheel_speeds`` (ω_L, ω_R of the last sub-step after slip [rad/s]), ``region`` (flat slip
     region at the end of the action), ``kinematic_log`` float64 (n_free_substeps, 6), columns
     [region, omega_left_cmd, omega_right_cmd, v_x, v_y, yaw_rate] (what the Bayesian ridge
-    kinematic model learns from), and ``step_info``: the same as a typed
+    kinematic model learns from), ``cost`` (see Rewards; 0 at a reset), and ``step_info``: the
+    same as a typed
     :class:`~skidnav.envs.step_info.StepInfo`.
 
     ## Arguments
@@ -124,7 +129,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     limit, 500 actions, when made with ``gymnasium.make``); ``dynamics`` and ``floor`` added
     (the default ``dynamics="kinematic"`` gives the same numbers as before);
     ``observation="features"`` with ``lidar_rays`` and ``lidar_range`` added; ``action`` and
-    ``control_period`` added (the defaults give the same numbers as before).
+    ``control_period`` added (the defaults give the same numbers as before); ``info["cost"]``
+    added.
     """
 
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 10}  # noqa: RUF012
@@ -255,7 +261,7 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
             self.physics_robot.reset(x, y, heading)
         state = self.discretization.state(x, y, heading)
         region = self.discretization.region(x, y)
-        return self._observation(state), self._info(state, False, (0.0, 0.0), region, 0)
+        return self._observation(state), self._info(state, False, (0.0, 0.0), region, 0, 0.0)
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
         """Apply one action (10 sub-steps of 0.1 s by default); never truncates (see class doc)."""
@@ -270,9 +276,11 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
                 self.task, self.physics_robot, self.pose, commands, self.time, self._noise,
                 self._log,
             )  # fmt: skip
-        reward, terminated, collided, n_logged, omega_left, omega_right, state, region = outcome
+        reward, terminated, collided, n_logged, omega_left, omega_right, state, region, cost = (
+            outcome
+        )
         self.time += self._action_duration
-        info = self._info(state, collided, (omega_left, omega_right), region, n_logged)
+        info = self._info(state, collided, (omega_left, omega_right), region, n_logged, cost)
         self.trail.append(info["pose"][:2])
         return self._observation(state), float(reward), bool(terminated), False, info
 
@@ -307,11 +315,12 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         wheel_speeds: tuple[float, float],
         region: int,
         n_logged: int,
+        cost: float,
     ) -> dict[str, Any]:
         """The step info of the current pose (:func:`~skidnav.envs.step_info.step_info`)."""
         cell = self.discretization.unflatten(state)
         log = self._log[:n_logged].copy()
-        return step_info(self.pose.tolist(), cell, collided, wheel_speeds, region, log)
+        return step_info(self.pose.tolist(), cell, collided, wheel_speeds, region, log, cost)
 
     def render(self) -> Any:
         """An RGB image (H, W, 3) uint8 of the arena, or an ANSI text grid."""

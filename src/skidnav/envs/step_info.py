@@ -14,7 +14,10 @@ attributes:
 * ``region``: flat slip region of the end pose;
 * ``kinematic_log``: float64 (n, 6), one row per free sub-step (control period),
   columns ``kernels.navigation.LOG_COLUMNS`` [region, ω_L_cmd, ω_R_cmd, v_x, v_y, yaw_rate]:
-  what the kinematic models learn from (n = 0 when nothing moved freely).
+  what the kinematic models learn from (n = 0 when nothing moved freely);
+* ``cost``: the action's cost, minus its reward without the goal bonus
+  (:func:`skidnav.kernels.navigation.action_cost`; 0 at a reset). NaN where nothing scored it:
+  the real-time loop ranks nothing by it.
 
 >>> import numpy as np
 >>> info = step_info((0.1, 0.2, 0.0), (4, 9, 10), False, (1.7, 1.7), 8, np.zeros((10, 6)))
@@ -24,6 +27,7 @@ attributes:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any, NamedTuple
 
@@ -42,6 +46,7 @@ class StepInfo(NamedTuple):
     wheel_speeds: tuple[float, float]
     region: int
     kinematic_log: np.ndarray
+    cost: float = math.nan
 
 
 def step_info(
@@ -51,6 +56,7 @@ def step_info(
     wheel_speeds: tuple[float, float],
     region: int,
     kinematic_log: np.ndarray,
+    cost: float = math.nan,
 ) -> dict[str, Any]:
     """The info dict of a step (see module doc); numbers become Python floats, ints and bools."""
     x, y, heading = pose
@@ -61,6 +67,7 @@ def step_info(
         (float(wheel_speeds[0]), float(wheel_speeds[1])),
         int(region),
         kinematic_log,
+        float(cost),
     )
     info = record._asdict()
     info[STEP_INFO_KEY] = record

@@ -62,7 +62,12 @@ EPISODE_COLUMNS = (
     "wall_time",
     "greedy_length",
     "greedy_success",
+    "greedy_cost",
 )
+LATER_EPISODE_COLUMNS = ("greedy_cost",)
+"""Episode columns that run files written before them lack: such a file reads them as NaN (not
+measured), and its summary lacks the columns added with them (``oracle_cost``,
+``oracle_rollout_cost``), NaN in the tables."""
 GRID_COLUMNS = ("run_id", "agent", "algorithm", "map", "preset", "seed")
 
 
@@ -126,8 +131,9 @@ def run_file_specs(config: ExperimentConfig) -> dict[str, ArraySpec]:
 
 OPTIONAL_ARRAYS = frozenset(
     f"array.{key}" for key in (*_WORLD_ARRAYS, "start_heading", "start", "goal")
-)
-"""Members of a run file only a skid-steer run has."""
+) | {f"episode.{key}" for key in LATER_EPISODE_COLUMNS}
+"""Members of a run file only a skid-steer run has, and the episode columns older run files lack
+(:data:`LATER_EPISODE_COLUMNS`)."""
 
 
 @dataclass(frozen=True)
@@ -141,7 +147,8 @@ class RunLayout:
         from_dict: the grid back from that dict (ValueError, TypeError or KeyError if invalid).
         file_specs: what a run file of a grid may hold besides its document (checked before
             anything is read).
-        optional: members of ``file_specs`` a run file may lack.
+        optional: members of ``file_specs`` a run file may lack (an episode column among them
+            reads as NaN).
     """
 
     kind: str
@@ -326,6 +333,7 @@ class ResultStore:
         document = _run_document(path, arrays.pop("document"))
         episodes = {k.split(".", 1)[1]: v for k, v in arrays.items() if k.startswith("episode.")}
         others = {k.split(".", 1)[1]: v for k, v in arrays.items() if k.startswith("array.")}
+        episodes = _with_missing_columns(episodes, self.layout.episode_columns)
         return TrialResult(run_id, document["coordinates"], episodes, document["summary"], others)
 
     def run_code(self, run_id: str) -> dict[str, Any]:
@@ -381,6 +389,16 @@ class ResultStore:
         """``metadata.json`` (empty when missing)."""
         path = self.root / "metadata.json"
         return self._read_json(path) if path.exists() else {}
+
+
+def _with_missing_columns(
+    episodes: dict[str, np.ndarray], columns: tuple[str, ...]
+) -> dict[str, np.ndarray]:
+    """``episodes`` in the order of ``columns``, those a run file lacks (optional members only:
+    written before they existed) filled with NaN, each as long as the others."""
+    n_episodes = len(next(iter(episodes.values()), ()))
+    missing = np.full(n_episodes, np.nan)
+    return {key: episodes[key] if key in episodes else missing.copy() for key in columns}
 
 
 def _run_document(path: Path, text: np.ndarray) -> dict[str, Any]:

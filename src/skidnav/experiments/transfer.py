@@ -66,8 +66,11 @@ def transfer_run(
     )  # fmt: skip
     train_agent_fast(agent, kinematic, episodes, max_steps=max_steps, seed=seed_int(episode_stream))
     seeds = [int(s) for s in np.random.default_rng(evaluation).integers(0, 2**31, rollouts)]
-    on_kinematic = rollout_summary(greedy_evaluation(agent, kinematic, max_steps, seeds))
-    on_physics = rollout_summary(greedy_evaluation(agent, physical, max_steps, seeds))
+    lengths = [
+        [rollout.length for rollout in greedy_evaluation(agent, env, max_steps, seeds)]
+        for env in (kinematic, physical)
+    ]
+    on_kinematic, on_physics = (rollout_summary(each) for each in lengths)
     return TransferResult(
         agent_name, seed, on_kinematic[0], on_physics[0], on_kinematic[1], on_physics[1]
     )

@@ -227,8 +227,12 @@ def _world_arrays(
 
 def _episode_arrays(log: Any) -> dict[str, np.ndarray]:
     """The TrainingLog as record columns: each evaluation's R rollouts become their mean length
-    over those that reached the goal (NaN if none) and the share that did."""
+    and their mean cost over those that reached the goal (NaN if none) and the share that did."""
     greedy, reached = evaluation_summary(log.greedy_lengths)
+    # A rollout that reached the goal costs at least one per action (> 0, as a length), so the
+    # same summary of the costs in its place averages the costs of the same rollouts.
+    lengths = np.asarray(log.greedy_lengths)
+    cost, _ = evaluation_summary(np.where(lengths > 0, log.greedy_costs, -1.0))
     arrays = {
         "return": np.asarray(log.returns, dtype=np.float64),
         "length": np.asarray(log.lengths, dtype=np.int64),
@@ -238,6 +242,7 @@ def _episode_arrays(log: Any) -> dict[str, np.ndarray]:
         "wall_time": np.asarray(log.wall_time, dtype=np.float64),
         "greedy_length": greedy,
         "greedy_success": reached,
+        "greedy_cost": cost,
     }
     assert set(arrays) == set(EPISODE_COLUMNS)
     return arrays
@@ -384,20 +389,29 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
 
 
 def _oracle_columns(reference: float, oracle: Oracle | None) -> dict[str, float]:
-    """The summary columns of the run's reference: L*, the mean of the oracle's own rollouts
-    (NaN when any of them failed), the share of them that reached the goal and the mean length
-    of those that did: from one exact pose a greedy policy over cells can loop (an action that
-    works on average over the cell hits a wall from that point, and is chosen again), so the
-    oracle's expected length is a reference, not a policy every agent could follow."""
-    lengths = oracle.rollout_lengths if oracle is not None else np.zeros(0, np.int64)
-    reached = lengths[lengths > 0]
+    """The summary columns of the run's references: L* and C* (:mod:`~skidnav.experiments.oracle`;
+    without an oracle, C* = L*: a grid maze's moves cost one each, and elsewhere both are NaN);
+    the means of the oracle's own rollouts (the action-optimal policy's lengths, NaN when any of
+    them failed, and the cost-optimal policy's costs), the share of the action-optimal rollouts
+    that reached the goal and the mean length of those that did: from one exact pose a greedy
+    policy over cells can loop (an action that works on average over the cell hits a wall from
+    that point, and is chosen again), so the oracle's expected length is a reference, not a
+    policy every agent could follow."""
     nan = float("nan")
+    if oracle is None:
+        return {
+            "oracle_length": reference, "oracle_rollout_length": nan,
+            "oracle_cost": reference, "oracle_rollout_cost": nan,
+            "oracle_rollout_success": nan, "oracle_reached_length": nan,
+        }  # fmt: skip
+    lengths = oracle.rollout_lengths
+    reached = lengths[lengths > 0]
     return {
-        "oracle_length": reference,
-        "oracle_rollout_length": oracle.rollout_mean if oracle is not None else nan,
-        "oracle_rollout_success": float(reached.size / lengths.size) if lengths.size else nan,
+        "oracle_length": reference, "oracle_rollout_length": oracle.rollout_mean,
+        "oracle_cost": oracle.start_cost, "oracle_rollout_cost": oracle.rollout_cost,
+        "oracle_rollout_success": float(reached.size / lengths.size),
         "oracle_reached_length": float(reached.mean()) if reached.size else nan,
-    }
+    }  # fmt: skip
 
 
 def _plan_columns(plan: StartPlan | None, rule: ConvergenceRule | None) -> dict[str, float]:

@@ -2,7 +2,8 @@
 ``env.step`` that draw the same numbers and change the same state.
 
 An env step is ``step(env, state, action, rng) -> (next state, reward, terminated, collided,
-rows logged)`` on a NamedTuple ``env`` holding the env's mutable state in arrays, with a ``pose``
+rows logged, cost)`` (the cost the env reports in ``info["cost"]``) on a NamedTuple ``env``
+holding the env's mutable state in arrays, with a ``pose``
 (float64 (3,)) and a ``log`` (float64 (n, 6)) the agents' experience carries
 (:class:`skidnav.kernels.learning.Experience`). It is registered for the NamedTuple's class in
 :data:`ENV_STEPS` and called through :func:`env_step`.
@@ -16,7 +17,7 @@ import numpy as np
 
 from skidnav._jit import dispatch_on_type, jit
 from skidnav.kernels.learning import NO_LOG
-from skidnav.kernels.maze_trainer import MazeArrays, maze_move
+from skidnav.kernels.maze_trainer import MOVE_COST, MazeArrays, maze_move
 from skidnav.kernels.navigation import NavigationTask, draw_noise, transition
 
 ENV_STEPS: dict[type, Any] = {}
@@ -26,7 +27,7 @@ ENV_STEPS: dict[type, Any] = {}
 @dispatch_on_type(ENV_STEPS)
 def env_step(
     env: Any, state: int, action: int, rng: np.random.Generator
-) -> tuple[int, float, bool, bool, int]:
+) -> tuple[int, float, bool, bool, int, float]:
     """One step of the env whose state ``env`` is: the step registered for ``type(env)``."""
     return ENV_STEPS[type(env)](env, state, action, rng)
 
@@ -46,13 +47,16 @@ class NavigationState(NamedTuple):
 @jit
 def navigation_step(
     env: NavigationState, state: int, action: int, rng: np.random.Generator
-) -> tuple[int, float, bool, bool, int]:
+) -> tuple[int, float, bool, bool, int, float]:
     """``SkidSteerNavEnv.step``: noise from ``rng``, one action of the simulator, the clock
     advanced by the action's duration."""
     draw_noise(rng, env.noise)
     outcome = transition(env.task, env.pose, action, env.clock[0], env.noise, env.log)
     env.clock[0] += env.task.robot.dt * env.task.robot.substeps
-    return outcome.state, outcome.reward, outcome.terminated, outcome.collided, outcome.n_logged
+    return (
+        outcome.state, outcome.reward, outcome.terminated, outcome.collided, outcome.n_logged,
+        outcome.cost,
+    )  # fmt: skip
 
 
 class MazeState(NamedTuple):
@@ -69,12 +73,13 @@ class MazeState(NamedTuple):
 @jit
 def maze_step(
     env: MazeState, state: int, action: int, rng: np.random.Generator
-) -> tuple[int, float, bool, bool, int]:
-    """``GridMazeEnv.step``: the move, reward 1 and termination at the goal (draws nothing)."""
+) -> tuple[int, float, bool, bool, int, float]:
+    """``GridMazeEnv.step``: the move, reward 1 and termination at the goal, cost
+    :data:`~skidnav.kernels.maze_trainer.MOVE_COST` (draws nothing)."""
     next_state = maze_move(env.maze, state, action, env.total_steps[0])
     env.total_steps[0] += 1
     terminated = next_state == env.maze.goal
-    return next_state, 1.0 if terminated else 0.0, terminated, False, NO_LOG
+    return next_state, 1.0 if terminated else 0.0, terminated, False, NO_LOG, MOVE_COST
 
 
 ENV_STEPS[NavigationState] = navigation_step

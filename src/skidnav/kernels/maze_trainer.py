@@ -14,6 +14,9 @@ from skidnav._jit import inline_jit
 ROW_MOVES = (-1, 1, 0, 0)
 COLUMN_MOVES = (0, 0, -1, 1)
 """(row, column) change of actions 0 up, 1 down, 2 left, 3 right (as ``envs.mazes.MOVES``)."""
+MOVE_COST = 1.0
+"""The cost of every move of a maze, the goal's included: its discounted goal reward is earned
+soonest on the shortest path, so the cost it ranks paths by is their number of moves."""
 
 
 class MazeArrays(NamedTuple):

@@ -27,6 +27,14 @@ robot ends the action in the goal cell; −10 after a collision; otherwise −1 
 the wheel-speed variance of the region where the action ends: the slip field's true η²/12
 (default) or, with ``observed_variance``, the running sample variance of wheel speeds measured
 during forward actions in that region (the thesis's choice).
+
+Cost (:func:`action_cost`): minus the reward without the goal bonus. An action costs 1 + 10·var
+(a free step), 10 (a collision), and the action that reaches the goal costs what a free step
+ending there would: the +10 is the same on every path that reaches the goal, so it changes no
+choice between them. An episode that reaches the goal has return 10 + c_g − (its summed cost),
+c_g the goal action's cost (the same on every path on a stationary floor), so the summed cost
+ranks paths as the undiscounted return does; on a floor with var ≈ 0 it is the number of
+actions plus 9 per collision, and on a slippery floor a longer path may cost less.
 """
 
 from __future__ import annotations
@@ -104,7 +112,8 @@ class NavigationTask(NamedTuple):
 
 class Outcome(NamedTuple):
     """Result of one action: reward, termination, collision, logged rows, last wheel speeds
-    [rad/s], and the flat state and slip region where the action ended."""
+    [rad/s], the flat state and slip region where the action ended, and its cost
+    (:func:`action_cost`)."""
 
     reward: float
     terminated: bool
@@ -114,6 +123,7 @@ class Outcome(NamedTuple):
     omega_right: float
     state: int
     region: int
+    cost: float
 
 
 @inline_jit
@@ -312,6 +322,16 @@ def action_reward(rewards: RewardScheme, at_goal: bool, collided: bool, variance
 
 
 @inline_jit
+def action_cost(rewards: RewardScheme, at_goal: bool, collided: bool, variance: float) -> float:
+    """The cost of an action (module doc): minus :func:`action_reward` without the goal bonus,
+    i.e. ``−rewards.collision`` after a collision that did not end in the goal cell, else
+    ``−rewards.step + rewards.variance_weight · variance`` (a free step, and the action that
+    reached the goal: its bonus is the same on every path there). ``variance`` [rad²/s²] as
+    there."""
+    return -action_reward(rewards, False, collided and not at_goal, variance)
+
+
+@inline_jit
 def command_transition(
     task: NavigationTask,
     pose: np.ndarray,
@@ -354,7 +374,7 @@ def score_action(
     omega_right: float,
 ) -> Outcome:
     """The :class:`Outcome` of an action that started at ``time`` [s] and left the robot at
-    ``pose`` (x [m], y [m], heading [rad]): state, region, goal and reward (module doc), for
+    ``pose`` (x [m], y [m], heading [rad]): state, region, goal, reward and cost (module doc), for
     any robot that moved it (this kernel's, or the physical one of :mod:`skidnav.physics`)."""
     i, j = cell_of(pose[0], pose[1], task.grid)
     state = state_of(pose[0], pose[1], pose[2], task.grid)
@@ -363,7 +383,10 @@ def score_action(
     end_time = time + task.robot.dt * task.robot.substeps
     variance = region_variance(task, region, end_time)
     reward = action_reward(task.rewards, terminated, collided, variance)
-    return Outcome(reward, terminated, collided, n_logged, omega_left, omega_right, state, region)
+    cost = action_cost(task.rewards, terminated, collided, variance)
+    return Outcome(
+        reward, terminated, collided, n_logged, omega_left, omega_right, state, region, cost
+    )
 
 
 @inline_jit

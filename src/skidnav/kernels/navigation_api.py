@@ -174,7 +174,7 @@ def step_arrays(
     time: float,
     noise: np.ndarray,
     log: np.ndarray,
-) -> tuple[float, bool, bool, int, float, float, int, int]:
+) -> tuple[float, bool, bool, int, float, float, int, int, float]:
     """:func:`command_transition` of the wheel speeds (``omega_left``, ``omega_right``) [rad/s]
     on the task given as :func:`task_arrays`, for callers in Python (the env): the
     :class:`Outcome` fields as a plain tuple, which crosses back into Python faster."""
@@ -184,5 +184,5 @@ def step_arrays(
     outcome = command_transition(task, pose, (omega_left, omega_right), time, noise, log)
     return (
         outcome.reward, outcome.terminated, outcome.collided, outcome.n_logged,
-        outcome.omega_left, outcome.omega_right, outcome.state, outcome.region,
+        outcome.omega_left, outcome.omega_right, outcome.state, outcome.region, outcome.cost,
     )  # fmt: skip

@@ -67,7 +67,9 @@ def learn_stretch(
     env_rng, agent_rng = rngs
     while tally[LENGTH] < limits.stop:
         action = epsilon_greedy(arrays.q, state, epsilon, agent_rng)
-        next_state, reward, terminated, collided, n_logged = env_step(env, state, action, env_rng)
+        next_state, reward, terminated, collided, n_logged, _ = env_step(
+            env, state, action, env_rng
+        )
         if rewards.shape[0] > 0:
             rewards[tally[LENGTH]] = reward
         tally[ELAPSED] += 1
@@ -99,13 +101,18 @@ def greedy_stretch(
     max_steps: int,
     env_limit: int,
     env_rng: np.random.Generator,
-) -> tuple[int, int, int]:
+) -> tuple[int, float, int, int]:
     """Greedy rollout (``greedy_first``, no learning) from a reset env: returns (actions taken if
-    the goal was reached else −1, last state, actions taken)."""
+    the goal was reached else −1, the sum of the steps' costs in step order if it was else NaN,
+    last state, actions taken)."""
+    cost = 0.0
     for step in range(1, max_steps + 1):
-        state, _, terminated, _, _ = env_step(env, state, greedy_first(q, state), env_rng)
+        state, _, terminated, _, _, step_cost = env_step(
+            env, state, greedy_first(q, state), env_rng
+        )
+        cost += step_cost
         if terminated:
-            return step, state, step
+            return step, cost, state, step
         if step >= env_limit:
-            return -1, state, step
-    return -1, state, max_steps
+            return -1, np.nan, state, step
+    return -1, np.nan, state, max_steps

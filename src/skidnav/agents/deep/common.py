@@ -39,7 +39,14 @@ from gymnasium.wrappers import RescaleObservation
 from gymnasium.wrappers.utils import rescale_box
 
 from skidnav.agents.core import save_paths
-from skidnav.agents.training import TrainingLog, greedy_evaluation, log_from_rows
+from skidnav.agents.training import (
+    NOT_REACHED,
+    Rollout,
+    TrainingLog,
+    greedy_evaluation,
+    log_from_rows,
+    record_evaluation,
+)
 from skidnav.atomicfile import write_atomic, write_npz_atomic
 from skidnav.errors import CorruptFileError, first_line, shown
 from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, read_json
@@ -217,9 +224,9 @@ class DeepAgent(Generic[ConfigT]):
         n_rollouts = 1 if greedy_seeds is None else len(greedy_seeds)
         limit = greedy_max_steps or 10_000
 
-        def evaluate() -> list[int]:
+        def evaluate() -> list[Rollout]:
             if greedy_eval_env is None:
-                return [-1] * n_rollouts
+                return [NOT_REACHED] * n_rollouts
             return greedy_evaluation(self, greedy_eval_env, limit, greedy_seeds)
 
         if episodes > 0:
@@ -296,10 +303,10 @@ def set_global_random_state(state: RandomState) -> None:
 
 
 def episode_recorder(
-    episodes: int, columns: dict[str, list[Any]], evaluate: Callable[[], list[int]]
+    episodes: int, columns: dict[str, list[Any]], evaluate: Callable[[], list[Rollout]]
 ) -> BaseCallback:
     """A Stable-Baselines3 callback that appends each finished episode to ``columns`` (the
-    :class:`TrainingLog` fields; ``evaluate()`` gives its greedy lengths) and stops training after
+    :class:`TrainingLog` fields; ``evaluate()`` gives its greedy rollouts) and stops training after
     ``episodes`` of them."""
     from stable_baselines3.common.callbacks import BaseCallback
 
@@ -324,7 +331,7 @@ def episode_recorder(
             columns["successes"].append(not info.get("TimeLimit.truncated", False))
             columns["collisions"].append(self.collisions)
             columns["planning_updates"].append(0)
-            columns["greedy_lengths"].append(evaluate())
+            record_evaluation(columns, evaluate())
             self.total, self.length, self.collisions = 0.0, 0, 0
             self.start = time.perf_counter()
             if len(columns["returns"]) < episodes:
