@@ -141,3 +141,18 @@ def test_path_length_and_moving_average() -> None:
     assert path_length(poses) == pytest.approx(0.9)
     assert path_length(poses[:1]) == 0.0
     assert moving_average(np.array([1.0, 2, 3, 4]), 2) == pytest.approx([1, 1.5, 2.5, 3.5])
+
+
+def test_convergence_can_be_measured_in_cost_against_c_star() -> None:
+    episodes = _episodes(np.full(10, 20.0), np.ones(10))
+    episodes["greedy_cost"] = np.full(10, 30.0)  # a path as short as L*, but through slip
+    by_actions = ConvergenceRule(20.0, 0.1, 3, 0.9)
+    by_cost = ConvergenceRule(20.0, 0.1, 3, 0.9, measure="greedy_cost")
+    assert run_metrics(episodes, np.zeros((1, 3)), False, by_actions)["converged"] == 1.0
+    assert run_metrics(episodes, np.zeros((1, 3)), False, by_cost)["converged"] == 0.0
+    assert (
+        run_metrics(episodes, np.zeros((1, 3)), False, by_cost._replace(reference=28.0))[
+            "converged"
+        ]
+        == 1.0
+    )

@@ -206,3 +206,19 @@ def test_a_run_records_what_its_evaluations_cost() -> None:
         summary = result.summary
         assert summary["oracle_cost"] > summary["oracle_length"] > 1.0
         assert summary["oracle_rollout_cost"] > 1.0  # every oracle rollout reached the goal
+
+
+def test_the_cost_objective_measures_evaluations_against_c_star() -> None:
+    toml = TINY_TOML.replace(
+        "eval_rollouts = 2", 'eval_rollouts = 2\nconvergence_objective = "cost"'
+    )
+    spec = next(s for s in expand_runs(parse_config(toml)) if s.coordinates["preset"] == "slippery")
+    result = trial.run_trial(spec)
+    summary, costs = result.summary, result.episodes["greedy_cost"]
+    assert summary["oracle_cost"] > summary["oracle_length"]  # slippery: C* is not L*
+    last = costs[-2:][np.isfinite(costs[-2:])]  # the last W = 2 evaluations that reached it
+    expected = last.mean() / summary["oracle_cost"] - 1 if last.size else np.nan
+    np.testing.assert_allclose(summary["optimality_gap"], expected)
+    assert np.isnan(summary["start_plan_passes"])  # the plan's replays record no cost
+    with pytest.raises(UserError, match="convergence_objective"):
+        parse_config(toml.replace('"cost"', '"return"'))

@@ -178,6 +178,10 @@ def _check_range(name: str, value: float, low: float, high: float, *, integer: b
         raise ValueError(f"expected {name} to be {kind} {bounds}, got {shown(value)}")
 
 
+CONVERGENCE_OBJECTIVES = {"actions": "greedy_length", "cost": "greedy_cost"}
+"""What convergence is measured in → the per-episode column compared with the oracle."""
+
+
 @dataclass(frozen=True)
 class ExperimentConfig:
     """A whole experiment, validated on construction.
@@ -201,6 +205,10 @@ class ExperimentConfig:
             [1, 10,000] (default 10).
         convergence_level: p, the share of passing evaluations that must hold from the
             convergence episode to every later episode, in (0, 1] (default 0.9).
+        convergence_objective: what an evaluation is measured in against the oracle: "actions"
+            (mean length against L*, default) or "cost" (mean cost, minus the reward without the
+            goal bonus, against C*: the objective of the agents' reward, which differs from the
+            actions where the floor's slip variance or collisions weigh).
         eval_rollouts: greedy rollouts per evaluation, R, each from its own fixed evaluation
             seed, in [1, 100] (default 5).
         oracle_samples: sampled poses per state (each tries every action) of the oracle's
@@ -236,6 +244,7 @@ class ExperimentConfig:
     convergence_tolerance: float = 0.10
     convergence_window: int = 10
     convergence_level: float = 0.9
+    convergence_objective: str = "actions"
     eval_rollouts: int = 5
     oracle_samples: int = 64
     baseline: str = ""
@@ -294,6 +303,11 @@ class ExperimentConfig:
         )
         _check_range("convergence_window", self.convergence_window, 1, 10_000, integer=True)
         _check_range("convergence_level", self.convergence_level, 1e-6, 1.0, integer=False)
+        if self.convergence_objective not in CONVERGENCE_OBJECTIVES:
+            raise ValueError(
+                f"expected convergence_objective in {sorted(CONVERGENCE_OBJECTIVES)}, "
+                f"got {shown(self.convergence_objective)}"
+            )
         _check_range("eval_rollouts", self.eval_rollouts, 1, 100, integer=True)
         _check_range("oracle_samples", self.oracle_samples, 1, 1_000, integer=True)
         _check_range("bootstrap_samples", self.bootstrap_samples, 100, MAX_BOOTSTRAP, integer=True)
@@ -363,6 +377,7 @@ def _base_dict(config: ExperimentConfig) -> dict[str, Any]:
         "convergence_tolerance": config.convergence_tolerance,
         "convergence_window": config.convergence_window,
         "convergence_level": config.convergence_level,
+        "convergence_objective": config.convergence_objective,
         "eval_rollouts": config.eval_rollouts,
         "oracle_samples": config.oracle_samples,
         "baseline": config.baseline,

@@ -42,6 +42,7 @@ EXPERIMENT_KEYS = (
     "convergence_tolerance",
     "convergence_window",
     "convergence_level",
+    "convergence_objective",
     "eval_rollouts",
     "oracle_samples",
     "baseline",

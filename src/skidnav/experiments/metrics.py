@@ -46,18 +46,23 @@ class ConvergenceRule(NamedTuple):
     """How convergence is judged (module docs).
 
     Attributes:
-        reference: L*, the oracle's expected actions from the start [actions] (> 0).
+        reference: the oracle's optimum from the start of the measure: L* [actions], or C*
+            with ``measure = "greedy_cost"`` (> 0).
         tolerance: relative band above L* (e.g. 0.1 = 10 %).
         window: W ≥ 1, the evaluations from the convergence episode on that must already hold
             a share ``level`` of passes (the least evidence of a convergence).
         level: p in (0, 1], the share of passes that must hold from the convergence episode to
             every later episode (1: every evaluation from it on passes).
+        measure: the per-episode column compared with ``reference``: ``greedy_length`` (mean
+            actions of the rollouts that reached the goal) or ``greedy_cost`` (their mean cost,
+            minus the reward without the goal bonus: the objective of the agents' reward).
     """
 
     reference: float
     tolerance: float
     window: int
     level: float = 1.0
+    measure: str = "greedy_length"
 
 
 def evaluation_summary(greedy_lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -223,13 +228,13 @@ CONVERGENCE_COLUMNS = (
 
 
 def convergence_metrics(episodes: dict[str, np.ndarray], rule: ConvergenceRule) -> dict[str, float]:
-    """The convergence columns of a run (module docs) from its ``greedy_length`` and
+    """The convergence columns of a run (module docs) from its ``rule.measure`` and
     ``greedy_success`` and ``length`` per episode, shape (N,) each: ``convergence_episode`` and
     ``converged`` (1.0 / 0.0), ``convergence_steps`` (real actions taken in episodes 1 … e, the
     convergence or censoring episode: the experience it cost), ``pass_share_after`` (NaN when
     censored), ``first_window_episode`` (NaN when no window passed),
     ``pass_share_after_first_window``, ``pass_share_last10``, ``optimality_gap``."""
-    mean, share = episodes["greedy_length"], episodes["greedy_success"]
+    mean, share = episodes[rule.measure], episodes["greedy_success"]
     passed = within_tolerance(mean, share, rule)
     episode, converged = convergence_episode(passed, rule.window, rule.level)
     first = first_window(passed, rule.window)

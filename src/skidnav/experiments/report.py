@@ -115,6 +115,11 @@ def definitions(config: ExperimentConfig) -> str:
         config.convergence_tolerance, config.convergence_window, config.eval_rollouts,
         config.convergence_level,
     )  # fmt: skip
+    measured, optimum = (
+        ("length", "L*") if config.convergence_objective == "actions"
+        else ("cost (minus the reward without the goal bonus: the objective of the agents' "
+              "reward)", "the oracle's C*, the least expected cost from the start")
+    )  # fmt: skip
     return f"""<ul class="note">
 <li><b>Oracle</b> L*: the expected number of actions from the start under the best policy of the
 true transition model of the discretized MDP, estimated from the simulator itself
@@ -122,9 +127,9 @@ true transition model of the discretized MDP, estimated from the simulator itsel
 <li><b>Evaluation</b>: after every training episode the greedy policy is rolled out
 <b>{rollouts}</b> times from the start, each from a reset with one of {rollouts} fixed evaluation
 seeds (the same after every episode and for every agent of a world).</li>
-<li><b>Pass</b>: an evaluation passes when every rollout reaches the goal with a mean length
-within <b>{tol:.0%}</b> above L*. (The oracle's own greedy policy over cells can loop from the
-exact start pose; the share of its rollouts that reached the goal is the column
+<li><b>Pass</b>: an evaluation passes when every rollout reaches the goal with a mean
+{measured} within <b>{tol:.0%}</b> above {optimum}. (The oracle's own greedy policy over cells
+can loop from the exact start pose; the share of its rollouts that reached the goal is the column
 <code>oracle_rollout_success</code>: L* is a reference, not a policy every world lets a cell
 policy follow.)</li>
 <li><b>Convergence episode</b> (converged means it stays converged): the first passing episode e

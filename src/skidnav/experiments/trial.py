@@ -34,7 +34,7 @@ import numpy as np
 from skidnav.agents.catalog import build_agent, check_params, observation_for, train
 from skidnav.agents.core import TabularAgent
 from skidnav.errors import UserError
-from skidnav.experiments.config import ExperimentConfig, MapSpec
+from skidnav.experiments.config import CONVERGENCE_OBJECTIVES, ExperimentConfig, MapSpec
 from skidnav.experiments.finegrid import FineStates, check_grids, refines_positions, state_grid
 from skidnav.experiments.metrics import (
     ConvergenceRule,
@@ -375,10 +375,11 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     if grid_map is not None:
         arrays.update(_world_arrays(agent, grid_map, env))
     rule = None
-    if math.isfinite(reference) and config.greedy_eval:
+    optimum = _optimum(reference, oracle, config.convergence_objective)
+    if math.isfinite(optimum) and config.greedy_eval:
         rule = ConvergenceRule(
-            reference, config.convergence_tolerance, config.convergence_window,
-            config.convergence_level,
+            optimum, config.convergence_tolerance, config.convergence_window,
+            config.convergence_level, CONVERGENCE_OBJECTIVES[config.convergence_objective],
         )  # fmt: skip
     summary = run_metrics(episodes, poses, reached, rule)
     summary["action_limit"] = float(max_steps)
@@ -414,20 +415,29 @@ def _oracle_columns(reference: float, oracle: Oracle | None) -> dict[str, float]
     }  # fmt: skip
 
 
+def _optimum(reference: float, oracle: Oracle | None, objective: str) -> float:
+    """What convergence is measured against: L* (``reference``), or with the "cost" objective
+    the oracle's C* (L* where there is no oracle: a grid maze's moves cost one each)."""
+    return oracle.start_cost if objective == "cost" and oracle is not None else reference
+
+
 def _plan_columns(plan: StartPlan | None, rule: ConvergenceRule | None) -> dict[str, float]:
     """The summary columns of the world's start plan (:mod:`skidnav.experiments.start_plan`):
     its length [actions] (NaN when none was found), the share of its replays that reached the
-    goal, and whether its replays pass the run's convergence test (1.0 / 0.0)."""
+    goal, and whether its replays pass the run's convergence test (1.0 / 0.0; NaN when the test
+    is measured in cost, which the replays do not record)."""
     nan = float("nan")
     if plan is None or not len(plan.actions):
         return {"start_plan_length": nan, "start_plan_success": nan, "start_plan_passes": nan}
     lengths = plan.rollout_lengths
     mean, share = evaluation_summary(lengths[None, :])
-    passes = within_tolerance(mean, share, rule)[0] if rule is not None else nan
+    passes = nan
+    if rule is not None and rule.measure == "greedy_length":
+        passes = float(within_tolerance(mean, share, rule)[0])
     return {
         "start_plan_length": float(len(plan.actions)),
         "start_plan_success": float(share[0]),
-        "start_plan_passes": float(passes),
+        "start_plan_passes": passes,
     }
 
 
