@@ -47,7 +47,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/run_all.py
 
 # The current commit's key figures and time to learn measured and recorded, then every figure
-# named that moved by more than FACTOR (default 1.5) since the last commit recorded on this
+# named that moved by more than FACTOR (default 2) since the last commit recorded on this
 # machine (docs/speed.md).
 .PHONY: bench-compare
 bench-compare: $(STAMP)
