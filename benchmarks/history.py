@@ -72,7 +72,8 @@ def head() -> str:
 
 
 def record() -> str:
-    """Measure and record the figures of the current commit on this machine; its hash."""
+    """Measure and record the figures of the current commit on this machine; its hash.
+    CalledProcessError when a figure could not be measured (asv exits with 2)."""
     commit = head()
     asv("machine", "--yes", "--machine", MACHINE, quiet=True)  # asv's description of this machine
     asv("run", "--python=same", f"--set-commit-hash={commit}", "--machine", MACHINE,

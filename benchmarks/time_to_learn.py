@@ -8,8 +8,9 @@ core, and per agent:
   the Kaplan–Meier median over the runs (a run that did not converge is censored at its
   censoring episode; more than half censored: ∞);
 * **seconds to learn**: each run's training time [s] of its episodes up to and including its
-  convergence episode (the evaluation rollouts after each episode are measurement, not
-  learning, and the runner does not time them), the Kaplan–Meier median likewise;
+  convergence episode (neither the evaluation rollouts after each episode, which measure and do
+  not learn, nor numba's compilation, done by the runner's warm-up before a run's clock starts,
+  are timed), the Kaplan–Meier median likewise;
 * **planning updates/s** and **real steps/s** over all its training, for comparison with the
   update rates of ``bench_agents.py`` and ``bench_training.py``.
 
