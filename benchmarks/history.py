@@ -58,8 +58,9 @@ def asv(*arguments: str, quiet: bool = False) -> None:
     to this process (e.g. ``PYTHONPATH=src``) is passed on as asv's ``ASV_PYTHONPATH``, so the
     code measured is the code this process imports. ``quiet``: its output is not shown."""
     environment = dict(os.environ)
-    if "PYTHONPATH" in environment:
-        environment.setdefault("ASV_PYTHONPATH", environment["PYTHONPATH"])
+    if "PYTHONPATH" in environment:  # made absolute: asv runs the benchmarks elsewhere
+        paths = [str(Path(path).resolve()) for path in environment["PYTHONPATH"].split(os.pathsep)]
+        environment.setdefault("ASV_PYTHONPATH", os.pathsep.join(paths))
     command = [sys.executable, "-m", "asv", "--config", str(CONFIG), *arguments]
     subprocess.run(command, check=True, env=environment, cwd=HERE.parent, capture_output=quiet)
 
