@@ -46,6 +46,13 @@ lint: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/run_all.py
 
+# The current commit's key figures and time to learn measured and recorded, then every figure
+# named that moved by more than FACTOR (default 2) since the last commit recorded on this
+# machine (docs/speed.md).
+.PHONY: bench-compare
+bench-compare: $(STAMP)
+	$(PY) benchmarks/history.py compare $(if $(FACTOR),--factor $(FACTOR))
+
 # numba's on-disk cache does not notice edits to helpers inlined from another module:
 # after changing a kernel, clear it.
 clean-cache:

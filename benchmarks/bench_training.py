@@ -53,6 +53,11 @@ def steps_per_second(name: str, fused: bool, episodes: int) -> float:
     return float(log.lengths.sum()) / (time.perf_counter() - start)
 
 
+def best_rate(name: str, fused: bool, episodes: int) -> float:
+    """The best of :data:`REPEATS` timings of :func:`steps_per_second`."""
+    return max(steps_per_second(name, fused, episodes) for _ in range(REPEATS))
+
+
 def plain_python_rate(name: str) -> float:
     """:func:`steps_per_second` step by step as plain Python (:func:`plain_python.interpreted`)."""
     return interpreted("bench_training", f"steps_per_second({name!r}, False, {PLAIN_EPISODES})")
@@ -63,8 +68,8 @@ def main() -> None:
           "ratios against plain Python measured in this run:")  # fmt: skip
     for name in AGENT_MODULES:
         plain = plain_python_rate(name)
-        fused = max(steps_per_second(name, True, EPISODES) for _ in range(REPEATS))
-        stepwise = max(steps_per_second(name, False, EPISODES // 4) for _ in range(REPEATS))
+        fused = best_rate(name, True, EPISODES)
+        stepwise = best_rate(name, False, EPISODES // 4)
         print(
             f"  {name:24s} plain {plain:9,.0f}  step by step {stepwise:9,.0f} "
             f"({stepwise / plain:5.1f}x)  fused {fused:10,.0f} ({fused / plain:6.1f}x)",

@@ -44,13 +44,22 @@ def steps_per_second(mode: str, n_steps: int, kwargs: dict[str, Any]) -> float:
     return n_steps * N_ENVS / (time.perf_counter() - start)
 
 
+def native_and_sync(
+    kwargs: dict[str, Any], native_steps: int = 400, sync_steps: int = 20
+) -> tuple[float, float]:
+    """(native, ``SyncVectorEnv``) sub-env steps/s of the case ``kwargs``: the median of
+    :data:`REPEATS` timings of :func:`steps_per_second` each, one after the other."""
+    native = statistics.median(
+        steps_per_second("vector_entry_point", native_steps, kwargs) for _ in range(REPEATS)
+    )
+    single = statistics.median(steps_per_second("sync", sync_steps, kwargs) for _ in range(REPEATS))
+    return native, single
+
+
 def main() -> None:
     print(f"vector env, {N_ENVS} sub-envs, obstacles map, random actions (target >= {TARGET:,})")
     for name, kwargs in CASES.items():
-        native = statistics.median(
-            steps_per_second("vector_entry_point", 400, kwargs) for _ in range(REPEATS)
-        )
-        single = statistics.median(steps_per_second("sync", 20, kwargs) for _ in range(REPEATS))
+        native, single = native_and_sync(kwargs)
         print(
             f"  {name:40s} native {native:11,.0f} steps/s; SyncVectorEnv of single envs "
             f"{single:9,.0f} steps/s; ratio {native / single:5.1f} ×",

@@ -144,6 +144,14 @@ def test_bad_actions_are_refused(kwargs: dict[str, Any], actions: Any, match: st
         envs.step(actions)
 
 
+def test_a_refused_batch_is_quoted_in_one_short_line() -> None:
+    envs = gymnasium.make_vec(ENV_ID, num_envs=256, map_kind="free", action="continuous")
+    envs.reset(seed=0)
+    with pytest.raises(ValueError, match="finite wheel speeds") as refused:
+        envs.step(np.full((256, 2), np.nan))
+    assert "\n" not in str(refused.value) and len(str(refused.value)) < 120
+
+
 def test_bad_construction_and_resets_are_refused() -> None:
     with pytest.raises(ValueError, match="num_envs"):
         SkidSteerNavVectorEnv(0)

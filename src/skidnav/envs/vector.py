@@ -48,6 +48,7 @@ from gymnasium.vector.utils import batch_space
 from skidnav.checks import check_integer
 from skidnav.envs.navigation import SkidSteerNavEnv
 from skidnav.envs.registration import ENV_ID
+from skidnav.errors import shown
 from skidnav.kernels.vector_env import (
     DISCRETE_OBSERVATION,
     FEATURE_OBSERVATION,
@@ -216,9 +217,10 @@ class SkidSteerNavVectorEnv(VectorEnv[Any, Any, Any]):
                 raise gymnasium.error.ResetNeeded("call reset before step")
             rng.random(out=self._noise[k])  # the single env's next draws, in its order
             self._noise_used[k] = 0
-        restarted = self._autoreset.copy()
-        self._restart(restarted)
-        self._rewards[restarted] = 0.0
+        restarted = self._autoreset  # replaced below, never written in place
+        if restarted.any():  # most steps restart no one: skip the masked writes and the call
+            self._restart(restarted)
+            self._rewards[restarted] = 0.0
         vector_step(
             self.template.task, self._stats, self._poses, self._times, commands, self._noise,
             self._noise_used, active, self._kind, self._geometry, self._rewards,
@@ -235,20 +237,26 @@ class SkidSteerNavVectorEnv(VectorEnv[Any, Any, Any]):
     def _commands(self, actions: Any) -> np.ndarray:
         """The wheel speeds float64 (N, 2) [rad/s] of the batch of actions; ValueError for a
         batch the action space does not hold (continuous: clipped to the box)."""
+        # Called every step: a message is formatted only on error (the repr of an (N, 2) batch
+        # takes several times as long as the compiled step of N robots).
         if self.template.action_kind == "continuous":
-            message = f"expected ({self.num_envs}, 2) finite wheel speeds, got {actions!r}"
             try:
                 values = np.asarray(actions, dtype=np.float64)
+                valid = values.shape == (self.num_envs, 2) and bool(np.isfinite(values).all())
             except (TypeError, ValueError):  # not numbers, or ragged
-                raise ValueError(message) from None
-            if values.shape != (self.num_envs, 2) or not np.isfinite(values).all():
-                raise ValueError(message)
+                valid = False
+            if not valid:
+                raise ValueError(
+                    f"expected ({self.num_envs}, 2) finite wheel speeds, got {shown(actions)}"
+                )
             limit = self.template.robot.wheel_speed
             return np.clip(values, -limit, limit)
         indices = np.asarray(actions)
         valid = indices.shape == (self.num_envs,) and indices.dtype.kind in "iu"
-        if not valid or not np.isin(indices, (0, 1, 2, 3)).all():
-            raise ValueError(f"expected {self.num_envs} integer actions in 0..3, got {actions!r}")
+        if not valid or not (indices.min() >= 0 and indices.max() <= 3):
+            raise ValueError(
+                f"expected {self.num_envs} integer actions in 0..3, got {shown(actions)}"
+            )
         return self._commands_of[indices.astype(np.int64)]
 
     def _outputs(self) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,124 @@
+"""The figure a user feels: how long each agent takes to learn, in wall time.
+
+The runs of :data:`CONFIG` (its comment states the world and the budget) are trained by the
+experiment runner (:func:`skidnav.experiments.runner.run_experiment`), one after another on one
+core, and per agent:
+
+* **convergence episode**: each run's, as the runner defines it (``skidnav.experiments.metrics``),
+  the Kaplan–Meier median over the runs (a run that did not converge is censored at its
+  censoring episode; more than half censored: ∞);
+* **seconds to learn**: each run's training time [s] of its episodes up to and including its
+  convergence episode (neither the evaluation rollouts after each episode, which measure and do
+  not learn, nor numba's compilation, done by the runner's warm-up before a run's clock starts,
+  are timed), the Kaplan–Meier median likewise;
+* **planning updates/s** and **real steps/s** over all its training, for comparison with the
+  update rates of ``bench_agents.py`` and ``bench_training.py``.
+
+Usage (from the repository root): ``PYTHONPATH=src python benchmarks/time_to_learn.py``.
+``make bench`` records these figures per commit (``benchmarks/history.py``).
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from pathlib import Path
+from typing import NamedTuple
+
+import pandas as pd
+
+from skidnav.experiments.configfile import load_config
+from skidnav.experiments.runner import run_experiment
+from skidnav.experiments.store import ResultStore
+from skidnav.survival import km_median
+
+CONFIG = Path(__file__).with_name("time_to_learn.toml")
+
+
+class Learned(NamedTuple):
+    """How long one agent took to learn (module doc).
+
+    Attributes:
+        runs: runs trained. converged: runs that converged.
+        episode: median convergence episode (∞: most runs did not converge).
+        seconds: median training time to convergence [s] (∞ likewise).
+        updates_per_second: planning updates per second of training (0 without planning).
+        steps_per_second: real steps per second of training.
+    """
+
+    runs: int
+    converged: int
+    episode: float
+    seconds: float
+    updates_per_second: float
+    steps_per_second: float
+
+
+def agent_labels(config_path: Path = CONFIG) -> list[str]:
+    """The agents of ``config_path``, in its order."""
+    return [agent.label for agent in load_config(config_path).agents]
+
+
+def budget(config_path: Path = CONFIG) -> tuple[int, str]:
+    """(runs per agent, what each run was given) of ``config_path``, e.g. (3, "2000 episodes of
+    ≤ 300 actions")."""
+    config = load_config(config_path)
+    limit = f" of ≤ {config.max_steps} actions" if config.max_steps else ""
+    runs = config.seeds * len(config.maps) * len(config.presets)
+    return runs, f"{config.episodes} episodes{limit}"
+
+
+def time_to_learn(config_path: Path = CONFIG) -> dict[str, Learned]:
+    """Train every run of ``config_path`` (serially, in a temporary folder) and measure how long
+    each agent took to learn, by agent label."""
+    config = load_config(config_path)
+    with tempfile.TemporaryDirectory() as out:
+        run_experiment(config, out, backend="serial", jobs=1)
+        episodes, summaries = ResultStore(out).load_tables()
+    return {
+        label: learned(episodes[episodes["agent"] == label], summaries[summaries["agent"] == label])
+        for label in agent_labels(config_path)
+    }
+
+
+def learned(episodes: pd.DataFrame, summaries: pd.DataFrame) -> Learned:
+    """:class:`Learned` of one agent from its runs' tables (``ResultStore.load_tables``)."""
+    until = summaries.set_index("run_id")["convergence_episode"]
+    learning = episodes[episodes["episode"] <= episodes["run_id"].map(until)]
+    seconds = learning.groupby("run_id")["wall_time"].sum().reindex(until.index)
+    converged = summaries.set_index("run_id")["converged"].astype(bool)
+    training = float(episodes["wall_time"].sum())
+    return Learned(
+        runs=len(summaries),
+        converged=int(converged.sum()),
+        episode=km_median(until.to_numpy(), converged.to_numpy()),
+        seconds=km_median(seconds.to_numpy(), converged.to_numpy()),
+        updates_per_second=float(episodes["planning_updates"].sum()) / training,
+        steps_per_second=float(episodes["length"].sum()) / training,
+    )
+
+
+def describe(value: float, unit: str = "") -> str:
+    """``value`` for a table: whole from 100 on, else 3 significant digits; "∞" for ∞, "–" for
+    NaN."""
+    if math.isnan(value):
+        return "–"
+    if math.isinf(value):
+        return "∞"
+    return (f"{value:,.0f}" if abs(value) >= 100 else f"{value:.3g}") + unit
+
+
+def main() -> None:
+    print(f"time to learn ({CONFIG.name}):")
+    for label, figures in time_to_learn().items():
+        print(
+            f"  {label:22s} converged {figures.converged}/{figures.runs}, median episode "
+            f"{describe(figures.episode)}, {describe(figures.seconds, ' s')} of training; "
+            f"{figures.updates_per_second / 1e6:6.2f} M planning updates/s, "
+            f"{figures.steps_per_second / 1e3:6.1f} k real steps/s",
+            flush=True,
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,37 @@
+"""The speed guard: the key ratios of ``make bench`` (``benchmarks/key_figures.py``), each a
+compiled path against its plain-Python or ``SyncVectorEnv`` twin measured in the same process,
+checked against floors set well below the ratios measured on the CI machine. A ratio, never an
+absolute time: a loaded machine slows both sides alike. A ratio below its floor is measured
+again (up to :data:`ATTEMPTS` times in all), so that a moment of load passes and a slowdown
+does not."""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from pathlib import Path
+
+import pytest
+
+from skidnav._jit import jit_disabled
+
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+sys.path.insert(0, str(BENCHMARKS))  # the benchmark scripts import one another by name
+key_figures = importlib.import_module("key_figures")
+ATTEMPTS = 3
+
+
+@pytest.mark.skipif(jit_disabled(), reason="nothing is compiled with NUMBA_DISABLE_JIT=1")
+@pytest.mark.parametrize("name", list(key_figures.FIGURES))
+def test_a_key_ratio_stays_above_its_floor(name: str) -> None:
+    figure = key_figures.FIGURES[name]
+    measured = []
+    for _ in range(ATTEMPTS):
+        compiled, twin = figure.measure(True)
+        measured.append(f"{compiled:,.0f} / {twin:,.0f} = {compiled / twin:.1f}×")
+        if compiled / twin >= figure.floor:
+            return
+    pytest.fail(
+        f"{figure.compiled} against {figure.twin} ({figure.unit}/s): "
+        f"{'; '.join(measured)}: below its floor {figure.floor:g}× in {ATTEMPTS} attempts"
+    )
