@@ -19,7 +19,13 @@ from skidnav.experiments.metrics import (
 from skidnav.experiments.oracle import compute_oracle
 from skidnav.kernels.model_sweep import model_value_iteration
 
-PARAMS = {"alpha": 0.5, "gamma": 0.95, "epsilon": 0.1, "planning_steps": 10}
+PARAMS = {
+    "alpha": 0.5, "gamma": 0.95, "epsilon": 0.1, "planning_steps": 10,
+    "planning_mode": "most-probable",
+}  # fmt: skip
+"""The thesis's planning target: with the expected one (the default) one of the three evaluation
+seeds of this world loops from episode 17 on (2 of 3 rollouts reach the goal, in 8 actions), so
+the run is censored at 40 episodes (measured)."""
 
 
 def _arena(world_seed: int) -> gymnasium.Env:  # type: ignore[type-arg]
