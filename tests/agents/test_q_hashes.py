@@ -61,7 +61,7 @@ NAVIGATION = {
     "dyna-q": "d8065832544ed9c8",
     "dyna-q-plus": "1a6ac4f2198d4900",
     "prioritized-sweeping": "faccdda34437a669",
-    "dyna-kinematic": "35c85e59bb9a0899",
+    "dyna-kinematic": "123f5eb4e35fdb7c",
     "trajectory-prioritized": "1f075498360d1f27",
     "dyna-full": "3a36d7b4bb62d231",
     "dyna-sweep": "2b3233528215cbd9",

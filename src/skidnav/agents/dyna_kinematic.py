@@ -5,8 +5,9 @@ After each real step (s, a, r, s′) with the env's ``info``:
 1. direct RL: one TD update of ``q[s, a]``;
 2. model learning: count the transition in the multinomial model; feed the free sub-steps of
    ``info["kinematic_log"]`` to the per-region Bayesian ridge kinematic model; record the reward
-   in the reward statistics; guess the wall cell of a collision and mark the goal cell of a
-   termination (the kinematic table around them is recomputed at the end of the episode);
+   in the reward statistics; weigh the map's evidence — the cell the robot ended in is free, the
+   guessed wall cell of a collision is a wall — and mark the goal cell of a termination (the
+   kinematic table around cells that changed is recomputed at the end of the episode);
 3. planning: ``planning_steps`` updates. With probability ``kinematic_share`` an update goes to the
    *frontier*: a visited pair drawn uniformly, a random action predicted from its state, and a
    random action at the predicted state; otherwise to a uniformly drawn visited pair (Dyna-Q).
@@ -205,6 +206,8 @@ class ModelBasedAgent(DynaQAgent):
             walls=np.zeros(shape, dtype=np.bool_),
             goals=np.zeros(shape, dtype=np.bool_),
             stale=np.zeros(shape, dtype=np.bool_),
+            wall_evidence=np.zeros(shape, dtype=np.int64),
+            free_evidence=np.zeros(shape, dtype=np.int64),
             reward_stats=np.zeros((n_regions + 2, 2)),
             trajectory_keys=np.zeros(1, dtype=np.int64),
             neighbour_keys=np.zeros(1, dtype=np.int64),
@@ -325,6 +328,8 @@ class ModelBasedAgent(DynaQAgent):
             "planner_walls": planner.walls,
             "planner_goals": planner.goals,
             "planner_stale": planner.stale,
+            "planner_wall_evidence": planner.wall_evidence,
+            "planner_free_evidence": planner.free_evidence,
             "planner_reward_stats": planner.reward_stats,
             "planner_counters": counters,
             "planner_trajectory_keys": planner.trajectory_keys[: counters[kp.N_TRAJECTORY]],
@@ -346,11 +351,12 @@ class ModelBasedAgent(DynaQAgent):
         archive's arrays are known to have that geometry's shapes)."""
         super()._restore_state_arrays(arrays)
         planner = self.planner
-        for name in ("walls", "goals", "stale", "reward_stats", "counters"):
+        for name in (*MAP_ARRAYS, "reward_stats", "counters"):
             saved = np.asarray(arrays[f"planner_{name}"])
             if saved.shape != getattr(planner, name).shape:
                 raise ValueError(f"saved planner {name} has shape {saved.shape}")
             getattr(planner, name)[...] = saved
+        check_planner_map(planner)
         sweeps = [_saved_keys(arrays, f"planner_{name}_keys", self.q.size)
                   for name in ("trajectory", "neighbour", "episode")]  # fmt: skip
         check_planner_counters(
@@ -384,6 +390,21 @@ def _saved_keys(arrays: Mapping[str, np.ndarray], name: str, n_keys: int) -> np.
     return keys
 
 
+MAP_ARRAYS = ("walls", "goals", "stale", "wall_evidence", "free_evidence")
+"""The planner's map (:class:`~skidnav.kernels.kinematic_planning.PlannerArrays`), saved as
+``planner_<name>``."""
+
+
+def check_planner_map(planner: kp.PlannerArrays) -> None:
+    """ValueError unless the planner's map evidence are counts and its walls are the cells the
+    evidence make walls (:func:`~skidnav.kernels.kinematic_planning.weigh_cell`)."""
+    if (planner.wall_evidence < 0).any() or (planner.free_evidence < 0).any():
+        raise ValueError("saved planner wall or free evidence are not counts")
+    weighed = (planner.wall_evidence > planner.free_evidence) & ~planner.goals
+    if not np.array_equal(planner.walls, weighed):
+        raise ValueError("saved planner walls disagree with their evidence")
+
+
 def check_planner_counters(counters: np.ndarray, sizes: list[int], has_kinematic: bool) -> None:
     """ValueError unless the planner counters agree with the saved sweep and episode lists
     (``sizes``: trajectory, neighbour, episode keys): the compiled planner indexes by them."""
@@ -397,6 +418,7 @@ def check_planner_counters(counters: np.ndarray, sizes: list[int], has_kinematic
         "REFRESH_RADIUS": counters[kp.REFRESH_RADIUS] >= 0,
         "USE_KINEMATIC": counters[kp.USE_KINEMATIC] in ((0, 1) if has_kinematic else (0,)),
         "EPISODE_TERMINATED": counters[kp.EPISODE_TERMINATED] in (0, 1),
+        "MAP_CHANGES": counters[kp.MAP_CHANGES] >= 0,
     }
     wrong = [name for name, ok in expected.items() if not ok]
     if wrong:

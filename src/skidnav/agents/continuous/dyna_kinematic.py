@@ -45,6 +45,7 @@ from skidnav.agents.continuous.config import (
 from skidnav.agents.continuous.dyna import LinearDynaAgent
 from skidnav.agents.dyna_kinematic import (
     check_planner_counters,
+    check_planner_map,
     geometry_from_json,
     geometry_from_task,
     geometry_json,
@@ -191,6 +192,8 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
             walls=np.zeros(shape, dtype=np.bool_),
             goals=np.zeros(shape, dtype=np.bool_),
             stale=np.zeros(shape, dtype=np.bool_),
+            wall_evidence=np.zeros(shape, dtype=np.int64),
+            free_evidence=np.zeros(shape, dtype=np.int64),
             reward_stats=np.zeros((grid.n_regions + 2, 2)),
             trajectory_keys=np.zeros(1, dtype=np.int64),
             neighbour_keys=np.zeros(1, dtype=np.int64),
@@ -352,6 +355,8 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
             "map_occupancy": self.context.occupancy,  # type: ignore[union-attr]
             "planner_walls": planner.walls,
             "planner_goals": planner.goals,
+            "planner_wall_evidence": planner.wall_evidence,
+            "planner_free_evidence": planner.free_evidence,
             "planner_reward_stats": planner.reward_stats,
             "planner_counters": planner.counters,
             **self.kinematic.state_arrays(),
@@ -406,6 +411,7 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
             raise CorruptFileError("saved planner_reward_stats hold negative counts")
         try:
             check_planner_counters(self.planner.counters, [0, 0, 0], has_kinematic=True)
+            check_planner_map(self.planner)
         except ValueError as error:
             raise CorruptFileError(str(error)) from None
         self.kinematic.load_arrays({name: np.asarray(arrays[name]) for name in arrays})
