@@ -38,6 +38,7 @@ from skidnav.kernels.multinomial import MultinomialArrays, model_observe
 from skidnav.kernels.navigation import NavigationTask
 from skidnav.kernels.tabular import td_update
 from skidnav.models.kinematic import KinematicModel
+from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import KinematicConstants, RobotParams
 from skidnav.world.discretization import Discretization, GridShape
 
@@ -151,7 +152,9 @@ class ModelBasedAgent(DynaQAgent):
     Without a discretization the agent has no geometry, whatever ``n_states`` is: no kinematic
     model, no spatial neighbours. With one, kinematic planning starts at the first real step whose
     ``info`` carries a ``kinematic_log`` (an env that never supplies one gets plain replay, not
-    predictions of the untrained prior).
+    predictions of the untrained prior). ``true_kinematics``: the simulator's expected body
+    velocities, float64 (n_regions, 4, 3) (the kinematic env's ``true_kinematics``), which an
+    agent whose ``kinematic_model`` is "true" plans with (:func:`hold_kinematic_model`).
     """
 
     uses_kinematic: ClassVar[bool] = False
@@ -167,14 +170,18 @@ class ModelBasedAgent(DynaQAgent):
         task: NavigationTask | None = None,
         robot: RobotParams | None = None,
         discretization: Discretization | None = None,
+        true_kinematics: np.ndarray | None = None,
     ) -> None:
         super().__init__(n_states, n_actions, config, rng)
         if task is not None:
             robot, discretization = geometry_from_task(task)
-        self._set_geometry(robot or RobotParams(), discretization)
+        self._set_geometry(robot or RobotParams(), discretization, true_kinematics)
 
-    def _set_geometry(self, robot: RobotParams, grid: Discretization | None) -> None:
-        """Build the kinematic model and the planner for this geometry (None: no geometry)."""
+    def _set_geometry(
+        self, robot: RobotParams, grid: Discretization | None, true_kinematics: np.ndarray | None
+    ) -> None:
+        """Build the kinematic model (held as ``kinematic_model`` asks) and the planner for this
+        geometry (None: no geometry)."""
         if grid is not None and (grid.n_states != self.n_states or self.n_actions != 4):
             raise ValueError(
                 f"expected {grid.n_states} states and 4 actions for this discretization, "
@@ -186,7 +193,9 @@ class ModelBasedAgent(DynaQAgent):
         self.kernel_grid: GridShape = grid.grid_shape() if grid else _NO_GRID
         self.kinematic: KinematicModel | None = None
         if self.uses_kinematic and grid is not None:
-            self.kinematic = KinematicModel(robot, grid, self.config.kinematic_config())  # type: ignore[attr-defined]
+            config: KinematicModelFields = self.config  # type: ignore[assignment]
+            self.kinematic = KinematicModel(robot, grid, config.kinematic_config())
+            hold_kinematic_model(self.kinematic, config.kinematic_model, true_kinematics)
         self.trajectories: list[np.ndarray] = []
         """The best loop-erased start→goal trajectories (pair keys), shortest first."""
         self.planner = self._new_planner()
@@ -343,7 +352,10 @@ class ModelBasedAgent(DynaQAgent):
         return arrays
 
     def _state_json(self) -> dict[str, Any]:
-        return {**super()._state_json(), "geometry": geometry_json(self.robot, self.discretization)}
+        meta = {**super()._state_json(), "geometry": geometry_json(self.robot, self.discretization)}
+        if self.kinematic is not None and self.kinematic.reference is not None:
+            meta["true_kinematics"] = self.kinematic.reference.tolist()
+        return meta
 
     def _restore_state_arrays(self, arrays: Mapping[str, np.ndarray]) -> None:
         """The saved planner, trajectories and kinematic model, into an agent built with the
@@ -377,6 +389,38 @@ class ModelBasedAgent(DynaQAgent):
         if self.kinematic is not None:
             self.kinematic.load_arrays(dict(arrays))
             self._refresh_table()
+
+
+def hold_kinematic_model(
+    model: KinematicModel, source: str, true_kinematics: np.ndarray | None
+) -> None:
+    """Make ``model`` the one an agent's ``kinematic_model`` names
+    (:class:`~skidnav.agents.config.KinematicModelFields`): "learned" leaves it learning, "prior"
+    holds the prior, "true" holds ``true_kinematics`` (float64 (n_regions, 4, 3), the simulator's
+    expected body velocities; ValueError when there are none, as on a physics or real robot)."""
+    if source == "prior":
+        model.hold()
+    elif source == "true":
+        if true_kinematics is None:
+            raise ValueError(
+                "expected the simulator's true_kinematics for kinematic_model 'true' (only the "
+                "kinematic env has them), got none"
+            )
+        model.hold(true_kinematics)
+
+
+def true_kinematics_from_json(value: Any, n_regions: int) -> np.ndarray:
+    """The ``true_kinematics`` a "true" agent saved in its JSON, float64 (n_regions, 4, 3);
+    ValueError unless it is exactly that, finite."""
+    try:
+        table = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        table = np.zeros(0)
+    if table.shape != (n_regions, N_ACTIONS, 3) or not np.isfinite(table).all():
+        raise ValueError(
+            f"expected true_kinematics of {n_regions} × {N_ACTIONS} × 3 finite numbers"
+        )
+    return table
 
 
 def _saved_keys(arrays: Mapping[str, np.ndarray], name: str, n_keys: int) -> np.ndarray:
