@@ -186,7 +186,7 @@ def test_save_load_round_trip_continues_identically(name: str, tmp_path: Path) -
     loaded = load_agent(tmp_path / "agent")  # geometry comes from the file, no context needed
     assert np.array_equal(loaded.q, agent.q)
     assert [t.tolist() for t in loaded.trajectories] == [t.tolist() for t in agent.trajectories]
-    for field in kp.PlannerArrays._fields[:6]:
+    for field in kp.PlannerArrays._fields[:9]:  # the table, velocities and the map
         assert np.array_equal(getattr(loaded.planner, field), getattr(agent.planner, field)), field
     twin = copy.deepcopy(env)
     train_agent_fast(agent, env, 3)
@@ -259,6 +259,8 @@ def _set(index: int, value: int) -> Any:
         ("trajectory_keys", _set(0, 4 * 810), "outside the Q table"),
         ("trajectory_lengths", _set(0, 1000), "trajectory lengths"),
         ("planner_reward_stats", _set(0, np.nan), "reward_stats"),
+        ("planner_free_evidence", _set((0, 0), -1), "evidence are not counts"),
+        ("planner_walls", lambda values: values.__setitem__((4, 4), ~values[4, 4]), "evidence"),
         ("model.entry_sibling", lambda values: values.fill(0), "model arrays"),
         ("kinematic_coefficients", _set(0, np.inf), "kinematic model coefficients"),
         ("kinematic_fitted_counts", _set(0, 10**6), "kinematic model sample counts"),

@@ -124,11 +124,11 @@ def build_agent(
         )
     rng = np.random.default_rng(seed)
     if kind == "tabular":
-        context = agent_context(name, env)
+        context = agent_context(name, env, params)
         n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
         return make_agent(name, int(space.n), n_actions, dict(params), rng, **context)  # type: ignore[union-attr]
     if kind == "linear":
-        context = agent_context(name, env)
+        context = agent_context(name, env, params)
         n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
         return make_linear_agent(name, space, n_actions, dict(params), rng, **context)  # type: ignore[arg-type]
     module = _deep_module(name)
@@ -137,12 +137,19 @@ def build_agent(
     return module.AGENT_CLASS(TimeLimit(env, max_steps), config, seed=deep_seed)
 
 
-def agent_context(name: str, env: gymnasium.Env[Any, Any]) -> dict[str, Any]:
-    """Extra constructor arguments a tabular or linear agent asks for by name (the navigation
-    ``task``)."""
+def agent_context(
+    name: str, env: gymnasium.Env[Any, Any], params: Mapping[str, Any] | None = None
+) -> dict[str, Any]:
+    """Extra constructor arguments a tabular or linear agent asks for by name: the navigation
+    ``task``, and for one whose ``params`` ask for ``kinematic_model = "true"`` the env's
+    ``true_kinematics`` (None on an env without them: the agent refuses in one line). No other
+    agent is handed the truth."""
     cls = linear_agent_class(name) if family(name) == "linear" else agent_class(name)
     parameters = inspect.signature(cls.__init__).parameters
-    return {"task": env.task} if "task" in parameters and hasattr(env, "task") else {}
+    context = {"task": env.task} if "task" in parameters and hasattr(env, "task") else {}
+    if "true_kinematics" in parameters and (params or {}).get("kinematic_model") == "true":
+        context["true_kinematics"] = getattr(env.unwrapped, "true_kinematics", None)
+    return context
 
 
 def train(

@@ -25,6 +25,8 @@ from skidnav.errors import shown
 from skidnav.kernels.multinomial import PLANNING_MODES
 from skidnav.models.kinematic import KinematicModelConfig
 
+KINEMATIC_MODELS = ("learned", "prior", "true")
+"""Values of :attr:`KinematicModelFields.kinematic_model`."""
 MAX_PLANNING_STEPS = 10_000_000
 """Most planning updates per real step (10 M: about a second of compiled planning)."""
 
@@ -163,9 +165,21 @@ class KinematicModelFields:
     """Samples kept per region (sliding window)."""
     kinematic_forgetting: float = 1.0
     """Per-sample weight decay of older samples, in (0, 1]."""
+    kinematic_model: str = "learned"
+    """Which kinematic model the agent plans with: "learned" (the thesis: refitted online from
+    the kinematic log), "prior" (the nominal robot, the regression's prior, never refitted: the
+    ablation of learning) or "true" (the simulator's expected body velocities of each slip
+    region and action, never refitted: a reference no real robot offers; it needs the
+    kinematic env's ``true_kinematics``)."""
 
     def kinematic_config(self) -> KinematicModelConfig:
-        """The kinematic model's config (ValueError for a bad field)."""
+        """The kinematic model's config (ValueError for a bad field, ``kinematic_model``
+        included)."""
+        _check(
+            self.kinematic_model in KINEMATIC_MODELS,
+            f"kinematic_model in {KINEMATIC_MODELS}",
+            self.kinematic_model,
+        )
         return KinematicModelConfig(
             min_samples=self.kinematic_min_samples,
             refit_every=self.kinematic_refit_every,

@@ -43,8 +43,9 @@ from skidnav.kernels.tabular import epsilon_at, epsilon_greedy, greedy_first
 logger = logging.getLogger(__name__)
 
 SAVE_FORMAT = "skidnav-agent"
-SAVE_VERSION = 2
-"""2: a model-based agent's geometry in the JSON (1 held it as 19 numbers in the archive)."""
+SAVE_VERSION = 3
+"""2: a model-based agent's geometry in the JSON (1 held it as 19 numbers in the archive);
+3: a model-based agent's planner keeps the wall and free evidence of every cell."""
 
 
 def save_paths(path: str | Path) -> tuple[Path, Path]:

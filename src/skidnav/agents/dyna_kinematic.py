@@ -5,8 +5,9 @@ After each real step (s, a, r, s′) with the env's ``info``:
 1. direct RL: one TD update of ``q[s, a]``;
 2. model learning: count the transition in the multinomial model; feed the free sub-steps of
    ``info["kinematic_log"]`` to the per-region Bayesian ridge kinematic model; record the reward
-   in the reward statistics; guess the wall cell of a collision and mark the goal cell of a
-   termination (the kinematic table around them is recomputed at the end of the episode);
+   in the reward statistics; weigh the map's evidence — the cell the robot ended in is free, the
+   guessed wall cell of a collision is a wall — and mark the goal cell of a termination (the
+   kinematic table around cells that changed is recomputed at the end of the episode);
 3. planning: ``planning_steps`` updates. With probability ``kinematic_share`` an update goes to the
    *frontier*: a visited pair drawn uniformly, a random action predicted from its state, and a
    random action at the predicted state; otherwise to a uniformly drawn visited pair (Dyna-Q).
@@ -43,6 +44,7 @@ from skidnav.kernels.multinomial import MultinomialArrays, model_observe
 from skidnav.kernels.navigation import NavigationTask
 from skidnav.kernels.tabular import td_update
 from skidnav.models.kinematic import KinematicModel
+from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import KinematicConstants, RobotParams
 from skidnav.world.discretization import Discretization, GridShape
 
@@ -158,7 +160,9 @@ class ModelBasedAgent(DynaQAgent):
     Without a discretization the agent has no geometry, whatever ``n_states`` is: no kinematic
     model, no spatial neighbours. With one, kinematic planning starts at the first real step whose
     ``info`` carries a ``kinematic_log`` (an env that never supplies one gets plain replay, not
-    predictions of the untrained prior).
+    predictions of the untrained prior). ``true_kinematics``: the simulator's expected body
+    velocities, float64 (n_regions, 4, 3) (the kinematic env's ``true_kinematics``), which an
+    agent whose ``kinematic_model`` is "true" plans with (:func:`hold_kinematic_model`).
     """
 
     uses_kinematic: ClassVar[bool] = False
@@ -174,14 +178,18 @@ class ModelBasedAgent(DynaQAgent):
         task: NavigationTask | None = None,
         robot: RobotParams | None = None,
         discretization: Discretization | None = None,
+        true_kinematics: np.ndarray | None = None,
     ) -> None:
         super().__init__(n_states, n_actions, config, rng)
         if task is not None:
             robot, discretization = geometry_from_task(task)
-        self._set_geometry(robot or RobotParams(), discretization)
+        self._set_geometry(robot or RobotParams(), discretization, true_kinematics)
 
-    def _set_geometry(self, robot: RobotParams, grid: Discretization | None) -> None:
-        """Build the kinematic model and the planner for this geometry (None: no geometry)."""
+    def _set_geometry(
+        self, robot: RobotParams, grid: Discretization | None, true_kinematics: np.ndarray | None
+    ) -> None:
+        """Build the kinematic model (held as ``kinematic_model`` asks) and the planner for this
+        geometry (None: no geometry)."""
         if grid is not None and (grid.n_states != self.n_states or self.n_actions != 4):
             raise ValueError(
                 f"expected {grid.n_states} states and 4 actions for this discretization, "
@@ -193,7 +201,9 @@ class ModelBasedAgent(DynaQAgent):
         self.kernel_grid: GridShape = grid.grid_shape() if grid else _NO_GRID
         self.kinematic: KinematicModel | None = None
         if self.uses_kinematic and grid is not None:
-            self.kinematic = KinematicModel(robot, grid, self.config.kinematic_config())  # type: ignore[attr-defined]
+            config: KinematicModelFields = self.config  # type: ignore[assignment]
+            self.kinematic = KinematicModel(robot, grid, config.kinematic_config())
+            hold_kinematic_model(self.kinematic, config.kinematic_model, true_kinematics)
         self.trajectories: list[np.ndarray] = []
         """The best loop-erased start→goal trajectories (pair keys), shortest first."""
         self.planner = self._new_planner()
@@ -213,6 +223,8 @@ class ModelBasedAgent(DynaQAgent):
             walls=np.zeros(shape, dtype=np.bool_),
             goals=np.zeros(shape, dtype=np.bool_),
             stale=np.zeros(shape, dtype=np.bool_),
+            wall_evidence=np.zeros(shape, dtype=np.int64),
+            free_evidence=np.zeros(shape, dtype=np.int64),
             reward_stats=np.zeros((n_regions + 2, 2)),
             trajectory_keys=np.zeros(1, dtype=np.int64),
             neighbour_keys=np.zeros(1, dtype=np.int64),
@@ -333,6 +345,8 @@ class ModelBasedAgent(DynaQAgent):
             "planner_walls": planner.walls,
             "planner_goals": planner.goals,
             "planner_stale": planner.stale,
+            "planner_wall_evidence": planner.wall_evidence,
+            "planner_free_evidence": planner.free_evidence,
             "planner_reward_stats": planner.reward_stats,
             "planner_counters": counters,
             "planner_trajectory_keys": planner.trajectory_keys[: counters[kp.N_TRAJECTORY]],
@@ -346,7 +360,10 @@ class ModelBasedAgent(DynaQAgent):
         return arrays
 
     def _state_json(self) -> dict[str, Any]:
-        return {**super()._state_json(), "geometry": geometry_json(self.robot, self.discretization)}
+        meta = {**super()._state_json(), "geometry": geometry_json(self.robot, self.discretization)}
+        if self.kinematic is not None and self.kinematic.reference is not None:
+            meta["true_kinematics"] = self.kinematic.reference.tolist()
+        return meta
 
     def _restore_state_arrays(self, arrays: Mapping[str, np.ndarray]) -> None:
         """The saved planner, trajectories and kinematic model, into an agent built with the
@@ -354,11 +371,12 @@ class ModelBasedAgent(DynaQAgent):
         archive's arrays are known to have that geometry's shapes)."""
         super()._restore_state_arrays(arrays)
         planner = self.planner
-        for name in ("walls", "goals", "stale", "reward_stats", "counters"):
+        for name in (*MAP_ARRAYS, "reward_stats", "counters"):
             saved = np.asarray(arrays[f"planner_{name}"])
             if saved.shape != getattr(planner, name).shape:
                 raise ValueError(f"saved planner {name} has shape {saved.shape}")
             getattr(planner, name)[...] = saved
+        check_planner_map(planner)
         sweeps = [_saved_keys(arrays, f"planner_{name}_keys", self.q.size)
                   for name in ("trajectory", "neighbour", "episode")]  # fmt: skip
         check_planner_counters(
@@ -381,6 +399,38 @@ class ModelBasedAgent(DynaQAgent):
             self._refresh_table()
 
 
+def hold_kinematic_model(
+    model: KinematicModel, source: str, true_kinematics: np.ndarray | None
+) -> None:
+    """Make ``model`` the one an agent's ``kinematic_model`` names
+    (:class:`~skidnav.agents.config.KinematicModelFields`): "learned" leaves it learning, "prior"
+    holds the prior, "true" holds ``true_kinematics`` (float64 (n_regions, 4, 3), the simulator's
+    expected body velocities; ValueError when there are none, as on a physics or real robot)."""
+    if source == "prior":
+        model.hold()
+    elif source == "true":
+        if true_kinematics is None:
+            raise ValueError(
+                "expected the simulator's true_kinematics for kinematic_model 'true' (only the "
+                "kinematic env has them), got none"
+            )
+        model.hold(true_kinematics)
+
+
+def true_kinematics_from_json(value: Any, n_regions: int) -> np.ndarray:
+    """The ``true_kinematics`` a "true" agent saved in its JSON, float64 (n_regions, 4, 3);
+    ValueError unless it is exactly that, finite."""
+    try:
+        table = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        table = np.zeros(0)
+    if table.shape != (n_regions, N_ACTIONS, 3) or not np.isfinite(table).all():
+        raise ValueError(
+            f"expected true_kinematics of {n_regions} × {N_ACTIONS} × 3 finite numbers"
+        )
+    return table
+
+
 def _saved_keys(arrays: Mapping[str, np.ndarray], name: str, n_keys: int) -> np.ndarray:
     """Saved pair keys ``arrays[name]`` as int64; ValueError unless each is in [0, n_keys)."""
     keys = np.asarray(arrays[name])
@@ -390,6 +440,21 @@ def _saved_keys(arrays: Mapping[str, np.ndarray], name: str, n_keys: int) -> np.
     if keys.size and (keys.min() < 0 or keys.max() >= n_keys):
         raise ValueError(f"saved {name} refer to pairs outside the Q table")
     return keys
+
+
+MAP_ARRAYS = ("walls", "goals", "stale", "wall_evidence", "free_evidence")
+"""The planner's map (:class:`~skidnav.kernels.kinematic_planning.PlannerArrays`), saved as
+``planner_<name>``."""
+
+
+def check_planner_map(planner: kp.PlannerArrays) -> None:
+    """ValueError unless the planner's map evidence are counts and its walls are the cells the
+    evidence make walls (:func:`~skidnav.kernels.kinematic_planning.weigh_cell`)."""
+    if (planner.wall_evidence < 0).any() or (planner.free_evidence < 0).any():
+        raise ValueError("saved planner wall or free evidence are not counts")
+    weighed = (planner.wall_evidence > planner.free_evidence) & ~planner.goals
+    if not np.array_equal(planner.walls, weighed):
+        raise ValueError("saved planner walls disagree with their evidence")
 
 
 def check_planner_counters(counters: np.ndarray, sizes: list[int], has_kinematic: bool) -> None:
@@ -405,6 +470,7 @@ def check_planner_counters(counters: np.ndarray, sizes: list[int], has_kinematic
         "REFRESH_RADIUS": counters[kp.REFRESH_RADIUS] >= 0,
         "USE_KINEMATIC": counters[kp.USE_KINEMATIC] in ((0, 1) if has_kinematic else (0,)),
         "EPISODE_TERMINATED": counters[kp.EPISODE_TERMINATED] in (0, 1),
+        "MAP_CHANGES": counters[kp.MAP_CHANGES] >= 0,
     }
     wrong = [name for name, ok in expected.items() if not ok]
     if wrong:

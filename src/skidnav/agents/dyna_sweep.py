@@ -27,6 +27,7 @@ import numpy as np
 from skidnav.agents.config import QLearningConfig, _check
 from skidnav.agents.dyna_full import DynaFullConfig
 from skidnav.agents.dyna_kinematic import ModelBasedAgent
+from skidnav.kernels import kinematic_planning as kp
 from skidnav.kernels.model_sweep import model_value_iteration
 
 
@@ -61,13 +62,16 @@ class DynaSweepAgent(ModelBasedAgent):
     """:meth:`_structure` when the models were last solved."""
 
     def _structure(self) -> tuple[int, ...]:
-        """What changes the solution materially: walls and goals known, kinematic refits."""
+        """What changes the solution materially: the known map (walls found or cleared, goals
+        found) and kinematic refits."""
         refits = self.kinematic.refits if self.kinematic is not None else 0
-        return (int(self.planner.walls.sum()), int(self.planner.goals.sum()), refits)
+        counters = self.planner.counters
+        return (int(counters[kp.MAP_CHANGES]), int(self.planner.goals.sum()), refits)
 
     def end_episode(self) -> None:
         """As :meth:`ModelBasedAgent.end_episode`, then, once a goal is known, solve the models
-        again if the episode changed their structure (a wall or goal found, a kinematic refit);
+        again if the episode changed their structure (a wall found or cleared, a goal found, a
+        kinematic refit);
         what else the episode taught (new pairs, new counts) is left to the per-step planning
         until the next solution."""
         super().end_episode()

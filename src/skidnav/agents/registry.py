@@ -20,7 +20,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from skidnav.agents.config import QLearningConfig
+from skidnav.agents.config import KinematicModelFields, QLearningConfig
 from skidnav.agents.core import SAVE_FORMAT, SAVE_VERSION, TabularAgent, save_paths
 from skidnav.errors import CorruptFileError, UserError, first_line, shown
 from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, read_json, up_to
@@ -99,7 +99,7 @@ MAX_AGENT_JSON_BYTES = 2**20
 """Largest ``.json`` of a saved agent [bytes] (they are a few kilobytes)."""
 _LOAD_ERRORS = (*READ_ERRORS, IndexError, UserError)
 """What restoring from damaged arrays can raise (a CorruptFileError is a UserError)."""
-_GEOMETRY_CONTEXT = ("task", "robot", "discretization")
+_GEOMETRY_CONTEXT = ("task", "robot", "discretization", "true_kinematics")
 
 
 def load_agent(path: str | Path, **context: Any) -> TabularAgent:
@@ -205,10 +205,15 @@ def _saved_geometry(
     cls: type[TabularAgent], n_states: int, config: QLearningConfig, meta: Mapping[str, Any]
 ) -> dict[str, Any]:
     """The robot and discretization a model-based agent saved in its JSON (empty for the other
-    agents), checked so that the agent built from them allocates no more than its metadata
-    declare: its states those of the Q table, no more slip regions than cells along each axis,
-    a kinematic model within bounds."""
-    from skidnav.agents.dyna_kinematic import ModelBasedAgent, geometry_from_json
+    agents), and the true kinematics of one whose ``kinematic_model`` is "true", checked so that
+    the agent built from them allocates no more than its metadata declare: its states those of
+    the Q table, no more slip regions than cells along each axis, a kinematic model within
+    bounds, a true-kinematics table of its regions."""
+    from skidnav.agents.dyna_kinematic import (
+        ModelBasedAgent,
+        geometry_from_json,
+        true_kinematics_from_json,
+    )
     from skidnav.models.kinematic import KinematicModel
 
     if not issubclass(cls, ModelBasedAgent):
@@ -223,10 +228,14 @@ def _saved_geometry(
             f"saved geometry has {grid.regions_x} × {grid.regions_y} slip regions for "
             f"{grid.n_x} × {grid.n_y} cells"
         )
-    kinematic_config = getattr(config, "kinematic_config", None)
-    if callable(kinematic_config):
-        KinematicModel.check_size(grid, kinematic_config())
-    return {"robot": robot, "discretization": grid}
+    geometry: dict[str, Any] = {"robot": robot, "discretization": grid}
+    if isinstance(config, KinematicModelFields):
+        KinematicModel.check_size(grid, config.kinematic_config())
+        if config.kinematic_model == "true":
+            geometry["true_kinematics"] = true_kinematics_from_json(
+                meta["true_kinematics"], grid.n_regions
+            )
+    return geometry
 
 
 def _expected_arrays(agent: TabularAgent, steps: int) -> dict[str, ArraySpec]:

@@ -130,7 +130,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     (the default ``dynamics="kinematic"`` gives the same numbers as before);
     ``observation="features"`` with ``lidar_rays`` and ``lidar_range`` added; ``action`` and
     ``control_period`` added (the defaults give the same numbers as before); ``info["cost"]``
-    added.
+    added; the ``true_kinematics`` property added (a reference for agents, nothing in the MDP
+    changes).
     """
 
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 10}  # noqa: RUF012
@@ -239,6 +240,18 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
             high=np.array([self.robot.arena_width, self.robot.arena_height, math.pi]),
             dtype=np.float64,
         )
+
+    @property
+    def true_kinematics(self) -> np.ndarray | None:
+        """The floor's true expected body velocities of every slip region and discrete action,
+        float64 (n_regions, 4, 3) (v_x [m/s], v_y [m/s], yaw_rate [rad/s];
+        :meth:`~skidnav.robot.slip.SlipField.expected_velocities`, averaged over a drift period
+        when the slip drifts): what a kinematic model could at best learn, for agents told to
+        plan with the truth (``kinematic_model = "true"``). None with ``dynamics="mujoco"``:
+        the physics robot has no such closed form."""
+        if self.physics_robot is not None:
+            return None
+        return self.slip_field.expected_velocities(self.robot)
 
     def start_pose(self) -> np.ndarray:
         """(x, y, heading) at the centre of the start cell, heading 0."""

@@ -269,6 +269,20 @@ class ExperimentConfig:
         if self.baseline not in self.agent_labels:
             raise ValueError(f"expected baseline to be an agent label, got {shown(self.baseline)}")
         _check_params("env", self.env_options)
+        self._check_true_kinematics()
+
+    def _check_true_kinematics(self) -> None:
+        """ValueError if an agent asks for the true kinematic model on the physics robot, which
+        has none (``kinematic_model = "true"`` with ``[env] dynamics = "mujoco"``)."""
+        if dict(self.env_options).get("dynamics") != "mujoco":
+            return
+        for agent in self.agents:
+            if agent.params_dict().get("kinematic_model") == "true":
+                raise ValueError(
+                    f"expected agent {shown(agent.label)} kinematic_model 'learned' or 'prior' "
+                    "with [env] dynamics 'mujoco' (the physics robot has no true kinematic "
+                    "model), got 'true'"
+                )
 
     def _check_members(self) -> None:
         if not self.agents:

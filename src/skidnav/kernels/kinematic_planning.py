@@ -52,7 +52,8 @@ EPISODE_LENGTH = 4
 REFRESH_RADIUS = 5
 USE_KINEMATIC = 6
 EPISODE_TERMINATED = 7
-N_COUNTERS = 8
+MAP_CHANGES = 8
+N_COUNTERS = 9
 
 
 class PlannerArrays(NamedTuple):
@@ -65,15 +66,22 @@ class PlannerArrays(NamedTuple):
         pred_row: int16 (n_states, n_actions) the ``reward_stats`` row of each prediction
             (:func:`reward_row`), derived from the two above wherever they are written.
         velocities: (n_regions, n_actions, 3) predicted body velocities [m/s, m/s, rad/s].
-        walls, goals: bool (n_x, n_y), cells known to be walls (guessed from collisions) / goals.
-        stale: bool (n_x, n_y), walls and goals found since the table was last refreshed.
+        walls: bool (n_x, n_y), cells the agent treats as walls: those whose wall evidence
+            outweighs their free evidence (:func:`weigh_cell`), never a known goal.
+        goals: bool (n_x, n_y), cells known to be goals.
+        stale: bool (n_x, n_y), cells that became or stopped being walls, and goals found, since
+            the table was last refreshed.
+        wall_evidence: int64 (n_x, n_y), collisions whose guessed wall cell
+            (:func:`~skidnav.kernels.kinematic_prediction.collision_wall_cell`) was this cell.
+        free_evidence: int64 (n_x, n_y), real steps that ended with the robot in this cell.
         reward_stats: float64 (n_regions + 2, 2) [sum, count] of real rewards: rows 0..R−1 free
             steps by the region of s′, row R collisions, row R + 1 goal arrivals.
         trajectory_keys: int64 (capacity,) sweep list of trajectory pairs (key s·n_actions + a).
         neighbour_keys: int64 (capacity,) sweep list of neighbourhood pairs.
         episode_keys: int64 (capacity,) pairs of the current episode, in order.
         counters: int64 (N_COUNTERS,) see the module constants (list lengths, cursors, episode
-            length, refresh radius [cells], kinematic flag, whether the episode terminated).
+            length, refresh radius [cells], kinematic flag, whether the episode terminated, and
+            the map's changes: goals found and cells that became or stopped being walls).
     """
 
     pred_next: np.ndarray
@@ -83,6 +91,8 @@ class PlannerArrays(NamedTuple):
     walls: np.ndarray
     goals: np.ndarray
     stale: np.ndarray
+    wall_evidence: np.ndarray
+    free_evidence: np.ndarray
     reward_stats: np.ndarray
     trajectory_keys: np.ndarray
     neighbour_keys: np.ndarray
@@ -280,8 +290,9 @@ def _refresh_cell(
 
 @jit
 def refresh_stale(planner: PlannerArrays, robot: KinematicConstants, grid: GridShape) -> int:
-    """Recompute the table for every cell within ``REFRESH_RADIUS`` cells of a stale cell (a wall
-    or goal discovered since the last refresh), then clear ``stale``. Returns the cells redone."""
+    """Recompute the table for every cell within ``REFRESH_RADIUS`` cells of a stale cell (a goal
+    found, a cell that became or stopped being a wall since the last refresh), then clear
+    ``stale``. Returns the cells redone."""
     radius = planner.counters[REFRESH_RADIUS]
     affected = np.zeros(planner.stale.shape, dtype=np.bool_)
     for ci in range(grid.n_x):
@@ -301,6 +312,29 @@ def refresh_stale(planner: PlannerArrays, robot: KinematicConstants, grid: GridS
 
 
 @jit
+def weigh_cell(planner: PlannerArrays, i: int, j: int, wall: int, free: int) -> None:
+    """Add ``wall`` collisions and ``free`` sightings of the robot to cell (i, j)'s evidence and
+    weigh it: the cell is a wall while its wall evidence exceeds its free evidence (a goal cell
+    never is). A cell that changes side is marked stale (the table around it is redone at the
+    end of the episode, :func:`refresh_stale`).
+
+    The robot is never inside a wall cell, so one sighting outweighs one wrong guess: a free cell
+    guessed as a wall is cleared when the robot is next seen in it, while a real wall's evidence
+    only grows. A guess is only a guess: it replays the *expected* motion of the action
+    (:func:`~skidnav.kernels.kinematic_prediction.collision_wall_cell`), and on a slippery floor
+    the colliding sub-step's random wheel-speed loss can send the robot into a neighbouring cell.
+    """
+    planner.wall_evidence[i, j] += wall
+    planner.free_evidence[i, j] += free
+    evidence = planner.wall_evidence[i, j] > planner.free_evidence[i, j]
+    is_wall = evidence and not planner.goals[i, j]
+    if is_wall != planner.walls[i, j]:
+        planner.walls[i, j] = is_wall
+        planner.stale[i, j] = True
+        planner.counters[MAP_CHANGES] += 1
+
+
+@jit
 def _learn_map(
     planner: PlannerArrays,
     action: int,
@@ -311,20 +345,21 @@ def _learn_map(
     robot: KinematicConstants,
     grid: GridShape,
 ) -> None:
-    """Record a discovered goal or wall cell and mark it stale (the table around it is redone
-    at the end of the episode, :func:`refresh_stale`)."""
+    """Learn the map from one real step: a discovered goal cell; the cell the robot ended in as
+    free evidence; the guessed wall cell of a collision as wall evidence (:func:`weigh_cell`)."""
     cell = next_state // grid.n_headings
     i, j = cell // grid.n_y, cell % grid.n_y
     if terminated and not planner.goals[i, j]:
         planner.goals[i, j] = True
         planner.stale[i, j] = True
+        planner.counters[MAP_CHANGES] += 1
+    weigh_cell(planner, i, j, 0, 1)
     if collided and planner.counters[USE_KINEMATIC] != 0:
         wi, wj = collision_wall_cell(
             pose[0], pose[1], pose[2], action, planner.velocities, robot, grid
         )
-        if wi >= 0 and not planner.walls[wi, wj] and not planner.goals[wi, wj]:
-            planner.walls[wi, wj] = True
-            planner.stale[wi, wj] = True
+        if wi >= 0:
+            weigh_cell(planner, wi, wj, 1, 0)
 
 
 @jit
@@ -341,7 +376,8 @@ def planner_observe(
     grid: GridShape,
 ) -> None:
     """Learn from one real step what the planner needs: reward statistics, the episode's pairs,
-    and (with pose information, ``pose[0] >= 0``) discovered goal and wall cells.
+    and (with pose information, ``pose[0] >= 0``) the map: goal cells, and the evidence of wall
+    and free cells (:func:`_learn_map`).
 
     Args:
         pose: float64 (3,) pose after the step [m, m, rad], or negative x when unknown.

@@ -173,7 +173,41 @@ class KinematicModel:
         self.refits = 0
         self._pooled_fitted = 0
         self._posteriors: list[Posterior | None] = [None] * n_regions
-        action_velocities(self.coefficients, robot.wheel_speed, self.velocities)
+        self.held = False
+        """True once :meth:`hold` stopped the learning."""
+        self.reference: np.ndarray | None = None
+        """The velocities handed to :meth:`hold`, if any (they replace the fit's)."""
+        self._update_velocities()
+
+    def _update_velocities(self) -> None:
+        """The velocity table from the coefficients, or the held reference."""
+        action_velocities(self.coefficients, self.robot.wheel_speed, self.velocities)
+        if self.reference is not None:
+            self.velocities[...] = self.reference
+
+    def hold(self, velocities: np.ndarray | None = None) -> None:
+        """Stop learning: :meth:`maybe_refit` never refits again (samples are still kept), so
+        the model predicts with its current fit — the prior (the nominal robot) if it never
+        refitted — or, given ``velocities``, with those from now on: a reference handed in,
+        such as the simulator's true expected velocities
+        (:meth:`~skidnav.robot.slip.SlipField.expected_velocities`). The reference replaces
+        the velocity table the predictions integrate; the coefficients (:meth:`estimates`,
+        :meth:`predict_twist`) stay the fit's.
+
+        Args:
+            velocities: float64 (n_regions, n_actions, 3) (v_x [m/s], v_y [m/s],
+                yaw_rate [rad/s]), finite; or None.
+        """
+        if velocities is not None:
+            table = np.asarray(velocities, dtype=np.float64)
+            if table.shape != self.velocities.shape or not np.isfinite(table).all():
+                raise ValueError(
+                    f"expected finite velocities of shape {self.velocities.shape}, "
+                    f"got shape {table.shape}"
+                )
+            self.reference = table.copy()
+            self._update_velocities()
+        self.held = True
 
     # -- learning --------------------------------------------------------------------------
 
@@ -193,8 +227,9 @@ class KinematicModel:
         return self.new_samples >= needed
 
     def maybe_refit(self) -> bool:
-        """Refit if :meth:`refit_due`; returns whether it did."""
-        if not self.refit_due():
+        """Refit if :meth:`refit_due` and the model is not held (:meth:`hold`); returns whether
+        it did."""
+        if self.held or not self.refit_due():
             return False
         self.refit()
         return True
@@ -216,7 +251,7 @@ class KinematicModel:
                 self.fitted_counts[region] = self.counts[region]
         self.refits += 1
         self._pooled_fitted = int(self.counts.sum())
-        action_velocities(self.coefficients, self.robot.wheel_speed, self.velocities)
+        self._update_velocities()
         logger.debug("kinematic refit %d", self.refits)
 
     def _region_samples(self, region: int) -> tuple[np.ndarray, np.ndarray]:
@@ -390,7 +425,7 @@ class KinematicModel:
             or not 0 <= self._pooled_fitted <= int(self.counts.sum())
         ):
             raise CorruptFileError("kinematic model sample counts are inconsistent")
-        action_velocities(self.coefficients, self.robot.wheel_speed, self.velocities)
+        self._update_velocities()
 
     def metadata(self) -> dict[str, object]:
         """JSON-ready description: config, robot and discretization."""

@@ -157,3 +157,43 @@ def apply_slip(commanded: float, loss: float) -> float:
     if commanded >= 0.0:
         return max(commanded - loss, 0.0)
     return min(commanded + loss, 0.0)
+
+
+@jit
+def expected_slipped_speed(commanded: float, eta: float) -> float:
+    """Expected wheel speed [rad/s] of :func:`apply_slip` with a loss drawn from U(0, η), η ≥ 0
+    [rad/s] (the thesis's slip): |ω| − η/2 while η ≤ |ω|, ω²/(2η) beyond (the loss cannot
+    reverse the wheel), with the sign of ``commanded``.
+
+    >>> expected_slipped_speed(1.7, 0.3), expected_slipped_speed(-1.0, 4.0)
+    (1.55, -0.125)
+    """
+    magnitude = abs(commanded)
+    mean = magnitude - eta / 2.0 if eta <= magnitude else magnitude * magnitude / (2.0 * eta)
+    return mean if commanded >= 0.0 else -mean
+
+
+@jit
+def expected_body_velocities(
+    omega_left: float,
+    omega_right: float,
+    eta: float,
+    x_icr: float,
+    wheel_radius: float,
+    half_track: float,
+) -> tuple[float, float, float]:
+    """Expected body velocities of commanded wheel speeds on a floor that slows each wheel by an
+    independent U(0, η) [rad/s]: the ICR model is linear in the wheel speeds, so its expectation
+    is :func:`body_velocities` of the :func:`expected_slipped_speed` of each wheel.
+
+    Args:
+        omega_left, omega_right: commanded wheel speeds [rad/s]. eta: loss scale η [rad/s].
+        x_icr, wheel_radius, half_track: the floor's ICR offset, r and c [m].
+
+    Returns:
+        (v_x [m/s], v_y [m/s], yaw_rate [rad/s]).
+    """
+    return body_velocities(
+        expected_slipped_speed(omega_left, eta), expected_slipped_speed(omega_right, eta),
+        x_icr, wheel_radius, half_track,
+    )  # fmt: skip

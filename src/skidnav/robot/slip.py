@@ -8,7 +8,9 @@ robot's coarse region (a 7 × 7 partition of the arena). A :class:`SlipField` ho
 
 with relative amplitude A, period P [s] and a seeded phase φ per region. x_ICR does not drift,
 so once within [−a, b] (SPEC §1, :meth:`SlipField.check_x_icr`) it stays there at every time.
-The true variance of a wheel's speed in a region is η²/12 (variance of U(0, η)).
+The true variance of a wheel's speed in a region is η²/12 (variance of U(0, η)), and the true
+expected body velocities of an action there follow from the expected wheel speeds
+(:meth:`SlipField.expected_velocities`).
 
 A field may also scale the robot's wheel radius and half track per region (the effective ICR
 model of a calibrated floor, :mod:`skidnav.robot.floors`; 1 everywhere otherwise) and name each
@@ -22,7 +24,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from skidnav._jit import jit
 from skidnav.robot.floors import CALIBRATED_PRESETS, PRESET_FLOORS, calibrated_floor
+from skidnav.robot.kinematics import N_ACTIONS, commanded_wheel_speeds, expected_body_velocities
 from skidnav.robot.params import RobotParams
 
 SLIP_PRESETS = ("thesis", "slippery", "rough", *CALIBRATED_PRESETS)
@@ -149,6 +153,53 @@ class SlipField:
             np.ascontiguousarray(robot.half_track * track.ravel()),
             np.ascontiguousarray(self.drift_phase.ravel()),
         )
+
+    def expected_velocities(self, robot: RobotParams, samples: int = 256) -> np.ndarray:
+        """The floor's true expected body velocities of every region and discrete action:
+        :func:`~skidnav.robot.kinematics.expected_body_velocities` of the action's commanded
+        wheel speeds with the region's η, x_ICR, r and c (:meth:`kernel_arrays`). A drifting
+        field gives their average over one drift period (``samples`` evenly spaced times): the
+        best stationary model of it.
+
+        Returns:
+            float64 (regions_x·regions_y, N_ACTIONS, 3): (v_x [m/s], v_y [m/s], yaw_rate
+            [rad/s]), regions flat as :meth:`kernel_arrays`.
+
+        >>> field = SlipField(eta=np.full((1, 1), 0.34), x_icr=np.full((1, 1), 0.05),
+        ...                   drift_phase=np.zeros((1, 1)))
+        >>> [round(float(v), 5) for v in field.expected_velocities(RobotParams())[0, 2]]  # left
+        [0.0, -0.02869, 0.57375]
+        """
+        _, x_icr, radius, track, _ = self.kernel_arrays(robot)
+        times = np.arange(samples) * (self.drift_period / samples) if self.drifting else [0.0]
+        total = np.zeros((x_icr.size, N_ACTIONS, 3))
+        for time in times:
+            eta = np.ascontiguousarray(self.eta_at(time).ravel())
+            _add_expected_velocities(eta, x_icr, radius, track, robot.wheel_speed, total)
+        return total / len(times)
+
+
+@jit
+def _add_expected_velocities(
+    eta: np.ndarray,
+    x_icr: np.ndarray,
+    wheel_radius: np.ndarray,
+    half_track: np.ndarray,
+    wheel_speed: float,
+    total: np.ndarray,
+) -> None:
+    """Add the expected body velocities of every flat region and action (float64 (n_regions,)
+    inputs as :meth:`SlipField.kernel_arrays`; ``wheel_speed`` [rad/s]) to ``total``, float64
+    (n_regions, N_ACTIONS, 3)."""
+    for region in range(eta.shape[0]):
+        for action in range(total.shape[1]):
+            omega_left, omega_right = commanded_wheel_speeds(action, wheel_speed)
+            twist = expected_body_velocities(
+                omega_left, omega_right, eta[region], x_icr[region], wheel_radius[region],
+                half_track[region],
+            )  # fmt: skip
+            for k in range(3):
+                total[region, action, k] += twist[k]
 
 
 def make_slip_field(

@@ -257,6 +257,10 @@ def test_damaged_files_are_one_line_errors(tmp_path: Path) -> None:
         "poses": ({**arrays, "visited_poses": arrays["visited_poses"][:-1]}, "visited_poses"),
         "counters": ({**arrays, "planner_counters": arrays["planner_counters"] + 7}, "counters"),
         "counts": ({**arrays, "kinematic_counts": counts}, "sample counts"),
+        "evidence": (
+            {**arrays, "planner_free_evidence": arrays["planner_free_evidence"] - 1},
+            "evidence are not counts",
+        ),
     }
     for case, (members, message) in cases.items():
         write_npz(npz_path, members)

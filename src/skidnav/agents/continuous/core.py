@@ -40,7 +40,8 @@ from skidnav.kernels.tile_coding import active_tiles, check_coder
 logger = logging.getLogger(__name__)
 
 SAVE_FORMAT = "skidnav-linear-agent"
-SAVE_VERSION = 1
+SAVE_VERSION = 2
+"""2: ``linear-dyna-kinematic`` keeps the wall and free evidence of every cell."""
 MAX_ACTIONS = 1024
 """Most actions a linear agent may have."""
 MAX_WEIGHT_BYTES = 256 * 2**20

@@ -45,9 +45,12 @@ from skidnav.agents.continuous.config import (
 from skidnav.agents.continuous.dyna import LinearDynaAgent
 from skidnav.agents.dyna_kinematic import (
     check_planner_counters,
+    check_planner_map,
     geometry_from_json,
     geometry_from_task,
     geometry_json,
+    hold_kinematic_model,
+    true_kinematics_from_json,
 )
 from skidnav.errors import CorruptFileError, shown
 from skidnav.kernels import kinematic_planning as kp
@@ -106,19 +109,25 @@ class LinearDynaKinematicConfig(LinearDynaConfig, KinematicModelFields):
 class KinematicContext(NamedTuple):
     """What the agent knows of the arena besides its experience: the nominal robot (the
     kinematic model's prior, the integrator), the discretization, the map the observation's
-    range readings are cast on (uint8 (n_x, n_y), 1 = wall) and the goal cell (i, j)."""
+    range readings are cast on (uint8 (n_x, n_y), 1 = wall), the goal cell (i, j), and for
+    ``kinematic_model = "true"`` the simulator's true kinematics (float64 (n_regions, 4, 3),
+    the kinematic env's ``true_kinematics``; else None)."""
 
     robot: RobotParams
     discretization: Discretization
     occupancy: np.ndarray
     goal_cell: tuple[int, int]
+    true_kinematics: np.ndarray | None = None
 
     @classmethod
-    def of_task(cls, task: NavigationTask) -> KinematicContext:
+    def of_task(
+        cls, task: NavigationTask, true_kinematics: np.ndarray | None = None
+    ) -> KinematicContext:
         """The context of a navigation task (``env.unwrapped.task``)."""
         robot, grid = geometry_from_task(task)
         occupancy = np.ascontiguousarray(task.occupancy != 0, dtype=np.uint8)
-        return cls(robot, grid, occupancy, (int(task.goal_i), int(task.goal_j)))
+        goal = (int(task.goal_i), int(task.goal_j))
+        return cls(robot, grid, occupancy, goal, true_kinematics)
 
 
 class LinearDynaKinematicAgent(LinearDynaAgent):
@@ -129,6 +138,8 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
         task: the navigation task of the env (``env.unwrapped.task``): robot, discretization,
             map and goal. None: no geometry, the agent is ``linear-dyna``.
         context: the same as a :class:`KinematicContext` (the loader's way; ``task`` wins).
+        true_kinematics: with ``task``, the simulator's true kinematics for
+            ``kinematic_model = "true"`` (:class:`KinematicContext`).
 
     With a geometry the observation must be the skid-steer env's ``"pose"`` (3 values, bounds
     [0, W] × [0, H] × [−π, π]) or ``"features"`` (7 + k values, x ≤ W, y ≤ H; the range of its
@@ -148,8 +159,11 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
         *,
         task: NavigationTask | None = None,
         context: KinematicContext | None = None,
+        true_kinematics: np.ndarray | None = None,
     ) -> None:
-        self.context = KinematicContext.of_task(task) if task is not None else context
+        if task is not None:
+            context = KinematicContext.of_task(task, true_kinematics)
+        self.context = context
         super().__init__(low, high, n_actions, config, rng)
 
     def _check_sizes(self) -> None:
@@ -181,6 +195,9 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
         robot, grid = self.context.robot, self.context.discretization
         self.observer = self._observer()
         self.kinematic = KinematicModel(robot, grid, self._config.kinematic_config())
+        hold_kinematic_model(
+            self.kinematic, self._config.kinematic_model, self.context.true_kinematics
+        )
         self.kernel_robot, self.kernel_grid = robot.kernel_constants(), grid.grid_shape()
         shape = (grid.n_x, grid.n_y)
         self.planner = kp.PlannerArrays(
@@ -191,6 +208,8 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
             walls=np.zeros(shape, dtype=np.bool_),
             goals=np.zeros(shape, dtype=np.bool_),
             stale=np.zeros(shape, dtype=np.bool_),
+            wall_evidence=np.zeros(shape, dtype=np.int64),
+            free_evidence=np.zeros(shape, dtype=np.int64),
             reward_stats=np.zeros((grid.n_regions + 2, 2)),
             trajectory_keys=np.zeros(1, dtype=np.int64),
             neighbour_keys=np.zeros(1, dtype=np.int64),
@@ -352,6 +371,8 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
             "map_occupancy": self.context.occupancy,  # type: ignore[union-attr]
             "planner_walls": planner.walls,
             "planner_goals": planner.goals,
+            "planner_wall_evidence": planner.wall_evidence,
+            "planner_free_evidence": planner.free_evidence,
             "planner_reward_stats": planner.reward_stats,
             "planner_counters": planner.counters,
             **self.kinematic.state_arrays(),
@@ -360,16 +381,24 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
     def _context_json(self) -> dict[str, Any]:
         if self.context is None:
             return {"context": None}
-        robot, grid, _, goal = self.context
-        return {"context": {**geometry_json(robot, grid), "goal_cell": list(goal)}}
+        robot, grid, _, goal, truth = self.context
+        context = {**geometry_json(robot, grid), "goal_cell": list(goal)}
+        if truth is not None and self._config.kinematic_model == "true":
+            context["true_kinematics"] = truth.tolist()
+        return {"context": context}
 
     @classmethod
     def context_from_json(cls, meta: Mapping[str, Any]) -> dict[str, Any]:
         value = meta["context"]
         if value is None:
             return {}
-        if not isinstance(value, Mapping) or set(value) != {"robot", "discretization", "goal_cell"}:
-            raise ValueError("expected a context with 'robot', 'discretization' and 'goal_cell'")
+        config = cls.config_class.from_mapping(meta["config"])
+        assert isinstance(config, LinearDynaKinematicConfig)
+        keys = {"robot", "discretization", "goal_cell"}
+        if config.kinematic_model == "true":
+            keys.add("true_kinematics")
+        if not isinstance(value, Mapping) or set(value) != keys:
+            raise ValueError(f"expected a context with {', '.join(sorted(keys))}")
         robot, grid = geometry_from_json(
             {"robot": value["robot"], "discretization": value["discretization"]}
         )
@@ -386,11 +415,12 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
             raise ValueError(f"expected a goal cell inside the grid, got {shown(goal)}")
         if grid.n_x * grid.n_y > MAX_CELLS:  # before the map is allocated
             raise ValueError(f"expected at most {MAX_CELLS:,} cells, got {grid.n_x * grid.n_y:,}")
-        config = cls.config_class.from_mapping(meta["config"])
-        assert isinstance(config, LinearDynaKinematicConfig)
         KinematicModel.check_size(grid, config.kinematic_config())  # a model a file may describe
+        truth = None
+        if "true_kinematics" in keys:
+            truth = true_kinematics_from_json(value["true_kinematics"], grid.n_regions)
         occupancy = np.zeros((grid.n_x, grid.n_y), dtype=np.uint8)  # read from the archive
-        return {"context": KinematicContext(robot, grid, occupancy, (goal[0], goal[1]))}
+        return {"context": KinematicContext(robot, grid, occupancy, (goal[0], goal[1]), truth)}
 
     def restore(
         self, counters: Mapping[str, Any], rng_state: Mapping[str, Any], arrays: Any
@@ -406,6 +436,7 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
             raise CorruptFileError("saved planner_reward_stats hold negative counts")
         try:
             check_planner_counters(self.planner.counters, [0, 0, 0], has_kinematic=True)
+            check_planner_map(self.planner)
         except ValueError as error:
             raise CorruptFileError(str(error)) from None
         self.kinematic.load_arrays({name: np.asarray(arrays[name]) for name in arrays})

@@ -23,7 +23,7 @@ import numpy as np
 
 from skidnav.atomicfile import write_user_file
 from skidnav.envs.step_info import step_info
-from skidnav.errors import UserError, shown
+from skidnav.errors import UserError, first_line, shown
 from skidnav.realtime.arena import build_map, seed_streams
 from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
 from skidnav.realtime.control.checkpoint import Checkpoints
@@ -87,11 +87,16 @@ def new_agent(
     rng: np.random.Generator,
 ) -> Any:
     """A new agent ``name`` with the hyperparameters of ``[agents.NAME]``, drawing from the
-    generator ``rng``, over ``grid``'s states and the robot's actions."""
+    generator ``rng``, over ``grid``'s states and the robot's actions; UserError (one line) for
+    hyperparameters this robot cannot serve, such as ``kinematic_model = "true"`` (a real or
+    served robot has no true kinematic model)."""
     from skidnav.agents.registry import make_agent
 
     table = config.agents.get(name)
-    return make_agent(name, grid.n_states, N_ACTIONS, table, rng, **context)
+    try:
+        return make_agent(name, grid.n_states, N_ACTIONS, table, rng, **context)
+    except ValueError as error:
+        raise UserError(f"agent {name!r}: {first_line(error)}") from None
 
 
 def warm_up_agent(
