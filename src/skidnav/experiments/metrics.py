@@ -8,7 +8,9 @@ Episodes are numbered from 1. Definitions (also in docs/experiments.md and in ev
   outlier does not decide.
 * **Pass**: the evaluation after episode e passes when every one of its R rollouts reached the
   goal and their mean length [actions] is at most (1 + tol) · L*, L* being the oracle's expected
-  number of actions from the start under the true simulator (:mod:`skidnav.experiments.oracle`).
+  number of actions from the start under the true simulator (:mod:`skidnav.experiments.oracle`);
+  with ``measure = "greedy_cost"``, their mean cost (minus the reward without the goal bonus) at
+  most (1 + tol) · C*, the oracle's least expected cost from the start.
 * **Convergence episode** (*converged means it stays converged*): the first passing episode e
   from which the share of passing evaluations stays at least p (``level``) to the end of the
   run: over e … k for every k from e + W − 1 (at least W evaluations of evidence) to N. A run
