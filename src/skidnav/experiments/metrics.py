@@ -67,13 +67,18 @@ class ConvergenceRule(NamedTuple):
     measure: str = "greedy_length"
 
 
-def evaluation_summary(greedy_lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def evaluation_summary(
+    greedy_lengths: np.ndarray, values: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """(mean length of the rollouts that reached the goal [actions], NaN if none; share that
-    reached it) per evaluation, each (N,), from lengths int (N, R) with −1 = goal not reached."""
+    reached it) per evaluation, each (N,), from lengths int (N, R) with −1 = goal not reached;
+    with ``values`` (N, R) (e.g. the rollouts' costs) the mean of those values instead of the
+    lengths, over the same rollouts."""
     lengths = np.asarray(greedy_lengths, dtype=np.float64).reshape(len(greedy_lengths), -1)
+    measured = lengths if values is None else np.asarray(values, np.float64).reshape(lengths.shape)
     reached = lengths > 0
     counts = reached.sum(axis=1)
-    totals = np.where(reached, lengths, 0.0).sum(axis=1)
+    totals = np.where(reached, measured, 0.0).sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = np.where(counts > 0, totals / np.maximum(counts, 1), np.nan)
     return mean, counts / lengths.shape[1]

@@ -229,10 +229,7 @@ def _episode_arrays(log: Any) -> dict[str, np.ndarray]:
     """The TrainingLog as record columns: each evaluation's R rollouts become their mean length
     and their mean cost over those that reached the goal (NaN if none) and the share that did."""
     greedy, reached = evaluation_summary(log.greedy_lengths)
-    # A rollout that reached the goal costs at least one per action (> 0, as a length), so the
-    # same summary of the costs in its place averages the costs of the same rollouts.
-    lengths = np.asarray(log.greedy_lengths)
-    cost, _ = evaluation_summary(np.where(lengths > 0, log.greedy_costs, -1.0))
+    cost, _ = evaluation_summary(log.greedy_lengths, log.greedy_costs)
     arrays = {
         "return": np.asarray(log.returns, dtype=np.float64),
         "length": np.asarray(log.lengths, dtype=np.int64),
