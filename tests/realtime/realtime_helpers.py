@@ -21,9 +21,11 @@ import pytest
 from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.control.records import EventLog
 from skidnav.realtime.link import protocol as pr
+from skidnav.realtime.link.auth import Session
 from skidnav.realtime.sim.lockstep import LockstepServer
 from skidnav.realtime.sim.robot import SimRobot, SimRobotConfig, build_robot, warm_up
-from skidnav.realtime.sim.server import SimServer, bind_listener
+from skidnav.realtime.sim.server import SimServer
+from skidnav.realtime.sim.transport import bind_listener
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import make_slip_field
 from skidnav.world.discretization import Discretization
@@ -112,16 +114,23 @@ class ServerThread:
 
 
 class RawClient:
-    """A bare socket speaking the protocol, for poking at the server."""
+    """A bare socket speaking the protocol, for poking at the server; with ``secret`` it
+    authenticates as a host does (every line after the robot's ``hello`` sealed and checked)."""
 
-    def __init__(self, port: int) -> None:
+    def __init__(self, port: int, secret: bytes | None = None) -> None:
         self.sock = socket.create_connection(("127.0.0.1", port), timeout=2.0)
         self.buffer = pr.LineBuffer()
         self.seq = 0
+        self.session = Session(secret, "host") if secret is not None else None
+        self.sent: list[bytes] = []  # every line sent, as sent
 
     def send(self, build: Callable[[int], pr.Message]) -> int:
         seq = self.seq
-        self.sock.sendall(pr.encode(build(seq)))
+        line = pr.encode(build(seq))
+        if self.session is not None and self.session.keyed:
+            line = self.session.seal(line)
+        self.sock.sendall(line)
+        self.sent.append(line)
         self.seq += 1
         return seq
 
@@ -134,17 +143,28 @@ class RawClient:
 
     def hello(self) -> pr.Hello:
         """Shake hands; the robot's ``hello``."""
-        self.send(lambda seq: pr.Hello(seq=seq, name="test"))
+        nonce = self.session.hello_nonce if self.session is not None else ""
+        self.send(lambda seq: pr.Hello(seq=seq, name="test", nonce=nonce))
         reply = self.receive_until(pr.Hello)
         assert isinstance(reply, pr.Hello)
         return reply
+
+    def _decode(self, line: bytes) -> pr.Message:
+        """One received line; with a secret, its MAC checked (the ``hello`` keys the session)."""
+        message = pr.decode(line)
+        if self.session is None or (isinstance(message, pr.Error) and not self.session.keyed):
+            return message
+        if not self.session.keyed and isinstance(message, pr.Hello):
+            self.session.greet(message.nonce)
+        self.session.verify(line)
+        return message
 
     def receive_until(self, kind: type[pr.Message], timeout: float = 2.0) -> pr.Message:
         """The next message of type ``kind`` (others are skipped)."""
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             for line in self.buffer.lines():
-                message = pr.decode(line)
+                message = self._decode(line)
                 if isinstance(message, kind):
                     return message
             self.sock.settimeout(max(0.01, deadline - time.monotonic()))

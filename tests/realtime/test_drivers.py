@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from skidnav.errors import UserError
@@ -11,6 +13,7 @@ from skidnav.realtime.link.drivers import SimDriver, make_driver
 from skidnav.realtime.link.line_client import LineClient, SerialLink, TcpLink
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
+from tests.realtime.realtime_helpers import wait_for
 
 
 def test_line_drivers_take_their_tables() -> None:
@@ -67,3 +70,46 @@ def test_model_based_agents_get_the_geometry() -> None:
     assert agent_context("q-learning", robot, grid) == {}
     context = agent_context("dyna-kinematic", robot, grid)
     assert context == {"robot": robot, "discretization": grid}
+
+
+def test_line_drivers_take_the_link_secret_from_a_file_or_the_environment(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    key = tmp_path / "robot.key"
+    key.write_text("a secret of the lab, from a file\n", encoding="utf-8")
+    monkeypatch.setenv("SKIDNAV_LINK_SECRET", "a secret of the lab, from the environment")
+    config = config_from_mapping({"tcp": {"secret_file": str(key)}})
+    tcp, serial = make_driver("tcp", config), make_driver("serial", config)
+    assert isinstance(tcp, LineClient) and isinstance(serial, LineClient)
+    assert tcp.secret == b"a secret of the lab, from a file"
+    assert serial.secret == b"a secret of the lab, from the environment"
+    monkeypatch.delenv("SKIDNAV_LINK_SECRET")
+    plain = make_driver("serial", config)
+    assert isinstance(plain, LineClient) and plain.secret is None
+    key.write_text("short\n", encoding="utf-8")
+    with pytest.raises(UserError, match="at least 16 bytes, got 5"):
+        make_driver("tcp", config)
+
+
+def test_the_sim_server_grants_the_runs_ttl_as_its_longest_lease() -> None:
+    for time_scale in (20.0, 1.0, 0.5):
+        config = config_from_mapping({"run": {"time_scale": time_scale}})
+        driver = make_driver("sim", config)
+        assert isinstance(driver, SimDriver)
+        arguments = driver.server.arguments
+        lease = float(arguments[arguments.index("--max-lease") + 1])
+        assert lease == driver.command_ttl == config.run.pose_timeout
+
+
+def test_the_sim_driver_and_its_server_share_the_environments_secret(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setenv("SKIDNAV_LINK_SECRET", "a secret of the lab, from the environment")
+    driver = make_driver("sim", config_from_mapping({"run": {"time_scale": 10.0}}))
+    assert isinstance(driver, SimDriver) and driver.secret is not None
+    try:
+        driver.connect()  # a server without the secret would fail the robot's hello
+        wait_for(lambda: driver.latest_pose() is not None, 5.0, "a first pose")
+        assert driver.fault is None
+    finally:
+        driver.shutdown()

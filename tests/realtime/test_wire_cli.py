@@ -37,17 +37,43 @@ def run_cli(argv: list[str]) -> int:
         (["robot", "sim-server", "--port", "0", "--time-scale", "inf"], "time_scale"),
         (["robot", "sim-server", "--port", "0", "--idle-timeout", "0.1"], "idle_timeout"),
         (["robot", "sim-server", "--port", "0", "--integrator", "rk4"], "invalid choice: 'rk4'"),
+        (["robot", "sim-server", "--port", "0", "--latency", "inf"], "expected a finite latency"),
+        (["robot", "sim-server", "--port", "0", "--latency", "nan"], "expected a finite latency"),
+        (["robot", "sim-server", "--port", "0", "--latency", "-0.1"], "expected a finite latency"),
+        (["robot", "sim-server", "--port", "0", "--pose-noise", "inf"], "finite pose_noise"),
+        (["robot", "sim-server", "--port", "0", "--idle-timeout", "inf"], "finite idle_timeout"),
+        (["robot", "sim-server", "--port", "0", "--max-lease", "1e300"], "expected max_lease in"),
+        (["robot", "sim-server", "--port", "0", "--max-lease", "nan"], "expected max_lease in"),
+        (
+            ["robot", "sim-server", "--port", "0", "--host", "0.0.0.0"],
+            "refusing to serve the robot link on 0.0.0.0 without a secret",
+        ),
+        (
+            ["robot", "sim-server", "--port", "0", "--secret-file", "{blocked}/robot.key"],
+            "cannot read secret file",
+        ),
+        (
+            ["robot", "sim-server", "--port", "0", "--secret-file", "{short}"],
+            "expected a link secret of at least 16 bytes, got 6",
+        ),
         (["robot", "sim-server", "--port", "0", "--log", "{blocked}/server.jsonl"], "cannot write"),
         (["robot", "run", "--agent", "q-learning", "--out", "{blocked}/run"], "cannot write"),
         (["robot", "run", "--agent", "q-learning", "--episodes", "many"], "invalid int value"),
     ],
 )
 def test_bad_arguments_end_in_one_line_and_exit_code_2(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], needle: str
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    argv: list[str],
+    needle: str,
 ) -> None:
+    monkeypatch.delenv("SKIDNAV_LINK_SECRET", raising=False)
     blocked = blocked_path(tmp_path)
+    short = tmp_path / "short.key"
+    short.write_text("secret\n", encoding="utf-8")
     before = sorted(tmp_path.rglob("*"))
-    code = run_cli([part.format(blocked=blocked) for part in argv])
+    code = run_cli([part.format(blocked=blocked, short=short) for part in argv])
     captured = capsys.readouterr()
     lines = captured.err.strip().splitlines()
     assert code == 2

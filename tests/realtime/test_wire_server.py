@@ -1,5 +1,6 @@
 """The sim server against hostile and broken clients: nothing a client sends or fails to read
-stalls the robot's period or crashes it, and no client keeps the robot from the next one."""
+stalls the robot's period or crashes it, no client keeps the robot from the next one, no stamp
+or ttl keeps the wheels turning past the server's lease, and no seq is acknowledged twice."""
 
 from __future__ import annotations
 
@@ -190,4 +191,78 @@ def test_the_wheels_stop_when_the_lease_runs_out_on_a_live_link(tmp_path: Path) 
         events = [e["event"] for e in server.events()]
         assert "lease" in events and "watchdog" not in events
         assert server.server.connected  # the link itself is fine
+        client.close()
+
+
+def raw_command(seq: int, stamp: float, ttl: float) -> pr.Command:
+    return pr.Command(seq=seq, omega_left=1.7, omega_right=1.7, stamp=stamp, ttl=ttl)
+
+
+@pytest.mark.parametrize(
+    ("stamp_ahead", "ttl"), [(0.0, 1e300), (1e308, 1e308)], ids=["ttl-1e300", "stamp-ttl-1e308"]
+)
+def test_no_stamp_or_ttl_keeps_the_wheels_turning_past_the_bounded_lease(
+    tmp_path: Path, stamp_ahead: float, ttl: float
+) -> None:
+    with ServerThread(TIME_SCALE, log=tmp_path / "server.jsonl") as server:
+        max_lease = server.server.options.max_lease
+        client = RawClient(server.port)
+        client.hello()
+        stamp = stamp_ahead or time.monotonic()
+        client.send(lambda seq: raw_command(seq, stamp, ttl))
+        client.receive_until(pr.Ack)
+        sent = time.monotonic()
+        wait_for(lambda: server.robot.moving, 1.0, "the wheels to turn")
+        while server.robot.moving and time.monotonic() - sent < 3.0:
+            client.send(lambda seq: pr.Heartbeat(seq=seq, stamp=time.monotonic()))
+            time.sleep(0.02)
+        stopped_after = time.monotonic() - sent
+        assert not server.robot.moving
+        assert stopped_after < max_lease + 0.2  # the lease plus a few (busy) periods
+        assert "lease" in [e["event"] for e in server.events()]
+        assert server.server.connected
+        client.close()
+
+
+def test_a_command_stamped_a_million_seconds_ahead_is_forgotten_by_the_next(
+    server_thread: ServerThread,
+) -> None:
+    client = RawClient(server_thread.port)
+    client.hello()
+    for ahead in (0.0, 1e6, 0.0, 0.0):  # the host's clock jumps ahead once, then back
+        stamp = time.monotonic() + ahead
+        seq = client.send(lambda s, stamp=stamp: raw_command(s, stamp, 0.5))
+        reply = client.receive_until(pr.Ack)
+        assert isinstance(reply, pr.Ack) and reply.ack == seq, ahead
+    assert server_thread.robot.moving
+    client.close()
+
+
+def next_reply(client: RawClient) -> pr.Message:
+    """The next ``ack`` or ``error`` (poses skipped)."""
+    while True:
+        message = client.receive_until(pr.Message)
+        if isinstance(message, pr.Ack | pr.Error):
+            return message
+
+
+@pytest.mark.parametrize("secret", [None, b"a shared secret of the lab"], ids=["plain", "auth"])
+def test_a_replayed_or_older_command_is_refused_not_acknowledged(secret: bytes | None) -> None:
+    with ServerThread(TIME_SCALE, options={"secret": secret}) as server:
+        client = RawClient(server.port, secret=secret)
+        client.hello()
+        client.command(1.7, 1.7)
+        assert isinstance(next_reply(client), pr.Ack)
+        client.sock.sendall(client.sent[-1])  # the very same line again
+        replayed = next_reply(client)
+        assert isinstance(replayed, pr.Error) and replayed.code == "replay"
+        assert not server.robot.moving
+        client.seq -= 2  # an older seq, correctly authenticated
+        client.command(1.7, 1.7)
+        older = next_reply(client)
+        assert isinstance(older, pr.Error) and older.code == "replay"
+        client.seq += 5
+        fresh = client.command(1.7, 1.7)
+        ack = next_reply(client)
+        assert isinstance(ack, pr.Ack) and ack.ack == fresh
         client.close()

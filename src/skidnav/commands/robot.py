@@ -78,6 +78,17 @@ def _add_sim_server(commands: Any) -> None:
     server.add_argument("--log", type=Path, help="JSON-lines log of received commands")
     server.add_argument("--link-timeout", type=float, default=0.5, help="quiet link stop [s]")
     server.add_argument(
+        "--max-lease",
+        type=float,
+        default=0.5,
+        help="longest a command holds the wheels after it arrived, whatever its ttl [s] (≤ 5)",
+    )
+    server.add_argument(
+        "--secret-file",
+        type=Path,
+        help="file holding the link secret (or set SKIDNAV_LINK_SECRET); needed beyond loopback",
+    )
+    server.add_argument(
         "--idle-timeout", type=float, default=2.0, help="drop a client quiet this long [s]"
     )
     server.add_argument(
@@ -93,14 +104,18 @@ def _add_sim_server(commands: Any) -> None:
 
 def _run_sim_server(args: argparse.Namespace) -> int:
     from skidnav.realtime.control.records import EventLog
-    from skidnav.realtime.sim import server as ss
     from skidnav.realtime.sim.lockstep import LockstepServer
+    from skidnav.realtime.sim.server import SimServer
+    from skidnav.realtime.sim.transport import bind_listener
 
     robot, options = _sim_robot(args)
-    server_class = LockstepServer if args.lockstep else ss.SimServer
+    server_class = LockstepServer if args.lockstep else SimServer
+    authenticated = options.secret is not None
     with contextlib.ExitStack() as stack:
         try:
-            listener = stack.enter_context(ss.bind_listener(args.host, args.port))
+            listener = stack.enter_context(
+                bind_listener(args.host, args.port, authenticated=authenticated)
+            )
         except OSError as error:
             raise UserError(f"cannot listen on {args.host}:{args.port}: {error}") from None
         stream = stack.enter_context(_open_log(args.log)) if args.log else None
@@ -127,6 +142,7 @@ def _sim_robot(args: argparse.Namespace) -> tuple[Any, Any]:
     server's options; UserError on a bad value."""
     from skidnav.physics.backend import PhysicsUnavailable
     from skidnav.realtime.config import ServerOptions
+    from skidnav.realtime.link.auth import load_secret
     from skidnav.realtime.sim.robot import SimRobotConfig, build_robot, warm_up
     from skidnav.robot.params import RobotParams
 
@@ -137,6 +153,8 @@ def _sim_robot(args: argparse.Namespace) -> tuple[Any, Any]:
             link_timeout=args.link_timeout,
             idle_timeout=args.idle_timeout,
             faults=tuple(fault for fault in args.fault.split(",") if fault),
+            max_lease=args.max_lease,
+            secret=load_secret(args.secret_file),
         )
     except ValueError as error:
         raise UserError(str(error)) from None

@@ -19,6 +19,7 @@ from typing import Any
 from skidnav.configtables import build_dataclass, check_keys, resolve_path, table
 from skidnav.errors import UserError, shown
 from skidnav.physics.materials import MATERIALS
+from skidnav.realtime.link.auth import require_secret
 from skidnav.realtime.link.protocol import MAX_LINE_BYTES
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.savedfile import parse_toml, read_config_text
@@ -30,6 +31,9 @@ TOP_TABLES = ("run", "sim", *DRIVER_TABLES, "agents", "policies", "study")
 """The tables of a config besides ``[presets]`` (``[study]``: :mod:`skidnav.realtime.study`)."""
 FAULTS = ("silence", "garbage", "oversized", "escape", "hangup")
 """Faults the sim server can inject for tests (realtime/sim/server.py)."""
+MAX_LEASE_LIMIT = 5.0
+"""Largest lease a robot can be configured to grant [s wall]: however it is set, no command
+keeps the wheels turning longer than this after it arrived."""
 
 
 @dataclass(frozen=True)
@@ -146,8 +150,8 @@ class SimSettings:
                 f"expected slip one of {', '.join(SLIP_PRESETS)}, got {shown(self.slip)}"
             )
         for name in ("drift", "latency", "pose_noise", "drop"):
-            if not getattr(self, name) >= 0:
-                raise ValueError(f"expected {name} >= 0, got {shown(getattr(self, name))}")
+            if not 0 <= getattr(self, name) < math.inf:
+                raise ValueError(f"expected a finite {name} >= 0, got {shown(getattr(self, name))}")
         if not (self.drift_period > 0 and self.link_timeout > 0 and self.drop < 1):
             raise ValueError("expected drift_period > 0, link_timeout > 0 and drop < 1")
         if not self.idle_timeout >= self.link_timeout:
@@ -194,6 +198,11 @@ class ServerOptions:
         send_limit: bytes queued for a client that does not read before it is dropped.
         faults: the faults successive SIGUSR1s inject, in order (each one of :data:`FAULTS`).
         name: robot name sent in ``hello``.
+        max_lease: longest a command holds the wheels after it arrived [s wall], whatever its
+            ``ttl``: in (0, :data:`MAX_LEASE_LIMIT`]; the default is five periods of a 0.1 s
+            robot in real time, the host's own ``ttl`` at time scale 1.
+        secret: the link secret (docs/protocol.md, "Authentication"); None: no
+            authentication, which only a loopback server may do.
     """
 
     time_scale: float = 1.0
@@ -202,17 +211,25 @@ class ServerOptions:
     send_limit: int = 64 * 1024
     faults: tuple[str, ...] = ()
     name: str = "skidnav-sim"
+    max_lease: float = 0.5
+    secret: bytes | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if not 0 < self.time_scale < math.inf:
             raise ValueError(f"expected a finite time_scale > 0, got {self.time_scale}")
-        if not self.link_timeout > 0:
-            raise ValueError(f"expected link_timeout > 0 s, got {self.link_timeout}")
-        if not self.idle_timeout >= self.link_timeout:
+        if not 0 < self.link_timeout < math.inf:
+            raise ValueError(f"expected a finite link_timeout > 0 s, got {self.link_timeout}")
+        if not self.link_timeout <= self.idle_timeout < math.inf:
             raise ValueError(
-                f"expected idle_timeout >= link_timeout ({self.link_timeout} s), "
+                f"expected a finite idle_timeout >= link_timeout ({self.link_timeout} s), "
                 f"got {self.idle_timeout}"
             )
+        if not 0 < self.max_lease <= MAX_LEASE_LIMIT:
+            raise ValueError(
+                f"expected max_lease in (0, {MAX_LEASE_LIMIT}] s, got {shown(self.max_lease)}"
+            )
+        if self.secret is not None:
+            require_secret(self.secret)
         if not self.send_limit >= MAX_LINE_BYTES:
             raise ValueError(f"expected send_limit >= {MAX_LINE_BYTES}, got {self.send_limit}")
         for fault in self.faults:

@@ -1,11 +1,16 @@
 """Robot drivers by name: ``sim``, ``tcp``, ``serial`` and ``ros2`` (docs/realtime.md).
 
 ``sim`` starts ``skidnav robot sim-server`` as a child process on a free loopback port (with the
-run's map, seed, time scale and ``[sim]`` settings) and talks to it over TCP; reconnecting after
-a fault restarts the server if it died. The child's standard input is a pipe from this process
-and the server exits at its end of stream (``--exit-with-stdin``): when this process ends in any
-way, SIGKILL included, the kernel closes the pipe and the server follows. ``ros2`` is built by
-``skidnav.realtime.link.ros2`` when that module is installed.
+run's map, seed, time scale and ``[sim]`` settings, and a lease as long as the run's command
+``ttl``) and talks to it over TCP; reconnecting after a fault restarts the server if it died.
+The child's standard input is a pipe from this process and the server exits at its end of
+stream (``--exit-with-stdin``): when this process ends in any way, SIGKILL included, the kernel
+closes the pipe and the server follows. ``ros2`` is built by ``skidnav.realtime.link.ros2`` when
+that module is installed.
+
+The line drivers authenticate the link (docs/protocol.md, "Authentication") with the secret in
+the file ``secret_file`` of their table, else in the environment variable
+``SKIDNAV_LINK_SECRET`` (which a ``sim`` server inherits); without either, they do not.
 """
 
 from __future__ import annotations
@@ -20,7 +25,8 @@ from pathlib import Path
 from typing import Any
 
 from skidnav.errors import UserError
-from skidnav.realtime.config import RealtimeConfig
+from skidnav.realtime.config import MAX_LEASE_LIMIT, RealtimeConfig
+from skidnav.realtime.link.auth import load_secret
 from skidnav.realtime.link.interface import RobotDriver
 from skidnav.realtime.link.line_client import LineClient, SerialLink, TcpLink
 
@@ -102,14 +108,20 @@ def make_driver(name: str, config: RealtimeConfig, server_log: Path | None = Non
     ``[sim]`` and ``[run]``); ``server_log`` is the sim server's command log (sim only)."""
     options = config.drivers.get(name, {})
     lockstep = config.sim.lockstep if name == "sim" else bool(options.get("lockstep", False))
+    if name == "ros2":
+        return _make_ros2_driver(options)
+    secret_file = options.get("secret_file")
     client: dict[str, Any] = {
         "stop_timeout": max(0.05, 2 * config.run.period_wall),
         "command_ttl": config.run.pose_timeout,  # a command lives as long as a pose may lag
         "lockstep": lockstep,
+        "secret": load_secret(None if secret_file is None else str(secret_file)),
     }
     if name == "sim":
         run = config.run
         arguments = [
+            "--max-lease",
+            str(min(run.pose_timeout, MAX_LEASE_LIMIT)),
             "--time-scale",
             str(run.time_scale),
             "--map",
@@ -125,8 +137,6 @@ def make_driver(name: str, config: RealtimeConfig, server_log: Path | None = Non
     if name == "serial":
         url = str(options.get("url", "/dev/ttyUSB0"))
         return LineClient(SerialLink(url, int(options.get("baudrate", 115200))), **client)
-    if name == "ros2":
-        return _make_ros2_driver(options)
     raise UserError(f"unknown driver {name!r}; expected one of {', '.join(DRIVERS)}")
 
 

@@ -3,9 +3,11 @@
 :class:`LineClient` implements :class:`~skidnav.realtime.link.interface.RobotDriver` over any
 :class:`Link` (a byte stream). A reader thread parses incoming lines, keeps the newest pose
 (stamped on this process's monotonic clock at receipt), collects ``ack``/``stopped`` replies and
-sends a ``heartbeat`` whenever nothing was sent for ``heartbeat_interval`` seconds. A lost link,
-a malformed line or an ``error`` from the robot is a *fault*: it is kept in :attr:`fault` and
-passed at once to the fault callback (the safety monitor's trip).
+sends a ``heartbeat`` whenever nothing was sent for ``heartbeat_interval`` seconds once the
+robot's ``hello`` arrived. A lost link, a malformed line, a robot message whose ``seq`` does not
+increase, an ``error`` from the robot and, with a secret, a line that fails authentication
+(docs/protocol.md, "Authentication") are *faults*: each is kept in :attr:`fault` and passed at
+once to the fault callback (the safety monitor's trip).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from typing import Protocol
 import serial
 
 from skidnav.realtime.link import protocol as pr
+from skidnav.realtime.link.auth import Session, require_secret
 from skidnav.realtime.link.interface import Pose
 
 log = logging.getLogger(__name__)
@@ -132,6 +135,8 @@ class LineClient:
         lockstep: the robot runs one control period per ``cmd`` and acknowledges it after
             that period's pose (docs/protocol.md, "Lockstep"); the loop then paces itself by
             :meth:`wait_answered` instead of the wall clock.
+        secret: the link secret (at least 16 bytes): the robot must prove it knows it and
+            every line is authenticated; None: no authentication (loopback robots only).
     """
 
     def __init__(
@@ -144,9 +149,11 @@ class LineClient:
         command_ttl: float = 0.5,
         dead_timeout: float = 2.0,
         lockstep: bool = False,
+        secret: bytes | None = None,
     ) -> None:
         if not (stop_timeout > 0 and command_ttl > 0 and dead_timeout > 0):
             raise ValueError("expected stop_timeout, command_ttl and dead_timeout > 0 s")
+        self.secret = require_secret(secret) if secret is not None else None
         self.link = link
         self.handshake_timeout = handshake_timeout
         self.stop_timeout = stop_timeout
@@ -161,6 +168,8 @@ class LineClient:
         self._pose: Pose | None = None
         self._measurement: tuple[Pose, float] | None = None
         self._seq = 0
+        self._session: Session | None = None
+        self._robot_seq: int | None = None  # the newest seq taken from the robot
         self._last_tx = 0.0
         self._last_rx = 0.0
         self._write_lock = threading.Lock()
@@ -182,12 +191,15 @@ class LineClient:
         self._hello.clear()
         self._stopped_up_to = -1
         self._acked_up_to = self._last_command = -1
+        self._session = Session(self.secret, "host") if self.secret is not None else None
+        self._robot_seq = None
+        nonce = self._session.hello_nonce if self._session is not None else ""
         self.link.open()
         self._last_rx = time.monotonic()
         self._running.set()
         self._thread = threading.Thread(target=self._read_loop, name="line-client", daemon=True)
         self._thread.start()
-        self._send(lambda seq: pr.Hello(seq=seq, name="skidnav"))
+        self._send(lambda seq: pr.Hello(seq=seq, name="skidnav", nonce=nonce))
         deadline = time.monotonic() + self.handshake_timeout
         while not self._hello.wait(READ_POLL):  # an error reply (busy, version) ends the wait
             if self.fault is not None or time.monotonic() >= deadline:
@@ -275,8 +287,11 @@ class LineClient:
         with self._write_lock:
             seq = self._seq
             self._seq += 1
+            line = pr.encode(build(seq))
+            if self._session is not None and self._session.keyed:
+                line = self._session.seal(line)
             try:
-                self.link.write(pr.encode(build(seq)))
+                self.link.write(line)
             except ConnectionError as error:
                 self._report(f"link lost: {error}")
                 return None
@@ -302,7 +317,8 @@ class LineClient:
                 self._last_rx = time.monotonic()
                 buffer.feed(data)
                 self._drain(buffer)
-            if time.monotonic() - self._last_tx > self.heartbeat_interval:
+            quiet = time.monotonic() - self._last_tx > self.heartbeat_interval
+            if quiet and self._hello.is_set():  # before: nothing to authenticate it with
                 self._send(lambda seq: pr.Heartbeat(seq=seq, stamp=time.monotonic()))
         self._running.clear()
         with self._reply:
@@ -320,15 +336,36 @@ class LineClient:
     def _handle_line(self, line: bytes) -> None:
         """Decode and dispatch one line; nothing in it can end the reader."""
         try:
-            message = pr.decode(line)
+            message = self._accept(line)
         except pr.ProtocolError as error:
-            self._report(f"malformed message ({error.code}): {error}")
+            kind = "robot not authenticated" if error.code == "auth" else "malformed message"
+            self._report(f"{kind} ({error.code}): {error}")
             return
         try:
             self._handle(message)
         except Exception as error:  # a failing callback must not stop stops being confirmed
             log.exception("handling a %s message failed", message.TYPE)
             self._report(f"handling a {message.TYPE} message failed: {error}")
+
+    def _accept(self, line: bytes) -> pr.Message:
+        """One robot line decoded and checked: with a secret, its MAC (the ``hello``'s once its
+        nonce is read; before it, only an unauthenticated ``error`` passes), then the seq rule.
+        ProtocolError ``auth`` or ``replay`` otherwise."""
+        session = self._session
+        if session is not None and session.keyed:
+            session.verify(line)
+        message = pr.decode(line)
+        if session is not None and not session.keyed:
+            if isinstance(message, pr.Hello):
+                session.greet(message.nonce)
+                session.verify(line)
+            elif not isinstance(message, pr.Error):
+                raise pr.ProtocolError("auth", f"unauthenticated {message.TYPE} before hello")
+        last = self._robot_seq
+        if last is not None and message.seq <= last:
+            raise pr.ProtocolError("replay", f"robot {message.TYPE} {message.seq} after {last}")
+        self._robot_seq = message.seq
+        return message
 
     def _handle(self, message: pr.Message) -> None:
         if isinstance(message, pr.PoseReport):

@@ -4,16 +4,19 @@ One message is one JSON object on one UTF-8 line ending in ``\\n``, at most :dat
 bytes including the newline. Every message carries ``"v"`` (protocol version), ``"type"`` and
 ``"seq"`` (the sender's own counter, a non-negative integer that increases by one per message).
 The same messages travel over TCP, a serial line or a pty, so a microcontroller only needs a
-line reader, a JSON formatter and a float parser.
+line reader, a JSON formatter and a float parser. With a shared secret, both ``hello`` messages
+carry a ``nonce`` and every later line ends with a ``mac`` field (:mod:`.auth`).
 
 Message types and their fields (units SI):
 
 ==============  =========  ==========================================================
 type            direction  fields besides v, type, seq
 ==============  =========  ==========================================================
-``hello``       both       ``name`` (str), ``period`` (s, robot → host; 0 from host)
+``hello``       both       ``name`` (str), ``period`` (s, robot → host; 0 from host),
+                           ``nonce`` (32 hex digits; only with authentication)
 ``cmd``         host→robot ``omega_left``, ``omega_right`` (rad/s), ``stamp`` (host clock, s),
-                           ``ttl`` (s > 0): valid until host time ``stamp + ttl``
+                           ``ttl`` (s > 0): held at most ``ttl`` after arrival (the robot
+                           bounds it), not run if older than ``ttl`` when read
 ``ack``         robot→host ``ack`` (seq of the acknowledged ``cmd``)
 ``pose``        robot→host ``stamp`` (robot clock, s), ``x``, ``y`` (m), ``heading`` (rad)
 ``stop``        host→robot (none): zero both wheels now
@@ -28,13 +31,15 @@ a number that is not finite or out of range, another version or an unknown type 
 
 :class:`HostClock` is the robot's half of the stall rule (docs/protocol.md, "Stale commands"): it
 maps the host's ``stamp`` onto the robot's own clock, so a command that waited in a buffer while
-either side stalled is recognised as expired however late it is read.
+either side stalled is recognised as stale however late it is read, while a step of the host's
+clock is forgotten by the next message.
 """
 
 from __future__ import annotations
 
 import json
 import math
+from collections import deque
 from collections.abc import Iterator
 from dataclasses import asdict, dataclass
 from typing import Any, ClassVar
@@ -46,6 +51,8 @@ MAX_LINE_BYTES = 1024
 """Longest accepted line [bytes], the terminating newline included."""
 MAX_INTEGER = 2**63 - 1
 """Largest accepted integer field (``seq``, ``ack``): what a signed 64-bit counter holds."""
+NONCE_BYTES = 16
+"""Length of a ``hello`` nonce [bytes]; on the wire, twice as many lowercase hex digits."""
 
 
 class ProtocolError(UserError):
@@ -53,9 +60,10 @@ class ProtocolError(UserError):
 
     Attributes:
         code: ``"oversized"``, ``"encoding"``, ``"json"``, ``"field"``, ``"version"`` or
-            ``"unknown_type"`` — the ``code`` of the ``error`` reply a peer may send back.
-            (Robots also send ``"state"``, ``"busy"``, ``"range"`` and ``"expired"``; see
-            :class:`Error`.)
+            ``"unknown_type"`` (the line cannot be parsed), ``"auth"`` (its MAC is missing or
+            wrong, :mod:`.auth`) or ``"replay"`` (its ``seq`` does not increase) — the ``code``
+            of the ``error`` reply a peer may send back. (Robots also send ``"state"``,
+            ``"busy"``, ``"range"`` and ``"expired"``; see :class:`Error`.)
     """
 
     def __init__(self, code: str, message: str) -> None:
@@ -71,24 +79,47 @@ class Message:
     FLOATS: ClassVar[tuple[str, ...]] = ()
     INTS: ClassVar[tuple[str, ...]] = ()
     STRS: ClassVar[tuple[str, ...]] = ()
+    OPTIONAL: ClassVar[tuple[str, ...]] = ()
+    """Fields a line may leave out (they take their default)."""
     seq: int
+
+    def wire_fields(self) -> dict[str, Any]:
+        """The fields as sent (all of them; :class:`Hello` leaves out an empty nonce)."""
+        return asdict(self)
 
 
 @dataclass(frozen=True)
 class Hello(Message):
-    """Handshake: the host sends it first; the robot answers with its own, ``period`` [s] > 0."""
+    """Handshake: the host sends it first; the robot answers with its own, ``period`` [s] > 0.
+    ``nonce``: this side's fresh :data:`NONCE_BYTES` in lowercase hex with authentication
+    (:mod:`.auth`), empty (and left off the line) without; anything else is a ProtocolError."""
 
     TYPE: ClassVar[str] = "hello"
     FLOATS: ClassVar[tuple[str, ...]] = ("period",)
-    STRS: ClassVar[tuple[str, ...]] = ("name",)
+    STRS: ClassVar[tuple[str, ...]] = ("name", "nonce")
+    OPTIONAL: ClassVar[tuple[str, ...]] = ("period", "nonce")
     name: str
     period: float = 0.0
+    nonce: str = ""
+
+    def __post_init__(self) -> None:
+        digits = set("0123456789abcdef")
+        if self.nonce and not (len(self.nonce) == 2 * NONCE_BYTES and set(self.nonce) <= digits):
+            raise ProtocolError("field", f"field 'nonce' must be {2 * NONCE_BYTES} hex digits")
+
+    def wire_fields(self) -> dict[str, Any]:
+        fields = asdict(self)
+        if not self.nonce:
+            del fields["nonce"]
+        return fields
 
 
 @dataclass(frozen=True)
 class Command(Message):
     """Wheel angular speeds [rad/s] to hold until the next command, for at most ``ttl`` [s]
-    after ``stamp`` [s, the host's clock at sending]; ``ttl`` > 0 (ProtocolError otherwise)."""
+    after it arrived (a robot bounds ``ttl`` by its own largest lease); ``stamp`` [s] is the
+    host's clock at sending, by which the robot refuses a command older than ``ttl`` when read;
+    ``ttl`` > 0 (ProtocolError otherwise)."""
 
     TYPE: ClassVar[str] = "cmd"
     FLOATS: ClassVar[tuple[str, ...]] = ("omega_left", "omega_right", "stamp", "ttl")
@@ -175,7 +206,7 @@ def encode(message: Message) -> bytes:
     b'{"v":2,"type":"cmd","seq":3,"omega_left":1.7,"omega_right":-1.7,"stamp":52.5,"ttl":0.5}\\n'
     """
     body: dict[str, Any] = {"v": PROTOCOL_VERSION, "type": message.TYPE}
-    body.update(asdict(message))
+    body.update(message.wire_fields())
     try:
         text = json.dumps(body, separators=(",", ":"), ensure_ascii=False, allow_nan=False)
         line = text.encode("utf-8") + b"\n"
@@ -271,10 +302,10 @@ def decode(line: bytes) -> Message:
     fields: dict[str, Any] = {"seq": _field(body, "seq", "int")}
     for names, kind_name in ((cls.FLOATS, "float"), (cls.INTS, "int"), (cls.STRS, "str")):
         for name in names:
-            if name == "period" and name not in body:
+            if name in cls.OPTIONAL and name not in body:
                 continue
             fields[name] = _field(body, name, kind_name)
-    return cls(**fields)  # may raise ProtocolError (Command.ttl)
+    return cls(**fields)  # may raise ProtocolError (Command.ttl, Hello.nonce)
 
 
 class LineBuffer:
@@ -326,39 +357,53 @@ class HostClock:
 
     Every stamped message from the host (``cmd``, ``heartbeat``) gives a sample
     ``receipt − stamp`` = clock offset + transport delay (both in seconds, the receipt on the
-    robot's own running clock). Delays are never negative, so the smallest sample is the best
-    offset estimate; the estimate may rise by at most ``drift`` seconds per second so that it
-    follows clocks that run at slightly different rates. A message that sat in a buffer while
-    either side stalled gives a large sample and leaves the estimate alone.
+    robot's own running clock). A *read* is everything the robot read at once (one ``now``);
+    its smallest sample is its best offset measurement. The offset estimate is the median of the
+    last :data:`READS` reads' measurements (the lower one while there are only two), so
 
-    Args:
-        drift: largest tolerated rate difference of the two clocks [s/s] (1e-3 = 1000 ppm).
+    - a command that sat in a buffer while either side stalled is read with others that did
+      too: its read's measurement is large, the median still that of the reads before, and the
+      command's age (:meth:`age`) shows the wait;
+    - one message with a wild stamp (a host clock stepping forward or back, or a glitch) moves
+      the estimate for at most that read, and a lasting step of the host's clock is adopted
+      from its second read on: nothing can keep later commands stale;
+    - clocks running at slightly different rates are followed read by read.
 
     >>> clock = HostClock()
-    >>> clock.observe(stamp=100.0, now=4.0)    # offset -96 s (+ a delay)
-    >>> clock.deadline(stamp=100.25, ttl=0.5)  # host time 100.75 s on the robot's clock
-    4.75
-    >>> clock.observe(stamp=100.5, now=5.5)    # read 1 s late: a stall, not a new offset
-    >>> clock.deadline(stamp=100.5, ttl=0.5) < 5.5   # so that command has expired
+    >>> clock.observe(stamp=100.0, now=4.0)  # offset -96 s (+ a delay)
+    >>> clock.observe(stamp=100.1, now=4.1)
+    >>> clock.observe(stamp=100.5, now=5.5)  # read 1 s late: a stall, not a new offset
+    >>> clock.age(stamp=100.5, now=5.5)  # so it is 1 s old
+    1.0
+    >>> clock.observe(stamp=1e6, now=5.6)  # a stamp 10^6 s ahead (the host's clock jumped)
+    >>> clock.observe(stamp=101.7, now=5.7)  # and back: the next command is fresh again
+    >>> abs(clock.age(stamp=101.7, now=5.7)) < 1e-9
     True
     """
 
-    def __init__(self, drift: float = 1e-3) -> None:
-        self.drift = drift
-        self.offset: float | None = None
-        self._updated = 0.0
+    READS = 3
+
+    def __init__(self) -> None:
+        self._reads: deque[tuple[float, float]] = deque(maxlen=self.READS)  # (now, sample)
 
     def observe(self, stamp: float, now: float) -> None:
         """One host message with ``stamp`` [s, host clock] read at ``now`` [s, robot clock]."""
         sample = now - stamp
-        if self.offset is None:
-            self.offset = sample
-        else:
-            relaxed = self.offset + self.drift * max(0.0, now - self._updated)
-            self.offset = min(sample, relaxed)
-        self._updated = now
+        if self._reads and self._reads[-1][0] == now:
+            sample = min(sample, self._reads.pop()[1])
+        self._reads.append((now, sample))
 
-    def deadline(self, stamp: float, ttl: float) -> float:
-        """Host time ``stamp + ttl`` on the robot's clock [s] (call :meth:`observe` first)."""
-        assert self.offset is not None, "observe a host stamp first"
-        return stamp + ttl + self.offset
+    @property
+    def offset(self) -> float | None:
+        """Robot clock minus host clock [s] as estimated (None before the first sample)."""
+        if not self._reads:
+            return None
+        samples = sorted(sample for _, sample in self._reads)
+        return samples[(len(samples) - 1) // 2]
+
+    def age(self, stamp: float, now: float) -> float:
+        """How long before ``now`` [s, robot clock] the host sent what it stamped ``stamp``
+        [s] (call :meth:`observe` first); ±inf for absurd stamps (beyond ±1e307 s)."""
+        offset = self.offset
+        assert offset is not None, "observe a host stamp first"
+        return (now - stamp) - offset

@@ -32,7 +32,8 @@ from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.control.records import EventLog
 from skidnav.realtime.link import protocol as pr
 from skidnav.realtime.sim.robot import SimRobot
-from skidnav.realtime.sim.server import Channel, SimServer
+from skidnav.realtime.sim.server import SimServer
+from skidnav.realtime.sim.transport import Channel
 
 IDLE_WAKE = 0.01
 """Longest the server sleeps without input [s wall]: its timeouts and faults are this punctual."""
@@ -97,6 +98,7 @@ class LockstepServer(SimServer):
             if self.firmware is None or self.firmware.closed:
                 break
             self._answer(segment, now)
+        self._hang_up_if_asked()
         if ended is not None and self._channel is not None:
             self._drop(ended)
 

@@ -64,10 +64,10 @@ class SimRobotConfig:
     drop: float = 0.0
 
     def __post_init__(self) -> None:
-        if not self.latency >= 0:
-            raise ValueError(f"expected latency >= 0 s, got {self.latency}")
-        if not self.pose_noise >= 0:
-            raise ValueError(f"expected pose_noise >= 0 m, got {self.pose_noise}")
+        if not 0 <= self.latency < math.inf:
+            raise ValueError(f"expected a finite latency >= 0 s, got {self.latency}")
+        if not 0 <= self.pose_noise < math.inf:
+            raise ValueError(f"expected a finite pose_noise >= 0 m, got {self.pose_noise}")
         if not 0 <= self.drop < 1:
             raise ValueError(f"expected drop in [0, 1), got {self.drop}")
 
@@ -224,17 +224,23 @@ class Firmware:
     :meth:`receive` answers one batch of messages — everything read at once — and applies only
     its newest motion message (``cmd``, ``stop``, or a malformed line, which stops), so a robot
     that stalled never replays the commands that queued up meanwhile; every ``stop`` is
-    answered. A ``cmd`` beyond the wheel-speed limit is refused (``range``), one read after its
-    deadline (``stamp + ttl`` of the host's clock, mapped by
-    :class:`~skidnav.realtime.link.protocol.HostClock`) is refused (``expired``); both stop the
-    wheels. :meth:`watch`, called every period, stops the wheels when the newest command's
-    deadline passes (the lease) or when no valid message came for ``link_timeout``, and
-    declares the client idle after ``idle_timeout``. Times are the robot's own clock [s].
+    answered. A message whose ``seq`` does not exceed the previous one's is refused
+    (``replay``), a ``cmd`` beyond the wheel-speed limit too (``range``), and so is one older
+    than its ``ttl`` when read (``expired``: its ``stamp`` mapped onto the robot's clock by
+    :class:`~skidnav.realtime.link.protocol.HostClock`); each stops the wheels. A line that
+    fails authentication (``auth``) is refused too, and nothing more is taken from the
+    connection: :attr:`hang_up` says why it is to be closed. A command holds the wheels for
+    ``min(ttl, options.max_lease)`` after it was read, on the robot's own clock: no ``stamp``
+    or ``ttl`` can stretch that lease. :meth:`watch`, called every period, stops the wheels when
+    the lease ends or when no valid message came for ``link_timeout``, and declares the client
+    idle after ``idle_timeout``. Times are the robot's own clock [s].
 
     Args:
         robot: the robot. options: the timeouts and the robot's name. events: the log.
         reply: queues one message for the host (called with a builder taking the ``seq``).
         now: the time of connection.
+        nonce: the robot's handshake nonce for its ``hello`` (hex; empty without
+            authentication).
     """
 
     def __init__(
@@ -244,12 +250,16 @@ class Firmware:
         events: EventLog,
         reply: Callable[[Callable[[int], pr.Message]], None],
         now: float,
+        nonce: str = "",
     ) -> None:
         self.robot, self.options, self.events, self.reply = robot, options, events, reply
+        self.nonce = nonce
         self.greeted = False
         self.closed = False  # the connection is gone: nothing more is applied
+        self.hang_up: str | None = None  # why the connection is to be closed
         self.clock = pr.HostClock()
         self.last_valid = now
+        self.last_seq: int | None = None  # the newest seq taken from the host
         self.lease: float | None = None
         self.applied = 0  # commands run so far (a lockstep server steps one period per command)
 
@@ -272,7 +282,9 @@ class Firmware:
             if self.closed:
                 return
             if isinstance(item, pr.ProtocolError):
-                self.reject(item.code, str(item))
+                self._refuse_line(item)
+            elif not self._in_order(item):
+                continue
             elif isinstance(item, pr.Hello):
                 self._hello(item, now)
             elif not self.greeted:
@@ -281,11 +293,27 @@ class Firmware:
                 self.last_valid = now
                 self._handle(item, now, superseded=index < newest)
 
+    def _refuse_line(self, error: pr.ProtocolError) -> None:
+        """A line that is no valid message; after a failed authentication, hang up."""
+        self.reject(error.code, str(error))
+        if error.code == "auth":
+            self.hang_up = f"authentication failed: {error}"
+            self.closed = True
+
+    def _in_order(self, message: pr.Message) -> bool:
+        """The seq rule: True if ``message`` comes after the last one taken, else refuse it."""
+        last = self.last_seq
+        if last is not None and message.seq <= last:
+            self.reject("replay", f"{message.TYPE} {message.seq} after {last}: seq must increase")
+            return False
+        self.last_seq = message.seq
+        return True
+
     def _hello(self, message: pr.Hello, now: float) -> None:
         self.greeted, self.last_valid = True, now
         self.events.write("hello", name=message.name)
-        period, name = self.robot.robot.dt, self.options.name
-        self.reply(lambda seq: pr.Hello(seq=seq, name=name, period=period))
+        period, name, nonce = self.robot.robot.dt, self.options.name, self.nonce
+        self.reply(lambda seq: pr.Hello(seq=seq, name=name, period=period, nonce=nonce))
 
     def _handle(self, message: pr.Message, now: float, superseded: bool) -> None:
         if isinstance(message, pr.Command | pr.Heartbeat):
@@ -305,7 +333,8 @@ class Firmware:
             self.reject("state", f"unexpected {message.TYPE} from host")
 
     def _command(self, message: pr.Command, now: float, superseded: bool) -> None:
-        """Apply a ``cmd`` unless superseded, beyond the limit or expired."""
+        """Apply a ``cmd`` unless superseded, beyond the limit or stale; its lease is
+        ``min(ttl, max_lease)`` from now."""
         if superseded:
             self.events.write("superseded", seq=message.seq, stamp=message.stamp)
             return
@@ -313,13 +342,13 @@ class Firmware:
         if max(abs(message.omega_left), abs(message.omega_right)) > limit:
             self.reject("range", f"cmd {message.seq}: a wheel speed beyond ±{limit} rad/s")
             return
-        deadline = self.clock.deadline(message.stamp, message.ttl)
-        if now >= deadline:
-            late = now - deadline
-            self.reject("expired", f"cmd {message.seq} read {late:.3f} s after its deadline")
+        ttl = min(message.ttl, self.options.max_lease)
+        age = self.clock.age(message.stamp, now)
+        if age >= ttl:
+            self.reject("expired", f"cmd {message.seq} read {age - ttl:.3f} s after its deadline")
             return
         self.robot.command(message.omega_left, message.omega_right)
-        self.lease = deadline
+        self.lease = now + ttl
         self.applied += 1
         self.events.write(
             "cmd",
@@ -327,7 +356,8 @@ class Firmware:
             omega_left=message.omega_left,
             omega_right=message.omega_right,
             stamp=message.stamp,
-            valid_for=deadline - now,
+            age=age,
+            lease=ttl,
             robot_time=self.robot.time,
         )
         self.reply(lambda seq: pr.Ack(seq=seq, ack=message.seq))

@@ -12,7 +12,10 @@ What the robot answers, and when it stops on its own, is the :class:`~skidnav.re
 Firmware` of the connection (docs/protocol.md, "What a robot must do"); the server adds the
 transport: it reads everything that arrived before handing it over as one batch (so a stalled
 robot applies only the newest command), stops the wheels when the client disconnects, and drops
-a client the firmware declares idle, so a dead controller never locks the robot.
+a client the firmware declares idle, so a dead controller never locks the robot. With a secret
+(``options.secret``) it authenticates every line after the client's ``hello`` and every line it
+sends (:mod:`~skidnav.realtime.link.auth`), and hangs up on a client that fails; without one,
+:func:`~skidnav.realtime.sim.transport.bind_listener` serves loopback only.
 
 Every received command, stop, fault, wheel change, late period and connection is appended to a
 JSON-lines log with the system-wide monotonic clock (``mono`` [s]), so tests can measure when a
@@ -34,62 +37,20 @@ import socket
 import threading
 import time
 from collections.abc import Callable
-from typing import Protocol
 
 from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.control.records import EventLog
 from skidnav.realtime.link import protocol as pr
+from skidnav.realtime.link.auth import Session
 from skidnav.realtime.sim.robot import Firmware, SimRobot
+from skidnav.realtime.sim.transport import Channel, FdChannel, refuse_busy
 
 log = logging.getLogger(__name__)
 
-BACKLOG = 1024
-"""Pending TCP connections the kernel queues for the server (listen backlog; the kernel may cap
-it lower, e.g. at ``net.core.somaxconn`` on Linux). Connections beyond it are dropped and retried
-by the client a second or more later."""
 READ_LIMIT = 32 * 1024
 """Most bytes read from the client per wake-up [bytes]; the rest waits for the next one."""
 LATE_LOG = 0.05
 """A period that starts this much late [s wall] is logged as ``late`` (the server stalled)."""
-
-
-class Channel(Protocol):
-    """A connected, non-blocking byte stream the server can select on."""
-
-    def fileno(self) -> int: ...
-    def read(self) -> bytes:
-        """Bytes that arrived; b"" at end of stream; BlockingIOError if none yet."""
-        ...
-
-    def write(self, data: bytes) -> int:
-        """Write what fits now; returns the bytes taken (0 if none); OSError if broken."""
-        ...
-
-    def close(self) -> None: ...
-
-
-class FdChannel:
-    """A file descriptor — a pty master, a serial device, a connected socket's — as a
-    :class:`Channel`, made non-blocking; closing the channel closes the descriptor."""
-
-    def __init__(self, fd: int) -> None:
-        self.fd = fd
-        os.set_blocking(fd, False)
-
-    def fileno(self) -> int:
-        return self.fd
-
-    def read(self) -> bytes:
-        return os.read(self.fd, 4096)
-
-    def write(self, data: bytes) -> int:
-        try:
-            return os.write(self.fd, data)
-        except BlockingIOError:
-            return 0
-
-    def close(self) -> None:
-        os.close(self.fd)
 
 
 class SimServer:
@@ -115,6 +76,7 @@ class SimServer:
         self.firmware: Firmware | None = None
         self._seq = 0
         self._channel: Channel | None = None
+        self._session: Session | None = None
         self._selector: selectors.BaseSelector | None = None
         self._buffer = pr.LineBuffer()
         self._outbox = bytearray()
@@ -139,7 +101,10 @@ class SimServer:
             return
         message = build(self._seq)
         self._seq += 1
-        self._send_raw(pr.encode(message))
+        line = pr.encode(message)
+        if self._session is not None and self._session.keyed:
+            line = self._session.seal(line)
+        self._send_raw(line)
 
     def _send_raw(self, data: bytes) -> None:
         """Queue ``data`` for the client; a client that lets the queue overflow is dropped."""
@@ -174,8 +139,11 @@ class SimServer:
         self._channel = channel
         self._buffer = pr.LineBuffer()
         self._outbox = bytearray()
+        secret = self.options.secret
+        self._session = Session(secret, "robot") if secret is not None else None
+        nonce = self._session.hello_nonce if self._session is not None else ""
         self.firmware = Firmware(
-            self.robot, self.options, self.events, self._send, time.monotonic()
+            self.robot, self.options, self.events, self._send, time.monotonic(), nonce
         )
         self._active_faults.discard("silence")
         self._active_faults.discard("escape")
@@ -211,8 +179,14 @@ class SimServer:
         items = self._complete_lines()
         if self.firmware is not None and items:
             self.firmware.receive(items, now)
+        self._hang_up_if_asked()
         if ended is not None and self._channel is not None:
             self._drop(ended)
+
+    def _hang_up_if_asked(self) -> None:
+        """Drop the client the firmware refused to hear more from (failed authentication)."""
+        if self.firmware is not None and self.firmware.hang_up is not None:
+            self._drop(self.firmware.hang_up)
 
     def _read_available(self) -> str | None:
         """Feed what arrived to the line buffer; the reason if the stream ended."""
@@ -237,12 +211,23 @@ class SimServer:
             try:
                 for line in self._buffer.lines():
                     try:
-                        items.append(pr.decode(line))
+                        items.append(self._decode_line(line))
                     except pr.ProtocolError as error:
                         items.append(error)
                 return items
             except pr.ProtocolError as error:  # an oversized line; the buffer resynchronizes
                 items.append(error)
+
+    def _decode_line(self, line: bytes) -> pr.Message:
+        """One line decoded; with a secret, its MAC checked once the client's ``hello`` gave
+        its nonce (a ``hello`` without one fails: ProtocolError ``auth``)."""
+        session = self._session
+        if session is not None and session.keyed:
+            session.verify(line)
+        message = pr.decode(line)
+        if session is not None and not session.keyed and isinstance(message, pr.Hello):
+            session.greet(message.nonce)
+        return message
 
     # --- the period ----------------------------------------------------------------------
     def _apply_fault(self) -> None:
@@ -384,32 +369,9 @@ class SimServer:
                 log.warning("accept failed: %s", error)
                 return
             if self.connected:
-                _refuse(sock)
+                refuse_busy(sock)
                 continue
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # a line leaves at once
             # the kernel's queue is bounded too: a client that does not read is found out soon
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, self.options.send_limit)
             self.attach(FdChannel(sock.detach()))
-
-
-def _refuse(sock: socket.socket) -> None:
-    """Tell a second client ``busy`` (one non-blocking send, errors ignored) and close it."""
-    busy = pr.encode(pr.Error(seq=0, code="busy", message="another client is connected"))
-    with contextlib.suppress(OSError):
-        sock.setblocking(False)
-        sock.send(busy)
-    sock.close()
-
-
-def bind_listener(host: str, port: int) -> socket.socket:
-    """A listening TCP socket on (host, port) with a backlog of :data:`BACKLOG`; port 0 picks
-    a free one. OSError if it cannot bind, OverflowError for a port beyond 65535."""
-    listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-    listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-    try:
-        listener.bind((host, port))
-        listener.listen(BACKLOG)
-    except (OSError, OverflowError):
-        listener.close()
-        raise
-    return listener
