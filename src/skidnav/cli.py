@@ -8,7 +8,7 @@ import sys
 from collections.abc import Sequence
 
 from skidnav.commands.parsing import OneLineParser
-from skidnav.errors import UserError
+from skidnav.errors import EXIT_RUNS_FAILED, RunsFailedError, UserError
 
 SUBCOMMAND_MODULES = {
     "map": "skidnav.commands.map",
@@ -52,7 +52,8 @@ def build_parser(modules: Sequence[str] = tuple(SUBCOMMAND_MODULES.values())) ->
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point; returns the process exit code (0 ok, 2 user error, 130 interrupted)."""
+    """Entry point; returns the process exit code (0 ok, 1 failed runs, 2 user error, 130
+    interrupted)."""
     arguments = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(requested_modules(arguments))
     args = parser.parse_args(arguments)
@@ -65,6 +66,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UserError as error:
         print(f"skidnav: error: {error}", file=sys.stderr)
         return 2
+    except RunsFailedError as error:
+        print(f"skidnav: error: {error}", file=sys.stderr)
+        return EXIT_RUNS_FAILED
     except KeyboardInterrupt:
         print("skidnav: interrupted", file=sys.stderr)
         return 130

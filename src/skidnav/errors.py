@@ -1,4 +1,5 @@
-"""Errors a user can cause. The CLI prints them as one line and exits with code 2."""
+"""Errors a user can cause, and failed runs. The CLI prints them as one line and exits with code 2
+(a user error) or 1 (failed runs)."""
 
 EXCERPT_CHARS = 40
 """Most characters of a file's contents an error message quotes."""
@@ -13,6 +14,16 @@ class UserError(Exception):
 
 class CorruptFileError(UserError):
     """A saved file that is truncated, corrupt, or from an incompatible version."""
+
+
+class RunsFailedError(Exception):
+    """Runs of a sweep that raised while the others finished and were kept (each failure was
+    logged in one line as it happened; :mod:`skidnav.experiments.failures`). The CLI prints the
+    message as one line and exits with :data:`EXIT_RUNS_FAILED`."""
+
+
+EXIT_RUNS_FAILED = 1
+"""Exit code of a command whose sweep had failed runs (2 is a user error)."""
 
 
 def excerpt(text: str | bytes, limit: int = EXCERPT_CHARS) -> str:

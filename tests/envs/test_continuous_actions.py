@@ -59,7 +59,8 @@ def test_actions_outside_the_box_are_clipped_and_bad_ones_refused() -> None:
     clipped.reset(seed=2)
     limit.reset(seed=2)
     assert clipped.step(np.array([9.0, -9.0]))[4]["pose"] == limit.step([1.7, -1.7])[4]["pose"]
-    for bad in ([np.nan, 0.0], [1.0], [[1.0, 1.0]], "fast", None):
+    complex_ones = ([1.0 + 2.0j, 1.0], np.array([1.0, 1.0], dtype=np.complex64), ["1", "1"])
+    for bad in ([np.nan, 0.0], [1.0], [[1.0, 1.0]], "fast", None, *complex_ones):
         with pytest.raises(ValueError, match="wheel speeds"):
             clipped.step(bad)
 

@@ -204,7 +204,11 @@ def test_features_are_bit_identical_with_and_without_jit():
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"lidar_rays": -1}, "^expected lidar_rays to be an integer >= 0, got -1$"),
+        ({"lidar_rays": -1}, r"^expected lidar_rays to be an integer in \[0, 1024\], got -1$"),
+        (
+            {"lidar_rays": 10**7},
+            r"^expected lidar_rays to be an integer in \[0, 1024\], got 10000000$",
+        ),
         ({"lidar_rays": 2.0}, "lidar_rays"),
         ({"lidar_rays": True}, "lidar_rays"),
         ({"lidar_range": 0.0}, "^expected lidar_range to be a finite number > 0 m, got 0.0$"),

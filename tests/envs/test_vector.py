@@ -10,7 +10,12 @@ import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.envs.registration import ENV_ID
-from skidnav.envs.vector import GatheredInfo, SkidSteerNavVectorEnv
+from skidnav.envs.vector import (
+    GatheredInfo,
+    SkidSteerNavVectorEnv,
+    make_vector_env,
+    robot_bytes,
+)
 from skidnav.world.grid import GridMap, border_walls
 
 NEAR_GOAL = GridMap(occupancy=border_walls((25, 25)), start=(5, 8), goal=(7, 8))
@@ -135,6 +140,10 @@ def test_what_the_compiled_step_does_not_simulate_gets_single_envs() -> None:
         ({"action": "continuous"}, [[0.0, 1.0], [0.0], [1.0, 1.0]], "finite wheel speeds"),
         ({"action": "continuous"}, np.ones((3, 3)), "finite wheel speeds"),
         ({"action": "continuous"}, np.array([[0.0, np.nan]] * 3), "finite wheel speeds"),
+        ({"action": "continuous"}, np.array([[1.0 + 2.0j, 1.0]] * 3), "finite wheel speeds"),
+        ({"action": "continuous"}, np.ones((3, 2), dtype=np.complex128), "finite wheel speeds"),
+        ({"action": "continuous"}, [["1", "1"]] * 3, "finite wheel speeds"),
+        ({}, np.array([0, 1, 2], dtype=np.complex128), "integer actions"),
     ],
 )
 def test_bad_actions_are_refused(kwargs: dict[str, Any], actions: Any, match: str) -> None:
@@ -178,3 +187,25 @@ def test_max_episode_steps_means_what_it_means_for_gymnasium_make(
         envs.reset(seed=0)
         truncations = sum(int(envs.step(np.array([2]))[3][0]) for _ in range(501))
         assert truncations == expected, (limit, render_mode)
+
+
+@pytest.mark.parametrize("vectorization_mode", [None, "vector_entry_point"])
+def test_num_envs_is_range_checked_before_anything_is_allocated(
+    vectorization_mode: str | None,
+) -> None:
+    mode = {} if vectorization_mode is None else {"vectorization_mode": vectorization_mode}
+    with pytest.raises(
+        ValueError, match=r"^expected num_envs to be an integer in \[1, 16777216\], "
+    ):
+        gymnasium.make_vec(ENV_ID, num_envs=10**9, map_kind="free", **mode)
+    with pytest.raises(ValueError, match=r"^expected num_envs"):  # the MuJoCo path too
+        make_vector_env(10**9, dynamics="mujoco")
+    with pytest.raises(ValueError, match=r"^expected a vector env of at most 4 GiB, got about 69"):
+        gymnasium.make_vec(ENV_ID, num_envs=10**7, map_kind="free", **mode)
+
+
+def test_the_memory_estimate_covers_the_arrays() -> None:
+    envs = SkidSteerNavVectorEnv(64, map_kind="free", observation="features", lidar_rays=16)
+    arrays = [value for value in vars(envs).values() if isinstance(value, np.ndarray)]
+    per_robot = sum(a.nbytes for a in arrays if a.shape[:1] == (64,)) / 64
+    assert per_robot <= robot_bytes(envs.template) <= per_robot + 1024 + 200

@@ -15,7 +15,7 @@ import pytest
 from optuna.trial import TrialState
 
 from skidnav.cli import main
-from skidnav.errors import UserError
+from skidnav.errors import RunsFailedError, UserError
 from skidnav.experiments.config import config_to_dict
 from skidnav.experiments.configfile import load_config, parse_config
 from skidnav.experiments.runs import RunSpec, expand_runs
@@ -216,6 +216,16 @@ def test_interrupted_study_resumes_to_the_same_trials(tmp_path: Path) -> None:
     tune_experiment(config, tune, cut, backend="serial", trial=StubTrial())
     resumed = [(t.params, t.value) for t in _finished(_study(cut))]
     assert resumed == [(t.params, t.value) for t in _finished(_study(straight))]
+
+
+def test_a_run_that_raises_fails_its_trial_and_the_search_in_one_line(tmp_path: Path) -> None:
+    def divide_by_zero(spec: RunSpec) -> TrialResult:
+        raise ZeroDivisionError("float division by zero")
+
+    config, tune = _load(tmp_path)
+    with pytest.raises(RunsFailedError, match=r"^run-000000 \(agent q-learning, preset rough, "):
+        tune_experiment(config, tune, tmp_path / "study", backend="serial", trial=divide_by_zero)
+    assert [t.state for t in _study(tmp_path / "study").get_trials()] == [TrialState.FAIL]
 
 
 def test_a_trial_left_running_by_a_kill_is_marked_failed(tmp_path: Path) -> None:

@@ -49,6 +49,25 @@ def test_recovers_geometry_from_noise_free_data_within_5_percent() -> None:
             assert estimate == pytest.approx(true, rel=0.05)
 
 
+@pytest.mark.parametrize("wheels", [[(1.7, 1.7)], [(1.7, 1.7), (-1.7, -1.7)]])
+def test_a_region_driven_straight_learns_its_radius_and_stays_finite(
+    wheels: list[tuple[float, float]],
+) -> None:
+    """One action, or forward and back (collinear wheel speeds: a singular XᵀX), noise-free:
+    the regressions met a negative Cholesky pivot and left NaN coefficients (compiled) or divided
+    by zero; now v_x gives r / 2 per wheel and the unexcited yaw and v_y keep the prior."""
+    model = KinematicModel(RobotParams(), GRID, KinematicModelConfig(refit_every=1))
+    rows = np.zeros((200, 6))
+    for k, (omega_left, omega_right) in enumerate(wheels * (200 // len(wheels))):
+        twist = body_velocities(omega_left, omega_right, 0.02, 0.03, 0.08)
+        rows[k] = (4, omega_left, omega_right, *twist)
+    model.feed(rows)
+    model.refit()
+    assert np.isfinite(model.coefficients).all() and np.isfinite(model.velocities).all()
+    np.testing.assert_allclose(model.coefficients[4, :2], [0.015, 0.015], rtol=1e-6)
+    np.testing.assert_allclose(model.coefficients[4, 3:], [-0.1875, 0.1875, 0.0, -0.05, 0.0])
+
+
 def test_regions_without_data_use_the_pooled_fit_and_empty_model_the_prior() -> None:
     config = KinematicModelConfig(min_samples=50, refit_every=1)
     model = KinematicModel(RobotParams(), GRID, config)

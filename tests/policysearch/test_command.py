@@ -57,6 +57,7 @@ def test_search_writes_the_policy_and_the_learning_curve(
             "827 GiB for the episodes of --population 10000 × --episodes 10000",
         ),
         (["--hidden", "1024", "--lidar-rays", "1024"], "parameters from --hidden 1024 and"),
+        (["--lidar-rays", "1025"], "expected --lidar-rays to be an integer in [0, 1024], got 1025"),
         (["--resume"], "no checkpoint.json to resume from"),
         (["--map", "cave"], "invalid choice"),
     ],

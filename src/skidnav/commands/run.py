@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from skidnav.envs.registration import allow_env_modules
 from skidnav.experiments.configfile import load_config_and_text
 from skidnav.experiments.runner import BACKENDS, run_experiment
 
@@ -24,6 +25,7 @@ def add_parser(subparsers: Any) -> None:
         "--out", type=Path, default=None, help="results directory (default: runs/<config name>)"
     )
     add_backend_arguments(parser)
+    add_env_module_argument(parser)
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--report", action="store_true", help="write report.html when done")
     parser.set_defaults(func=run_command)
@@ -47,8 +49,22 @@ def add_backend_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_env_module_argument(parser: argparse.ArgumentParser) -> None:
+    """``--env-module MODULE`` (repeatable): the modules a config's ``env_id`` may name
+    (``run``, ``tune``)."""
+    parser.add_argument(
+        "--env-module",
+        action="append",
+        default=[],
+        metavar="MODULE",
+        help="import MODULE for its Gymnasium environments and allow env_id = "
+        '"MODULE:Env-v0" (repeatable; a config alone can name only registered ids)',
+    )
+
+
 def run_command(args: argparse.Namespace) -> int:
     """Run the experiment; print where the results are."""
+    allow_env_modules(args.env_module)
     config, text = load_config_and_text(args.config)
     out = args.out if args.out is not None else Path("runs") / config.name
     outcome = run_experiment(

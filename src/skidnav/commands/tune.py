@@ -10,7 +10,8 @@ from typing import Any
 
 import optuna
 
-from skidnav.commands.run import add_backend_arguments
+from skidnav.commands.run import add_backend_arguments, add_env_module_argument
+from skidnav.envs.registration import allow_env_modules
 from skidnav.errors import UserError
 from skidnav.experiments.tuneconfig import load_tune_config_and_text
 from skidnav.experiments.tuning import tune_experiment
@@ -38,6 +39,7 @@ def add_parser(subparsers: Any) -> None:
         help="finished trials per agent, instead of [tune] trials (e.g. a small budget)",
     )
     add_backend_arguments(parser)
+    add_env_module_argument(parser)
     parser.set_defaults(func=tune_command)
 
 
@@ -55,6 +57,7 @@ def tune_command(args: argparse.Namespace) -> int:
     """Run the search; print each trial and where tuned.toml is."""
     if not args.verbose:
         optuna.logging.set_verbosity(logging.WARNING)
+    allow_env_modules(args.env_module)
     config, tune, text = load_tune_config_and_text(args.config)
     if args.trials is not None:
         try:

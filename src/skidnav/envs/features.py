@@ -36,6 +36,7 @@ import numpy as np
 from gymnasium import spaces
 
 from skidnav._jit import inline_jit, jit
+from skidnav.checks import check_integer
 from skidnav.kernels.lidar import lidar_ranges
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
@@ -50,13 +51,15 @@ POSE_GOAL_NAMES = (
     "goal_sin_bearing",
 )
 """Names of the features before the lidar ranges, in order."""
+MAX_LIDAR_RAYS = 1024
+"""Most lidar rays an observation carries (the env's default is 8): the one cap, of the env, the
+policy search and its policy files."""
 
 
 def check_lidar(lidar_rays: int, lidar_range: float) -> None:
-    """ValueError unless ``lidar_rays`` is an integer ≥ 0 and ``lidar_range`` [m] is finite and
-    > 0."""
-    if isinstance(lidar_rays, bool) or not isinstance(lidar_rays, int) or lidar_rays < 0:
-        raise ValueError(f"expected lidar_rays to be an integer >= 0, got {lidar_rays!r}")
+    """ValueError unless ``lidar_rays`` is an integer in [0, :data:`MAX_LIDAR_RAYS`] and
+    ``lidar_range`` [m] is finite and > 0."""
+    check_integer("lidar_rays", lidar_rays, 0, MAX_LIDAR_RAYS)
     if (
         isinstance(lidar_range, bool)
         or not isinstance(lidar_range, int | float)

@@ -375,13 +375,29 @@ def action_space(kind: str, robot: RobotParams) -> spaces.Space[Any]:
     return spaces.Box(low=-limit, high=limit, shape=(2,), dtype=np.float32)
 
 
+def real_values(action: Any) -> np.ndarray | None:
+    """``action`` as a float64 array, or None unless it holds real numbers: a complex number
+    (whose imaginary part a cast would drop), a string, or a ragged or non-numeric sequence
+    gives None.
+
+    >>> real_values([1.7, -1]), real_values(np.array([1.7 + 0j, 1.0])), real_values("17")
+    (array([ 1.7, -1. ]), None, None)
+    """
+    try:
+        values = np.asarray(action)
+        if values.dtype.kind not in "biufO":
+            return None
+        return values.astype(np.float64, copy=False)
+    except (TypeError, ValueError):  # ragged, or an object that is not a real number
+        return None
+
+
 def clipped_wheel_speeds(action: Any, limit: float) -> tuple[float, float]:
     """A continuous action (ω_L, ω_R) [rad/s] as two floats clipped to ± ``limit``; ValueError
-    unless it holds two finite numbers."""
-    try:
-        values = np.asarray(action, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"expected an action of two wheel speeds, got {action!r}") from None
+    unless it holds two finite real numbers."""
+    values = real_values(action)
+    if values is None:
+        raise ValueError(f"expected an action of two wheel speeds, got {action!r}")
     if values.shape != (2,) or not np.isfinite(values).all():
         raise ValueError(f"expected an action of two finite wheel speeds, got {action!r}")
     left, right = values.tolist()

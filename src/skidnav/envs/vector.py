@@ -46,7 +46,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from skidnav.checks import check_integer
-from skidnav.envs.navigation import SkidSteerNavEnv
+from skidnav.envs.navigation import SkidSteerNavEnv, real_values
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import shown
 from skidnav.kernels.vector_env import (
@@ -68,6 +68,13 @@ OBSERVATION_CODES = {
     "pose": POSE_OBSERVATION,
     "features": FEATURE_OBSERVATION,
 }
+MAX_NUM_ENVS = 2**24
+"""Most sub-envs of one vector env, on either path (on the compiled one
+:data:`MAX_VECTOR_BYTES` binds first: a robot takes at least 2.8 kB)."""
+MAX_VECTOR_BYTES = 4 * 2**30
+"""Most memory [bytes] the per-robot state of a compiled vector env may take
+(:func:`robot_bytes` × N). The policy search's cap on all of its memory is as large, with a
+larger estimate per sub-env, so every search it accepts gets its vector envs."""
 
 
 def make_vector_env(
@@ -76,7 +83,9 @@ def make_vector_env(
     """The vector entry point of ``skidnav/SkidSteerNav-v0`` (``gymnasium.make_vec``):
     :class:`SkidSteerNavVectorEnv`, or a ``SyncVectorEnv`` of single envs for what it does not
     simulate (``dynamics="mujoco"``, a ``render_mode``). ``max_episode_steps`` as for
-    ``gymnasium.make``, on either path: None the registered limit, −1 no limit."""
+    ``gymnasium.make``, on either path: None the registered limit, −1 no limit. ValueError for
+    ``num_envs`` outside [1, :data:`MAX_NUM_ENVS`]."""
+    check_integer("num_envs", num_envs, 1, MAX_NUM_ENVS)
     if kwargs.get("dynamics", "kinematic") != "kinematic" or kwargs.get("render_mode"):
         single = {"max_episode_steps": max_episode_steps, **kwargs}
         return gymnasium.vector.SyncVectorEnv(
@@ -86,6 +95,15 @@ def make_vector_env(
         max_episode_steps = gymnasium.spec(ENV_ID).max_episode_steps
     limit = None if max_episode_steps == -1 else max_episode_steps
     return SkidSteerNavVectorEnv(num_envs, limit, **kwargs)
+
+
+def robot_bytes(template: SkidSteerNavEnv) -> int:
+    """Memory [bytes] a compiled vector env of ``template``'s sub-envs holds per robot: float64
+    arrays of 2 · :data:`NOISE_ACTIONS` uniforms per sub-step of an action, the slip
+    statistics, the observation and 16 scalars, and 1 KiB for its random generator."""
+    shape = template.observation_space.shape or (1,)
+    floats = 2 * NOISE_ACTIONS * template.robot.substeps + template.task.variance_stats.size
+    return 8 * (floats + int(np.prod(shape)) + 16) + 1024
 
 
 class GatheredInfo(gymnasium.Wrapper[Any, Any, Any, Any]):
@@ -106,20 +124,29 @@ class SkidSteerNavVectorEnv(VectorEnv[Any, Any, Any]):
     """N navigation robots stepped together (module doc).
 
     Args:
-        num_envs: N ≥ 1. max_episode_steps: actions per episode before truncation (None: no
-            limit; ``gymnasium.make_vec`` passes the registered 500). kwargs: the arguments of
-            :class:`SkidSteerNavEnv` (``dynamics="kinematic"``, no ``render_mode``).
+        num_envs: N in [1, :data:`MAX_NUM_ENVS`], with N × :func:`robot_bytes` at most
+            :data:`MAX_VECTOR_BYTES`. max_episode_steps: actions per episode before truncation
+            (None: no limit; ``gymnasium.make_vec`` passes the registered 500). kwargs: the
+            arguments of :class:`SkidSteerNavEnv` (``dynamics="kinematic"``, no
+            ``render_mode``).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP}  # noqa: RUF012
 
     def __init__(self, num_envs: int, max_episode_steps: int | None = None, **kwargs: Any):
-        check_integer("num_envs", num_envs, 1)
+        check_integer("num_envs", num_envs, 1, MAX_NUM_ENVS)
         if max_episode_steps is not None:
             check_integer("max_episode_steps", max_episode_steps, 1)
         template = SkidSteerNavEnv(**kwargs)
         if template.dynamics != "kinematic" or template.render_mode is not None:
             raise ValueError("the compiled vector env simulates the kinematic robot, unrendered")
+        needed = num_envs * robot_bytes(template)
+        if needed > MAX_VECTOR_BYTES:
+            raise ValueError(
+                f"expected a vector env of at most {MAX_VECTOR_BYTES / 2**30:g} GiB, got about "
+                f"{needed / 2**30:.3g} GiB for num_envs {num_envs} at "
+                f"{template.robot.substeps} sub-steps per action"
+            )
         self.template, self.num_envs = template, num_envs
         self.max_episode_steps = max_episode_steps
         self.single_observation_space = template.observation_space
@@ -240,17 +267,17 @@ class SkidSteerNavVectorEnv(VectorEnv[Any, Any, Any]):
         # Called every step: a message is formatted only on error (the repr of an (N, 2) batch
         # takes several times as long as the compiled step of N robots).
         if self.template.action_kind == "continuous":
-            try:
-                values = np.asarray(actions, dtype=np.float64)
-                valid = values.shape == (self.num_envs, 2) and bool(np.isfinite(values).all())
-            except (TypeError, ValueError):  # not numbers, or ragged
-                valid = False
-            if not valid:
+            values = real_values(actions)
+            if (
+                values is None
+                or values.shape != (self.num_envs, 2)
+                or not np.isfinite(values).all()
+            ):
                 raise ValueError(
                     f"expected ({self.num_envs}, 2) finite wheel speeds, got {shown(actions)}"
                 )
             limit = self.template.robot.wheel_speed
-            return np.clip(values, -limit, limit)
+            return np.asarray(np.clip(values, -limit, limit))
         indices = np.asarray(actions)
         valid = indices.shape == (self.num_envs,) and indices.dtype.kind in "iu"
         if not valid or not (indices.min() >= 0 and indices.max() <= 3):

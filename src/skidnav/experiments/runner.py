@@ -10,6 +10,9 @@ Backends (all give identical numbers, since a run is a pure function of its spec
   a local cluster of ``jobs`` worker processes on 127.0.0.1. The client connects before the
   results directory is created, so a scheduler that cannot be reached leaves nothing behind.
 
+Local worker processes import nothing from the current directory
+(:func:`skidnav.childprocess.safe_path_children`).
+
 Workers only compute; this process writes every finished run atomically as it arrives
 (:class:`~skidnav.experiments.store.ResultStore`), with the version of the code that produced it,
 holding the directory's lock (:func:`~skidnav.experiments.store.directory_lock`): a second run on
@@ -17,7 +20,10 @@ the same directory is refused while the first lives.
 Started again on the same directory, the runner skips the runs already written, so a sweep killed
 by Ctrl-C or SIGKILL resumes with none lost and none duplicated; finished runs produced by other
 code are reused with a warning (:mod:`skidnav.experiments.sessions`). At the end the tidy tables
-and ``metadata.json`` (with the list of sessions) are (re)written.
+and ``metadata.json`` (with the list of sessions) are (re)written. A run that raises is logged in
+one line and the others go on; the sweep then ends in
+:class:`~skidnav.errors.RunsFailedError`, its finished runs kept for a resume
+(:mod:`skidnav.experiments.failures`).
 
 The grid is an :class:`~skidnav.experiments.config.ExperimentConfig` trained by
 :func:`skidnav.experiments.trial.run_trial`, or any other :class:`~skidnav.experiments.runs.Grid`
@@ -29,6 +35,7 @@ lock, resume and metadata for both.
 from __future__ import annotations
 
 import contextlib
+import functools
 import importlib
 import itertools
 import logging
@@ -45,8 +52,10 @@ from typing import Any, NamedTuple
 from tqdm import tqdm
 
 from skidnav._jit import jit_disabled
-from skidnav.errors import UserError
+from skidnav.childprocess import safe_path_children
+from skidnav.errors import RunsFailedError, UserError
 from skidnav.experiments.config import ExperimentConfig
+from skidnav.experiments.failures import RunFailure, attempt, failed_runs_message
 from skidnav.experiments.provenance import CODE_KEYS, code_version, package_versions
 from skidnav.experiments.runs import Grid, RunSpec, expand_runs
 from skidnav.experiments.sessions import mixed_code_message, other_code, update_sessions
@@ -79,27 +88,30 @@ class RunOutcome(NamedTuple):
     wall_time: float
 
 
-def _serial(runs: Sequence[RunSpec[Any]], trial: TrialFunction) -> Iterator[TrialResult]:
+Outcome = TrialResult | RunFailure
+"""What a run gives the runner: its results, or the one line of its failure."""
+
+
+def _serial(runs: Sequence[RunSpec[Any]], trial: TrialFunction) -> Iterator[Outcome]:
     for spec in runs:
-        yield trial(spec)
+        yield attempt(spec, functools.partial(trial, spec))
 
 
-def _process(
-    runs: Sequence[RunSpec[Any]], trial: TrialFunction, jobs: int
-) -> Iterator[TrialResult]:
+def _process(runs: Sequence[RunSpec[Any]], trial: TrialFunction, jobs: int) -> Iterator[Outcome]:
     if not runs:
         return
     jobs = min(jobs, len(runs))
     context = multiprocessing.get_context("spawn")
-    executor = ProcessPoolExecutor(
-        jobs, mp_context=context, initializer=init_worker, initargs=(os.getpid(),)
-    )
-    try:
-        futures = [executor.submit(trial, spec) for spec in runs]
-        for future in as_completed(futures):
-            yield future.result()
-    finally:
-        executor.shutdown(wait=True, cancel_futures=True)
+    with safe_path_children():
+        executor = ProcessPoolExecutor(
+            jobs, mp_context=context, initializer=init_worker, initargs=(os.getpid(),)
+        )
+        try:
+            futures = {executor.submit(trial, spec): spec for spec in runs}
+            for future in as_completed(futures):
+                yield attempt(futures[future], future.result)
+        finally:
+            executor.shutdown(wait=True, cancel_futures=True)
 
 
 def _distributed() -> Any:
@@ -126,6 +138,7 @@ def dask_client(jobs: int, scheduler: str | None) -> Iterator[Any]:
             yield client
         return
     with (
+        safe_path_children(),
         distributed.LocalCluster(
             n_workers=jobs,
             threads_per_worker=1,
@@ -138,11 +151,12 @@ def dask_client(jobs: int, scheduler: str | None) -> Iterator[Any]:
         yield client
 
 
-def _dask(runs: Sequence[RunSpec[Any]], trial: TrialFunction, client: Any) -> Iterator[TrialResult]:
+def _dask(runs: Sequence[RunSpec[Any]], trial: TrialFunction, client: Any) -> Iterator[Outcome]:
     keys = [f"skidnav-{spec.config.fingerprint()[:12]}-{spec.run_id}" for spec in runs]
     futures = client.map(trial, runs, key=keys, pure=False)
+    by_key = dict(zip(keys, runs, strict=True))
     for future in _distributed().as_completed(futures):
-        yield future.result()
+        yield attempt(by_key[future.key], future.result)
 
 
 def warm_up_first(runs: Sequence[RunSpec[Any]]) -> tuple[list[RunSpec[Any]], list[RunSpec[Any]]]:
@@ -164,9 +178,10 @@ def execute(
     backend: str,
     jobs: int,
     client: Any = None,
-) -> Iterator[TrialResult]:
+) -> Iterator[Outcome]:
     """Results of ``runs`` in completion order on ``backend`` (``dask`` needs the ``client`` of
-    :func:`dask_client`)."""
+    :func:`dask_client`); a run that raised gives its :class:`RunFailure` instead
+    (:mod:`skidnav.experiments.failures`)."""
     if not runs:
         return iter(())
     if backend == "serial" or (backend == "process" and min(jobs, len(runs)) == 1):
@@ -226,6 +241,8 @@ def run_experiment(
 
     Raises:
         UserError: bad backend options, or ``out_dir`` holds other results or is in use.
+        RunsFailedError: at the end, when runs raised (each was logged in one line); the runs
+            that finished are written, for a resume (:mod:`skidnav.experiments.failures`).
         KeyboardInterrupt: from the trial; the runs written until then stay, for a resume.
     """
     jobs = default_jobs() if jobs is None else jobs
@@ -246,7 +263,9 @@ def run_experiment(
             records = _resume_records(store, session)
             pending = [spec for spec in runs if spec.run_id not in records]
             execution = (trial, backend, jobs, client)
-            _run_pending(store, config, pending, records, session, execution, progress)
+            failures = _run_pending(store, config, pending, records, session, execution, progress)
+        if failures:
+            raise RunsFailedError(failed_runs_message(failures, len(runs), store.root))
         store.consolidate()
         wall_time = time.time() - started
         session.update(wall_time_s=wall_time, completed=True)
@@ -258,12 +277,12 @@ def run_experiment(
 def _default_trial(config: Grid, config_path: Path | str | None) -> TrialFunction:
     """:func:`skidnav.experiments.trial.run_trial`, after checking the experiment ``config``
     (only an :class:`ExperimentConfig` has a default trial)."""
-    from skidnav.experiments.trial import check_config, run_trial
+    from skidnav.experiments.trial import check_config, default_trial
 
     if not isinstance(config, ExperimentConfig):
         raise TypeError(f"a {type(config).__name__} grid needs its own trial function")
     check_config(config, config_path)
-    return run_trial
+    return default_trial()
 
 
 def _run_pending(
@@ -274,17 +293,24 @@ def _run_pending(
     session: dict[str, Any],
     execution: tuple[TrialFunction, str, int, Any],
     progress: bool,
-) -> None:
+) -> list[RunFailure]:
     """Run ``pending`` on ``execution`` (trial, backend, jobs, Dask client), writing each result
-    as it arrives and noting its code record in ``records``."""
+    as it arrives and noting its code record in ``records``; returns the runs that failed
+    (each logged as it failed)."""
     total = len(pending) + len(records)
     logger.info("%d runs, %d already done, %d to run", total, len(records), len(pending))
     stamp = {key: session[key] for key in CODE_KEYS} | {"session": session["started"]}
+    failures: list[RunFailure] = []
     with _progress(config, total, len(records), progress) as bar:
-        for result in execute(pending, *execution):
-            store.write_run(result, stamp)
-            records[result.run_id] = stamp
+        for outcome in execute(pending, *execution):
+            if isinstance(outcome, RunFailure):
+                logger.error("%s", outcome.message)
+                failures.append(outcome)
+            else:
+                store.write_run(outcome, stamp)
+                records[outcome.run_id] = stamp
             bar.update(1)
+    return failures
 
 
 def _progress(config: Grid, total: int, done: int, show: bool) -> tqdm[Any]:

@@ -23,8 +23,10 @@ agents); a deep agent trains in its own loop with the same evaluations.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +35,7 @@ import numpy as np
 
 from skidnav.agents.catalog import build_agent, check_params, observation_for, train
 from skidnav.agents.core import TabularAgent
+from skidnav.envs.registration import allowed_env_modules, registered_env_id, with_env_modules
 from skidnav.errors import UserError
 from skidnav.experiments.config import CONVERGENCE_OBJECTIVES, ExperimentConfig, MapSpec
 from skidnav.experiments.finegrid import FineStates, check_grids, refines_positions, state_grid
@@ -78,12 +81,13 @@ def make_env(
 ) -> gymnasium.Env[Any, Any]:
     """The environment of a run, as ``gymnasium.make`` gives it (wrappers included).
 
-    ``env_id`` is a registered Gymnasium id (e.g. ``skidnav/DynaMaze-v0``; Gymnasium's
-    ``module:Env-v0`` form imports ``module`` for its registrations first), made with the
-    ``[env]`` options: nothing named in a config is called. Only the skid-steer env receives the
-    map, slip preset and drift of the run, and the observation its agent learns over
-    (:func:`skidnav.agents.catalog.observation_for`: the discrete state for a tabular agent,
-    else ``[env] observation``, "features" by default; ``observation`` overrides both).
+    ``env_id`` is a registered Gymnasium id (e.g. ``skidnav/DynaMaze-v0``; ``module:Env-v0``
+    only for a module the user allowed, :func:`~skidnav.envs.registration.registered_env_id`),
+    made with the ``[env]`` options: nothing named in a config is imported or called. Only the
+    skid-steer env receives the map, slip preset and drift of the run, and the observation its
+    agent learns over (:func:`skidnav.agents.catalog.observation_for`: the discrete state for a
+    tabular agent, else ``[env] observation``, "features" by default; ``observation`` overrides
+    both).
     Gymnasium's ``TimeLimit`` truncates after the config's ``max_steps`` actions, else its
     ``[env] max_episode_steps``, else the registered limit (:func:`action_limit` reads it
     back). Runs train and evaluate on ``env.unwrapped``: the trainer enforces that limit itself.
@@ -117,10 +121,7 @@ def make_env(
             drift_amplitude=config.drift_amplitude,
             drift_period=config.drift_period,
         )
-    try:
-        return gymnasium.make(config.env_id, max_episode_steps=limit, **options)
-    except ModuleNotFoundError as error:
-        raise UserError(f"environment {config.env_id!r}: no module {error.name!r}") from None
+    return gymnasium.make(registered_env_id(config.env_id), max_episode_steps=limit, **options)
 
 
 def agent_view(spec: ExperimentRun, env: gymnasium.Env[Any, Any]) -> gymnasium.Env[Any, Any]:
@@ -327,6 +328,13 @@ def run_trial(spec: ExperimentRun) -> TrialResult:
     return measure_trial(spec)
 
 
+def default_trial() -> Callable[[ExperimentRun], TrialResult]:
+    """:func:`run_trial`, which a worker process runs after importing the environment modules
+    the user allowed in this process (:func:`~skidnav.envs.registration.allow_env_modules`)."""
+    modules = allowed_env_modules()
+    return functools.partial(with_env_modules, modules, run_trial) if modules else run_trial
+
+
 def measure_trial(spec: ExperimentRun) -> TrialResult:
     """:func:`run_trial` without the warm-up: the first call in a process also times numba's
     compilation of the kernels.
@@ -467,6 +475,7 @@ def check_config(config: ExperimentConfig, path: Path | str | None = None) -> No
 
 
 def _check_config(config: ExperimentConfig) -> None:
+    registered_env_id(config.env_id)
     for agent in config.agents:
         check_params(agent.name, agent.params_dict())
         if config.env_id == SKID_ENV_ID:

@@ -8,7 +8,8 @@ never evaluation worlds (docs/tuning.md).
   finished, the IQM over them is reported as step k and the pruner may stop the trial (its
   unfinished runs are cancelled). Steps follow seed order, not completion order, so pruning
   decisions, and with them the whole study, are the same on every backend.
-* **Runs** go through :func:`skidnav.experiments.runner.execute` (serial, process pool, Dask).
+* **Runs** go through :func:`skidnav.experiments.runner.execute` (serial, process pool, Dask); a
+  run that raises ends the search in one line (:class:`~skidnav.errors.RunsFailedError`).
 * **Seeds**: a tuning run's world and run streams are those of the evaluation grid with the
   spawn key prefixed by :data:`TUNE_STREAM`: ``SeedSequence(root_seed).spawn(3)[2]`` takes the
   place of the root, whose children 0 and 1 are the evaluation world and run roots. Every trial
@@ -42,7 +43,7 @@ import optuna
 from optuna.trial import FrozenTrial, TrialState
 
 from skidnav.atomicfile import remove_stale_temporaries, write_atomic
-from skidnav.errors import CorruptFileError, UserError
+from skidnav.errors import CorruptFileError, RunsFailedError, UserError
 from skidnav.experiments.config import (
     DEFAULT_ENV_ID,
     AgentSpec,
@@ -50,6 +51,7 @@ from skidnav.experiments.config import (
     config_to_dict,
     freeze_params,
 )
+from skidnav.experiments.failures import RunFailure
 from skidnav.experiments.runner import TrialFunction, _check_backend, dask_client, default_jobs
 from skidnav.experiments.runner import execute as execute_runs
 from skidnav.experiments.runs import expand_runs
@@ -276,8 +278,11 @@ def _results(
 ) -> Generator[TrialResult, None, None]:
     # Closing this generator drops the last reference to the runner's iterator, whose clean-up
     # (a process pool's shutdown with its pending runs cancelled, Dask futures released) then
-    # runs at once.
-    yield from execute_runs(runs, context.trial, context.backend, context.jobs, context.client)
+    # runs at once. A run that raised fails its trial, and the search, in one line.
+    for outcome in execute_runs(runs, context.trial, context.backend, context.jobs, context.client):
+        if isinstance(outcome, RunFailure):
+            raise RunsFailedError(outcome.message)
+        yield outcome
 
 
 def evaluate(trial: optuna.Trial, runs: Sequence[ExperimentRun], context: _Context) -> float:
@@ -432,10 +437,10 @@ def tune_experiment(
     jobs = default_jobs() if jobs is None else jobs
     _check_backend(backend, jobs, scheduler)
     if trial is None:
-        from skidnav.experiments.trial import run_trial
+        from skidnav.experiments.trial import default_trial
 
         check_tuning(config, tune, config_path)
-        trial = run_trial
+        trial = default_trial()
     compared = check_separation(config, tune)
     plans = _plans(config, tune)
     out = Path(out_dir)

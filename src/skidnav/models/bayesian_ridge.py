@@ -18,6 +18,26 @@ are the conventions of scikit-learn's ``BayesianRidge`` (whose names α, λ are 
 results are matched in the tests. Sample weights scale each sample's squared error; with an
 intercept the inputs and targets are centred on their weighted means first.
 
+Degenerate data (guards, ours; none of them acts on data scikit-learn fits well, so the results
+still match it there). The kinematic regressions meet them: a slip region the robot only drove
+straight through gives constant or collinear inputs (one action's wheel speeds, or forward and
+back), so XᵀX is singular; a residual of rounding noise gives α ≈ 1/var ≈ 10¹⁶, so λ/α falls
+below the rounding of XᵀX's entries and its Cholesky factor meets a zero or negative pivot (a
+division by zero, or a NaN). Hence:
+
+* λ/α is at least :data:`SHIFT_FLOOR` × the largest diagonal entry of XᵀX (XᵀX + (λ/α) I then
+  has a condition number of at most ~10¹², and its factor is accurate), and each pivot of the
+  factor at least λ/α (a bound of exact arithmetic: every pivot is at least the smallest
+  eigenvalue of the matrix);
+* γ is kept in [0, k] (its exact range is [0, rank XᵀX]) and Σ weights − γ at least 0 (fewer
+  samples, by weight, than well-determined parameters: tiny weights, or one sample);
+* α and λ are kept in [:data:`PRECISION_FLOOR`, 1 / :data:`PRECISION_FLOOR`] (a squared error or
+  a |w|² that overflows would make them 0, and λ/α a division by zero).
+
+With inputs, targets and weights of magnitude at most :data:`MAX_MAGNITUDE` (checked) the fit is
+then finite for any data: zero residuals, constant or all-zero inputs, one sample, tiny or huge
+weights (tested against scikit-learn with hypothesis).
+
 Where the time goes: the kinematic model refits 3 regressions per slip region; through
 scikit-learn most of a refit was input validation (21 regions: ~0.3 s per refit, about half of
 dyna-kinematic's trainer time at 1000 planning steps). Here the data enter once as the k × k
@@ -43,6 +63,12 @@ from skidnav._jit import jit
 
 HYPERPRIOR = 1e-6
 """Shape and rate of the Gamma hyperpriors on α and λ."""
+SHIFT_FLOOR = 1e-12
+"""Least λ/α, relative to the largest diagonal entry of XᵀX (module docstring)."""
+PRECISION_FLOOR = 1e-100
+"""Least α and λ; 1 / PRECISION_FLOOR is the greatest (module docstring)."""
+MAX_MAGNITUDE = 1e50
+"""Greatest magnitude of an input, a target or a weight: the sums of their squares stay finite."""
 
 
 class RidgePosterior(NamedTuple):
@@ -76,11 +102,24 @@ class RidgePosterior(NamedTuple):
 
 
 @jit
-def _inverse_shifted(gram: np.ndarray, shift: float) -> np.ndarray:
-    """(gram + shift · I)⁻¹ of a symmetric positive semi-definite k × k matrix and shift > 0,
-    by a Cholesky factor L and forward substitution ((LLᵀ)⁻¹ = L⁻ᵀL⁻¹). Plain loops, not
-    LAPACK or BLAS: their summation orders differ between libraries, and the results must be
-    the same compiled and interpreted."""
+def _clamped(precision: float) -> float:
+    """``precision`` within [PRECISION_FLOOR, 1 / PRECISION_FLOOR] (a NaN: the floor)."""
+    if not precision >= PRECISION_FLOOR:
+        return PRECISION_FLOOR
+    return min(precision, 1.0 / PRECISION_FLOOR)
+
+
+@jit
+def _shift(lam: float, alpha: float, largest: float) -> float:
+    """λ/α, at least SHIFT_FLOOR × ``largest`` (the largest diagonal entry of XᵀX)."""
+    return max(lam / alpha, SHIFT_FLOOR * largest)
+
+
+@jit
+def _cholesky(gram: np.ndarray, shift: float) -> np.ndarray:
+    """The lower Cholesky factor L of gram + shift · I (gram a symmetric positive semi-definite
+    k × k matrix, shift > 0). Each pivot is at least ``shift``, as in exact arithmetic, so none
+    is zero or negative after rounding."""
     k = gram.shape[0]
     factor = np.zeros((k, k))
     for i in range(k):
@@ -88,7 +127,20 @@ def _inverse_shifted(gram: np.ndarray, shift: float) -> np.ndarray:
             value = gram[i, j] + (shift if i == j else 0.0)
             for m in range(j):
                 value -= factor[i, m] * factor[j, m]
-            factor[i, j] = math.sqrt(value) if i == j else value / factor[j, j]
+            if i == j:
+                factor[i, i] = math.sqrt(value if value >= shift else shift)
+            else:
+                factor[i, j] = value / factor[j, j]
+    return factor
+
+
+@jit
+def _inverse_shifted(gram: np.ndarray, shift: float) -> np.ndarray:
+    """(gram + shift · I)⁻¹ by the Cholesky factor L (:func:`_cholesky`) and forward
+    substitution ((LLᵀ)⁻¹ = L⁻ᵀL⁻¹). Plain loops, not LAPACK or BLAS: their summation orders
+    differ between libraries, and the results must be the same compiled and interpreted."""
+    k = gram.shape[0]
+    factor = _cholesky(gram, shift)
     lower_inverse = np.zeros((k, k))
     for column in range(k):
         for i in range(column, k):
@@ -117,6 +169,49 @@ def _times(matrix: np.ndarray, vector: np.ndarray) -> np.ndarray:
 
 
 @jit
+def _gram(inputs: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(XᵀX (k, k), Xᵀy (k,)) of ``inputs`` X (n, k) and ``target`` y (n,)."""
+    n, k = inputs.shape
+    gram = np.zeros((k, k))
+    projected = np.zeros(k)
+    for row in range(n):
+        for i in range(k):
+            projected[i] += inputs[row, i] * target[row]
+            for j in range(k):
+                gram[i, j] += inputs[row, i] * inputs[row, j]
+    return gram, projected
+
+
+@jit
+def _squared_error(inputs: np.ndarray, target: np.ndarray, coef: np.ndarray) -> float:
+    """E = |y − Xw|² of ``inputs`` X (n, k), ``target`` y (n,) and ``coef`` w (k,)."""
+    error = 0.0
+    for row in range(inputs.shape[0]):
+        residual = target[row]
+        for column in range(inputs.shape[1]):
+            residual -= inputs[row, column] * coef[column]
+        error += residual * residual
+    return error
+
+
+@jit
+def _precisions(
+    inverse: np.ndarray, shift: float, coef: np.ndarray, error: float, weight_sum: float
+) -> tuple[float, float]:
+    """The re-estimated (λ, α) of step 3 of the module docstring, from A⁻¹ (k, k) of
+    A = XᵀX + ``shift`` · I, the posterior mean (k,) and its squared error, guarded."""
+    k = inverse.shape[0]
+    trace, norm = 0.0, 0.0
+    for i in range(k):
+        trace += inverse[i, i]
+        norm += coef[i] * coef[i]
+    gamma = min(max(k - shift * trace, 0.0), float(k))
+    lam = _clamped((gamma + 2.0 * HYPERPRIOR) / (norm + 2.0 * HYPERPRIOR))
+    free = max(weight_sum - gamma, 0.0)
+    return lam, _clamped((free + 2.0 * HYPERPRIOR) / (error + 2.0 * HYPERPRIOR))
+
+
+@jit
 def _evidence_iterations(
     inputs: np.ndarray,
     target: np.ndarray,
@@ -128,37 +223,23 @@ def _evidence_iterations(
     """The evidence loop of the module docstring on prepared data: ``inputs`` (n, k) and
     ``target`` (n,) already centred if need be and multiplied by √w; ``weight_sum`` = Σ w.
     With A = XᵀX + (λ/α) I: w = A⁻¹Xᵀy, γ = k − (λ/α) · trace(A⁻¹) (the eigenvalue sum of
-    the module docstring), Σ = A⁻¹ / α. Returns (coef (k,), covariance (k, k), α, λ,
-    iterations)."""
-    n, k = inputs.shape
-    gram = np.zeros((k, k))
-    projected = np.zeros(k)
-    for row in range(n):
-        for i in range(k):
-            projected[i] += inputs[row, i] * target[row]
-            for j in range(k):
-                gram[i, j] += inputs[row, i] * inputs[row, j]
-    alpha = 1.0 / (target_variance + np.finfo(np.float64).eps)
+    the module docstring), Σ = A⁻¹ / α, each guarded as the module docstring says. Returns
+    (coef (k,), covariance (k, k), α, λ, iterations)."""
+    k = inputs.shape[1]
+    gram, projected = _gram(inputs, target)
+    largest = 0.0
+    for i in range(k):
+        largest = max(largest, gram[i, i])
+    alpha = _clamped(1.0 / (target_variance + np.finfo(np.float64).eps))
     lam = 1.0
-    coef = np.zeros(k)
     previous = np.zeros(k)
     iterations = max_iter
     for iteration in range(max_iter):
-        inverse = _inverse_shifted(gram, lam / alpha)
+        shift = _shift(lam, alpha, largest)
+        inverse = _inverse_shifted(gram, shift)
         coef = _times(inverse, projected)
-        error = 0.0
-        for row in range(n):
-            residual = target[row]
-            for column in range(k):
-                residual -= inputs[row, column] * coef[column]
-            error += residual * residual
-        trace, norm = 0.0, 0.0
-        for i in range(k):
-            trace += inverse[i, i]
-            norm += coef[i] * coef[i]
-        gamma = k - lam / alpha * trace
-        lam = (gamma + 2.0 * HYPERPRIOR) / (norm + 2.0 * HYPERPRIOR)
-        alpha = (weight_sum - gamma + 2.0 * HYPERPRIOR) / (error + 2.0 * HYPERPRIOR)
+        error = _squared_error(inputs, target, coef)
+        lam, alpha = _precisions(inverse, shift, coef, error, weight_sum)
         moved = 0.0
         for i in range(k):
             moved += abs(previous[i] - coef[i])
@@ -166,7 +247,7 @@ def _evidence_iterations(
             iterations = iteration + 1
             break
         previous[:] = coef
-    inverse = _inverse_shifted(gram, lam / alpha)
+    inverse = _inverse_shifted(gram, _shift(lam, alpha, largest))
     return _times(inverse, projected), inverse / alpha, alpha, lam, iterations
 
 
@@ -181,18 +262,18 @@ def fit_bayesian_ridge(
     """Fit y ≈ inputs · coef (+ intercept) by evidence maximization (module docstring).
 
     Args:
-        inputs: float64 (n, k). target: float64 (n,). weights: non-negative (n,), not all 0.
+        inputs: float64 (n, k), n ≥ 1. target: float64 (n,). weights: (n,), ≥ 0, not all 0.
+            All finite and of magnitude at most :data:`MAX_MAGNITUDE`.
         fit_intercept: centre on the weighted means and fit an intercept.
         max_iter, tol: the evidence loop's limit and its L1 tolerance on the posterior mean.
+
+    Raises:
+        ValueError: for arrays of other shapes or values.
     """
     inputs = np.asarray(inputs, dtype=np.float64)
     target = np.asarray(target, dtype=np.float64)
     weights = np.asarray(weights, dtype=np.float64)
-    if inputs.ndim != 2 or target.shape != (len(inputs),) or weights.shape != target.shape:
-        raise ValueError(
-            f"expected inputs (n, k), target (n,) and weights (n,), got {inputs.shape}, "
-            f"{target.shape} and {weights.shape}"
-        )
+    _check_data(inputs, target, weights)
     weight_sum = float(weights.sum())
     target_mean = float(np.average(target, weights=weights))
     target_variance = float(np.average((target - target_mean) ** 2, weights=weights))
@@ -207,3 +288,27 @@ def fit_bayesian_ridge(
     )
     intercept = target_mean - float(offset @ coef) if fit_intercept else 0.0
     return RidgePosterior(coef, intercept, covariance, float(alpha), float(lam), offset, iterations)
+
+
+def _check_data(inputs: np.ndarray, target: np.ndarray, weights: np.ndarray) -> None:
+    """ValueError unless the arrays are as :func:`fit_bayesian_ridge` requires."""
+    if (
+        inputs.ndim != 2
+        or len(inputs) == 0
+        or target.shape != (len(inputs),)
+        or weights.shape != target.shape
+    ):
+        raise ValueError(
+            f"expected inputs (n, k) with n >= 1, target (n,) and weights (n,), got "
+            f"{inputs.shape}, {target.shape} and {weights.shape}"
+        )
+    for name, values in (("inputs", inputs), ("target", target), ("weights", weights)):
+        if not np.all(np.abs(values) <= MAX_MAGNITUDE):  # NaN fails too
+            raise ValueError(
+                f"expected finite {name} of magnitude at most {MAX_MAGNITUDE:g}, got "
+                f"{values.min():g} .. {values.max():g}"
+            )
+    if not (np.all(weights >= 0.0) and weights.sum() > 0.0):
+        raise ValueError(
+            f"expected weights >= 0, not all 0, got {weights.min():g} .. {weights.max():g}"
+        )

@@ -32,11 +32,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from skidnav.checks import check_integer, check_number
+from skidnav.envs.features import MAX_LIDAR_RAYS as MAX_LIDAR_RAYS  # the env's cap, re-exported
 
 MAX_HIDDEN = 1024
 """Widest hidden layer accepted (a saved file announcing more is refused before allocation)."""
-MAX_LIDAR_RAYS = 1024
-"""Most lidar rays accepted (the env's default is 8)."""
 
 
 @dataclass(frozen=True, eq=False)

@@ -2,11 +2,12 @@
 
 ``sim`` starts ``skidnav robot sim-server`` as a child process on a free loopback port (with the
 run's map, seed, time scale and ``[sim]`` settings, and a lease as long as the run's command
-``ttl``) and talks to it over TCP; reconnecting after a fault restarts the server if it died.
-The child's standard input is a pipe from this process and the server exits at its end of
-stream (``--exit-with-stdin``): when this process ends in any way, SIGKILL included, the kernel
-closes the pipe and the server follows. ``ros2`` is built by ``skidnav.realtime.link.ros2`` when
-that module is installed.
+``ttl``; without the current directory on its ``sys.path``, :mod:`skidnav.childprocess`) and
+talks to it over TCP; reconnecting after a fault restarts the server if it died. The child's
+standard input is a pipe from this process and the server exits at its end of stream
+(``--exit-with-stdin``): when this process ends in any way, SIGKILL included, the kernel closes
+the pipe and the server follows. ``ros2`` is built by ``skidnav.realtime.link.ros2`` when that
+module is installed.
 
 The line drivers authenticate the link (docs/protocol.md, "Authentication") with the secret in
 the file ``secret_file`` of their table, else in the environment variable
@@ -17,13 +18,12 @@ from __future__ import annotations
 
 import importlib
 import logging
-import os
 import subprocess
-import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from skidnav.childprocess import child_environment, python_module_command
 from skidnav.errors import UserError
 from skidnav.realtime.config import MAX_LEASE_LIMIT, RealtimeConfig
 from skidnav.realtime.link.auth import load_secret
@@ -48,15 +48,16 @@ class SimServerProcess:
         """Start the server (if not running) and return its port; ConnectionError on failure."""
         if self.process is not None and self.process.poll() is None:
             return self.port
-        command = [sys.executable, "-m", "skidnav.cli", "robot", "sim-server", "--port", "0"]
+        command = python_module_command("skidnav.cli", "robot", "sim-server", "--port", "0")
         command += ["--exit-with-stdin", *self.arguments]
         if self.log_path is not None:
             command += ["--log", str(self.log_path)]
-        env = dict(os.environ)
-        src = str(Path(__file__).resolve().parents[2])
-        env["PYTHONPATH"] = os.pathsep.join(filter(None, [src, env.get("PYTHONPATH")]))
         self.process = subprocess.Popen(
-            command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env
+            command,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            env=child_environment(),
         )
         assert self.process.stdout is not None
         line = self.process.stdout.readline()
