@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from skidnav.commands.outputs import check_output_dir
 from skidnav.experiments.configfile import load_config_and_text
 from skidnav.experiments.runner import BACKENDS, run_experiment
 
@@ -50,7 +51,7 @@ def add_backend_arguments(parser: argparse.ArgumentParser) -> None:
 def run_command(args: argparse.Namespace) -> int:
     """Run the experiment; print where the results are."""
     config, text = load_config_and_text(args.config)
-    out = args.out if args.out is not None else Path("runs") / config.name
+    out = check_output_dir(args.out if args.out is not None else Path("runs") / config.name)
     outcome = run_experiment(
         config,
         out,
