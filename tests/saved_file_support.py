@@ -1,16 +1,21 @@
 """Helpers of the saved-file tests: hand-made ``.npz`` archives (forged headers, zip bombs,
-strangers), directory listings, and commands run on a disk that fills up."""
+strangers), special files (FIFOs, sockets), a watchdog for calls that must not hang, directory
+listings, and commands run on a disk that fills up."""
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 import resource
+import signal
+import socket
 import subprocess
 import sys
 import zipfile
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
+from types import FrameType
 
 import numpy as np
 from numpy.lib import format as npy_format
@@ -114,3 +119,44 @@ def write_checkpoint(
         (directory / "agent.json").write_text(agent[0])
         write_npz(directory / "agent.npz", agent[1])
     return directory
+
+
+class Hung(BaseException):
+    """A call that did not return in time (a BaseException: no loader's handler takes it)."""
+
+
+@contextlib.contextmanager
+def within(seconds: float) -> Iterator[None]:
+    """Raise :class:`Hung` in the block if it runs longer than ``seconds`` (SIGALRM, which
+    also interrupts a blocking ``open`` or ``read``)."""
+
+    def expire(signum: int, frame: FrameType | None) -> None:
+        raise Hung(f"still running after {seconds} s")
+
+    previous = signal.signal(signal.SIGALRM, expire)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def replace_with(path: Path, kind: str) -> contextlib.AbstractContextManager[None]:
+    """Replace the file ``path`` by a special file for the duration: ``"fifo"`` (no writer),
+    ``"socket"`` (a listening Unix socket), ``"device"`` (a link to ``/dev/urandom``) or
+    ``"directory"``."""
+    stack = contextlib.ExitStack()
+    if path.exists() or path.is_symlink():
+        path.unlink()
+    if kind == "fifo":
+        os.mkfifo(path)
+    elif kind == "socket":
+        server = stack.enter_context(socket.socket(socket.AF_UNIX, socket.SOCK_STREAM))
+        server.bind(str(path))
+        server.listen(1)
+    elif kind == "device":
+        path.symlink_to("/dev/urandom")
+    else:
+        path.mkdir()
+    return stack

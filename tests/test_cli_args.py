@@ -12,13 +12,18 @@ from skidnav.experiments import report as report_module
 
 
 @pytest.mark.parametrize("command", ["run", "tune"])
-def test_a_config_that_never_ends_is_refused_at_its_limit(
+def test_a_device_or_a_huge_config_is_refused(
     command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    out = tmp_path / "out"
-    assert main([command, "/dev/zero", "--out", str(out), "--backend", "serial"]) == 2
-    lines = capsys.readouterr().err.strip().splitlines()
-    assert lines == ["skidnav: error: /dev/zero: config file larger than 4,000,000 bytes"]
+    out, huge = tmp_path / "out", tmp_path / "huge.toml"
+    huge.write_bytes(b"#" * 4_000_001)
+    for config, problem in [
+        ("/dev/zero", "cannot read config file (a character device, not a regular file)"),
+        (str(huge), "config file larger than 4,000,000 bytes"),
+    ]:
+        assert main([command, config, "--out", str(out), "--backend", "serial"]) == 2
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert lines == [f"skidnav: error: {config}: {problem}"]
     assert not out.exists()
 
 
@@ -40,9 +45,10 @@ def test_a_report_into_a_missing_folder_is_one_line(
     assert main(["report", str(tmp_path), "-o", str(target)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert lines == [
-        f"skidnav: error: {target}: cannot write the report (No such file or directory)"
+        f"skidnav: error: {target}: cannot write there (no directory {target.parent}); choose "
+        "another --output"
     ]
     assert sorted(tmp_path.iterdir()) == []
     assert main(["report", str(tmp_path), "-o", str(tmp_path)]) == 2  # a directory
-    assert "cannot write the report" in capsys.readouterr().err
+    assert "a directory, not a file; choose another --output" in capsys.readouterr().err
     assert sorted(tmp_path.iterdir()) == []

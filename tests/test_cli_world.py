@@ -75,7 +75,7 @@ EDGE_MAP = "skidnav-map 1\nwidth 6\nheight 5\nmap\n######\n#....S\n#....#\n#G...
         ([*ONE_STEP, "--out", "{tmp}/x.unknown"], "x.unknown: unknown picture format"),
         (
             [*ONE_STEP, "--out", "{tmp}/t.png", "--csv", "/nonexistent/x.csv"],
-            "/nonexistent/x.csv: cannot write the CSV file",
+            "/nonexistent/x.csv: cannot write there (no directory /nonexistent); choose another",
         ),
         (["simulate", "--map", "{edge}", "--actions", "f"], "m.txt:6:6: start 'S' in the last"),
         (["map", "generate", "--out", "/nonexistent/x.txt"], "/nonexistent/x.txt: cannot write"),
@@ -97,19 +97,22 @@ def test_user_errors_are_one_line_and_exit_2(args, message, tmp_path):
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["simulate", "--actions-file", "/dev/zero"], "action file larger than 2,097,152 bytes"),
+        (["simulate", "--actions-file", "/dev/zero"], "action file (a character device, not a"),
+        (["simulate", "--actions-file", "{huge}"], "action file larger than 2,097,152 bytes"),
         (["simulate", "--actions-file", "{tmp}/none"], "none: no such action file"),
         (["simulate", "--actions-file", "{long}"], "100,001 actions, expected at most 100,000"),
         (["simulate", "--actions", "f " + "x" * 10**5], "unknown action 'xxxxxxxxx"),
         (["simulate", "--random", "100001"], "expected --random >= 1 and <= 100,000"),
-        (["map", "show", "/dev/zero"], "/dev/zero: map file larger than 4,194,304 bytes"),
-        (["simulate", "--map", "/dev/zero", "--actions", "f"], "map file larger than"),
+        (["map", "show", "/dev/zero"], "/dev/zero: cannot read map file (a character device"),
+        (["simulate", "--map", "/dev/zero", "--actions", "f"], "map file (a character device"),
+        (["map", "show", "{huge}"], "huge.txt: map file larger than 4,194,304 bytes"),
     ],
 )
 def test_arguments_naming_endless_or_huge_inputs_are_one_line(args, message, tmp_path, capsys):
-    long_script = tmp_path / "long.txt"
+    long_script, huge = tmp_path / "long.txt", tmp_path / "huge.txt"
     long_script.write_text("f " * 100_001)
-    assert main([arg.format(tmp=tmp_path, long=long_script) for arg in args]) == 2
+    huge.write_bytes(b" " * (4 * 2**20 + 1))
+    assert main([arg.format(tmp=tmp_path, long=long_script, huge=huge) for arg in args]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and message in lines[0] and len(lines[0]) < 200, lines
 

@@ -2,7 +2,8 @@
 
 :func:`write_atomic` writes a temporary file beside the target, fsyncs it and moves it into
 place with ``os.replace``: a reader, or a kill at any moment, sees the old file or the new one.
-:func:`write_user_file` turns its OSError into one user-error line; :func:`write_npz_atomic`
+:func:`writing` turns an OSError into one user-error line (:func:`write_user_file` is the two
+together: a full disk is one line, the previous file kept); :func:`write_npz_atomic`
 writes an ``.npz`` built in memory; :func:`remove_stale_temporaries` removes the temporaries of
 writers that died (their pid is in the name).
 
@@ -17,7 +18,7 @@ import io
 import os
 import re
 import secrets
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -51,14 +52,29 @@ def write_atomic(path: Path | str, data: bytes) -> None:
             os.close(descriptor)
 
 
-def write_user_file(path: Path | str, data: bytes, what: str = "file") -> None:
-    """:func:`write_atomic` for a file the user asked for: an OSError (missing folder, no
-    permission, disk full) becomes one :class:`~skidnav.errors.UserError` line,
-    ``"PATH: cannot write the WHAT (reason)"``."""
+@contextlib.contextmanager
+def writing(path: Path | str, what: str = "file") -> Iterator[None]:
+    """Report an OSError of the writes in the block (missing folder, no permission, disk full)
+    as one :class:`~skidnav.errors.UserError` line, ``"PATH: cannot write the WHAT (reason)"``;
+    an atomic write has left the previous file as it was.
+
+    >>> with writing("/dev/null/x.csv", "table"):
+    ...     write_atomic("/dev/null/x.csv", b"")
+    Traceback (most recent call last):
+    ...
+    skidnav.errors.UserError: /dev/null/x.csv: cannot write the table (Not a directory)
+    """
     try:
-        write_atomic(path, data)
+        yield
     except OSError as error:
         raise UserError(f"{path}: cannot write the {what} ({error.strerror or error})") from None
+
+
+def write_user_file(path: Path | str, data: bytes, what: str = "file") -> None:
+    """:func:`write_atomic` for a file the user asked for, an OSError reported by
+    :func:`writing`."""
+    with writing(path, what):
+        write_atomic(path, data)
 
 
 def write_npz_atomic(

@@ -1,7 +1,13 @@
-"""The ``skidnav`` command: parse arguments, call the subcommand, turn user errors into one line."""
+"""The ``skidnav`` command: parse arguments, call the subcommand, turn user errors into one line.
+
+A full disk is the user's to fix too: every writer of skidnav reports it in one line naming its
+file (:func:`skidnav.atomicfile.writing`), and :func:`main` turns one that escaped them (an
+append to a log or journal written by a library) into one line as well.
+"""
 
 from __future__ import annotations
 
+import errno
 import importlib
 import logging
 import sys
@@ -27,6 +33,8 @@ SUBCOMMAND_MODULES = {
     "search": "skidnav.commands.search",
 }
 """Subcommand name → the module that adds it (``add_parser(subparsers)``)."""
+DISK_FULL = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
+"""``errno`` of a write that found no room: no space left, over quota, file too large."""
 
 
 def requested_modules(argv: Sequence[str]) -> list[str]:
@@ -69,6 +77,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except RunsFailedError as error:
         print(f"skidnav: error: {error}", file=sys.stderr)
         return EXIT_RUNS_FAILED
+    except OSError as error:
+        if error.errno not in DISK_FULL:
+            raise
+        where = f"{error.filename}: " if error.filename else ""
+        print(f"skidnav: error: {where}cannot write ({error.strerror})", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("skidnav: interrupted", file=sys.stderr)
         return 130

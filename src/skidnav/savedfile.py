@@ -6,12 +6,18 @@ line (a config: one :class:`~skidnav.errors.UserError` line), never in a traceba
 MemoryError, a RecursionError, an OverflowError or a hang, so nothing in a file is used before
 it is checked against what the reader expects:
 
-* :func:`read_limited` reads at most a given number of bytes (``/dev/zero`` ends at the limit);
-* :func:`parse_json` / :func:`read_json`: a size limit, a nesting limit checked before parsing,
-  no ``NaN``/``Infinity`` or overflowing numbers unless asked for, a JSON object;
-* :func:`read_config_text` / :func:`parse_toml`: the same limits for a TOML config;
+* every file is opened by :func:`skidnav.userfile.open_user_file` (a regular file; a FIFO, a
+  device or a socket refused without blocking) and read by :func:`~skidnav.userfile.read_limited`
+  (at most a given number of bytes);
+* :func:`parse_json` / :func:`read_json`: a size limit, a nesting limit checked before parsing
+  (:func:`skidnav.jsondepth.json_depth`, in memory linear in the text), no ``NaN``/``Infinity``
+  or overflowing numbers unless asked for, a JSON object;
+* :func:`read_config_text` / :func:`parse_toml`: the same limits for a TOML config (which may
+  come through a pipe);
 * :func:`shown`: a value of a file quoted in an error message (40 characters at most);
-* :class:`SavedArchive`: an ``.npz`` whose member names are checked against the expected arrays
+* :class:`SavedArchive`: an ``.npz`` whose zip directory is checked first (at most
+  :data:`MAX_MEMBERS` members in at most :data:`MAX_DIRECTORY_BYTES`, their declared sizes within
+  the budget), then whose member names are checked against the expected arrays
   (unknown or missing ones refused) before anything is decompressed, then every member's ``.npy``
   header (read with :func:`numpy.lib.format.read_magic` and ``read_array_header_1_0/2_0``, itself
   at most :data:`MAX_HEADER_BYTES`) against its :class:`ArraySpec` (dtype, shape) and its
@@ -27,18 +33,22 @@ import io
 import json
 import math
 import re
+import struct
+import tokenize
 import tomllib
 import zipfile
 import zlib
 from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any, BinaryIO, NamedTuple
 
 import numpy as np
 from numpy.lib import format as npy_format
 
 from skidnav.errors import CorruptFileError, UserError, excerpt, first_line
+from skidnav.jsondepth import json_depth
+from skidnav.userfile import open_user_file, read_limited
 
 MAX_JSON_BYTES = 64 * 2**20
 """Largest JSON file read [bytes] (an agent's is a few kilobytes, metadata a few megabytes)."""
@@ -54,49 +64,17 @@ MAX_HEADER_BYTES = 10_000
 """Largest ``.npy`` header accepted [bytes] (NumPy writes about 128)."""
 MAX_MEMBERS = 1000
 """Most members an ``.npz`` may hold."""
+MAX_DIRECTORY_BYTES = MAX_MEMBERS * 1024
+"""Largest zip directory of an ``.npz`` read [bytes] (NumPy's entries take about 100 bytes)."""
 READ_ERRORS = (
     OSError, ValueError, TypeError, EOFError, zipfile.BadZipFile, zlib.error,
-    NotImplementedError, MemoryError, RecursionError, OverflowError,
+    NotImplementedError, MemoryError, RecursionError, OverflowError, SyntaxError,
+    tokenize.TokenError,
 )  # fmt: skip
 """What decoding a damaged file can raise (zipfile raises NotImplementedError for a damaged
-compression-method field); readers turn them into one CorruptFileError line."""
-
-
-def read_limited(
-    path: Path | str, max_bytes: int, what: str = "file", error: type[UserError] = CorruptFileError
-) -> bytes:
-    """The bytes of ``path``; ``error`` (one line naming the file) when it is missing,
-    unreadable or longer than ``max_bytes``. Works on pipes and devices: reads at most
-    ``max_bytes + 1`` bytes and never asks for the size (``/dev/zero`` ends at the limit)."""
-    try:
-        with open(path, "rb") as handle:
-            data = handle.read(max_bytes + 1)
-    except FileNotFoundError:
-        raise error(f"{path}: no such {what}") from None
-    except OSError as failure:
-        raise error(f"{path}: cannot read {what} ({failure.strerror or failure})") from None
-    if len(data) > max_bytes:
-        raise error(f"{path}: {what} larger than {max_bytes:,} bytes")
-    return data
-
-
-_STRING = re.compile(r'"(?:[^"\\]|\\.)*"', re.DOTALL)
-_NOT_BRACKET = re.compile(r"[^\[\]{}]")
-
-
-def json_depth(text: str) -> int:
-    """Deepest nesting of arrays and objects in JSON ``text`` (brackets inside strings ignored),
-    computed without recursion.
-
-    >>> json_depth('{"a": [1, {"b": "[[["}]}'), json_depth("3")
-    (3, 0)
-    """
-    brackets = _NOT_BRACKET.sub("", _STRING.sub("", text))
-    if not brackets:
-        return 0
-    codes = np.frombuffer(brackets.encode("ascii"), dtype=np.uint8)
-    steps = np.where((codes == ord("[")) | (codes == ord("{")), 1, -1)
-    return int(np.cumsum(steps).max())
+compression-method field; NumPy parses a ``.npy`` header as a Python literal, and one that is
+not raises SyntaxError, or TokenError from its second try); readers turn them into one
+CorruptFileError line."""
 
 
 def _refuse_constant(name: str) -> Any:
@@ -111,18 +89,24 @@ def _finite_float(text: str) -> float:
 
 
 def parse_json(
-    text: str,
+    text: str | bytes,
     where: Path | str,
     *,
     max_depth: int = MAX_JSON_DEPTH,
     allow_nonfinite: bool = False,
 ) -> dict[str, Any]:
-    """The JSON object in ``text``; CorruptFileError ``"where: problem"`` when it is malformed,
-    nested deeper than ``max_depth``, not an object, or (unless ``allow_nonfinite``) holds
-    ``NaN``, ``Infinity`` or a number too large for a float (e.g. ``1e400``)."""
+    """The JSON object in ``text`` (or in its UTF-8 bytes); CorruptFileError ``"where: problem"``
+    when it is not UTF-8, malformed, nested deeper than ``max_depth``, not an object, or (unless
+    ``allow_nonfinite``) holds ``NaN``, ``Infinity`` or a number too large for a float (e.g.
+    ``1e400``)."""
     depth = json_depth(text)
     if depth > max_depth:
         raise CorruptFileError(f"{where}: JSON nested {depth} deep, expected at most {max_depth}")
+    if isinstance(text, bytes):
+        try:
+            text = text.decode("utf-8")
+        except UnicodeDecodeError:
+            raise CorruptFileError(f"{where}: not UTF-8 text") from None
     options: dict[str, Any] = {}
     if not allow_nonfinite:
         options = {"parse_constant": _refuse_constant, "parse_float": _finite_float}
@@ -143,13 +127,9 @@ def read_json(
     allow_nonfinite: bool = False,
     what: str = "file",
 ) -> dict[str, Any]:
-    """:func:`parse_json` of a file of at most ``max_bytes`` bytes (UTF-8)."""
+    """:func:`parse_json` of a regular file of at most ``max_bytes`` bytes (UTF-8)."""
     data = read_limited(path, max_bytes, what)
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError:
-        raise CorruptFileError(f"{path}: not UTF-8 text") from None
-    return parse_json(text, path, max_depth=max_depth, allow_nonfinite=allow_nonfinite)
+    return parse_json(data, path, max_depth=max_depth, allow_nonfinite=allow_nonfinite)
 
 
 def nesting_depth(value: object) -> int:
@@ -170,9 +150,11 @@ def nesting_depth(value: object) -> int:
 
 
 def read_config_text(path: Path | str) -> str:
-    """The text of a config file of at most :data:`MAX_CONFIG_BYTES` bytes (a device or a pipe
-    ends at that limit instead of filling the memory); UserError naming the file otherwise."""
-    data = read_limited(path, MAX_CONFIG_BYTES, "config file", UserError)
+    """The text of a config file of at most :data:`MAX_CONFIG_BYTES` bytes, a regular file or a
+    pipe (read up to that limit instead of filling the memory, its writer given
+    :data:`~skidnav.userfile.PIPE_TIMEOUT_S` to finish); UserError naming the file otherwise (a
+    device, a directory, a socket)."""
+    data = read_limited(path, MAX_CONFIG_BYTES, "config file", UserError, pipes=True)
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError:
@@ -287,26 +269,31 @@ class SavedArchive:
     def __init__(self, path: Path | str, max_bytes: int = MAX_ARCHIVE_BYTES) -> None:
         self.path = Path(path)
         self.max_bytes = max_bytes
+        self._handle: BinaryIO | None = None
         self._zip: zipfile.ZipFile | None = None
         self._members: dict[str, zipfile.ZipInfo] = {}
 
     def __enter__(self) -> SavedArchive:
+        self._handle = open_user_file(self.path)
         try:
-            self._zip = zipfile.ZipFile(self.path)
-        except FileNotFoundError:
-            raise CorruptFileError(f"{self.path}: no such file") from None
-        except READ_ERRORS as error:
-            raise self._error(f"not a readable .npz archive ({first_line(error, 80)})") from None
-        try:
+            try:
+                _check_directory(self._handle)
+                self._zip = zipfile.ZipFile(self._handle)
+            except READ_ERRORS as error:
+                problem = first_line(error, 80)
+                raise self._error(f"not a readable .npz archive ({problem})") from None
             self._list_members(self._zip.infolist())
         except BaseException:
-            self._zip.close()
+            self.__exit__()
             raise
         return self
 
     def _list_members(self, members: list[zipfile.ZipInfo]) -> None:
         if len(members) > MAX_MEMBERS:
             raise self._error(f"{len(members)} members, expected at most {MAX_MEMBERS}")
+        declared = sum(info.file_size for info in members)
+        if declared > self.max_bytes + len(members) * MAX_HEADER_BYTES:
+            raise self._error(f"members of {declared:,} bytes, expected at most {self.max_bytes:,}")
         for info in members:
             name = info.filename.removesuffix(".npy")
             if name == info.filename or name in self._members:
@@ -314,8 +301,10 @@ class SavedArchive:
             self._members[name] = info
 
     def __exit__(self, *exc_info: object) -> None:
-        if self._zip is not None:
-            self._zip.close()
+        for resource in (self._zip, self._handle):
+            if resource is not None:
+                resource.close()
+        self._zip = self._handle = None
 
     @property
     def names(self) -> frozenset[str]:
@@ -393,6 +382,36 @@ class SavedArchive:
         return data.view(header.dtype).reshape(
             header.shape, order="F" if header.fortran_order else "C"
         )
+
+
+_END_RECORD = b"PK\x05\x06"
+_END_RECORD_BYTES = 22
+_SEARCHED_BYTES = _END_RECORD_BYTES + (1 << 16)
+"""Where ``zipfile`` looks for the end record: within reach of the largest comment."""
+_ZIP64_LOCATOR = b"PK\x06\x07"
+_LOCATOR_BYTES = 20
+
+
+def _check_directory(handle: BinaryIO) -> None:
+    """ValueError unless the end record of the zip file ``handle`` (found where ``zipfile`` finds
+    it: the last 22 bytes, else the last match in the searched tail) announces at most
+    :data:`MAX_MEMBERS` entries in at most :data:`MAX_DIRECTORY_BYTES`, with no ZIP64 locator
+    before it (an archive within the limits never needs one). ``zipfile`` reads the whole
+    directory at once and makes an object per entry, so this comes first."""
+    size = handle.seek(0, io.SEEK_END)
+    window = min(size, _SEARCHED_BYTES + _LOCATOR_BYTES)
+    handle.seek(size - window)
+    tail = handle.read(window)
+    at = len(tail) - _END_RECORD_BYTES
+    if not (at >= 0 and tail.startswith(_END_RECORD, at) and tail.endswith(b"\0\0")):
+        at = tail.rfind(_END_RECORD, max(0, len(tail) - _SEARCHED_BYTES))
+    if at < 0 or at + _END_RECORD_BYTES > len(tail):
+        raise ValueError("no zip directory")
+    entries, directory_bytes = struct.unpack_from("<HI", tail, at + 10)
+    if at >= _LOCATOR_BYTES and tail.startswith(_ZIP64_LOCATOR, at - _LOCATOR_BYTES):
+        raise ValueError("a ZIP64 directory")
+    if entries > MAX_MEMBERS or directory_bytes > MAX_DIRECTORY_BYTES:
+        raise ValueError(f"a directory of {entries:,} entries in {directory_bytes:,} bytes")
 
 
 def _read_header(stream: Any) -> tuple[NpyHeader, int]:

@@ -171,11 +171,17 @@ def test_no_data_is_read_before_every_member_is_checked(
         assert read == []  # refused from the zip directory and the headers alone
 
 
-def test_json_through_a_device_is_cut_at_its_limit(saved_dyna_q: Files, tmp_path: Path) -> None:
+def test_json_through_a_device_is_refused_and_a_long_one_cut(
+    saved_dyna_q: Files, tmp_path: Path
+) -> None:
     npz_path = _write(tmp_path / "c", saved_dyna_q, lambda files: None, "")
     json_path = npz_path.with_suffix(".json")
     json_path.unlink()
     json_path.symlink_to("/dev/zero")
+    with pytest.raises(CorruptFileError, match=r"agent file \(a character device, not a regular"):
+        load_agent(npz_path)
+    json_path.unlink()
+    json_path.write_bytes(b" " * (2**20 + 1))
     with pytest.raises(CorruptFileError, match="agent file larger than 1,048,576 bytes"):
         load_agent(npz_path)
 

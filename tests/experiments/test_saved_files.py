@@ -20,7 +20,8 @@ from skidnav.cli import main
 from skidnav.errors import CorruptFileError
 from skidnav.experiments.oracle import cache_dir, load_or_compute_oracle
 from skidnav.experiments.store import ResultStore
-from skidnav.savedfile import json_depth, parse_json
+from skidnav.jsondepth import json_depth
+from skidnav.savedfile import parse_json
 from skidnav.world.grid import GridMap, border_walls
 from tests.experiments.exp_support import cli_command, cli_env
 from tests.saved_file_support import arrays_of, forged_npy, npy_bytes, write_npz

@@ -5,6 +5,7 @@ the policy's output clipped to the wheels' limit."""
 from __future__ import annotations
 
 import json
+import logging
 import math
 import threading
 import time
@@ -242,10 +243,11 @@ def test_goal_tracker_reaches_the_goal_through_the_sim_driver_and_resumes(
 
 
 def test_a_failing_policy_stops_the_robot_and_ends_the_run(
-    tmp_path: Path, overdriven_file: Any
+    tmp_path: Path, overdriven_file: Any, caplog: pytest.LogCaptureFixture
 ) -> None:
     """NaN wheel speeds from the 4th call on (the 1st is the check before connecting): the
-    monitor trips, the stop is confirmed, exit code 3."""
+    monitor trips, the stop is confirmed, exit code 3; the failure is logged in one line (no
+    traceback)."""
     out = tmp_path / "out"
     policy_path = overdriven_file(fail_after=3)
     with ServerThread(TIME_SCALE, log=tmp_path / "server.jsonl") as server:
@@ -255,6 +257,9 @@ def test_a_failing_policy_stops_the_robot_and_ends_the_run(
     events = read_events(out / "run.jsonl")
     trip = next(e for e in events if e["event"] == "trip")
     assert trip["reason"].startswith("policy failed: expected an action of two finite wheel")
+    errors = [record for record in caplog.records if record.levelno >= logging.ERROR]
+    assert [record.getMessage() for record in errors] == [trip["reason"]]
+    assert not any(record.exc_info for record in errors)
     assert [e["confirmed"] for e in events if e["event"] == "stopped"] == [True]
     assert sum(e["event"] == "transition" for e in events) == 2
     summary = json.loads((out / "summary.json").read_text())
@@ -305,6 +310,31 @@ def test_bad_policy_settings_and_files_are_one_line_errors(
         lines = capsys.readouterr().err.strip().splitlines()
         assert len(lines) == 1 and message in lines[0], lines
     assert not (tmp_path / "out").exists()  # refused before anything was written
+
+
+@pytest.mark.parametrize("weight", [1e308, 1e32, math.nan])
+def test_a_policy_with_weights_no_search_writes_is_one_line(
+    weight: float, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Weights of 10³² and more (the search keeps them below: cmaes asserts it) would overflow
+    the policy's sums to NaN on the robot: refused when the file is loaded."""
+    from skidnav.policysearch.policy import PolicyLayout, TanhPolicy
+    from skidnav.policysearch.policyfile import save_policy
+
+    layout = PolicyLayout(np.zeros(9), np.ones(9), hidden=2, wheel_speed=1.7, lidar_rays=2)
+    npz_path, json_path = save_policy(
+        TanhPolicy(layout, np.ones(layout.n_parameters)), tmp_path / "p"
+    )
+    with np.load(npz_path) as archive:
+        arrays = {name: archive[name] for name in archive.files}
+    np.savez(npz_path, **{**arrays, "parameters": np.full(layout.n_parameters, weight)})
+    argv = ["robot", "run", "--driver", "tcp", "--policy-file", str(json_path)]
+    assert main([*argv, "--out", str(tmp_path / "out")]) == 2
+    assert capsys.readouterr().err.strip() == (
+        f"skidnav: error: {npz_path}: array 'parameters' holds a value that is NaN or not below "
+        "1e+32 in magnitude"
+    )
+    assert not (tmp_path / "out").exists()
 
 
 def test_lockstep_runs_of_a_policy_are_identical(tmp_path: Path) -> None:

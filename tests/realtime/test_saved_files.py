@@ -92,13 +92,16 @@ def test_a_hostile_config_is_one_line_and_writes_nothing(
 
 
 @pytest.mark.parametrize("command", ["run", "study"])
-def test_a_config_that_never_ends_is_refused_at_its_limit(
+def test_a_device_as_config_is_refused_without_reading_it(
     command: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     args = RUN if command == "run" else ["robot", "study", "--quiet"]
     assert main([*args, "--config", "/dev/zero", "--out", str(tmp_path / "out")]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
-    assert lines == ["skidnav: error: /dev/zero: config file larger than 4,000,000 bytes"]
+    assert lines == [
+        "skidnav: error: /dev/zero: cannot read config file (a character device, not a regular "
+        "file)"
+    ]
     assert list(tmp_path.iterdir()) == []
 
 
@@ -206,10 +209,14 @@ def test_a_hostile_checkpoint_ends_the_resume_in_one_line(
     assert listing(out) == before  # nothing written, nothing left behind
 
 
-def test_a_pointer_through_a_device_is_cut_at_its_limit(tmp_path: Path) -> None:
+def test_a_pointer_through_a_device_is_refused_and_a_long_one_cut(tmp_path: Path) -> None:
     root = write_checkpoint(tmp_path).parent
     (root / LATEST).unlink()
     (root / LATEST).symlink_to("/dev/zero")
+    with pytest.raises(CorruptFileError, match=r"checkpoint pointer \(a character device"):
+        Checkpoints(root).latest()
+    (root / LATEST).unlink()
+    (root / LATEST).write_text(" " * 4097)
     with pytest.raises(CorruptFileError, match="checkpoint pointer larger than 4,096 bytes"):
         Checkpoints(root).latest()
 

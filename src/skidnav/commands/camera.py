@@ -20,12 +20,13 @@ import math
 from pathlib import Path
 from typing import Any
 
-import cv2
-
+from skidnav.commands.outputs import check_output_file, make_output_dir
+from skidnav.commands.parsing import positive_number
 from skidnav.errors import UserError
 from skidnav.realtime.camera.calibration import check_intrinsics
 from skidnav.realtime.camera.intrinsics import DEFAULT_BOARD_DICTIONARY, MIN_VIEWS
 from skidnav.realtime.camera.markers import DEFAULT_DICTIONARY, aruco_dictionary
+from skidnav.realtime.camera.opencv import cv2
 from skidnav.realtime.camera.sources import read_images
 from skidnav.realtime.camera.tracking import (
     ArenaLayout,
@@ -140,7 +141,9 @@ def _add_source_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--source", required=True, help="camera index, video file, or folder of images"
     )
-    parser.add_argument("--fps", type=float, default=30.0, help="frame rate of an image folder")
+    parser.add_argument(
+        "--fps", type=positive_number, default=30.0, help="frame rate of an image folder [Hz]"
+    )
 
 
 def _add_layout_arguments(parser: argparse.ArgumentParser) -> None:
@@ -189,6 +192,7 @@ def run_calibrate(args: argparse.Namespace) -> int:
     layout = _layout(args)
     if args.frames < 1:
         raise UserError(f"--frames must be >= 1, got {args.frames}")
+    check_output_file(args.out)
     intrinsics = None if args.intrinsics is None else load_intrinsics(args.intrinsics)
     with open_frames(args.source, fps=args.fps) as frames:
         calibration = calibrate(frames, layout, max_frames=args.frames, intrinsics=intrinsics)
@@ -251,7 +255,7 @@ def run_markers(args: argparse.Namespace) -> int:
     size = dictionary.bytesList.shape[0]
     if any(not 0 <= marker_id < size for marker_id in args.ids) or args.pixels < 20:
         raise UserError(f"expected ids in [0, {size}) and --pixels >= 20")
-    args.out.mkdir(parents=True, exist_ok=True)
+    make_output_dir(args.out)
     margin = args.pixels // 8
     for marker_id in args.ids:
         image = cv2.aruco.generateImageMarker(dictionary, marker_id, args.pixels)
@@ -268,8 +272,9 @@ def run_board(args: argparse.Namespace) -> int:
     spec = _board(args)
     if args.pixels_per_square < 20:
         raise UserError(f"--pixels-per-square must be >= 20, got {args.pixels_per_square}")
+    check_output_file(args.out, parents=True)
     image = spec.image(args.pixels_per_square)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
+    make_output_dir(args.out.parent)
     try:
         written = cv2.imwrite(str(args.out), image)
     except cv2.error:
@@ -289,6 +294,7 @@ def run_intrinsics(args: argparse.Namespace) -> int:
     spec = _board(args)
     if args.min_views < 3:
         raise UserError(f"--min-views must be >= 3, got {args.min_views}")
+    check_output_file(args.out)
     images = read_images(args.images)
     intrinsics = calibrate_intrinsics(images, spec, min_views=args.min_views)
     intrinsics.save(args.out)

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from skidnav.atomicfile import write_user_file
+from skidnav.commands.outputs import check_output_dir, make_output_dir
 from skidnav.errors import UserError
 from skidnav.robot.slip import SLIP_PRESETS
 
@@ -64,14 +65,10 @@ def continuity_command(args: argparse.Namespace) -> int:
         )  # fmt: skip
     except ValueError as error:
         raise UserError(f"continuity: {error}") from None
-    if args.out.exists() and not args.out.is_dir():
-        raise UserError(f"{args.out}: not a directory")
+    check_output_dir(args.out)
     if args.out.exists() and any(args.out.iterdir()):
         raise UserError(f"{args.out}: not empty (choose a new --out)")
-    try:
-        args.out.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise UserError(f"{args.out}: cannot create ({error.strerror or error})") from None
+    make_output_dir(args.out)
     runs = run_comparison(config, progress=_progress)
     write_results(args.out, config, runs)
     print((args.out / "table.md").read_text(encoding="utf-8"))

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from skidnav.atomicfile import write_user_file
+from skidnav.commands.outputs import check_output_file
 from skidnav.errors import UserError
 from skidnav.physics.backend import PhysicsUnavailable
 from skidnav.physics.materials import MATERIALS
@@ -39,6 +40,8 @@ def _calibrate(args: argparse.Namespace) -> int:
         raise UserError(f"expected --seconds in [2, {MAX_SEGMENTS}], got {args.seconds}")
     if args.seed < 0:
         raise UserError(f"expected --seed >= 0, got {args.seed}")
+    if args.out is not None:
+        check_output_file(args.out)
     from skidnav.physics.calibration import calibrate
 
     materials = args.material or list(MATERIALS)

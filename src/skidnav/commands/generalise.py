@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from skidnav.atomicfile import write_user_file
+from skidnav.commands.outputs import check_output_file
 from skidnav.errors import UserError, shown
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.stats import bootstrap_interval, difference_interval
@@ -101,6 +102,8 @@ def _check(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
 
 def _generalise(args: argparse.Namespace) -> int:
     params = _check(args)
+    if args.out is not None:
+        check_output_file(args.out)
     from skidnav.agents.catalog import check_params
     from skidnav.experiments.generalisation import generalisation_run, references, split_worlds
 

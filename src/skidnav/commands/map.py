@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from skidnav.commands.outputs import check_output_file
 from skidnav.errors import UserError
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import MAP_KINDS, MAX_SIZE, generate_map
@@ -39,6 +40,8 @@ def _generate(args: argparse.Namespace) -> int:
             f"expected --size of at most {MAX_SIZE} × {MAX_SIZE} cells (the map file limit), "
             f"got {args.size[0]} × {args.size[1]}"
         )
+    if args.out is not None:
+        check_output_file(args.out)
     try:
         grid = generate_map(args.kind, np.random.default_rng(args.seed), tuple(args.size))
     except ValueError as error:
@@ -57,6 +60,8 @@ def _generate(args: argparse.Namespace) -> int:
 
 
 def _show(args: argparse.Namespace) -> int:
+    if args.png is not None:
+        check_output_file(args.png, "--png")
     grid = load_map(args.file)
     if args.png is None:
         print(format_map(grid), end="")

@@ -8,6 +8,7 @@ line naming the problem and exit code 2, so every parser and subparser of the co
 from __future__ import annotations
 
 import argparse
+import math
 from typing import NoReturn
 
 
@@ -22,3 +23,22 @@ class OneLineParser(argparse.ArgumentParser):
         command = self.prog.removeprefix("skidnav").strip()
         where = f"{command}: " if command else ""
         self.exit(2, f"skidnav: error: {where}{message}\n")
+
+
+def positive_number(text: str) -> float:
+    """A finite number > 0, for an argument's ``type`` (``nan``, ``inf``, 0 refused in one line).
+
+    >>> positive_number("2.5")
+    2.5
+    >>> positive_number("nan")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: expected a finite number > 0, got 'nan'
+    """
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not 0 < value < math.inf:
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value

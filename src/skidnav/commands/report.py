@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from skidnav.commands.outputs import check_output_file
 from skidnav.errors import UserError
 
 
@@ -35,6 +36,8 @@ def report_command(args: argparse.Namespace) -> int:
     """Write the report; print its path."""
     if not args.run_dir.is_dir():
         raise UserError(f"{args.run_dir}: no such results directory")
+    if args.output is not None:
+        check_output_file(args.output, "--output")
     if args.study:
         return study_command(args.run_dir, args.output or args.run_dir / "study.md")
     from skidnav.experiments.report import write_report

@@ -26,6 +26,7 @@ import numpy as np
 from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
 from skidnav.agents.registry import make_agent
 from skidnav.atomicfile import write_user_file
+from skidnav.commands.outputs import make_output_dir
 from skidnav.envs.mazes import GridMazeEnv, blocking_maze, dyna_maze, shortcut_maze
 from skidnav.errors import UserError
 
@@ -223,11 +224,7 @@ def run(args: argparse.Namespace) -> int:
     """Run every textbook check and print the summary."""
     if args.runs < 1:
         raise UserError(f"expected --runs >= 1, got {args.runs}")
-    out: Path = args.out
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise UserError(f"{out}: cannot create the folder ({error.strerror or error})") from None
+    out: Path = make_output_dir(args.out)
     start = time.perf_counter()
     _report_dyna_maze(args.runs, out)
     _report_changing_mazes(args.runs, out)

@@ -17,6 +17,7 @@ from pathlib import Path
 from types import FrameType
 from typing import IO, Any
 
+from skidnav.commands.outputs import check_output_dir
 from skidnav.errors import UserError
 
 
@@ -209,6 +210,8 @@ def _add_run(commands: Any) -> None:
 def _run_loop(args: argparse.Namespace) -> int:
     from skidnav.realtime.control.run import run_from_args
 
+    check_output_dir(args.out)
+
     def progress(line: str) -> None:
         if not args.quiet:
             print(f"\r{line:<79}", end="", file=sys.stderr, flush=True)
@@ -250,6 +253,7 @@ def _run_study(args: argparse.Namespace) -> int:
         "seeds": args.seeds,
     }
     tables, settings = load_study(args.config, overrides)
+    check_output_dir(args.out)
 
     def progress(line: str) -> None:
         if not args.quiet:

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from skidnav.commands.outputs import check_output_dir
 from skidnav.envs.registration import allow_env_modules
 from skidnav.experiments.configfile import load_config_and_text
 from skidnav.experiments.runner import BACKENDS, run_experiment
@@ -66,7 +67,7 @@ def run_command(args: argparse.Namespace) -> int:
     """Run the experiment; print where the results are."""
     allow_env_modules(args.env_module)
     config, text = load_config_and_text(args.config)
-    out = args.out if args.out is not None else Path("runs") / config.name
+    out = check_output_dir(args.out if args.out is not None else Path("runs") / config.name)
     outcome = run_experiment(
         config,
         out,

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from skidnav.atomicfile import write_user_file
+from skidnav.commands.outputs import check_output_dir, make_output_dir
 from skidnav.errors import UserError
 from skidnav.robot.slip import SLIP_PRESETS
 
@@ -88,16 +89,13 @@ def _prepare(out: Path, resume: bool) -> Path:
         raise UserError(f"{out}: holds a search already (pass --resume, or another --out)")
     if resume and not exists:
         raise UserError(f"{out}: no checkpoint.json to resume from")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as error:
-        raise UserError(f"{out}: cannot create the folder ({error.strerror or error})") from None
+    make_output_dir(out)
     return checkpoint
 
 
 def _search(args: argparse.Namespace) -> int:
     config = _config(args)
-    checkpoint = _prepare(args.out, args.resume)
+    checkpoint = _prepare(check_output_dir(args.out), args.resume)
     from skidnav.policysearch.policyfile import save_policy
     from skidnav.policysearch.search import record_rows, run_search
 

@@ -18,12 +18,13 @@ from typing import Any
 import numpy as np
 
 from skidnav.atomicfile import write_atomic
+from skidnav.commands.outputs import check_output_file
 from skidnav.errors import UserError, excerpt
 from skidnav.robot.kinematics import ACTION_NAMES
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SLIP_PRESETS
-from skidnav.savedfile import read_limited
 from skidnav.seeding import ARENA_ROLES, child_sequences, seed_int
+from skidnav.userfile import read_limited
 from skidnav.world.grid import MAP_KINDS
 
 ACTION_ALIASES = {name: index for index, name in enumerate(ACTION_NAMES)} | {
@@ -32,7 +33,7 @@ ACTION_ALIASES = {name: index for index, name in enumerate(ACTION_NAMES)} | {
 MAX_ACTIONS = 100_000
 """Most actions one ``simulate`` runs (a script or ``--random N``)."""
 MAX_ACTIONS_FILE_BYTES = 2 * 2**20
-"""Longest ``--actions-file`` read [bytes]."""
+"""Longest ``--actions-file`` read [bytes] (a regular file or a pipe)."""
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -84,7 +85,9 @@ def _script(args: argparse.Namespace) -> list[int] | None:
     if args.actions is not None:
         return parse_actions(args.actions)
     if args.actions_file is not None:
-        data = read_limited(args.actions_file, MAX_ACTIONS_FILE_BYTES, "action file", UserError)
+        data = read_limited(
+            args.actions_file, MAX_ACTIONS_FILE_BYTES, "action file", UserError, pipes=True
+        )
         try:
             text = data.decode("utf-8")
         except UnicodeDecodeError:
@@ -137,6 +140,9 @@ def _write_csv(path: Path, rows: list[tuple[Any, ...]]) -> None:
 def _simulate(args: argparse.Namespace) -> int:
     from skidnav.envs.rendering import save_frame
 
+    check_output_file(args.out)
+    if args.csv is not None:
+        check_output_file(args.csv, "--csv")
     script = _script(args)
     env = _make_env(args, len(script) if script else args.random)
     streams = child_sequences(args.seed, ARENA_ROLES)  # env noise and policy never share one

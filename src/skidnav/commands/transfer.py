@@ -15,6 +15,7 @@ import numpy as np
 
 from skidnav.agents.registry import available_agents
 from skidnav.atomicfile import write_user_file
+from skidnav.commands.outputs import check_output_file
 from skidnav.errors import UserError
 from skidnav.physics.backend import PhysicsUnavailable
 from skidnav.physics.materials import MATERIALS
@@ -58,6 +59,8 @@ def _check(args: argparse.Namespace) -> None:
 
 def _transfer(args: argparse.Namespace) -> int:
     _check(args)
+    if args.out is not None:
+        check_output_file(args.out)
     from skidnav.experiments.transfer import TransferResult, transfer_run
 
     results: list[TransferResult] = []

@@ -10,6 +10,7 @@ from typing import Any
 
 import optuna
 
+from skidnav.commands.outputs import check_output_dir
 from skidnav.commands.run import add_backend_arguments, add_env_module_argument
 from skidnav.envs.registration import allow_env_modules
 from skidnav.errors import UserError
@@ -64,7 +65,7 @@ def tune_command(args: argparse.Namespace) -> int:
             tune = dataclasses.replace(tune, trials=args.trials)
         except ValueError as error:
             raise UserError(f"--trials: {error}") from None
-    out = args.out if args.out is not None else Path("runs") / config.name
+    out = check_output_dir(args.out if args.out is not None else Path("runs") / config.name)
     outcome = tune_experiment(
         config,
         tune,

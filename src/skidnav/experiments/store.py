@@ -16,8 +16,11 @@ Layout of a results directory::
 Every file is written to a temporary name, synced and moved into place with ``os.replace``
 (:func:`skidnav.atomicfile.write_atomic`), so a run is either completely there or absent: after a
 kill, the runs already written are skipped and the rest are run again (none lost, none
-duplicated), and reopening removes the temporaries of writers that died. One process at a time
-writes a directory (:func:`directory_lock`). Run files are read as
+duplicated), and reopening removes the temporaries of writers that died. A write that fails (a
+full disk) is one line naming the file (:func:`skidnav.atomicfile.writing`): the files before
+it stay whole, so the same command resumes once there is room. One process at a time writes a
+directory (:func:`directory_lock`). The tidy tables are read back as saved files too
+(:func:`read_table`). Run files are read as
 :class:`~skidnav.savedfile.SavedArchive` with the arrays and sizes the config allows; nothing is
 pickled.
 
@@ -36,13 +39,18 @@ import os
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any, BinaryIO, NamedTuple
 
 import numpy as np
 import pandas as pd
 
-from skidnav.atomicfile import remove_stale_temporaries, write_atomic, write_npz_atomic
-from skidnav.errors import CorruptFileError, UserError, shown
+from skidnav.atomicfile import (
+    remove_stale_temporaries,
+    write_npz_atomic,
+    write_user_file,
+    writing,
+)
+from skidnav.errors import CorruptFileError, UserError, first_line, shown
 from skidnav.experiments.config import (
     MAX_STEPS,
     ExperimentConfig,
@@ -50,7 +58,8 @@ from skidnav.experiments.config import (
     config_to_dict,
 )
 from skidnav.experiments.runs import Grid
-from skidnav.savedfile import ArraySpec, SavedArchive, parse_json, read_json, up_to
+from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, parse_json, read_json, up_to
+from skidnav.userfile import open_user_file
 from skidnav.world.grid import MAX_SIZE
 
 EPISODE_COLUMNS = (
@@ -99,6 +108,8 @@ class TrialResult(NamedTuple):
     arrays: dict[str, np.ndarray]
 
 
+MAX_TABLE_BYTES = 4 * 2**30
+"""Largest tidy table read back [bytes], on disk and as announced uncompressed."""
 LOCK_FILE = ".skidnav.lock"
 """The lock file of a results or study directory."""
 _WORLD_ARRAYS = {
@@ -254,7 +265,8 @@ class ResultStore:
         """
         store = cls(root, layout)
         exists = store.check(config)
-        store.runs_dir.mkdir(parents=True, exist_ok=True)
+        with writing(store.runs_dir, "runs directory"):
+            store.runs_dir.mkdir(parents=True, exist_ok=True)
         for directory in (store.root, store.runs_dir):
             remove_stale_temporaries(directory)
         if exists:
@@ -265,9 +277,9 @@ class ResultStore:
             "fingerprint": config.fingerprint(),
             "config": layout.to_dict(config),
         }
-        write_atomic(config_path, json.dumps(document, indent=2).encode())
+        write_user_file(config_path, json.dumps(document, indent=2).encode(), "config")
         if source_text:
-            write_atomic(store.root / "config.toml", source_text.encode())
+            write_user_file(store.root / "config.toml", source_text.encode(), "config")
         return store
 
     def _read_json(self, path: Path) -> dict[str, Any]:
@@ -318,7 +330,9 @@ class ResultStore:
             "code": code or {},
         }
         payload["document"] = np.array(json.dumps(document))
-        write_npz_atomic(self.run_path(result.run_id), payload, compress=True)
+        path = self.run_path(result.run_id)
+        with writing(path, "run file"):
+            write_npz_atomic(path, payload, compress=True)
 
     def _run_specs(self) -> dict[str, ArraySpec]:
         if self._specs is None:
@@ -369,8 +383,10 @@ class ResultStore:
         episodes = pd.concat(episode_frames, ignore_index=True)
         summaries = pd.DataFrame(summary_rows)
         for name, frame in (("episodes", episodes), ("summaries", summaries)):
-            write_atomic(self.root / f"{name}.parquet", frame.to_parquet(index=False))
-        write_atomic(self.root / "summaries.csv", summaries.to_csv(index=False).encode())
+            write_user_file(self.root / f"{name}.parquet", frame.to_parquet(index=False), "table")
+        write_user_file(
+            self.root / "summaries.csv", summaries.to_csv(index=False).encode(), "table"
+        )
         return episodes, summaries
 
     def load_tables(self) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -378,17 +394,48 @@ class ResultStore:
         paths = [self.root / "episodes.parquet", self.root / "summaries.parquet"]
         if not all(path.exists() for path in paths):
             return self.consolidate()
-        return pd.read_parquet(paths[0]), pd.read_parquet(paths[1])
+        return read_table(paths[0]), read_table(paths[1])
 
     def write_metadata(self, metadata: dict[str, Any]) -> None:
         """Write ``metadata.json`` atomically."""
         text = json.dumps(metadata, indent=2, default=str)
-        write_atomic(self.root / "metadata.json", text.encode())
+        write_user_file(self.root / "metadata.json", text.encode(), "metadata")
 
     def metadata(self) -> dict[str, Any]:
         """``metadata.json`` (empty when missing)."""
         path = self.root / "metadata.json"
         return self._read_json(path) if path.exists() else {}
+
+
+def read_table(path: Path) -> pd.DataFrame:
+    """A Parquet table of :meth:`ResultStore.consolidate`, read as a saved file: a regular file
+    (:func:`skidnav.userfile.open_user_file`) of at most :data:`MAX_TABLE_BYTES` whose row groups
+    announce at most that much data (its footer is read first); CorruptFileError naming it
+    otherwise."""
+    import pyarrow
+
+    with open_user_file(path, "table") as handle:
+        try:
+            announced = _announced_bytes(handle)
+            if announced > MAX_TABLE_BYTES:
+                raise ValueError(f"{announced:,} bytes, expected at most {MAX_TABLE_BYTES:,}")
+            handle.seek(0)
+            return pd.read_parquet(handle)
+        except (*READ_ERRORS, pyarrow.ArrowException) as error:
+            raise CorruptFileError(f"{path}: unreadable table ({first_line(error, 80)})") from None
+
+
+def _announced_bytes(handle: BinaryIO) -> int:
+    """The larger of a Parquet file's size and the data its row groups announce (the footer is
+    read only when the file is within :data:`MAX_TABLE_BYTES`)."""
+    import pyarrow.parquet
+
+    size = handle.seek(0, os.SEEK_END)
+    if size > MAX_TABLE_BYTES:
+        return size
+    footer = pyarrow.parquet.ParquetFile(handle).metadata
+    groups = range(footer.num_row_groups)
+    return max(size, sum(int(footer.row_group(group).total_byte_size) for group in groups))
 
 
 def _with_missing_columns(

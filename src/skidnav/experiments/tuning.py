@@ -52,6 +52,7 @@ from skidnav.experiments.config import (
     freeze_params,
 )
 from skidnav.experiments.failures import RunFailure
+from skidnav.experiments.journalfile import check_journal
 from skidnav.experiments.runner import TrialFunction, _check_backend, dask_client, default_jobs
 from skidnav.experiments.runner import execute as execute_runs
 from skidnav.experiments.runs import expand_runs
@@ -198,21 +199,23 @@ def _plans(config: ExperimentConfig, tune: TuneConfig) -> list[_Plan]:
     return plans
 
 
-def open_storage(journal: Path) -> optuna.storages.JournalStorage:
-    """The journal storage on ``journal`` (created if missing). A last line cut short by a kill
-    during a write is dropped first, so appending to the file stays valid.
+def open_storage(journal: Path, repair: bool = True) -> optuna.storages.JournalStorage:
+    """The journal storage on ``journal`` (created if missing), checked first
+    (:func:`~skidnav.experiments.journalfile.check_journal`). With ``repair``, a last line cut
+    short by a kill during a write is then dropped, so appending to the file stays valid (a
+    reader leaves it: Optuna skips it).
 
     Raises:
-        CorruptFileError: the journal cannot be read.
+        CorruptFileError: the journal is not one (nothing is changed then).
     """
     from optuna.storages.journal import JournalFileBackend, JournalFileOpenLock
 
     if journal.exists():
-        data = journal.read_bytes()
-        if data and not data.endswith(b"\n"):
+        check = check_journal(journal)
+        if repair and check.torn_bytes:
             logger.warning("%s: dropping a last line cut short by an interruption", journal)
             with open(journal, "r+b") as handle:
-                handle.truncate(data.rfind(b"\n") + 1)
+                handle.truncate(check.complete_bytes)
     try:
         backend = JournalFileBackend(str(journal), lock_obj=JournalFileOpenLock(str(journal)))
         return optuna.storages.JournalStorage(backend)
@@ -393,7 +396,7 @@ def _needs_work(journal: Path, plans: Sequence[_Plan], target: int) -> bool:
     nothing."""
     if not journal.exists():
         return True
-    storage = open_storage(journal)
+    storage = open_storage(journal, repair=False)  # the directory is not locked yet
     studies = [_study(storage, plan, create=False) for plan in plans]
     return any(study is None or finished_count(study) < target for study in studies)
 

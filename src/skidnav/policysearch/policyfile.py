@@ -5,8 +5,9 @@ The archive holds three float64 arrays: ``parameters`` (n,), ``observation_low``
 floats (``hidden``, ``lidar_rays``, ``lidar_range`` [m], ``wheel_speed`` [rad/s]) and free
 ``provenance`` (the search's config and counters). Loading reads the JSON first (size and
 nesting limited), derives n and d from it, and checks every array's name, dtype and shape against
-them before any data is read (:class:`skidnav.savedfile.SavedArchive`); a bad file is one
-:class:`~skidnav.errors.CorruptFileError` line naming it.
+them before any data is read (:class:`skidnav.savedfile.SavedArchive`), then every parameter
+below :data:`~skidnav.policysearch.config.MAX_PARAMETER` in magnitude (as a search keeps them);
+a bad file is one :class:`~skidnav.errors.CorruptFileError` line naming it.
 
 >>> import tempfile
 >>> import numpy as np
@@ -26,10 +27,13 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from skidnav.agents.core import save_paths
 from skidnav.atomicfile import write_atomic, write_npz_atomic
 from skidnav.checks import check_number
 from skidnav.errors import CorruptFileError, first_line, shown
+from skidnav.policysearch.config import MAX_PARAMETER
 from skidnav.policysearch.policy import (
     MAX_HIDDEN,
     MAX_LIDAR_RAYS,
@@ -107,6 +111,11 @@ def policy_from_file(json_path: Path, meta: Mapping[str, Any]) -> TanhPolicy:
     }
     with SavedArchive(npz_path) as archive:
         arrays = archive.read_all(specs)
+    if not (np.abs(arrays["parameters"]) < MAX_PARAMETER).all():  # NaN fails too
+        raise CorruptFileError(
+            f"{npz_path}: array 'parameters' holds a value that is NaN or not below "
+            f"{MAX_PARAMETER:g} in magnitude"
+        )
     try:
         layout = PolicyLayout(
             arrays["observation_low"], arrays["observation_high"], hidden=hidden,

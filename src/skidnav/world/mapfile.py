@@ -28,7 +28,7 @@ import numpy as np
 
 from skidnav.atomicfile import write_atomic
 from skidnav.errors import UserError, excerpt
-from skidnav.savedfile import read_limited
+from skidnav.userfile import read_limited
 from skidnav.world.grid import MAX_SIZE, MIN_SIZE, GridMap, on_far_edge
 
 MAGIC = "skidnav-map 1"

@@ -23,12 +23,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
 
 from skidnav.errors import CorruptFileError, UserError, first_line
 from skidnav.realtime.camera.markers import FloatArray, aruco_dictionary
+from skidnav.realtime.camera.opencv import cv2
 from skidnav.realtime.camera.sources import read_json_file, write_json_file
 
 LOGGER = logging.getLogger(__name__)

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import cv2
 import numpy as np
 
 from skidnav.realtime.camera.intrinsics import CameraIntrinsics
 from skidnav.realtime.camera.markers import FloatArray
+from skidnav.realtime.camera.opencv import cv2
 
 # OpenCV's default stops after 5 fixed-point iterations, which leaves 0.87 px at the corners of
 # the k1 = -0.25 test lens (docs/camera.md); these criteria converge to 2e-12 px on it.

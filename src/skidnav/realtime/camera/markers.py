@@ -21,9 +21,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
+
+from skidnav.realtime.camera.opencv import cv2
 
 FloatArray = NDArray[np.float64]
 

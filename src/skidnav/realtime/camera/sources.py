@@ -11,17 +11,19 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
 
 from skidnav.atomicfile import write_atomic
 from skidnav.errors import UserError
+from skidnav.realtime.camera.imagefile import read_image
+from skidnav.realtime.camera.opencv import cv2
 from skidnav.savedfile import read_json
 
 LOGGER = logging.getLogger(__name__)
@@ -52,12 +54,13 @@ class FrameSource:
 
     Args:
         source: camera index (int, or a string of digits), a video file, or a folder of images.
-        fps: frame rate [Hz] assumed for an image folder (and for a video that reports none).
+        fps: frame rate [Hz] assumed for an image folder (and for a video that reports none),
+            finite and > 0.
     """
 
     def __init__(self, source: int | str | Path, fps: float = 30.0) -> None:
-        if not fps > 0:
-            raise ValueError(f"expected fps > 0, got {fps}")
+        if not 0 < fps < math.inf:  # NaN fails too
+            raise ValueError(f"expected a finite fps > 0, got {fps}")
         self.fps = fps
         self.description = str(source)
         self._files: list[Path] | None = None
@@ -72,6 +75,8 @@ class FrameSource:
             self._files = image_files(path)
         elif path.is_file():
             self._open_capture(str(path))
+        elif path.exists():  # a FIFO or a device: a video reader would wait on it
+            raise UserError(f"{path}: not a video file or an image folder")
         else:
             raise UserError(f"{path}: no such camera, video file or image folder")
 
@@ -94,11 +99,12 @@ class FrameSource:
 
     def _iterate_files(self, files: list[Path]) -> Iterator[Frame]:
         for index, file in enumerate(files):
-            image = cv2.imread(str(file), cv2.IMREAD_COLOR)
-            if image is None:
-                LOGGER.warning("%s: unreadable image, skipped", file)
+            try:
+                image = read_image(file)
+            except UserError as error:
+                LOGGER.warning("%s; skipped", error)
                 continue
-            yield Frame(index, index / self.fps, np.asarray(image, dtype=np.uint8))
+            yield Frame(index, index / self.fps, image)
 
     def _iterate_capture(self) -> Iterator[Frame]:
         index = 0
@@ -149,23 +155,18 @@ def read_images(paths: Sequence[str | Path]) -> list[tuple[str, NDArray[np.uint8
     all or nothing: every image was chosen by the user.
 
     Raises:
-        UserError: a path that does not exist, a folder without images, or an unreadable image.
+        UserError: a path that does not exist, a folder without images, or an image
+            :func:`~skidnav.realtime.camera.imagefile.read_image` refuses.
     """
     files: list[Path] = []
     for path in map(Path, paths):
         if path.is_dir():
             files.extend(image_files(path))
-        elif path.is_file():
+        elif path.exists():
             files.append(path)
         else:
             raise UserError(f"{path}: no such image file or folder")
-    images = []
-    for file in files:
-        image = cv2.imread(str(file), cv2.IMREAD_COLOR)
-        if image is None:
-            raise UserError(f"{file}: unreadable image")
-        images.append((str(file), np.asarray(image, dtype=np.uint8)))
-    return images
+    return [(str(file), read_image(file)) for file in files]
 
 
 def read_json_file(path: str | Path, what: str) -> dict[str, Any]:

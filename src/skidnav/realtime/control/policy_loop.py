@@ -106,7 +106,8 @@ class PolicyLoop(EpisodeLoop):
             command = clipped_wheel_speeds(output, self.robot.wheel_speed)
         except Exception as error:  # whatever a policy does wrong, the robot must stop
             reason = f"policy failed: {first_line(error, 160)}"
-            log.error("%s", reason, exc_info=True)
+            log.error("%s", reason)  # one line; where it failed only when debugging
+            log.debug("the policy's failure", exc_info=True)
             self.monitor.trip(reason)
             raise Aborted(reason) from None
         left, right = np.asarray(output, dtype=np.float64).tolist()

@@ -29,7 +29,7 @@ from pathlib import Path
 
 from skidnav.errors import UserError
 from skidnav.realtime.link.protocol import MAX_LINE_BYTES, NONCE_BYTES, ProtocolError
-from skidnav.savedfile import read_limited
+from skidnav.userfile import read_limited
 
 SECRET_ENV = "SKIDNAV_LINK_SECRET"
 """The environment variable holding the link secret when no secret file is named."""
