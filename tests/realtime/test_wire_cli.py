@@ -42,6 +42,7 @@ def run_cli(argv: list[str]) -> int:
         (["robot", "sim-server", "--port", "0", "--latency", "-0.1"], "expected a finite latency"),
         (["robot", "sim-server", "--port", "0", "--pose-noise", "inf"], "finite pose_noise"),
         (["robot", "sim-server", "--port", "0", "--idle-timeout", "inf"], "finite idle_timeout"),
+        (["robot", "sim-server", "--port", "0", "--drift-period", "inf"], "finite number > 0"),
         (["robot", "sim-server", "--port", "0", "--max-lease", "1e300"], "expected max_lease in"),
         (["robot", "sim-server", "--port", "0", "--max-lease", "nan"], "expected max_lease in"),
         (

@@ -18,6 +18,7 @@ from types import FrameType
 from typing import IO, Any
 
 from skidnav.commands.outputs import check_output_dir
+from skidnav.commands.parsing import positive_number
 from skidnav.errors import UserError
 
 
@@ -50,7 +51,9 @@ def _add_sim_server(commands: Any) -> None:
     server.add_argument("--time-scale", type=float, default=1.0, help="robot s per wall s")
     server.add_argument("--slip", default="rough", help="slip preset: thesis, slippery, rough")
     server.add_argument("--drift", type=float, default=0.0, help="relative slip drift amplitude")
-    server.add_argument("--drift-period", type=float, default=600.0, help="drift period [s]")
+    server.add_argument(
+        "--drift-period", type=positive_number, default=600.0, help="drift period [s]"
+    )
     server.add_argument("--latency", type=float, default=0.0, help="command latency [s]")
     server.add_argument("--pose-noise", type=float, default=0.0, help="pose noise σ [m]")
     server.add_argument("--drop", type=float, default=0.0, help="pose drop probability")

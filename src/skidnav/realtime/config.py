@@ -152,8 +152,8 @@ class SimSettings:
         for name in ("drift", "latency", "pose_noise", "drop"):
             if not 0 <= getattr(self, name) < math.inf:
                 raise ValueError(f"expected a finite {name} >= 0, got {shown(getattr(self, name))}")
-        if not (self.drift_period > 0 and self.link_timeout > 0 and self.drop < 1):
-            raise ValueError("expected drift_period > 0, link_timeout > 0 and drop < 1")
+        if not (0 < self.drift_period < math.inf and self.link_timeout > 0 and self.drop < 1):
+            raise ValueError("expected a finite drift_period > 0, link_timeout > 0 and drop < 1")
         if not self.idle_timeout >= self.link_timeout:
             raise ValueError(
                 f"expected idle_timeout >= link_timeout, got {shown(self.idle_timeout)}"
