@@ -65,6 +65,10 @@ class QLearningConfig:
     """Floor of the decaying ε, in [0, epsilon]."""
     initial_q: float = 0.0
     """Initial value of every entry of the Q table (optimistic if above the true values)."""
+    alpha_visit_exponent: float = 0.0
+    """Exponent ω of the step size of real updates, in [0, 1]: the n-th real update of a pair
+    uses α · n^(−ω) (polynomial step sizes, Even-Dar & Mansour (2003)); 0 = the constant α of
+    the thesis. Planning updates keep the constant α."""
 
     def __post_init__(self) -> None:
         _check(0.0 < self.alpha <= 1.0, "alpha in (0, 1]", self.alpha)
@@ -75,6 +79,11 @@ class QLearningConfig:
             0.0 <= self.epsilon_min <= self.epsilon, "epsilon_min in [0, epsilon]", self.epsilon_min
         )
         _check(math.isfinite(self.initial_q), "a finite initial_q", self.initial_q)
+        _check(
+            0.0 <= self.alpha_visit_exponent <= 1.0,
+            "alpha_visit_exponent in [0, 1]",
+            self.alpha_visit_exponent,
+        )
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-able dict of every field."""
@@ -146,6 +155,11 @@ class PrioritizedSweepingConfig(DynaQConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         _check(self.theta >= 0.0 and math.isfinite(self.theta), "theta >= 0", self.theta)
+        _check(
+            self.alpha_visit_exponent == 0.0,
+            "alpha_visit_exponent 0 (its real update is a queue pop at the constant alpha)",
+            self.alpha_visit_exponent,
+        )
 
 
 @dataclass(frozen=True)

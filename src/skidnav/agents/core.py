@@ -106,6 +106,10 @@ class TabularAgent:
         self.n_actions = int(n_actions)
         self.rng = np.random.default_rng() if rng is None else rng
         self.q = np.full((n_states, n_actions), config.initial_q, dtype=np.float64)
+        shape = (n_states, n_actions) if config.alpha_visit_exponent > 0.0 else (1, 1)
+        self.visits = np.zeros(shape, dtype=np.int64)
+        """Real updates of each pair, int64 (n_states, n_actions), counted only when the step
+        size decays with them (``alpha_visit_exponent`` > 0; a (1, 1) placeholder otherwise)."""
         self.counters = np.zeros(N_COUNTERS, dtype=np.int64)
         """Real steps and planning updates, int64 (N_COUNTERS,), as the learning kernel counts."""
         self.episodes = 0
@@ -194,10 +198,15 @@ class TabularAgent:
 
     def _state_arrays(self) -> dict[str, np.ndarray]:
         """Arrays beyond ``q`` to save (names without ``/``); subclasses extend."""
-        return {}
+        return {"visits": self.visits} if self.config.alpha_visit_exponent > 0.0 else {}
 
     def _restore_state_arrays(self, arrays: Mapping[str, np.ndarray]) -> None:
         """Inverse of :meth:`_state_arrays`; raise KeyError/ValueError if something is missing."""
+        if self.config.alpha_visit_exponent > 0.0:
+            visits = np.asarray(arrays["visits"])
+            if visits.shape != self.visits.shape or (visits < 0).any():
+                raise ValueError(f"saved visits must be >= 0 of shape {self.visits.shape}")
+            self.visits[:] = visits
 
     def _state_json(self) -> dict[str, Any]:
         """Entries beyond the common ones for the saved JSON (subclasses extend)."""

@@ -42,7 +42,7 @@ from skidnav.kernels import kinematic_planning as kp
 from skidnav.kernels.learning import PLANNING_UPDATES, Experience, learning_step
 from skidnav.kernels.multinomial import MultinomialArrays, model_observe
 from skidnav.kernels.navigation import NavigationTask
-from skidnav.kernels.tabular import td_update
+from skidnav.kernels.tabular import td_update, visit_step_size
 from skidnav.models.kinematic import KinematicModel
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import KinematicConstants, RobotParams
@@ -93,24 +93,28 @@ _NO_ROBOT = RobotParams().kernel_constants()
 class ModelBasedArrays(NamedTuple):
     """What the model-based agents learn into: Q table, multinomial model, the planner's arrays
     and the kinematic model's sample buffers (float64 (n_regions, window, 5) and int64
-    (n_regions,); (1, 1, 5) and (1,) placeholders without a kinematic model)."""
+    (n_regions,); (1, 1, 5) and (1,) placeholders without a kinematic model), and the real
+    updates of each pair (:attr:`~skidnav.agents.core.TabularAgent.visits`)."""
 
     q: np.ndarray
     model: MultinomialArrays
     planner: kp.PlannerArrays
     kinematic_data: np.ndarray
     kinematic_counts: np.ndarray
+    visits: np.ndarray
 
 
 class ModelBasedSettings(NamedTuple):
-    """The planning shares, the agent's robot and grid as the kernels take them, and whether it
-    has a geometry and a kinematic model."""
+    """The planning shares, the agent's robot and grid as the kernels take them, whether it
+    has a geometry and a kinematic model, and the visit exponent ω of the real updates' step
+    size."""
 
     shares: kp.PlanningShares
     robot: KinematicConstants
     grid: GridShape
     has_geometry: bool
     has_kinematic: bool
+    alpha_exponent: float
 
 
 _NO_KINEMATIC = (np.zeros((1, 1, 5)), np.zeros(1, dtype=np.int64))
@@ -129,9 +133,10 @@ def model_based_step(
     bookkeeping (rewards, walls, goals, the episode's pairs), the kinematic samples of the step,
     then the combined planning updates."""
     a, s = arrays, settings
+    alpha = visit_step_size(a.visits, step.state, step.action, s.shares.alpha, s.alpha_exponent)
     td_update(
-        a.q, step.state, step.action, step.reward, step.next_state, step.terminated,
-        s.shares.alpha, s.shares.gamma,
+        a.q, step.state, step.action, step.reward, step.next_state, step.terminated, alpha,
+        s.shares.gamma,
     )  # fmt: skip
     model_observe(a.model, step.state, step.action, step.reward, step.next_state, step.terminated)
     pose = step.pose if s.has_geometry else np.full(3, -1.0)
@@ -260,12 +265,12 @@ class ModelBasedAgent(DynaQAgent):
         data, counts = (
             (self.kinematic.data, self.kinematic.counts) if self.kinematic else _NO_KINEMATIC
         )
-        return ModelBasedArrays(self.q, self.model.arrays, self.planner, data, counts)
+        return ModelBasedArrays(self.q, self.model.arrays, self.planner, data, counts, self.visits)
 
     def learning_settings(self) -> ModelBasedSettings:  # type: ignore[override]
         return ModelBasedSettings(
             self.shares, self.kernel_robot, self.kernel_grid, self.discretization is not None,
-            self.kinematic is not None,
+            self.kinematic is not None, float(self.config.alpha_visit_exponent),
         )  # fmt: skip
 
     def end_episode(self) -> None:

@@ -23,24 +23,28 @@ from skidnav.agents.core import TabularAgent
 from skidnav.kernels.learning import PLANNING_UPDATES, Experience, learning_step
 from skidnav.kernels.multinomial import MultinomialArrays, model_observe
 from skidnav.kernels.planning import dyna_planning
-from skidnav.kernels.tabular import td_update
+from skidnav.kernels.tabular import td_update, visit_step_size
 from skidnav.models.multinomial import MultinomialModel
 
 
 class DynaArrays(NamedTuple):
-    """What Dyna-Q learns into: the Q table and the multinomial model's arrays."""
+    """What Dyna-Q learns into: the Q table, the multinomial model's arrays and the real updates
+    of each pair (:attr:`~skidnav.agents.core.TabularAgent.visits`)."""
 
     q: np.ndarray
     model: MultinomialArrays
+    visits: np.ndarray
 
 
 class PlanningSettings(NamedTuple):
-    """α, γ, planning updates per real step and the planning target (``planning_mode_code``)."""
+    """α, γ, planning updates per real step, the planning target (``planning_mode_code``) and
+    the visit exponent ω of the real updates' step size."""
 
     alpha: float
     gamma: float
     planning_steps: int
     mode: int
+    alpha_exponent: float
 
 
 @learning_step(DynaArrays)
@@ -54,9 +58,10 @@ def dyna_q_step(
 ) -> None:
     """The learning step of Dyna-Q: TD update, model count, then the planning updates."""
     s = settings
+    alpha = visit_step_size(arrays.visits, step.state, step.action, s.alpha, s.alpha_exponent)
     td_update(
         arrays.q, step.state, step.action, step.reward, step.next_state, step.terminated,
-        s.alpha, s.gamma,
+        alpha, s.gamma,
     )  # fmt: skip
     model_observe(
         arrays.model, step.state, step.action, step.reward, step.next_state, step.terminated
@@ -89,13 +94,13 @@ class DynaQAgent(TabularAgent):
         self.model.reserve(n_steps)
 
     def learning_arrays(self) -> DynaArrays:
-        return DynaArrays(self.q, self.model.arrays)
+        return DynaArrays(self.q, self.model.arrays, self.visits)
 
     def learning_settings(self) -> PlanningSettings:
         config = self.config
         return PlanningSettings(
             float(config.alpha), float(config.gamma), int(config.planning_steps),
-            int(config.planning_mode_code),
+            int(config.planning_mode_code), float(config.alpha_visit_exponent),
         )  # fmt: skip
 
     def _state_arrays(self) -> dict[str, np.ndarray]:

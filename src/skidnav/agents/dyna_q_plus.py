@@ -20,14 +20,15 @@ from skidnav.agents.dyna_q import DynaQAgent
 from skidnav.kernels.learning import PLANNING_UPDATES, STEPS, Experience, learning_step
 from skidnav.kernels.multinomial import MultinomialArrays, model_observe
 from skidnav.kernels.planning import dyna_plus_planning
-from skidnav.kernels.tabular import td_update
+from skidnav.kernels.tabular import td_update, visit_step_size
 
 
 class DynaPlusArrays(NamedTuple):
     """What Dyna-Q+ learns into. ``last_tried`` int64 (n_states, n_actions): the real step at
     which each pair was last tried (0 = never); ``visited`` int64 (n_states,) whose first
     ``n_visited[0]`` entries are the states seen, in order of first visit; ``is_visited`` bool
-    (n_states,)."""
+    (n_states,); ``visits``: the real updates of each pair
+    (:attr:`~skidnav.agents.core.TabularAgent.visits`)."""
 
     q: np.ndarray
     model: MultinomialArrays
@@ -35,16 +36,19 @@ class DynaPlusArrays(NamedTuple):
     visited: np.ndarray
     n_visited: np.ndarray
     is_visited: np.ndarray
+    visits: np.ndarray
 
 
 class BonusSettings(NamedTuple):
-    """α, γ, planning updates per real step, planning target and the bonus weight κ."""
+    """α, γ, planning updates per real step, planning target, the bonus weight κ and the visit
+    exponent ω of the real updates' step size."""
 
     alpha: float
     gamma: float
     planning_steps: int
     mode: int
     kappa: float
+    alpha_exponent: float
 
 
 @learning_step(DynaPlusArrays)
@@ -64,8 +68,9 @@ def dyna_q_plus_step(
         d.is_visited[step.state] = True
         d.visited[d.n_visited[0]] = step.state
         d.n_visited[0] += 1
+    alpha = visit_step_size(d.visits, step.state, step.action, s.alpha, s.alpha_exponent)
     td_update(
-        d.q, step.state, step.action, step.reward, step.next_state, step.terminated, s.alpha,
+        d.q, step.state, step.action, step.reward, step.next_state, step.terminated, alpha,
         s.gamma,
     )  # fmt: skip
     model_observe(d.model, step.state, step.action, step.reward, step.next_state, step.terminated)
@@ -105,7 +110,7 @@ class DynaQPlusAgent(DynaQAgent):
     def learning_arrays(self) -> DynaPlusArrays:  # type: ignore[override]
         return DynaPlusArrays(
             self.q, self.model.arrays, self.last_tried, self._visited, self._n_visited,
-            self._is_visited,
+            self._is_visited, self.visits,
         )  # fmt: skip
 
     def learning_settings(self) -> BonusSettings:  # type: ignore[override]
@@ -113,6 +118,7 @@ class DynaQPlusAgent(DynaQAgent):
         return BonusSettings(
             float(config.alpha), float(config.gamma), int(config.planning_steps),
             int(config.planning_mode_code), float(config.kappa),
+            float(config.alpha_visit_exponent),
         )  # fmt: skip
 
     def _state_arrays(self) -> dict[str, np.ndarray]:

@@ -14,20 +14,23 @@ from skidnav._jit import jit
 from skidnav.agents.config import QLearningConfig
 from skidnav.agents.core import TabularAgent
 from skidnav.kernels.learning import Experience, learning_step
-from skidnav.kernels.tabular import td_update
+from skidnav.kernels.tabular import td_update, visit_step_size
 
 
 class QArrays(NamedTuple):
-    """What Q-learning learns into: the Q table, float64 (n_states, n_actions)."""
+    """What Q-learning learns into: the Q table, float64 (n_states, n_actions), and the real
+    updates of each pair (:attr:`~skidnav.agents.core.TabularAgent.visits`)."""
 
     q: np.ndarray
+    visits: np.ndarray
 
 
 class TDSettings(NamedTuple):
-    """Step size α and discount γ."""
+    """Step size α, discount γ and the step size's visit exponent ω."""
 
     alpha: float
     gamma: float
+    alpha_exponent: float
 
 
 @learning_step(QArrays)
@@ -40,9 +43,12 @@ def q_learning_step(
     rng: np.random.Generator,
 ) -> None:
     """The learning step of Q-learning: one TD update (draws nothing)."""
+    alpha = visit_step_size(
+        arrays.visits, step.state, step.action, settings.alpha, settings.alpha_exponent
+    )
     td_update(
         arrays.q, step.state, step.action, step.reward, step.next_state, step.terminated,
-        settings.alpha, settings.gamma,
+        alpha, settings.gamma,
     )  # fmt: skip
 
 
@@ -53,10 +59,13 @@ class QLearningAgent(TabularAgent):
     config_class: ClassVar[type[QLearningConfig]] = QLearningConfig
 
     def learning_arrays(self) -> QArrays:
-        return QArrays(self.q)
+        return QArrays(self.q, self.visits)
 
     def learning_settings(self) -> TDSettings:
-        return TDSettings(float(self.config.alpha), float(self.config.gamma))
+        config = self.config
+        return TDSettings(
+            float(config.alpha), float(config.gamma), float(config.alpha_visit_exponent)
+        )
 
 
 AGENT_NAME = "q-learning"

@@ -77,6 +77,20 @@ def update_toward(q: np.ndarray, state: int, action: int, target: float, alpha: 
 
 
 @inline_jit
+def visit_step_size(
+    visits: np.ndarray, state: int, action: int, alpha: float, exponent: float
+) -> float:
+    """Step size of a real update of ``(state, action)``: ``alpha · n^(−exponent)``, n the
+    pair's real updates including this one, counted in ``visits`` (int64 (n_states, n_actions)).
+    With ``exponent`` 0, ``alpha`` itself, and ``visits`` (then any placeholder) is not touched
+    (Even-Dar & Mansour (2003), polynomial step sizes)."""
+    if exponent == 0.0:
+        return alpha
+    visits[state, action] += 1
+    return alpha * float(visits[state, action]) ** (-exponent)
+
+
+@inline_jit
 def td_update(
     q: np.ndarray,
     state: int,

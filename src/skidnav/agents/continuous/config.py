@@ -49,6 +49,11 @@ class LinearConfig(QLearningConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         _check(
+            self.alpha_visit_exponent == 0.0,
+            "alpha_visit_exponent 0 (visit counts are tabular)",
+            self.alpha_visit_exponent,
+        )
+        _check(
             isinstance(self.n_tilings, int) and 1 <= self.n_tilings <= MAX_TILINGS,
             f"an integer n_tilings in [1, {MAX_TILINGS}]",
             self.n_tilings,
