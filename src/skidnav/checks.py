@@ -19,6 +19,8 @@ from __future__ import annotations
 import contextlib
 import math
 
+import numpy as np
+
 from skidnav.errors import shown
 
 
@@ -51,3 +53,18 @@ def check_number(
     else:
         bounds = f"in {'[' if closed else '('}{low:g}, {high:g}]"
     raise ValueError(f"expected {name} to be a finite number {bounds}, got {shown(value)}")
+
+
+def check_magnitude(name: str, values: np.ndarray, bound: float) -> None:
+    """ValueError unless every value of the array ``name`` is below ``bound`` in magnitude (NaN
+    is not).
+
+    >>> check_magnitude("mean", np.array([1.0, np.nan]), 1e32)
+    Traceback (most recent call last):
+    ...
+    ValueError: array 'mean' holds a value that is NaN or not below 1e+32 in magnitude
+    """
+    if not (np.abs(values) < bound).all():  # NaN fails the comparison
+        raise ValueError(
+            f"array {name!r} holds a value that is NaN or not below {bound:g} in magnitude"
+        )

@@ -38,7 +38,7 @@ from cmaes import CMA
 
 from skidnav.agents.core import save_paths
 from skidnav.atomicfile import write_atomic, write_npz_atomic
-from skidnav.checks import check_integer, check_number
+from skidnav.checks import check_integer, check_magnitude, check_number
 from skidnav.errors import CorruptFileError, first_line
 from skidnav.policysearch.config import MAX_GENERATIONS, MAX_PARAMETER, SearchConfig
 from skidnav.policysearch.curve import (
@@ -181,10 +181,7 @@ def _check_state(arrays: dict[str, np.ndarray]) -> None:
     bounds = {"mean": MAX_PARAMETER, "path_sigma": MAX_PARAMETER, "path_c": MAX_PARAMETER}
     bounds["covariance"] = MAX_COVARIANCE
     for name, bound in bounds.items():
-        if not (np.abs(arrays[name]) < bound).all():  # NaN fails too
-            raise ValueError(
-                f"array {name!r} holds a value that is NaN or not below {bound:g} in magnitude"
-            )
+        check_magnitude(name, arrays[name], bound)
 
 
 def _check_copy(json_path: Path, expected: dict[str, Any], generation: int) -> None:

@@ -27,11 +27,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from skidnav.agents.core import save_paths
 from skidnav.atomicfile import write_atomic, write_npz_atomic
-from skidnav.checks import check_number
+from skidnav.checks import check_magnitude, check_number
 from skidnav.errors import CorruptFileError, first_line, shown
 from skidnav.policysearch.config import MAX_PARAMETER
 from skidnav.policysearch.policy import (
@@ -111,11 +109,10 @@ def policy_from_file(json_path: Path, meta: Mapping[str, Any]) -> TanhPolicy:
     }
     with SavedArchive(npz_path) as archive:
         arrays = archive.read_all(specs)
-    if not (np.abs(arrays["parameters"]) < MAX_PARAMETER).all():  # NaN fails too
-        raise CorruptFileError(
-            f"{npz_path}: array 'parameters' holds a value that is NaN or not below "
-            f"{MAX_PARAMETER:g} in magnitude"
-        )
+    try:
+        check_magnitude("parameters", arrays["parameters"], MAX_PARAMETER)
+    except ValueError as error:
+        raise CorruptFileError(f"{npz_path}: {error}") from None
     try:
         layout = PolicyLayout(
             arrays["observation_low"], arrays["observation_high"], hidden=hidden,
