@@ -13,8 +13,8 @@ from typing import Any
 import pytest
 
 from skidnav.cli import main
-from skidnav.commands.outputs import check_output_dir, check_output_file
 from skidnav.errors import UserError
+from skidnav.outputs import check_output_dir, check_output_file
 from tests.experiments.exp_support import TINY_TOML
 from tests.saved_file_support import listing
 

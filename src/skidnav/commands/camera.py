@@ -20,9 +20,9 @@ import math
 from pathlib import Path
 from typing import Any
 
-from skidnav.commands.outputs import check_output_file, make_output_dir
 from skidnav.commands.parsing import positive_number
 from skidnav.errors import UserError
+from skidnav.outputs import check_output_file, make_output_dir
 from skidnav.realtime.camera.calibration import check_intrinsics
 from skidnav.realtime.camera.intrinsics import DEFAULT_BOARD_DICTIONARY, MIN_VIEWS
 from skidnav.realtime.camera.markers import DEFAULT_DICTIONARY, aruco_dictionary

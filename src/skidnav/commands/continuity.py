@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 
 from skidnav.atomicfile import write_user_file
-from skidnav.commands.outputs import check_output_dir, make_output_dir
 from skidnav.errors import UserError
+from skidnav.outputs import check_output_dir, make_output_dir
 from skidnav.robot.slip import SLIP_PRESETS
 
 SHOWN = ("success", "time_to_goal", "path_length", "wheel_change", "reversals_per_metre", "energy")

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from skidnav.atomicfile import write_user_file
-from skidnav.commands.outputs import check_output_file
 from skidnav.errors import UserError
+from skidnav.outputs import check_output_file
 from skidnav.physics.backend import PhysicsUnavailable
 from skidnav.physics.materials import MATERIALS
 

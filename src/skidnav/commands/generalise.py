@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from skidnav.atomicfile import write_user_file
-from skidnav.commands.outputs import check_output_file
 from skidnav.errors import UserError, shown
+from skidnav.outputs import check_output_file
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.stats import bootstrap_interval, difference_interval
 

@@ -6,8 +6,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from skidnav.commands.outputs import check_output_file
 from skidnav.errors import UserError
+from skidnav.outputs import check_output_file
 
 
 def add_parser(subparsers: Any) -> None:

@@ -26,9 +26,9 @@ import numpy as np
 from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
 from skidnav.agents.registry import make_agent
 from skidnav.atomicfile import write_user_file
-from skidnav.commands.outputs import make_output_dir
 from skidnav.envs.mazes import GridMazeEnv, blocking_maze, dyna_maze, shortcut_maze
 from skidnav.errors import UserError
+from skidnav.outputs import make_output_dir
 
 BOOK = {"alpha": 0.1, "gamma": 0.95, "epsilon": 0.1}
 CHANGING = {"alpha": 1.0, "gamma": 0.95, "epsilon": 0.1, "planning_steps": 10}

@@ -17,9 +17,9 @@ from pathlib import Path
 from types import FrameType
 from typing import IO, Any
 
-from skidnav.commands.outputs import check_output_dir
 from skidnav.commands.parsing import positive_number
 from skidnav.errors import UserError
+from skidnav.outputs import check_output_dir
 
 
 def port_number(text: str) -> int:

@@ -6,10 +6,10 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from skidnav.commands.outputs import check_output_dir
 from skidnav.envs.registration import allow_env_modules
 from skidnav.experiments.configfile import load_config_and_text
 from skidnav.experiments.runner import BACKENDS, run_experiment
+from skidnav.outputs import check_output_dir
 
 
 def add_parser(subparsers: Any) -> None:

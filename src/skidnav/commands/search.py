@@ -17,8 +17,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from skidnav.atomicfile import write_user_file
-from skidnav.commands.outputs import check_output_dir, make_output_dir
 from skidnav.errors import UserError
+from skidnav.outputs import check_output_dir, make_output_dir
 from skidnav.robot.slip import SLIP_PRESETS
 
 if TYPE_CHECKING:  # the search loads the env and numba: only when run

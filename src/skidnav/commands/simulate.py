@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 
 from skidnav.atomicfile import write_atomic
-from skidnav.commands.outputs import check_output_file
 from skidnav.errors import UserError, excerpt
+from skidnav.outputs import check_output_file
 from skidnav.robot.kinematics import ACTION_NAMES
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SLIP_PRESETS

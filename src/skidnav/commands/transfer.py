@@ -15,8 +15,8 @@ import numpy as np
 
 from skidnav.agents.registry import available_agents
 from skidnav.atomicfile import write_user_file
-from skidnav.commands.outputs import check_output_file
 from skidnav.errors import UserError
+from skidnav.outputs import check_output_file
 from skidnav.physics.backend import PhysicsUnavailable
 from skidnav.physics.materials import MATERIALS
 from skidnav.robot.slip import SLIP_PRESETS

@@ -24,6 +24,7 @@ import numpy as np
 from skidnav.atomicfile import write_user_file
 from skidnav.envs.step_info import step_info
 from skidnav.errors import UserError, first_line, shown
+from skidnav.outputs import make_output_dir
 from skidnav.realtime.arena import build_map, seed_streams
 from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
 from skidnav.realtime.control.checkpoint import Checkpoints
@@ -160,7 +161,7 @@ def run_from_args(
         context = agent_context(args.agent, robot, grid)
         pilot, first_episode, state = _make_or_resume_agent(args, config, context, grid)
         warm_up_agent(args.agent, config, context, grid.n_states)
-    out = output_directory(args.out)  # a refused --resume has written nothing
+    out = make_output_dir(args.out)  # a refused --resume has written nothing
     code, loop = drive(
         args.driver,
         pilot,
@@ -248,19 +249,6 @@ def drive(
     finally:
         shutdown()
     return code, loop
-
-
-def output_directory(path: Path) -> Path:
-    """``path`` created if needed, with a probe file written and removed; UserError naming it
-    if it cannot hold the run's files."""
-    probe = path / ".skidnav-write-test"
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        probe.write_bytes(b"")
-        probe.unlink()
-    except OSError as error:
-        raise UserError(f"cannot write to {path}: {error.strerror or error}") from None
-    return path
 
 
 def _summarize(loop: EpisodeLoop, out: Path, code: int) -> str:
