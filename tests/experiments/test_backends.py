@@ -153,3 +153,28 @@ def test_worker_watchdog_ends_an_orphaned_worker() -> None:
     assert result.returncode == -signal.SIGTERM, result.stderr
     assert time.monotonic() - started < 25
     assert result.stdout.strip() == str(sys.platform.startswith("linux"))
+
+
+def worker_pid(spec: object) -> int:
+    """A trial that answers which process ran it (importable by spawned workers)."""
+    time.sleep(0.05)  # long enough for both workers to take runs
+    return os.getpid()
+
+
+def test_batches_on_one_process_pool_run_in_the_same_workers() -> None:
+    """A search passes one pool to every trial's batch: its workers start once, not per trial
+    (so a search killed between trials leaves no freshly starting worker behind). The first run
+    of each algorithm of a batch runs in this process (to compile once)."""
+    from skidnav.experiments.runner import execute, process_pool
+    from skidnav.experiments.runs import expand_runs
+
+    runs = expand_runs(parse_config(TINY_TOML))
+    here = {os.getpid()}
+    with process_pool(2) as pool:
+        first = set(execute(runs[:4], worker_pid, "process", 2, None, pool)) - here
+        second = set(execute(runs[4:], worker_pid, "process", 2, None, pool)) - here
+        stopped = execute(runs, worker_pid, "process", 2, None, pool)
+        next(stopped)
+        del stopped  # a pruned trial: pending runs cancelled, the pool stays usable
+        again = set(execute(runs[:4], worker_pid, "process", 2, None, pool)) - here
+    assert first and second <= first and again <= first

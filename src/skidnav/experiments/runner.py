@@ -44,7 +44,7 @@ import os
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import ProcessPoolExecutor, as_completed, wait
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -97,21 +97,51 @@ def _serial(runs: Sequence[RunSpec[Any]], trial: TrialFunction) -> Iterator[Outc
         yield attempt(spec, functools.partial(trial, spec))
 
 
-def _process(runs: Sequence[RunSpec[Any]], trial: TrialFunction, jobs: int) -> Iterator[Outcome]:
-    if not runs:
-        return
-    jobs = min(jobs, len(runs))
+@contextlib.contextmanager
+def process_pool(jobs: int) -> Iterator[ProcessPoolExecutor]:
+    """A pool of ``jobs`` local worker processes (``spawn``, without the current directory on
+    their path, ending with this process: :mod:`skidnav.experiments.workers`), shut down with its
+    pending runs cancelled on exit. A caller that executes many batches of runs (a search's
+    trials) passes it to :func:`execute` for each, so its workers start once."""
     context = multiprocessing.get_context("spawn")
     with safe_path_children():
         executor = ProcessPoolExecutor(
             jobs, mp_context=context, initializer=init_worker, initargs=(os.getpid(),)
         )
         try:
-            futures = {executor.submit(trial, spec): spec for spec in runs}
-            for future in as_completed(futures):
-                yield attempt(futures[future], future.result)
+            yield executor
         finally:
             executor.shutdown(wait=True, cancel_futures=True)
+
+
+def _submitted(
+    executor: ProcessPoolExecutor, runs: Sequence[RunSpec[Any]], trial: TrialFunction
+) -> Iterator[Outcome]:
+    """Outcomes of ``runs`` on ``executor`` as they finish; when the caller stops early, the
+    pending runs are cancelled and the running ones awaited, so the pool is free again."""
+    futures = {executor.submit(trial, spec): spec for spec in runs}
+    try:
+        for future in as_completed(futures):
+            yield attempt(futures[future], future.result)
+    finally:
+        for future in futures:
+            future.cancel()
+        wait(futures)
+
+
+def _process(
+    runs: Sequence[RunSpec[Any]],
+    trial: TrialFunction,
+    jobs: int,
+    executor: ProcessPoolExecutor | None = None,
+) -> Iterator[Outcome]:
+    if not runs:
+        return
+    if executor is not None:
+        yield from _submitted(executor, runs, trial)
+        return
+    with process_pool(min(jobs, len(runs))) as own:
+        yield from _submitted(own, runs, trial)
 
 
 def _distributed() -> Any:
@@ -178,9 +208,11 @@ def execute(
     backend: str,
     jobs: int,
     client: Any = None,
+    executor: ProcessPoolExecutor | None = None,
 ) -> Iterator[Outcome]:
     """Results of ``runs`` in completion order on ``backend`` (``dask`` needs the ``client`` of
-    :func:`dask_client`); a run that raised gives its :class:`RunFailure` instead
+    :func:`dask_client`; ``process`` uses ``executor``, a :func:`process_pool`, when given, or a
+    pool of its own); a run that raised gives its :class:`RunFailure` instead
     (:mod:`skidnav.experiments.failures`)."""
     if not runs:
         return iter(())
@@ -188,7 +220,7 @@ def execute(
         return _serial(runs, trial)
     if backend == "process":
         first, rest = warm_up_first(runs)
-        return itertools.chain(_serial(first, trial), _process(rest, trial, jobs))
+        return itertools.chain(_serial(first, trial), _process(rest, trial, jobs, executor))
     assert client is not None, "the dask backend needs a client"
     return _dask(runs, trial, client)
 

@@ -9,7 +9,9 @@ never evaluation worlds (docs/tuning.md).
   unfinished runs are cancelled). Steps follow seed order, not completion order, so pruning
   decisions, and with them the whole study, are the same on every backend.
 * **Runs** go through :func:`skidnav.experiments.runner.execute` (serial, process pool, Dask); a
-  run that raises ends the search in one line (:class:`~skidnav.errors.RunsFailedError`).
+  run that raises ends the search in one line (:class:`~skidnav.errors.RunsFailedError`). The
+  process backend's pool is one for the whole search (:func:`~skidnav.experiments.runner.process_pool`):
+  its workers start once, not at every trial.
 * **Seeds**: a tuning run's world and run streams are those of the evaluation grid with the
   spawn key prefixed by :data:`TUNE_STREAM`: ``SeedSequence(root_seed).spawn(3)[2]`` takes the
   place of the root, whose children 0 and 1 are the evaluation world and run roots. Every trial
@@ -35,6 +37,7 @@ import time
 import warnings
 import zlib
 from collections.abc import Callable, Generator, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple
 
@@ -53,7 +56,13 @@ from skidnav.experiments.config import (
 )
 from skidnav.experiments.failures import RunFailure
 from skidnav.experiments.journalfile import check_journal
-from skidnav.experiments.runner import TrialFunction, _check_backend, dask_client, default_jobs
+from skidnav.experiments.runner import (
+    TrialFunction,
+    _check_backend,
+    dask_client,
+    default_jobs,
+    process_pool,
+)
 from skidnav.experiments.runner import execute as execute_runs
 from skidnav.experiments.runs import expand_runs
 from skidnav.experiments.store import TrialResult, directory_lock
@@ -111,6 +120,8 @@ class _Context:
     backend: str
     jobs: int
     client: Any
+    executor: ProcessPoolExecutor | None
+    """The process backend's pool, shared by every trial (its workers start once)."""
 
 
 def tuning_key(key: SeedKey) -> SeedKey:
@@ -282,7 +293,10 @@ def _results(
     # Closing this generator drops the last reference to the runner's iterator, whose clean-up
     # (a process pool's shutdown with its pending runs cancelled, Dask futures released) then
     # runs at once. A run that raised fails its trial, and the search, in one line.
-    for outcome in execute_runs(runs, context.trial, context.backend, context.jobs, context.client):
+    outcomes = execute_runs(
+        runs, context.trial, context.backend, context.jobs, context.client, context.executor
+    )
+    for outcome in outcomes:
         if isinstance(outcome, RunFailure):
             raise RunsFailedError(outcome.message)
         yield outcome
@@ -454,7 +468,10 @@ def tune_experiment(
         stack.enter_context(directory_lock(out))  # one search per directory
         remove_stale_temporaries(out)
         studies = _open_studies(out, plans, tune, source_text)
-        context = _Context(config, tune, trial, backend, jobs, client)
+        executor = None
+        if backend == "process" and jobs > 1:
+            executor = stack.enter_context(process_pool(jobs))
+        context = _Context(config, tune, trial, backend, jobs, client, executor)
         deadline = None if tune.timeout_s is None else started + tune.timeout_s
         try:
             executed = _optimize(plans, studies, context, deadline, on_trial)
