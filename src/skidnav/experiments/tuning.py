@@ -10,8 +10,8 @@ never evaluation worlds (docs/tuning.md).
   decisions, and with them the whole study, are the same on every backend.
 * **Runs** go through :func:`skidnav.experiments.runner.execute` (serial, process pool, Dask); a
   run that raises ends the search in one line (:class:`~skidnav.errors.RunsFailedError`). The
-  process backend's pool is one for the whole search (:func:`~skidnav.experiments.runner.process_pool`):
-  its workers start once, not at every trial.
+  process backend's pool is one for the whole search
+  (:func:`~skidnav.experiments.runner.process_pool`): its workers start once, not at every trial.
 * **Seeds**: a tuning run's world and run streams are those of the evaluation grid with the
   spawn key prefixed by :data:`TUNE_STREAM`: ``SeedSequence(root_seed).spawn(3)[2]`` takes the
   place of the root, whose children 0 and 1 are the evaluation world and run roots. Every trial
