@@ -175,6 +175,15 @@ def test_a_command_read_after_its_deadline_is_refused(tmp_path: Path) -> None:
         assert applied == [fresh]
 
 
+def heartbeats_until_the_wheels_stop(client: RawClient, server: ServerThread, sent: float) -> None:
+    """Once the wheels turn, keep the link alive with heartbeats (no new command) until they
+    stop, or 3 s after ``sent`` (monotonic [s])."""
+    wait_for(lambda: server.robot.moving, 1.0, "the wheels to turn")
+    while server.robot.moving and time.monotonic() - sent < 3.0:
+        client.send(lambda seq: pr.Heartbeat(seq=seq, stamp=time.monotonic()))
+        time.sleep(0.02)
+
+
 def test_the_wheels_stop_when_the_lease_runs_out_on_a_live_link(tmp_path: Path) -> None:
     with ServerThread(TIME_SCALE, log=tmp_path / "server.jsonl") as server:
         client = RawClient(server.port)
@@ -182,10 +191,7 @@ def test_the_wheels_stop_when_the_lease_runs_out_on_a_live_link(tmp_path: Path) 
         client.command(1.7, 1.7, ttl=0.15)
         client.receive_until(pr.Ack)
         sent = time.monotonic()
-        wait_for(lambda: server.robot.moving, 1.0, "the wheels to turn")
-        while server.robot.moving and time.monotonic() - sent < 3.0:
-            client.send(lambda seq: pr.Heartbeat(seq=seq, stamp=time.monotonic()))
-            time.sleep(0.02)
+        heartbeats_until_the_wheels_stop(client, server, sent)
         assert not server.robot.moving
         assert time.monotonic() - sent >= 0.15
         events = [e["event"] for e in server.events()]
@@ -212,10 +218,7 @@ def test_no_stamp_or_ttl_keeps_the_wheels_turning_past_the_bounded_lease(
         client.send(lambda seq: raw_command(seq, stamp, ttl))
         client.receive_until(pr.Ack)
         sent = time.monotonic()
-        wait_for(lambda: server.robot.moving, 1.0, "the wheels to turn")
-        while server.robot.moving and time.monotonic() - sent < 3.0:
-            client.send(lambda seq: pr.Heartbeat(seq=seq, stamp=time.monotonic()))
-            time.sleep(0.02)
+        heartbeats_until_the_wheels_stop(client, server, sent)
         stopped_after = time.monotonic() - sent
         assert not server.robot.moving
         assert stopped_after < max_lease + 0.2  # the lease plus a few (busy) periods
