@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from skidnav.cli import main
-from skidnav.experiments import report as report_module
+from skidnav.experiments.report import html as report_module
 
 
 @pytest.mark.parametrize("command", ["run", "tune"])

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skidnav.agents.registry import load_agent, make_agent
+from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.cli import main
 from skidnav.commands.reproduce import dyna_maze_runs
 from skidnav.errors import CorruptFileError
@@ -41,7 +41,7 @@ import numpy as np
 
 rng = np.random.default_rng(1)
 if sys.argv[1] == "agent":
-    from skidnav.agents.registry import make_agent
+    from skidnav.agents.tabular.registry import make_agent
 
     saved = make_agent("dyna-q", 5400, 4, {}, rng)
     saved.q[:] = rng.random(saved.q.shape)  # incompressible: far past the limit
@@ -228,11 +228,13 @@ def _error_line(stderr: str) -> str:
 
 def test_a_picture_on_a_full_disk_leaves_the_previous_one(tmp_path: Path) -> None:
     room, picture = tmp_path / "room.txt", tmp_path / "room.png"
-    assert main(["map", "generate", "--kind", "maze", "--out", str(room)]) == 0
-    assert main(["map", "show", str(room), "--png", str(picture)]) == 0
+    assert main(["world", "map", "generate", "--kind", "maze", "--out", str(room)]) == 0
+    assert main(["world", "map", "show", str(room), "--png", str(picture)]) == 0
     size = picture.stat().st_size
     picture.write_bytes(b"the previous picture")
-    result = skidnav_with_full_disk(["map", "show", str(room), "--png", str(picture)], size // 2)
+    result = skidnav_with_full_disk(
+        ["world", "map", "show", str(room), "--png", str(picture)], size // 2
+    )
     assert result.returncode == 2
     assert _error_line(result.stderr) == (
         f"skidnav: error: {picture}: cannot write the picture (File too large)"
@@ -244,7 +246,7 @@ def test_a_picture_on_a_full_disk_leaves_the_previous_one(tmp_path: Path) -> Non
 def test_reproduce_on_a_full_disk_keeps_whole_files(tmp_path: Path) -> None:
     dyna_maze_runs(1, planning_steps=(5,))  # compiled and cached before the disk fills
     (tmp_path / "dyna_maze.png").write_bytes(b"the previous plot")
-    args = ["reproduce", "sutton-barto", "--runs", "1", "--out", str(tmp_path)]
+    args = ["study", "reproduce", "sutton-barto", "--runs", "1", "--out", str(tmp_path)]
     result = skidnav_with_full_disk(args, max_file_bytes=8000)  # the CSV fits, the plot not
     assert result.returncode == 2
     plot = tmp_path / "dyna_maze.png"

@@ -6,7 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from skidnav.agents.registry import available_agents, make_agent
+from skidnav.agents.tabular.registry import available_agents, make_agent
 from skidnav.agents.training import TrainingLog, train_agent, train_for_steps
 from skidnav.envs.mazes import blocking_maze, dyna_maze
 

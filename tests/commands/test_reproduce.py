@@ -1,4 +1,4 @@
-"""``skidnav reproduce sutton-barto``: the textbook criteria, and the command end to end."""
+"""``skidnav study reproduce sutton-barto``: the textbook criteria, and the command end to end."""
 
 from __future__ import annotations
 
@@ -41,7 +41,7 @@ def _header(path: Path) -> list[str]:
 
 
 def test_cli_writes_every_csv_and_png(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["reproduce", "sutton-barto", "--runs", "2", "--out", str(tmp_path)]) == 0
+    assert main(["study", "reproduce", "sutton-barto", "--runs", "2", "--out", str(tmp_path)]) == 0
     columns = {
         "dyna_maze": ["planning_steps", "run", "episode", "steps"],
         "blocking_maze": ["agent", "step", "mean_cumulative_reward"],
@@ -56,4 +56,4 @@ def test_cli_writes_every_csv_and_png(tmp_path: Path, capsys: pytest.CaptureFixt
     assert len(rows) == 3 * 2 * 50  # n × runs × episodes
     assert np.unique([row["planning_steps"] for row in rows]).tolist() == ["0", "5", "50"]
     assert "wrote CSV and PNG files" in capsys.readouterr().out
-    assert main(["reproduce", "sutton-barto", "--runs", "0", "--out", str(tmp_path)]) == 2
+    assert main(["study", "reproduce", "sutton-barto", "--runs", "0", "--out", str(tmp_path)]) == 2

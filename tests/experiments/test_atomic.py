@@ -16,7 +16,7 @@ import pytest
 
 from skidnav.atomicfile import remove_stale_temporaries, write_atomic
 from skidnav.cli import main
-from skidnav.experiments import report as report_module
+from skidnav.experiments.report import html as report_module
 from skidnav.experiments.store import LOCK_FILE, ResultStore, directory_lock
 from tests.experiments.exp_support import cli_command, cli_env
 

@@ -8,18 +8,18 @@ import pytest
 
 import skidnav  # noqa: F401  (registers the env)
 from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import make_agent
+from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import train_agent
 from skidnav.errors import UserError
 from skidnav.experiments.config import config_from_dict, config_to_dict
 from skidnav.experiments.configfile import parse_config
-from skidnav.experiments.finegrid import FineStates, state_grid
-from skidnav.experiments.gap import gap_rows, gap_section, optimum_rows
-from skidnav.experiments.optimum import Optimum, compute_optimum, optimum_columns
-from skidnav.experiments.oracle import compute_oracle, solve
+from skidnav.experiments.reference.finegrid import FineStates, state_grid
+from skidnav.experiments.reference.optimum import Optimum, compute_optimum, optimum_columns
+from skidnav.experiments.reference.oracle import compute_oracle, solve
 from skidnav.experiments.runner import run_experiment
 from skidnav.experiments.store import ResultStore
 from skidnav.experiments.trial import check_config
+from skidnav.studies.gap import gap_rows, gap_section, optimum_rows
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap, border_walls, generate_map
 
@@ -219,7 +219,7 @@ def test_agents_that_cannot_use_finer_cells_are_refused(agent, message):
 
 
 def test_the_table_printer_refuses_a_directory_without_results(tmp_path, capsys):
-    from skidnav.experiments.gap import main
+    from skidnav.studies.gap import main
 
     assert main([str(tmp_path / "none")]) == 2
     error = capsys.readouterr().err

@@ -1,5 +1,5 @@
 """The generalisation study: seeded splits of maps, training on a map set, evaluation on both
-sides, and ``skidnav generalise``."""
+sides, and ``skidnav study generalise``."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skidnav.experiments import generalisation
-from skidnav.experiments.generalisation import (
+from skidnav.studies import generalisation
+from skidnav.studies.generalisation import (
     GoalSeeker,
     evaluate_on,
     generalisation_run,
@@ -76,7 +76,8 @@ def test_dqn_trains_on_a_map_set() -> None:
 def test_command_writes_one_row_per_agent_and_seed(tmp_path: Path) -> None:
     out = tmp_path / "generalisation.csv"
     done = subprocess.run(
-        [sys.executable, "-m", "skidnav.cli", "generalise", "--agent", "linear-q", "--seeds", "2",
+        [sys.executable, "-m", "skidnav.cli", "study", "generalise", "--agent", "linear-q",
+        "--seeds", "2",
          "--training-maps", "2", "--held-out-maps", "1", "--episodes", "2", "--max-steps", "20",
          "--rollouts", "1", "--params", 'linear-q={"dimensions": [4, 5], "tiles": [2]}',
          "--out", str(out)],
@@ -109,7 +110,7 @@ def test_references_are_measured_on_the_split() -> None:
 )
 def test_bad_arguments_are_one_line(arguments: list[str], message: str) -> None:
     done = subprocess.run(
-        [sys.executable, "-m", "skidnav.cli", "generalise", *arguments],
+        [sys.executable, "-m", "skidnav.cli", "study", "generalise", *arguments],
         capture_output=True, text=True, timeout=120,
     )  # fmt: skip
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr

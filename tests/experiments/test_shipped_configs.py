@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from skidnav.experiments.configfile import load_config
-from skidnav.experiments.tuneconfig import load_tune_config
 from skidnav.realtime.config import load_config as load_realtime_config
+from skidnav.studies.tuning.config import load_tune_config
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 SHIPPED = sorted(CONFIGS.glob("*.toml"))

@@ -13,7 +13,7 @@ import pytest
 
 from skidnav import cli
 from skidnav._jit import jit_disabled
-from skidnav.agents.registry import available_agents
+from skidnav.agents.tabular.registry import available_agents
 from skidnav.agents.training import TrainingLog
 from skidnav.errors import UserError
 from skidnav.experiments import trial

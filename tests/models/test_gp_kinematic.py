@@ -127,7 +127,17 @@ def test_config_and_queries_are_validated() -> None:
 
 
 def test_cli_compares_both_models_on_a_tiny_budget(capsys: pytest.CaptureFixture[str]) -> None:
-    arguments = ["kinematic", "compare", "--seeds", "2", "--samples", "300", "--window", "20"]
+    arguments = [
+        "study",
+        "kinematic",
+        "compare",
+        "--seeds",
+        "2",
+        "--samples",
+        "300",
+        "--window",
+        "20",
+    ]
     assert main([*arguments, "--drift", "0.5"]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert "drift A = 0.5 over P = 30 s" in lines[0]
@@ -151,7 +161,7 @@ def test_cli_compares_both_models_on_a_tiny_budget(capsys: pytest.CaptureFixture
 def test_bad_arguments_give_one_line_and_exit_code_2(
     capsys: pytest.CaptureFixture[str], option: str, value: str, message: str
 ) -> None:
-    assert _exit_code(["kinematic", "compare", option, value]) == 2
+    assert _exit_code(["study", "kinematic", "compare", option, value]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err, err
 

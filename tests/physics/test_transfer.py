@@ -1,4 +1,4 @@
-"""``skidnav transfer``: policies from the kinematic simulator run on the MuJoCo robot."""
+"""``skidnav study transfer``: policies from the kinematic simulator run on the MuJoCo robot."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import pytest
 
 pytest.importorskip("mujoco")
 
-from skidnav.experiments.transfer import transfer_run
+from skidnav.studies.transfer import transfer_run
 
 
 def test_same_seed_same_gap_and_shares_are_shares() -> None:
@@ -26,7 +26,8 @@ def test_same_seed_same_gap_and_shares_are_shares() -> None:
 def test_command_writes_one_row_per_agent_and_seed(tmp_path: Path) -> None:
     out = tmp_path / "gap.csv"
     done = subprocess.run(
-        [sys.executable, "-m", "skidnav.cli", "transfer", "--agent", "dyna-q", "--seeds", "2",
+        [sys.executable, "-m", "skidnav.cli", "study", "transfer", "--agent", "dyna-q", "--seeds",
+        "2",
          "--episodes", "2", "--planning-steps", "5", "--rollouts", "1", "--out", str(out)],
         capture_output=True, text=True, timeout=300,
     )  # fmt: skip
@@ -39,7 +40,7 @@ def test_command_writes_one_row_per_agent_and_seed(tmp_path: Path) -> None:
 @pytest.mark.parametrize("flag, value", [("--seeds", "0"), ("--rollouts", "1000")])
 def test_bad_arguments_are_one_line(flag: str, value: str) -> None:
     done = subprocess.run(
-        [sys.executable, "-m", "skidnav.cli", "transfer", flag, value],
+        [sys.executable, "-m", "skidnav.cli", "study", "transfer", flag, value],
         capture_output=True, text=True, timeout=60,
     )  # fmt: skip
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1

@@ -14,7 +14,7 @@ from skidnav.realtime.arena import build_map, seed_streams, start_pose
 from skidnav.realtime.control.homing import HomingController
 from skidnav.realtime.control.transition import IcrEstimates, WheelSpeedStats, log_row, reward_of
 from skidnav.realtime.link.interface import Pose
-from skidnav.realtime.sim.robot import SimRobot, SimRobotConfig, build_robot
+from skidnav.realtime.robot_server.simulated_robot import SimRobot, SimRobotConfig, build_robot
 from skidnav.robot.kinematics import body_velocities, euler_step
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
@@ -199,7 +199,7 @@ def test_homing_with_the_estimated_icr_reaches_the_start_on_a_shifted_floor() ->
 
 
 SCORING_KERNELS = """
-from skidnav.kernels.navigation import action_reward
+from skidnav.sim.navigation import action_reward
 from skidnav.realtime.arena import build_map
 from skidnav.realtime.control.transition import compile_scoring
 from skidnav.robot.kinematics import wrap_angle

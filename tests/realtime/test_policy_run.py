@@ -15,12 +15,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skidnav.agents import policy_files
-from skidnav.agents.goal_tracker import GoalTracker
+from skidnav.agents.policies import loading as policy_files
+from skidnav.agents.policies.goal_tracker import GoalTracker
 from skidnav.cli import main
-from skidnav.envs.features import PoseFeatures
 from skidnav.realtime.arena import build_map
 from skidnav.realtime.control.checkpoint import Checkpoints
+from skidnav.sim.features import PoseFeatures
 from skidnav.world.discretization import Discretization
 from tests.realtime.realtime_helpers import ServerThread, read_events, wait_for, write_config
 from tests.realtime.test_faults import POSE_TIMEOUT, STOP_WITHIN, assert_quiet_until_reconnect
@@ -318,8 +318,8 @@ def test_a_policy_with_weights_no_search_writes_is_one_line(
 ) -> None:
     """Weights of 10³² and more (the search keeps them below: cmaes asserts it) would overflow
     the policy's sums to NaN on the robot: refused when the file is loaded."""
-    from skidnav.policysearch.policy import PolicyLayout, TanhPolicy
-    from skidnav.policysearch.policyfile import save_policy
+    from skidnav.agents.policies.search.policy_file import save_policy
+    from skidnav.agents.policies.search.tanh_policy import PolicyLayout, TanhPolicy
 
     layout = PolicyLayout(np.zeros(9), np.ones(9), hidden=2, wheel_speed=1.7, lidar_rays=2)
     npz_path, json_path = save_policy(

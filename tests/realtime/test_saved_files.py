@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skidnav.agents.registry import load_agent, make_agent
+from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.cli import main
 from skidnav.errors import CorruptFileError
 from skidnav.realtime.control.checkpoint import LATEST, Checkpoints

@@ -19,7 +19,8 @@ from skidnav.experiments.runs import RunSpec, expand_runs
 from skidnav.experiments.store import ResultStore
 from skidnav.realtime.control.loop import EXIT_INTERRUPTED
 from skidnav.realtime.control.records import EpisodeResult
-from skidnav.realtime.study import (
+from skidnav.studies.hardware.report import markdown_report
+from skidnav.studies.hardware.study import (
     STUDY_LAYOUT,
     build_grid,
     grid_from_dict,
@@ -27,8 +28,7 @@ from skidnav.realtime.study import (
     load_study,
     run_study,
 )
-from skidnav.realtime.study_report import markdown_report
-from skidnav.realtime.study_trial import run_config
+from skidnav.studies.hardware.trial import run_config
 from tests.realtime.realtime_helpers import write_config
 from tests.realtime.test_run import small_room_map
 
@@ -144,7 +144,7 @@ def test_an_interrupted_study_resumes_with_no_run_lost_or_repeated(
 ) -> None:
     tables, settings = load_study(study_config(tmp_path), {"seeds": 2, "episodes": 3})
     out, calls = tmp_path / "study", []
-    monkeypatch.setattr("skidnav.realtime.study_trial.realtime_run", fake_realtime(calls, 3))
+    monkeypatch.setattr("skidnav.studies.hardware.trial.realtime_run", fake_realtime(calls, 3))
     first = run_study(tables, settings, out)
     assert first == (EXIT_INTERRUPTED, 8, 2, 2)
     store = ResultStore(out, STUDY_LAYOUT)
@@ -153,7 +153,7 @@ def test_an_interrupted_study_resumes_with_no_run_lost_or_repeated(
     interrupted = out / "runs" / "q-learning" / "slippery-drifting" / "seed-0"
     assert (interrupted / "run.jsonl").exists()  # unfinished: no run file
 
-    monkeypatch.setattr("skidnav.realtime.study_trial.realtime_run", fake_realtime(calls))
+    monkeypatch.setattr("skidnav.studies.hardware.trial.realtime_run", fake_realtime(calls))
     second = run_study(tables, settings, out)
     assert second == (0, 8, 8, 6)
     assert calls[3:] == [f"run-{i:06d}" for i in range(2, 8)]  # the interrupted run again
@@ -321,7 +321,7 @@ def test_study_settings_and_one_line_errors(
     assert not out.exists()
 
     config.write_text(text)
-    monkeypatch.setattr("skidnav.realtime.study_trial.realtime_run", fake_realtime([]))
+    monkeypatch.setattr("skidnav.studies.hardware.trial.realtime_run", fake_realtime([]))
     assert main([*argv, "--episodes", "2", "--agents", "q-learning"]) == 0
     assert main([*argv, "--episodes", "3", "--agents", "q-learning"]) == 2
     assert (

@@ -88,7 +88,7 @@ def test_bad_arguments_end_in_one_line_and_exit_code_2(
 def test_the_sim_server_takes_the_integrator_asked_for(
     integrator: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import skidnav.realtime.sim.robot as sim_robot
+    import skidnav.realtime.robot_server.simulated_robot as sim_robot
 
     built = []
 

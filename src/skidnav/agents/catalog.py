@@ -2,10 +2,10 @@
 
 Three families, each with its own registry:
 
-* **tabular** (:mod:`skidnav.agents.registry`): a Q table over the env's ``Discrete``
+* **tabular** (:mod:`skidnav.agents.tabular.registry`): a Q table over the env's ``Discrete``
   observation; trained by the compiled trainer
   (:func:`~skidnav.agents.fast_training.train_agent_fast`);
-* **linear** (:mod:`skidnav.agents.continuous.registry`): tile-coded features of a ``Box``
+* **linear** (:mod:`skidnav.agents.linear.registry`): tile-coded features of a ``Box``
   observation; trained by the plain loop (:func:`~skidnav.agents.training.train_agent`, to
   which the compiled trainer falls back for them);
 * **deep** (:data:`DEEP_AGENTS`, the ``deep`` extra): Stable-Baselines3 owns the loop, and the
@@ -28,13 +28,13 @@ import gymnasium
 import numpy as np
 from gymnasium.wrappers import TimeLimit
 
-from skidnav.agents.continuous.registry import (
+from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.linear.registry import (
     CONTINUOUS_AGENT_MODULES,
     linear_agent_class,
     make_linear_agent,
 )
-from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import AGENT_MODULES, agent_class, make_agent, make_config
+from skidnav.agents.tabular.registry import AGENT_MODULES, agent_class, make_agent, make_config
 from skidnav.agents.training import TrainingLog
 from skidnav.errors import UserError, first_line, shown
 

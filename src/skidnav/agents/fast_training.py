@@ -3,8 +3,8 @@
 (:class:`skidnav.envs.mazes.GridMazeEnv`), and :func:`train_for_steps_fast`, a drop-in for
 :func:`skidnav.agents.training.train_for_steps` on the same envs.
 
-Episodes run in compiled stretches (:func:`skidnav.kernels.trainer.learn_stretch`, at most
-:data:`STRETCH` steps each): the env's compiled step (:mod:`skidnav.kernels.env_steps`),
+Episodes run in compiled stretches (:func:`skidnav.agents.fused_loop.learn_stretch`, at most
+:data:`STRETCH` steps each): the env's compiled step (:mod:`skidnav.agents.env_steps`),
 ε-greedy, and the agent's own learning step — the very kernel its ``observe`` calls, so there is
 one learning step per agent. Between stretches Python makes room in the agent's buffers
 (``reserve``); between episodes it does what the agent does in ``end_episode`` (ε decay,
@@ -12,7 +12,8 @@ trajectory bookkeeping, kinematic refits by the compiled Bayesian ridge) and the
 evaluation rollouts (also compiled). Same signature, same output, and the same numbers as the
 plain loop for the same seed (tested), except ``wall_time``. Other envs (the navigation env with
 ``dynamics="mujoco"`` among them: its physics is not compiled), or agents that are not a
-:class:`~skidnav.agents.core.TabularAgent`, fall back to the plain loop. The navigation env's
+:class:`~skidnav.agents.tabular.agent.TabularAgent`, fall back to the plain loop. The navigation
+env's
 ``trail`` (for rendering) is not recorded.
 """
 
@@ -26,7 +27,11 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from skidnav.agents.core import TabularAgent
+from skidnav.agents import env_steps
+from skidnav.agents import fused_loop as trainer
+from skidnav.agents.fused_loop import ELAPSED, ENDED, LENGTH, Limits
+from skidnav.agents.learning import NO_LOG_ROWS, NO_POSE
+from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.agents.training import (
     NOT_REACHED,
     Rollout,
@@ -36,9 +41,6 @@ from skidnav.agents.training import (
     train_agent,
     train_for_steps,
 )
-from skidnav.kernels import env_steps, trainer
-from skidnav.kernels.learning import NO_LOG_ROWS, NO_POSE
-from skidnav.kernels.trainer import ELAPSED, ENDED, LENGTH, Limits
 
 logger = logging.getLogger(__name__)
 
@@ -62,7 +64,7 @@ def _unwrapped(env: gym.Env[Any, Any]) -> tuple[Any, int]:
 class FusedEnv:
     """An unwrapped env the compiled loop drives, with the smallest step limit along its
     wrappers; subclasses convert the env's state to and from the loop's
-    (:mod:`skidnav.kernels.env_steps`)."""
+    (:mod:`skidnav.agents.env_steps`)."""
 
     def __init__(self, env: Any, limit: int) -> None:
         self.env, self.limit = env, limit

@@ -21,7 +21,8 @@ from skidnav.errors import UserError
 
 
 class Learner(Protocol):
-    """What the loop needs from an agent (every :class:`~skidnav.agents.core.TabularAgent`, and
+    """What the loop needs from an agent (every
+    :class:`~skidnav.agents.tabular.agent.TabularAgent`, and
     the agents on continuous states). A state is what :func:`as_state` makes of an observation:
     an int for a Discrete observation, a float64 array for a Box one."""
 
@@ -73,7 +74,7 @@ class TrainingLog(NamedTuple):
     greedy_costs: np.ndarray
     """Costs of the same rollouts, float64 (n_episodes, n_rollouts): the sum of the costs the
     evaluation env reports for its actions (``info["cost"]``: on the navigation env minus the
-    reward without the goal bonus, :func:`skidnav.kernels.navigation.action_cost`); NaN where the
+    reward without the goal bonus, :func:`skidnav.sim.navigation.action_cost`); NaN where the
     length is −1, and where the env reports no cost."""
 
 

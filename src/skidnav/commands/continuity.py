@@ -1,9 +1,9 @@
-"""``skidnav continuity``: discrete agents against wheel-speed learners on one world
-(:mod:`skidnav.experiments.wheel_comparison`).
+"""``skidnav study continuity``: discrete agents against wheel-speed learners on one world
+(:mod:`skidnav.studies.continuity.comparison`).
 
 Writes into ``--out DIR``: ``runs.csv`` (one row per learner run: seed, real episodes used and to
 learn, wall time, success of its rollouts), ``table.csv`` (per learner and metric: mean and 95 %
-bootstrap interval over every rollout of every seed, :func:`~skidnav.experiments.continuity.
+bootstrap interval over every rollout of every seed, :func:`~skidnav.studies.continuity.traces.
 comparison_table`), ``table.md`` (the same as markdown, with the runs' learning costs) and
 ``trajectories.png`` (each learner's first rollout of its first seed on the arena).
 """
@@ -28,7 +28,7 @@ SHOWN = ("success", "time_to_goal", "path_length", "wheel_change", "reversals_pe
 
 def add_parser(subparsers: Any) -> None:
     """Add ``continuity``."""
-    from skidnav.experiments.wheel_comparison import LEARNERS
+    from skidnav.studies.continuity.comparison import LEARNERS
 
     parser = subparsers.add_parser(
         "continuity", help="discrete agents against wheel-speed learners: what continuity buys"
@@ -53,7 +53,7 @@ def add_parser(subparsers: Any) -> None:
 
 def continuity_command(args: argparse.Namespace) -> int:
     """Run the comparison; write and print its table."""
-    from skidnav.experiments.wheel_comparison import ComparisonConfig, run_comparison
+    from skidnav.studies.continuity.comparison import ComparisonConfig, run_comparison
 
     try:
         config = ComparisonConfig(
@@ -91,8 +91,8 @@ def write_results(out: Path, config: Any, runs: list[Any]) -> None:
     import pandas as pd
 
     from skidnav.envs.registration import ENV_ID
-    from skidnav.experiments.continuity import comparison_table
-    from skidnav.experiments.trajectory_plot import save_trajectory_picture
+    from skidnav.studies.continuity.traces import comparison_table
+    from skidnav.studies.continuity.trajectory_plot import save_trajectory_picture
 
     rows = [
         {"learner": r.learner, "seed": r.seed, "episodes_used": r.episodes_used,

@@ -1,5 +1,5 @@
-"""``skidnav generalise``: agents trained on a set of maps, run on maps never seen
-(:mod:`skidnav.experiments.generalisation`)."""
+"""``skidnav study generalise``: agents trained on a set of maps, run on maps never seen
+(:mod:`skidnav.studies.generalisation`)."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.stats import bootstrap_interval, difference_interval
 
 if TYPE_CHECKING:  # the experiment modules load numba and the agents: only when run
-    from skidnav.experiments.generalisation import GeneralisationResult
+    from skidnav.studies.generalisation import GeneralisationResult
 
 MAX_SEEDS = 1000
 MAX_WORLDS = 1000
@@ -105,7 +105,7 @@ def _generalise(args: argparse.Namespace) -> int:
     if args.out is not None:
         check_output_file(args.out)
     from skidnav.agents.catalog import check_params
-    from skidnav.experiments.generalisation import generalisation_run, references, split_worlds
+    from skidnav.studies.generalisation import generalisation_run, references, split_worlds
 
     names = args.agent or list(DEFAULT_AGENTS)
     for name in names:

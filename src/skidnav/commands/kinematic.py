@@ -1,5 +1,5 @@
-"""``skidnav kinematic compare``: the Bayesian-ridge and the Gaussian-process kinematic models on
-held-out sub-steps of the fast simulator (docs/gp-kinematic.md).
+"""``skidnav study kinematic compare``: the Bayesian-ridge and the Gaussian-process kinematic
+models on held-out sub-steps of the fast simulator (docs/gp-kinematic.md).
 
 Per seed: drive the env ``skidnav/SkidSteerNav-v0`` with uniformly random actions until
 ``--samples`` free sub-steps are logged (``info["kinematic_log"]``), fit both models on the first

@@ -40,7 +40,7 @@ def report_command(args: argparse.Namespace) -> int:
         check_output_file(args.output, "--output")
     if args.study:
         return study_command(args.run_dir, args.output or args.run_dir / "study.md")
-    from skidnav.experiments.report import write_report
+    from skidnav.experiments.report.html import write_report
 
     print(f"report: {write_report(args.run_dir, args.output)}")
     return 0
@@ -49,7 +49,7 @@ def report_command(args: argparse.Namespace) -> int:
 def study_command(run_dir: Path, output: Path) -> int:
     """Write the study's tables of ``run_dir`` to ``output``; print its path."""
     from skidnav.atomicfile import write_user_file
-    from skidnav.realtime.experiment_study import experiment_study_report
+    from skidnav.studies.hardware.experiment_tables import experiment_study_report
 
     write_user_file(output, experiment_study_report(run_dir).encode("utf-8"), "study tables")
     print(f"study tables: {output}")

@@ -1,4 +1,4 @@
-"""``skidnav reproduce sutton-barto``: the textbook checks of Sutton & Barto (2018) ch. 8.
+"""``skidnav study reproduce sutton-barto``: the textbook checks of Sutton & Barto (2018) ch. 8.
 
 Writes per-episode (or per-step) CSV files and PNG plots to ``--out``, each atomically, and prints
 a summary:
@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
-from skidnav.agents.registry import make_agent
+from skidnav.agents.tabular.registry import make_agent
 from skidnav.atomicfile import write_user_file
 from skidnav.envs.mazes import GridMazeEnv, blocking_maze, dyna_maze, shortcut_maze
 from skidnav.errors import UserError
@@ -38,7 +38,7 @@ PATH_TOLERANCE = 1.2
 
 
 def add_parser(subparsers: Any) -> None:
-    """Register ``skidnav reproduce``."""
+    """Register ``skidnav study reproduce``."""
     parser = subparsers.add_parser("reproduce", help="reproduce reference results")
     parser.add_argument("target", choices=["sutton-barto"], help="which results")
     parser.add_argument("--runs", type=int, default=30, help="independent runs (seeds 0..N-1)")
@@ -55,7 +55,7 @@ def _write_csv(path: Path, header: Sequence[str], rows: list[Sequence[Any]]) -> 
 
 
 def _plot(path: Path, curves: dict[str, np.ndarray], xlabel: str, ylabel: str, x0: int = 1) -> None:
-    from skidnav.experiments.plots import line_plot  # matplotlib only when a figure is drawn
+    from skidnav.experiments.report.plots import line_plot  # matplotlib only when a figure is drawn
 
     write_user_file(path, line_plot(curves, xlabel, ylabel, x0), "plot")
 

@@ -3,7 +3,7 @@
 ``skidnav robot sim-server`` runs the simulated robot server; ``skidnav robot run`` runs an agent
 (or a frozen continuous policy) in real time against a robot driver; ``skidnav robot study``
 runs agents × presets × seeds against the sim server through the experiment runner and
-tabulates success (realtime/study.py).
+tabulates success (studies/hardware/study.py).
 """
 
 from __future__ import annotations
@@ -108,9 +108,9 @@ def _add_sim_server(commands: Any) -> None:
 
 def _run_sim_server(args: argparse.Namespace) -> int:
     from skidnav.realtime.control.records import EventLog
-    from skidnav.realtime.sim.lockstep import LockstepServer
-    from skidnav.realtime.sim.server import SimServer
-    from skidnav.realtime.sim.transport import bind_listener
+    from skidnav.realtime.robot_server.lockstep import LockstepServer
+    from skidnav.realtime.robot_server.server import SimServer
+    from skidnav.realtime.robot_server.transport import bind_listener
 
     robot, options = _sim_robot(args)
     server_class = LockstepServer if args.lockstep else SimServer
@@ -147,7 +147,7 @@ def _sim_robot(args: argparse.Namespace) -> tuple[Any, Any]:
     from skidnav.physics.backend import PhysicsUnavailable
     from skidnav.realtime.config import ServerOptions
     from skidnav.realtime.link.auth import load_secret
-    from skidnav.realtime.sim.robot import SimRobotConfig, build_robot, warm_up
+    from skidnav.realtime.robot_server.simulated_robot import SimRobotConfig, build_robot, warm_up
     from skidnav.robot.params import RobotParams
 
     try:
@@ -246,7 +246,7 @@ def _add_study(commands: Any) -> None:
 
 
 def _run_study(args: argparse.Namespace) -> int:
-    from skidnav.realtime.study import load_study, run_study
+    from skidnav.studies.hardware.study import load_study, run_study
 
     overrides = {
         "agents": args.agents,

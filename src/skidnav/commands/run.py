@@ -83,7 +83,7 @@ def run_command(args: argparse.Namespace) -> int:
         f"{outcome.skipped} already done) in {outcome.wall_time:.1f} s"
     )
     if args.report:
-        from skidnav.experiments.report import write_report
+        from skidnav.experiments.report.html import write_report
 
         print(f"report: {write_report(outcome.out_dir)}")
     return 0

@@ -1,7 +1,9 @@
-"""``skidnav search``: a tanh wheel-speed policy found by CMA-ES (:mod:`skidnav.policysearch`).
+"""``skidnav study search``: a tanh wheel-speed policy found by CMA-ES
+(:mod:`skidnav.agents.policies.search`).
 
 Writes into ``--out DIR``: ``policy.npz`` + ``policy.json`` (the final mean policy),
-``curve.csv`` (one row per generation, :class:`~skidnav.policysearch.search.GenerationRecord`),
+``curve.csv`` (one row per generation,
+:class:`~skidnav.agents.policies.search.cmaes.GenerationRecord`),
 ``search.json`` (the config and the last row) and ``checkpoint.npz`` + ``checkpoint.json``
 (rewritten after every generation; ``--resume`` continues from it).
 """
@@ -22,8 +24,8 @@ from skidnav.outputs import check_output_dir, make_output_dir
 from skidnav.robot.slip import SLIP_PRESETS
 
 if TYPE_CHECKING:  # the search loads the env and numba: only when run
-    from skidnav.policysearch.config import SearchConfig
-    from skidnav.policysearch.search import GenerationRecord
+    from skidnav.agents.policies.search.cmaes import GenerationRecord
+    from skidnav.agents.policies.search.config import SearchConfig
 
 FLAG_FIELDS = {
     "map": "map_kind", "world_seed": "world_seed", "slip": "slip", "max_steps": "max_episode_steps",
@@ -33,7 +35,7 @@ FLAG_FIELDS = {
     "eval_episodes": "eval_episodes",
     "eval_every": "eval_every", "seed": "seed",
 }  # fmt: skip
-"""Argument → :class:`~skidnav.policysearch.config.SearchConfig` field."""
+"""Argument → :class:`~skidnav.agents.policies.search.config.SearchConfig` field."""
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -66,7 +68,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
 
 def _config(args: argparse.Namespace) -> SearchConfig:
     """The search's config from the arguments; UserError naming the flag of a bad value."""
-    from skidnav.policysearch.config import SearchConfig
+    from skidnav.agents.policies.search.config import SearchConfig
 
     values = {field: getattr(args, flag) for flag, field in FLAG_FIELDS.items()}
     try:
@@ -96,8 +98,8 @@ def _prepare(out: Path, resume: bool) -> Path:
 def _search(args: argparse.Namespace) -> int:
     config = _config(args)
     checkpoint = _prepare(check_output_dir(args.out), args.resume)
-    from skidnav.policysearch.policyfile import save_policy
-    from skidnav.policysearch.search import record_rows, run_search
+    from skidnav.agents.policies.search.cmaes import record_rows, run_search
+    from skidnav.agents.policies.search.policy_file import save_policy
 
     def progress(record: GenerationRecord) -> None:
         success = "" if math.isnan(record.mean_success) else f", success {record.mean_success:.2f}"

@@ -1,5 +1,5 @@
-"""``skidnav transfer``: the sim-to-sim gap — agents trained on the kinematic simulator, their
-greedy policies run on the MuJoCo robot (:mod:`skidnav.experiments.transfer`)."""
+"""``skidnav study transfer``: the sim-to-sim gap — agents trained on the kinematic simulator, their
+greedy policies run on the MuJoCo robot (:mod:`skidnav.studies.transfer`)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from skidnav.agents.registry import available_agents
+from skidnav.agents.tabular.registry import available_agents
 from skidnav.atomicfile import write_user_file
 from skidnav.errors import UserError
 from skidnav.outputs import check_output_file
@@ -23,7 +23,7 @@ from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.stats import bootstrap_interval
 
 if TYPE_CHECKING:  # the experiment modules load numba and the agents: only when run
-    from skidnav.experiments.transfer import TransferResult
+    from skidnav.studies.transfer import TransferResult
 
 MAX_SEEDS = 1000
 MAX_EPISODES = 100_000
@@ -61,7 +61,7 @@ def _transfer(args: argparse.Namespace) -> int:
     _check(args)
     if args.out is not None:
         check_output_file(args.out)
-    from skidnav.experiments.transfer import TransferResult, transfer_run
+    from skidnav.studies.transfer import TransferResult, transfer_run
 
     results: list[TransferResult] = []
     for name in args.agent or ["q-learning", "dyna-full"]:

@@ -11,17 +11,17 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
-from skidnav.envs import rendering
-from skidnav.envs.features import PoseFeatures
 from skidnav.envs.step_info import step_info
-from skidnav.kernels.navigation import NavigationTask, RewardScheme
-from skidnav.kernels.navigation_api import build_task, step_arrays, task_arrays
 from skidnav.physics.mdp import floor_materials, physics_transition
-from skidnav.physics.robot import PhysicsRobot
+from skidnav.physics.mujoco_robot import PhysicsRobot
 from skidnav.robot.kinematics import commanded_wheel_speeds, wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
 from skidnav.seeding import ARENA_ROLES, streams
+from skidnav.sim.features import PoseFeatures
+from skidnav.sim.navigation import NavigationTask, RewardScheme
+from skidnav.sim.task import build_task, step_arrays, task_arrays
+from skidnav.world import rendering
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 from skidnav.world.maps import build_map
@@ -58,7 +58,7 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     (7 + k,) of x [m], y [m], cos ψ, sin ψ, the distance [m] to the goal cell's centre, cos and
     sin of the goal's bearing from the heading, and k = ``lidar_rays`` range readings [m] to the
     nearest wall or border, ray 0 ahead and the others counter-clockwise, clipped at
-    ``lidar_range`` (layout and bounds: :mod:`skidnav.envs.features`).
+    ``lidar_range`` (layout and bounds: :mod:`skidnav.sim.features`).
 
     ## Rewards
     +10 on ending an action in the goal cell; −10 for an action that ran into a wall; otherwise
@@ -67,7 +67,7 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     forward actions with ``variance="observed"``, as the thesis). The same with either dynamics.
     ``info["cost"]`` is the action's cost, minus its reward without the goal bonus: 1 + 10·var,
     10 for a collision, and the action that reaches the goal costs what a free step ending there
-    would (:func:`skidnav.kernels.navigation.action_cost`); summed over an episode that reaches
+    would (:func:`skidnav.sim.navigation.action_cost`); summed over an episode that reaches
     the goal it ranks paths as the return does.
 
     ## Starting State

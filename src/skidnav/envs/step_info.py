@@ -16,7 +16,7 @@ attributes:
   columns ``kernels.navigation.LOG_COLUMNS`` [region, ω_L_cmd, ω_R_cmd, v_x, v_y, yaw_rate]:
   what the kinematic models learn from (n = 0 when nothing moved freely);
 * ``cost``: the action's cost, minus its reward without the goal bonus
-  (:func:`skidnav.kernels.navigation.action_cost`; 0 at a reset). NaN where nothing scored it:
+  (:func:`skidnav.sim.navigation.action_cost`; 0 at a reset). NaN where nothing scored it:
   the real-time loop ranks nothing by it.
 
 >>> import numpy as np

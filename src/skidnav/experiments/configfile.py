@@ -27,7 +27,7 @@ from skidnav.savedfile import MAX_CONFIG_BYTES, parse_toml, read_config_text
 
 MAX_CONFIG_CHARS = MAX_CONFIG_BYTES // 4
 """Longest config text accepted [characters] (a config is a few kilobytes)."""
-TOP_KEYS = ("experiment", "env", "maps", "agents", "tune")  # [tune]: experiments/tuneconfig.py
+TOP_KEYS = ("experiment", "env", "maps", "agents", "tune")  # [tune]: studies/tuning/config.py
 EXPERIMENT_KEYS = (
     "name",
     "description",

@@ -14,7 +14,8 @@ any order, and after a resume.
 
 A grid is anything with the attributes of :class:`Grid`: an
 :class:`~skidnav.experiments.config.ExperimentConfig` (``skidnav run``), or the
-hardware-in-the-loop study's grid (:class:`skidnav.realtime.study.StudyGrid`), whose runs the
+hardware-in-the-loop study's grid (:class:`skidnav.studies.hardware.study.StudyGrid`), whose runs
+the
 same runner executes with a trial function of its own.
 """
 

@@ -26,7 +26,8 @@ pickled.
 
 What a run file holds depends on the kind of grid, described by a :class:`RunLayout`: an
 experiment's (:data:`EXPERIMENT_LAYOUT`, the default) or the hardware-in-the-loop study's
-(:data:`skidnav.realtime.study.STUDY_LAYOUT`: real-time episodes, no maps). ``config.json`` names
+(:data:`skidnav.studies.hardware.study.STUDY_LAYOUT`: real-time episodes, no maps). ``config.json``
+names
 the kind, so a directory of one kind is never read as the other.
 """
 

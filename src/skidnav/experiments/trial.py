@@ -34,20 +34,25 @@ import gymnasium
 import numpy as np
 
 from skidnav.agents.catalog import build_agent, check_params, observation_for, train
-from skidnav.agents.core import TabularAgent
+from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.envs.registration import allowed_env_modules, registered_env_id, with_env_modules
 from skidnav.errors import UserError
 from skidnav.experiments.config import CONVERGENCE_OBJECTIVES, ExperimentConfig, MapSpec
-from skidnav.experiments.finegrid import FineStates, check_grids, refines_positions, state_grid
 from skidnav.experiments.metrics import (
     ConvergenceRule,
     evaluation_summary,
     run_metrics,
     within_tolerance,
 )
-from skidnav.experiments.oracle import Oracle, compute_oracle, load_or_compute_oracle
+from skidnav.experiments.reference.finegrid import (
+    FineStates,
+    check_grids,
+    refines_positions,
+    state_grid,
+)
+from skidnav.experiments.reference.oracle import Oracle, compute_oracle, load_or_compute_oracle
+from skidnav.experiments.reference.start_plan import StartPlan, start_plan
 from skidnav.experiments.runs import RunSpec, expand_runs
-from skidnav.experiments.start_plan import StartPlan, start_plan
 from skidnav.experiments.store import EPISODE_COLUMNS, TrialResult
 from skidnav.seeding import RUN_ROLES, WORLD_ROLES, child_sequences, seed_int
 from skidnav.world.discretization import Discretization, heading_bin
@@ -95,7 +100,8 @@ def make_env(
     An agent's ``discretization`` (n_x, n_y, n_headings) with the map's cells becomes the env's
     own discretization (finer heading bins, the compiled trainer); one with finer cells than
     the map's leaves the env on poses, which :func:`agent_view` turns into the states of the
-    finer grid (:class:`~skidnav.experiments.finegrid.FineStates`). ``observation`` overrides
+    finer grid (:class:`~skidnav.experiments.reference.finegrid.FineStates`). ``observation``
+    overrides
     both.
     """
     config = spec.config
@@ -201,7 +207,7 @@ def _world_arrays(
 ) -> dict[str, np.ndarray]:
     """Walls, start, goal and slip η of a skid-steer run, and of a tabular agent its value,
     heading and policy maps (on the agent's finer grid, and the map refined to it, for an agent
-    seeing :class:`~skidnav.experiments.finegrid.FineStates`)."""
+    seeing :class:`~skidnav.experiments.reference.finegrid.FineStates`)."""
     grid = getattr(env, "discretization", None)
     nav: Any = env
     if isinstance(env, FineStates):
@@ -363,7 +369,7 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     plan = start_plan(eval_env, eval_seeds, max_steps) if oracle is not None else None
     optima = {}
     if grid_map is not None and config.optimum_grids and _has_oracle(eval_env):
-        from skidnav.experiments.optimum import world_optima  # it builds on this module
+        from skidnav.experiments.reference.optimum import world_optima  # it builds on this module
 
         optima = world_optima(spec, grid_map, slip_seed, world_streams["oracle"], max_steps)
     log = train(
@@ -395,7 +401,8 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
 
 
 def _oracle_columns(reference: float, oracle: Oracle | None) -> dict[str, float]:
-    """The summary columns of the run's references: L* and C* (:mod:`~skidnav.experiments.oracle`;
+    """The summary columns of the run's references: L* and C*
+    (:mod:`~skidnav.experiments.reference.oracle`;
     without an oracle, C* = L*: a grid maze's moves cost one each, and elsewhere both are NaN);
     the means of the oracle's own rollouts (the action-optimal policy's lengths, NaN when any of
     them failed, and the cost-optimal policy's costs), the share of the action-optimal rollouts
@@ -427,7 +434,8 @@ def _optimum(reference: float, oracle: Oracle | None, objective: str) -> float:
 
 
 def _plan_columns(plan: StartPlan | None, rule: ConvergenceRule | None) -> dict[str, float]:
-    """The summary columns of the world's start plan (:mod:`skidnav.experiments.start_plan`):
+    """The summary columns of the world's start plan
+    (:mod:`skidnav.experiments.reference.start_plan`):
     its length [actions] (NaN when none was found), the share of its replays that reached the
     goal, and whether its replays pass the run's convergence test (1.0 / 0.0; NaN when the test
     is measured in cost, which the replays do not record)."""

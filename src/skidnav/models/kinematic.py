@@ -48,13 +48,13 @@ import numpy as np
 
 from skidnav.atomicfile import write_atomic, write_npz_atomic
 from skidnav.errors import CorruptFileError, first_line
-from skidnav.kernels.kinematic_prediction import (
+from skidnav.models.bayesian_ridge import RidgePosterior, fit_bayesian_ridge
+from skidnav.models.kinematic_prediction import (
     action_velocities,
     feed_rows,
     predict_action,
     prediction_table,
 )
-from skidnav.models.bayesian_ridge import RidgePosterior, fit_bayesian_ridge
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
 from skidnav.savedfile import MAX_ARCHIVE_BYTES, READ_ERRORS, ArraySpec, SavedArchive, read_json
@@ -346,7 +346,7 @@ class KinematicModel:
         """Predicted pose after ``action`` from ``pose`` (x [m], y [m], heading [rad]).
 
         Returns ((x, y, heading), outcome) with the outcome codes of
-        :mod:`skidnav.kernels.kinematic_prediction`.
+        :mod:`skidnav.models.kinematic_prediction`.
         """
         walls_, goals_ = self._masks(walls, goals)
         x, y, heading, outcome = predict_action(

@@ -28,9 +28,10 @@ from skidnav.world.grid import MAP_KINDS
 DRIVER_TABLES = ("tcp", "serial", "ros2")
 """The tables of driver options."""
 TOP_TABLES = ("run", "sim", *DRIVER_TABLES, "agents", "policies", "study")
-"""The tables of a config besides ``[presets]`` (``[study]``: :mod:`skidnav.realtime.study`)."""
+"""The tables of a config besides ``[presets]`` (``[study]``:
+:mod:`skidnav.studies.hardware.study`)."""
 FAULTS = ("silence", "garbage", "oversized", "escape", "hangup")
-"""Faults the sim server can inject for tests (realtime/sim/server.py)."""
+"""Faults the sim server can inject for tests (realtime/robot_server/server.py)."""
 MAX_LEASE_LIMIT = 5.0
 """Largest lease a robot can be configured to grant [s wall]: however it is set, no command
 keeps the wheels turning longer than this after it arrived."""

@@ -19,7 +19,7 @@ from skidnav.agents.deep.common import DeepConfig
 from skidnav.agents.deep.ppo import PPOAgent, PPOConfig, load_ppo
 from skidnav.agents.deep.sac import SACAgent, SACConfig, load_sac
 from skidnav.agents.deep.wheel_speeds import WheelSpeedAgent
-from skidnav.agents.wheel_policy import WheelSpeedPolicy
+from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
@@ -209,7 +209,7 @@ def test_a_saved_policy_loads_without_its_world(
     trained: tuple[str, WheelSpeedAgent[Any], Any, Any], tmp_path: Path
 ) -> None:
     """Through the policy-file registry: the real-time loop's way to run a policy."""
-    from skidnav.agents import policy_files
+    from skidnav.agents.policies import loading as policy_files
 
     name, agent, _, _ = trained
     _, json_path = agent.save(tmp_path / name)

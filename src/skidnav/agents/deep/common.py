@@ -38,7 +38,7 @@ import numpy as np
 from gymnasium.wrappers import RescaleObservation
 from gymnasium.wrappers.utils import rescale_box
 
-from skidnav.agents.core import save_paths
+from skidnav.agents.tabular.agent import save_paths
 from skidnav.agents.training import (
     NOT_REACHED,
     Rollout,

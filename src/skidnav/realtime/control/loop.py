@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skidnav.agents.core import TabularAgent
+from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.envs.step_info import step_info
 from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.control.episodes import EXIT_DONE, EXIT_INTERRUPTED, EXIT_SAFETY, EpisodeLoop

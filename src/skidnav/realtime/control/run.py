@@ -4,7 +4,7 @@ driver, loop, signals.
 Files written under ``--out`` (docs/realtime.md): ``run.jsonl`` (every command, pose, transition,
 safety event), ``checkpoints/`` (per episode), ``summary.json``, and for the ``sim`` driver the
 server's own command log ``sim-server.jsonl``. :func:`new_agent` and :func:`drive` are shared
-with the hardware-in-the-loop study (realtime/study.py), whose runs are real-time runs too.
+with the hardware-in-the-loop study (studies/hardware/study.py), whose runs are real-time runs too.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ from skidnav.world.grid import GridMap
 def agent_context(name: str, robot: RobotParams, grid: Discretization) -> dict[str, Any]:
     """Extra constructor arguments of agent ``name``: the model-based agents take the robot
     geometry and discretization (``robot``, ``discretization``) for their kinematic model."""
-    from skidnav.agents.registry import agent_class
+    from skidnav.agents.tabular.registry import agent_class
 
     parameters = inspect.signature(agent_class(name).__init__).parameters
     context: dict[str, Any] = {}
@@ -58,7 +58,7 @@ def _make_or_resume_agent(
     args: argparse.Namespace, config: RealtimeConfig, context: dict[str, Any], grid: Discretization
 ) -> tuple[Any, int, dict[str, Any] | None]:
     """(agent, first episode, loop state to restore or None)."""
-    from skidnav.agents.registry import load_agent
+    from skidnav.agents.tabular.registry import load_agent
 
     if args.resume:
         latest = Checkpoints(args.out / "checkpoints").latest()
@@ -91,7 +91,7 @@ def new_agent(
     generator ``rng``, over ``grid``'s states and the robot's actions; UserError (one line) for
     hyperparameters this robot cannot serve, such as ``kinematic_model = "true"`` (a real or
     served robot has no true kinematic model)."""
-    from skidnav.agents.registry import make_agent
+    from skidnav.agents.tabular.registry import make_agent
 
     table = config.agents.get(name)
     try:
@@ -106,7 +106,7 @@ def warm_up_agent(
     """Compile (numba) every kernel of agent ``name`` before the robot moves: a throwaway agent
     acts, learns from one dummy step and ends an episode. Compilation holds the GIL, which would
     starve the driver's reader thread and trip the pose watchdog mid-episode."""
-    from skidnav.agents.registry import make_agent
+    from skidnav.agents.tabular.registry import make_agent
 
     agent = make_agent(
         name, n_states, N_ACTIONS, config.agents.get(name), np.random.default_rng(0), **context
@@ -213,7 +213,7 @@ def drive(
     shut the driver down, the loop's scoring kernels compiled before connecting; returns (exit
     code of :meth:`EpisodeLoop.run`, the loop). With a ``policy_name``, ``agent`` is a frozen
     continuous policy
-    (:class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`) run by :class:`PolicyLoop`;
+    (:class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`) run by :class:`PolicyLoop`;
     else a tabular agent run by :class:`RealtimeLoop`.
 
     Raises:

@@ -1,0 +1,81 @@
+"""What a study is to ``skidnav run``: a kind of config the one runner executes.
+
+A study config is a TOML file whose top-level ``kind`` names its study (an experiment config
+has no ``kind``, or ``kind = "experiment"``). The study turns the parsed document into a
+:class:`~skidnav.experiments.runs.Grid` (its runs are the grid's agent × map × preset × seed
+points, each with its own seeds), gives the function that executes one run and the
+:class:`~skidnav.experiments.store.RunLayout` of its results, and writes its section of the
+report. :func:`skidnav.experiments.runner.run_experiment` does the rest, the same for every
+study: the process and Dask backends, one atomic file per finished run (a study killed by
+Ctrl-C or SIGKILL resumes with nothing finished lost), the tidy Parquet tables, provenance and
+the sessions in ``metadata.json``.
+
+:data:`STUDY_MODULES` lists the studies; each module defines ``STUDY``, an object of the
+:class:`Study` protocol. Only the named study's module is imported.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, Protocol
+
+from skidnav.errors import UserError
+from skidnav.experiments.runner import TrialFunction
+from skidnav.experiments.runs import Grid
+from skidnav.experiments.store import RunLayout
+
+EXPERIMENT_KIND = "experiment"
+"""The ``kind`` of a plain experiment config (agents × maps × presets × seeds)."""
+
+
+class Study(Protocol):
+    """One kind of study: how its config becomes runs, how a run is executed, how it reports.
+
+    Attributes:
+        kind: the config's ``kind`` value, e.g. ``"continuity"``.
+        layout: what its results directory holds (``layout.kind`` equals :attr:`kind`).
+    """
+
+    kind: str
+    layout: RunLayout
+
+    def grid(self, document: Mapping[str, Any], path: Path) -> Grid:
+        """The validated grid of the parsed TOML ``document`` read from ``path``.
+
+        Raises:
+            UserError: one line naming ``path``, the key and what was expected.
+        """
+        ...
+
+    def trial(self, grid: Grid) -> TrialFunction:
+        """The function executing one run of ``grid`` (importable by worker processes)."""
+        ...
+
+    def report(self, run_dir: Path) -> str:
+        """The study's section of the HTML report of ``run_dir`` (an HTML fragment)."""
+        ...
+
+
+STUDY_MODULES: dict[str, str] = {}
+"""Study kind → the module defining its ``STUDY``."""
+
+
+def study_kind(document: Mapping[str, Any], path: Path | str) -> str:
+    """The ``kind`` of a parsed config (:data:`EXPERIMENT_KIND` when it names none).
+
+    Raises:
+        UserError: ``kind`` is not a string naming a study.
+    """
+    kind = document.get("kind", EXPERIMENT_KIND)
+    if kind != EXPERIMENT_KIND and kind not in STUDY_MODULES:
+        known = ", ".join([EXPERIMENT_KIND, *sorted(STUDY_MODULES)])
+        raise UserError(f"{path}: kind: expected one of {known}, got {kind!r}")
+    return str(kind)
+
+
+def study(kind: str) -> Study:
+    """The study of ``kind`` (a key of :data:`STUDY_MODULES`)."""
+    found: Study = importlib.import_module(STUDY_MODULES[kind]).STUDY
+    return found
