@@ -1,4 +1,5 @@
-"""``skidnav run CONFIG``: run (or resume) an experiment grid."""
+"""``skidnav run CONFIG``: run (or resume) an experiment grid or a study (a config with a
+``kind``, :mod:`skidnav.studies.kind`) on the one runner."""
 
 from __future__ import annotations
 
@@ -7,21 +8,25 @@ from pathlib import Path
 from typing import Any
 
 from skidnav.envs.registration import allow_env_modules
-from skidnav.experiments.configfile import load_config_and_text
-from skidnav.experiments.runner import BACKENDS, run_experiment
+from skidnav.experiments.configfile import config_from_tables, parse_tables
+from skidnav.experiments.runner import BACKENDS, TrialFunction, run_experiment
+from skidnav.experiments.runs import Grid
+from skidnav.experiments.store import EXPERIMENT_LAYOUT, RunLayout
 from skidnav.outputs import check_output_dir
+from skidnav.savedfile import read_config_text
+from skidnav.studies.kind import EXPERIMENT_KIND, study, study_kind
 
 
 def add_parser(subparsers: Any) -> None:
     """Add the ``run`` subcommand."""
     parser = subparsers.add_parser(
         "run",
-        help="run an experiment config (agents × maps × presets × seeds); resumable",
-        description="Run every run of an experiment config. Started again on the same --out "
-        "directory it skips the runs already finished; a second run on a directory in use is "
-        "refused.",
+        help="run an experiment or study config (agents × maps × presets × seeds); resumable",
+        description="Run every run of an experiment config, or of a study config (its top-level "
+        "'kind' names the study). Started again on the same --out directory it skips the runs "
+        "already finished; a second run on a directory in use is refused.",
     )
-    parser.add_argument("config", type=Path, help="experiment config (TOML)")
+    parser.add_argument("config", type=Path, help="experiment or study config (TOML)")
     parser.add_argument(
         "--out", type=Path, default=None, help="results directory (default: runs/<config name>)"
     )
@@ -63,20 +68,39 @@ def add_env_module_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def load_grid(path: Path) -> tuple[Grid, TrialFunction | None, RunLayout, str]:
+    """The grid of the config at ``path``, its run function (None: the runner's default, for an
+    experiment), its results layout and the config's text.
+
+    Raises:
+        UserError: the file cannot be read, or its TOML, kind or content is invalid.
+    """
+    text = read_config_text(path)
+    document = parse_tables(text, path)
+    kind = study_kind(document, path)
+    if kind == EXPERIMENT_KIND:
+        return config_from_tables(document, path), None, EXPERIMENT_LAYOUT, text
+    chosen = study(kind)
+    grid = chosen.grid(document, path)
+    return grid, chosen.trial(grid), chosen.layout, text
+
+
 def run_command(args: argparse.Namespace) -> int:
-    """Run the experiment; print where the results are."""
+    """Run the experiment or study; print where the results are."""
     allow_env_modules(args.env_module)
-    config, text = load_config_and_text(args.config)
-    out = check_output_dir(args.out if args.out is not None else Path("runs") / config.name)
+    grid, trial, layout, text = load_grid(args.config)
+    out = check_output_dir(args.out if args.out is not None else Path("runs") / grid.name)
     outcome = run_experiment(
-        config,
+        grid,
         out,
         backend=args.backend,
         jobs=args.jobs,
         scheduler=args.scheduler,
+        trial=trial,
         source_text=text,
         config_path=args.config,
         progress=not args.no_progress,
+        layout=layout,
     )
     print(
         f"{outcome.n_runs} runs in {outcome.out_dir} ({outcome.executed} run now, "
