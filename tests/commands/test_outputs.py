@@ -38,9 +38,10 @@ COMMANDS: dict[str, tuple[list[str], str]] = {
         ["study", "continuity", "--out", "{dir}"],
         "skidnav.studies.continuity.comparison.run_comparison",
     ),
-    "search": (
-        ["study", "search", "--out", "{dir}"],
-        "skidnav.agents.policies.search.cmaes.run_search",
+    "search": (["study", "search", "--out", "{dir}"], "skidnav.commands.search.run_experiment"),
+    "kinematic compare": (
+        ["study", "kinematic", "compare", "--out", "{dir}"],
+        "skidnav.commands.kinematic.run_experiment",
     ),
     "reproduce": (
         ["study", "reproduce", "sutton-barto", "--out", "{dir}"],

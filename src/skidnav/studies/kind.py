@@ -58,7 +58,10 @@ class Study(Protocol):
         ...
 
 
-STUDY_MODULES: dict[str, str] = {}
+STUDY_MODULES: dict[str, str] = {
+    "kinematic-models": "skidnav.studies.kinematic_models.study",
+    "policy-search": "skidnav.studies.policy_search.study",
+}
 """Study kind → the module defining its ``STUDY``."""
 
 

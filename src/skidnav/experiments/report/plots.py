@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import io
 import math
+from collections.abc import Mapping
 
 import matplotlib
 
@@ -44,12 +45,21 @@ def to_png(figure: Figure, dpi: int = DPI) -> bytes:
     return buffer.getvalue()
 
 
-def line_plot(curves: dict[str, np.ndarray], xlabel: str, ylabel: str, x0: int = 1) -> bytes:
-    """PNG bytes of one line per named curve (float (n,) values at x = x0, x0 + 1, …), with a
-    legend: the figures of ``skidnav study reproduce``."""
+def line_plot(
+    curves: Mapping[str, np.ndarray | tuple[np.ndarray, np.ndarray]],
+    xlabel: str,
+    ylabel: str,
+    x0: int = 1,
+) -> bytes:
+    """PNG bytes of one line per named curve, with a legend: float (n,) values at x = x0,
+    x0 + 1, … (the figures of ``skidnav study reproduce``), or (x (n,), y (n,)) points, marked
+    (a policy search's evaluations, :mod:`skidnav.studies.policy_search.report`)."""
     figure, axes = plt.subplots(figsize=(6, 4))
     for label, values in curves.items():
-        axes.plot(np.arange(x0, x0 + len(values)), values, label=label)
+        if isinstance(values, tuple):
+            axes.plot(*values, label=label, marker="o", markersize=3)
+        else:
+            axes.plot(np.arange(x0, x0 + len(values)), values, label=label)
     axes.set_xlabel(xlabel)
     axes.set_ylabel(ylabel)
     axes.legend()
