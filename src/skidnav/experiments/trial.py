@@ -12,12 +12,12 @@ starts. The warm-up draws from its own generators, never from the run's streams,
 number.
 
 Agents of every family (:mod:`skidnav.agents.catalog`: tabular, linear on continuous
-observations, deep) are built and trained through one door. Tabular agents train in the
-compiled trainer ``skidnav.agents.fast_training.train_agent_fast`` for the skid-steer
-environment when it is installed and supports the agent, else in
+observations, deep) are built and trained through one door, the catalog entry of their name.
+Tabular agents train in the compiled trainer ``skidnav.agents.fast_training.train_agent_fast``
+for the skid-steer environment when it supports the agent, else in
 ``skidnav.agents.training.train_agent`` (which it falls back to on its own, e.g. for
-``[env] dynamics = "mujoco"``, the physical robot, whose runs have no oracle, and for the linear
-agents); a deep agent trains in its own loop with the same evaluations.
+``[env] dynamics = "mujoco"``, the physical robot, whose runs have no oracle); linear agents
+train in ``train_agent``; a deep agent trains in its own loop with the same evaluations.
 """
 
 from __future__ import annotations
@@ -33,8 +33,10 @@ from typing import Any
 import gymnasium
 import numpy as np
 
-from skidnav.agents.catalog import build_agent, check_params, observation_for, train
+from skidnav.agents.catalog import CatalogAgent, CatalogEntry, entry
+from skidnav.agents.interface import Agent
 from skidnav.agents.tabular.agent import TabularAgent
+from skidnav.agents.training import Greedy, TrainingLog
 from skidnav.envs.registration import allowed_env_modules, registered_env_id, with_env_modules
 from skidnav.errors import UserError
 from skidnav.experiments.config import CONVERGENCE_OBJECTIVES, ExperimentConfig, MapSpec
@@ -90,9 +92,9 @@ def make_env(
     only for a module the user allowed, :func:`~skidnav.envs.registration.registered_env_id`),
     made with the ``[env]`` options: nothing named in a config is imported or called. Only the
     skid-steer env receives the map, slip preset and drift of the run, and the observation its
-    agent learns over (:func:`skidnav.agents.catalog.observation_for`: the discrete state for a
-    tabular agent, else ``[env] observation``, "features" by default; ``observation`` overrides
-    both).
+    agent learns over (:meth:`skidnav.agents.catalog.AgentEntry.env_observation`: the discrete
+    state for a tabular agent, else ``[env] observation``, "features" by default;
+    ``observation`` overrides both).
     Gymnasium's ``TimeLimit`` truncates after the config's ``max_steps`` actions, else its
     ``[env] max_episode_steps``, else the registered limit (:func:`action_limit` reads it
     back). Runs train and evaluate on ``env.unwrapped``: the trainer enforces that limit itself.
@@ -119,8 +121,9 @@ def make_env(
                 observation = "pose"
             else:
                 options["discretization"] = Discretization(*levels)
+        requested = options.get("observation")
         options.update(
-            observation=observation or observation_for(spec.agent.name, options.get("observation")),
+            observation=observation or entry(spec.agent.name).env_observation(requested),
             grid_map=grid_map,
             world_seed=slip_seed,
             slip=spec.preset,
@@ -148,7 +151,7 @@ def action_limit(env: gymnasium.Env[Any, Any]) -> int:
 
 
 def greedy_rollout(
-    agent: TabularAgent, env: gymnasium.Env[Any, Any], seed: int, max_steps: int
+    agent: Greedy, env: gymnasium.Env[Any, Any], seed: int, max_steps: int
 ) -> tuple[np.ndarray, bool]:
     """Follow the greedy policy from the start; returns (poses (T+1, 3) [m, m, rad], reached)."""
     state, info = env.reset(seed=seed)
@@ -203,7 +206,7 @@ def policy_map(q: np.ndarray, grid_map: GridMap, heading_index: int) -> np.ndarr
 
 
 def _world_arrays(
-    agent: Any, grid_map: GridMap, env: gymnasium.Env[Any, Any]
+    agent: Agent, grid_map: GridMap, env: gymnasium.Env[Any, Any]
 ) -> dict[str, np.ndarray]:
     """Walls, start, goal and slip η of a skid-steer run, and of a tabular agent its value,
     heading and policy maps (on the agent's finer grid, and the map refined to it, for an agent
@@ -232,7 +235,7 @@ def _world_arrays(
     return arrays
 
 
-def _episode_arrays(log: Any) -> dict[str, np.ndarray]:
+def _episode_arrays(log: TrainingLog) -> dict[str, np.ndarray]:
     """The TrainingLog as record columns: each evaluation's R rollouts become their mean length
     and their mean cost over those that reached the goal (NaN if none) and the share that did."""
     greedy, reached = evaluation_summary(log.greedy_lengths)
@@ -277,10 +280,10 @@ def _oracle_env(
 
 def _agent(
     spec: ExperimentRun, env: gymnasium.Env[Any, Any], seed: np.random.SeedSequence, max_steps: int
-) -> Any:
-    """A new agent of the run's variant for ``env``, of whichever family
-    (:func:`skidnav.agents.catalog.build_agent`)."""
-    return build_agent(spec.agent.name, env, spec.agent.params_dict(), seed, max_steps)
+) -> CatalogAgent:
+    """A new agent of the run's variant for ``env``, of whichever family, with its family's
+    training (:meth:`skidnav.agents.catalog.AgentEntry.build`)."""
+    return entry(spec.agent.name).build(env, spec.agent.params_dict(), seed, max_steps)
 
 
 def warm_up(spec: ExperimentRun) -> None:
@@ -309,19 +312,18 @@ def warm_up(spec: ExperimentRun) -> None:
     env, eval_env = (agent_view(spec, each) for each in made)
     env.reset(seed=1)
     eval_env.reset(seed=2)
-    agent = _agent(spec, env, np.random.SeedSequence(3), max(WARM_UP_LIMITS))
+    built = _agent(spec, env, np.random.SeedSequence(3), max(WARM_UP_LIMITS))
     for limit in WARM_UP_LIMITS:
-        train(
-            agent,
+        built.train(
             env,
             1,
             max_steps=limit,
             greedy_eval_env=eval_env if spec.config.greedy_eval else None,
             greedy_seeds=[2, 3],
         )
-    greedy_rollout(agent, eval_env, 2, max(WARM_UP_LIMITS))
+    greedy_rollout(built.agent, eval_env, 2, max(WARM_UP_LIMITS))
     if grid_map is not None:
-        _world_arrays(agent, grid_map, env)
+        _world_arrays(built.agent, grid_map, env)
     if grid_map is not None and _has_oracle(eval_env):
         compute_oracle(_oracle_env(spec, grid_map, 0, eval_env), 1, 0, [2], max(WARM_UP_LIMITS))
         start_plan(eval_env, [2], max(WARM_UP_LIMITS))
@@ -357,7 +359,7 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     evaluation = world_streams["evaluation"].spawn(config.eval_rollouts)
     eval_seeds = [seed_int(s) for s in evaluation]
     env.reset(seed=seed_int(run_streams["episodes"]))
-    agent = _agent(spec, env, run_streams["agent"], max_steps)
+    built = _agent(spec, env, run_streams["agent"], max_steps)
     oracle = None
     if grid_map is not None and _has_oracle(eval_env):
         oracle_seed = seed_int(world_streams["oracle"])
@@ -372,8 +374,7 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
         from skidnav.experiments.reference.optimum import world_optima  # it builds on this module
 
         optima = world_optima(spec, grid_map, slip_seed, world_streams["oracle"], max_steps)
-    log = train(
-        agent,
+    log = built.train(
         env,
         config.episodes,
         max_steps=max_steps,
@@ -381,10 +382,10 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
         greedy_seeds=eval_seeds,
     )
     episodes = _episode_arrays(log)
-    poses, reached = greedy_rollout(agent, eval_env, eval_seeds[0], max_steps)
+    poses, reached = greedy_rollout(built.agent, eval_env, eval_seeds[0], max_steps)
     arrays = {"greedy_poses": poses}
     if grid_map is not None:
-        arrays.update(_world_arrays(agent, grid_map, env))
+        arrays.update(_world_arrays(built.agent, grid_map, env))
     rule = None
     optimum = _optimum(reference, oracle, config.convergence_objective)
     if math.isfinite(optimum) and config.greedy_eval:
@@ -484,11 +485,7 @@ def check_config(config: ExperimentConfig, path: Path | str | None = None) -> No
 
 def _check_config(config: ExperimentConfig) -> None:
     registered_env_id(config.env_id)
-    for agent in config.agents:
-        check_params(agent.name, agent.params_dict())
-        if config.env_id == SKID_ENV_ID:
-            requested = dict(config.env_options).get("observation")
-            observation_for(agent.name, None if requested is None else str(requested))
+    entries = _check_agents(config)
     for map_spec in config.maps:
         if map_spec.file:
             load_map(map_spec.file)
@@ -496,9 +493,22 @@ def _check_config(config: ExperimentConfig) -> None:
     try:
         for map_spec in config.maps:
             grid_map = build_map(map_spec, np.random.default_rng(0))
-            check_grids(config, grid_map, map_spec.label)
+            check_grids(config, grid_map, map_spec.label, entries)
         make_env(first, grid_map, 0).close()
     except gymnasium.error.Error as error:
         raise UserError(f"environment {config.env_id!r}: {error}") from None
     except (TypeError, ValueError) as error:
         raise UserError(f"environment or map options: {error}") from None
+
+
+def _check_agents(config: ExperimentConfig) -> dict[str, CatalogEntry]:
+    """The catalog entry of each agent name of ``config``, asked once, its parameters and (on
+    the skid-steer env) the observation it would learn over checked; UserError otherwise."""
+    entries: dict[str, CatalogEntry] = {}
+    requested = dict(config.env_options).get("observation")
+    for agent in config.agents:
+        described = entries.setdefault(agent.name, entry(agent.name))
+        described.config(agent.params_dict())
+        if config.env_id == SKID_ENV_ID:
+            described.env_observation(requested)
+    return entries

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from skidnav.agents.catalog import family
+from skidnav.agents.catalog import entry
 from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.report.analysis import aggregate, cells, convergence_table
@@ -47,8 +47,10 @@ def grid_text(config: ExperimentConfig, label: str, map_label: str) -> str:
     """The state grid agent ``label`` learns over on map ``map_label``, e.g. ``"25 × 25 × 20"``
     (its ``discretization``, else the map's cells and the env's default heading bins)."""
     agent = next(a for a in config.agents if a.label == label)
-    if family(agent.name) != "tabular":
-        return f"continuous ({dict(config.env_options).get('observation', 'features')})"
+    described = entry(agent.name)
+    if described.observation == "box":
+        observation = described.env_observation(dict(config.env_options).get("observation"))
+        return f"continuous ({observation})"
     levels = agent.discretization
     if not levels:
         spec = next(m for m in config.maps if m.label == map_label)

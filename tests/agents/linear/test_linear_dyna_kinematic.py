@@ -16,7 +16,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from skidnav.agents.catalog import build_agent
+from skidnav.agents.catalog import entry
 from skidnav.agents.linear.dyna_kinematic import LinearDynaKinematicAgent
 from skidnav.agents.linear.registry import load_linear_agent, make_linear_agent
 from skidnav.agents.tabular import kinematic_planning as kp
@@ -166,7 +166,7 @@ def test_the_kinematic_planning_speeds_up_learning_on_the_small_arena() -> None:
 
 def test_the_runner_builds_it_with_its_task() -> None:
     env = small_pose_env()
-    agent = build_agent(NAME, env.unwrapped, {"tiles": [2]}, np.random.SeedSequence(0), 12)
+    agent = entry(NAME).build(env.unwrapped, {"tiles": [2]}, np.random.SeedSequence(0), 12).agent
     assert isinstance(agent, LinearDynaKinematicAgent) and agent.kinematic is not None
     bare = make(NAME, env, 0)  # no task: linear-dyna
     assert isinstance(bare, LinearDynaKinematicAgent) and bare.kinematic is None

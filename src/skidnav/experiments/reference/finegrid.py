@@ -20,16 +20,15 @@ heading bins. Two uses:
 from __future__ import annotations
 
 import dataclasses
-import inspect
+from collections.abc import Mapping
 from typing import Any
 
 import gymnasium
 import numpy as np
 
-from skidnav.agents.catalog import family
-from skidnav.agents.tabular.registry import agent_class
+from skidnav.agents.catalog import CatalogEntry
 from skidnav.errors import UserError
-from skidnav.experiments.config import DEFAULT_ENV_ID, AgentSpec, ExperimentConfig
+from skidnav.experiments.config import DEFAULT_ENV_ID, ExperimentConfig
 from skidnav.sim.navigation import NavigationTask
 from skidnav.sim.task import build_task
 from skidnav.world.discretization import Discretization
@@ -116,34 +115,36 @@ class TablePolicy:
         return int(np.argmax(self.q[int(state)]))
 
 
-def agent_parameters(name: str) -> list[str]:
-    """The constructor parameters of tabular agent ``name``."""
-    return list(inspect.signature(agent_class(name).__init__).parameters)
-
-
-def check_grids(config: ExperimentConfig, grid_map: GridMap, map_label: str) -> None:
+def check_grids(
+    config: ExperimentConfig,
+    grid_map: GridMap,
+    map_label: str,
+    entries: Mapping[str, CatalogEntry],
+) -> None:
     """UserError unless every agent's ``discretization`` and every ``optimum_grids`` entry
     refines ``grid_map``'s cells, and an agent on finer cells than the map's is a tabular agent
-    that does not plan on the navigation task's own cells."""
-    wanted: list[tuple[str, tuple[int, ...], AgentSpec | None]] = [
-        (f"agent {a.label!r} discretization", a.discretization, a) for a in config.agents
+    that does not plan on the navigation task's own cells. ``entries``: the catalog entry of
+    each agent name of ``config``."""
+    wanted: list[tuple[str, tuple[int, ...], CatalogEntry | None]] = [
+        (f"agent {a.label!r} discretization", a.discretization, entries[a.name])
+        for a in config.agents
     ]
     wanted += [("optimum_grids", levels, None) for levels in config.optimum_grids]
-    for what, levels, agent in wanted:
+    for what, levels, described in wanted:
         if not levels:
             continue
         if config.env_id != DEFAULT_ENV_ID:
             raise UserError(f"{what}: a discretization needs the {DEFAULT_ENV_ID} environment")
-        if agent is not None and family(agent.name) != "tabular":
+        if described is not None and described.family != "tabular":
             raise UserError(f"{what}: only tabular agents take a discretization")
         try:
             refine_map(grid_map, (levels[0], levels[1]))
         except ValueError as error:
             raise UserError(f"{what} on map {map_label!r}: {error}") from None
         fine = refines_positions(levels, grid_map)
-        if agent is not None and fine and "task" in agent_parameters(agent.name):
+        if described is not None and fine and described.asks_for("task"):
             raise UserError(
-                f"{what}: {agent.name!r} plans on the environment's own cells; finer cells "
+                f"{what}: {described.name!r} plans on the environment's own cells; finer cells "
                 "than the map's take agents that learn from states alone (e.g. q-learning, "
                 "dyna-q, dyna-q-plus, prioritized-sweeping)"
             )

@@ -82,7 +82,7 @@ def compute_optimum(
     policy, fine = TablePolicy(solution.q), FineStates(nav, grid)
     lengths, actions = [], []
     for rollout_seed in seeds:
-        poses, reached = greedy_rollout(policy, fine, int(rollout_seed), max_steps)  # type: ignore[arg-type]
+        poses, reached = greedy_rollout(policy, fine, int(rollout_seed), max_steps)
         if reached:
             lengths.append(path_length(poses))
             actions.append(len(poses) - 1)
