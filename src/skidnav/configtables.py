@@ -9,6 +9,9 @@ the config file's folder.
 from __future__ import annotations
 
 import dataclasses
+import json
+import math
+import re
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any, TypeVar
@@ -75,3 +78,35 @@ def resolve_path(value: str, folder: Path) -> Path:
     """The absolute, resolved path of ``value``, a path written in a config file whose folder is
     ``folder`` (an absolute ``value`` stays where it points)."""
     return (folder / value).resolve()
+
+
+_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def toml_value(value: Any) -> str:
+    """A TOML literal of a scalar, list or flat dict (what configs hold).
+
+    >>> toml_value({"alpha": 0.5, "mode": "sample", "steps": [1, 2], "on": True})
+    '{ alpha = 0.5, mode = "sample", steps = [1, 2], on = true }'
+    """
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        return repr(value) if math.isfinite(value) else ("inf" if value > 0 else "-inf")
+    if isinstance(value, str):
+        return json.dumps(value)  # a JSON string is a TOML basic string
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(toml_value(item) for item in value) + "]"
+    if isinstance(value, dict):
+        items = ", ".join(f"{toml_key(key)} = {toml_value(item)}" for key, item in value.items())
+        return "{ " + items + " }" if items else "{}"
+    raise TypeError(f"expected a TOML scalar, list or table, got {value!r}")
+
+
+def toml_key(key: str) -> str:
+    """A TOML key: bare when it may be, else quoted."""
+    return key if _BARE_KEY.match(key) else json.dumps(key)

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from skidnav.checks import check_integer, check_number
-from skidnav.configtables import build_dataclass, check_keys
+from skidnav.configtables import build_dataclass, check_keys, toml_value
 from skidnav.errors import shown
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.experiments.store import RunLayout
@@ -191,7 +191,6 @@ def comparison_from_document(document: Mapping[str, Any], path: Path | str) -> M
 def comparison_toml(comparison: ModelComparison) -> str:
     """The config as the TOML text of a config file (:func:`comparison_from_document` reads it
     back equal); ``drift_period`` left out when it is the logged time."""
-    from skidnav.studies.tuning.tuned_file import toml_value
 
     lines = [f"kind = {toml_value(KIND)}"]
     for key, value in comparison_to_dict(comparison).items():

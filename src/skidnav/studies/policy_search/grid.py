@@ -36,7 +36,7 @@ from typing import Any
 from skidnav.agents.policies.search.config import MAX_SEED, SearchConfig
 from skidnav.agents.policies.search.curve import COUNTS, GenerationRecord
 from skidnav.checks import check_integer
-from skidnav.configtables import check_keys, table
+from skidnav.configtables import check_keys, table, toml_value
 from skidnav.errors import UserError, shown
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.experiments.store import RunLayout
@@ -174,8 +174,6 @@ def grid_from_document(document: Mapping[str, Any], path: Path | str) -> PolicyS
 def grid_toml(grid: PolicySearchGrid) -> str:
     """The grid as the TOML text of a config file (:func:`grid_from_document` reads it back
     equal)."""
-    from skidnav.studies.tuning.tuned_file import toml_value
-
     values = grid_to_dict(grid)
     lines = [f"kind = {toml_value(KIND)}"]
     lines += [f"{key} = {toml_value(values[key])}" for key in ("name", "presets", "seeds")]
