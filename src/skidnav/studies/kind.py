@@ -58,7 +58,10 @@ class Study(Protocol):
         ...
 
 
-STUDY_MODULES: dict[str, str] = {}
+STUDY_MODULES: dict[str, str] = {
+    "generalisation": "skidnav.studies.generalisation.study",
+    "transfer": "skidnav.studies.transfer.study",
+}
 """Study kind → the module defining its ``STUDY``."""
 
 
