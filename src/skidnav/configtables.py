@@ -12,7 +12,7 @@ import dataclasses
 import json
 import math
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -20,7 +20,18 @@ from skidnav.errors import UserError, shown
 
 T = TypeVar("T")
 
-__all__ = ["build_dataclass", "check_keys", "resolve_path", "table", "table_array"]
+__all__ = [
+    "build_dataclass",
+    "check_keys",
+    "resolve_path",
+    "table",
+    "table_array",
+    "toml_document",
+    "toml_key",
+    "toml_value",
+]
+
+_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
 
 
 def table(value: Any, where: str) -> dict[str, Any]:
@@ -80,9 +91,6 @@ def resolve_path(value: str, folder: Path) -> Path:
     return (folder / value).resolve()
 
 
-_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
-
-
 def toml_value(value: Any) -> str:
     """A TOML literal of a scalar, list or flat dict (what configs hold).
 
@@ -110,3 +118,33 @@ def toml_value(value: Any) -> str:
 def toml_key(key: str) -> str:
     """A TOML key: bare when it may be, else quoted."""
     return key if _BARE_KEY.match(key) else json.dumps(key)
+
+
+def toml_document(document: Mapping[str, Any]) -> str:
+    """The TOML text of a config ``document``: its top-level values first, then each table
+    ``[name]`` and each array of tables ``[[name]]`` (a list of dicts), in the document's order;
+    a table's own tables inline.
+
+    >>> print(toml_document({"kind": "x", "run": {"seeds": 2}, "agents": [{"name": "a"}]}))
+    kind = "x"
+    <BLANKLINE>
+    [run]
+    seeds = 2
+    <BLANKLINE>
+    [[agents]]
+    name = "a"
+    <BLANKLINE>
+    """
+    lines = [f"{toml_key(k)} = {toml_value(v)}" for k, v in document.items() if not _is_table(v)]
+    for name, value in document.items():
+        tables = [value] if isinstance(value, dict) else value if _is_table(value) else []
+        header = f"[{toml_key(name)}]" if isinstance(value, dict) else f"[[{toml_key(name)}]]"
+        for each in tables:
+            lines += ["", header, *(f"{toml_key(k)} = {toml_value(v)}" for k, v in each.items())]
+    return "\n".join(lines) + "\n"
+
+
+def _is_table(value: Any) -> bool:
+    """A table or a non-empty array of tables (written under a header of its own)."""
+    is_array = isinstance(value, list) and bool(value)
+    return isinstance(value, dict) or (is_array and all(isinstance(v, dict) for v in value))

@@ -26,10 +26,10 @@ COMMANDS: dict[str, tuple[list[str], str]] = {
     "run": (["run", "{config}", "--out", "{dir}"], "skidnav.commands.run.run_experiment"),
     "tune": (["tune", "{tune}", "--out", "{dir}"], "skidnav.commands.tune.tune_experiment"),
     "generalise": (
-        ["study", "generalise", "--out", "{file}"],
-        "skidnav.studies.generalisation.split_worlds",
+        ["study", "generalise", "--out", "{dir}"],
+        "skidnav.commands.run.run_experiment",
     ),
-    "transfer": (["study", "transfer", "--out", "{file}"], "skidnav.studies.transfer.transfer_run"),
+    "transfer": (["study", "transfer", "--out", "{dir}"], "skidnav.commands.run.run_experiment"),
     "floors calibrate": (
         ["world", "floors", "calibrate", "--out", "{file}"],
         "skidnav.physics.calibration.calibrate",

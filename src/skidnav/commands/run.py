@@ -9,7 +9,7 @@ from typing import Any
 
 from skidnav.envs.registration import allow_env_modules
 from skidnav.experiments.configfile import config_from_tables, parse_tables
-from skidnav.experiments.runner import BACKENDS, TrialFunction, run_experiment
+from skidnav.experiments.runner import BACKENDS, RunOutcome, TrialFunction, run_experiment
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import EXPERIMENT_LAYOUT, RunLayout
 from skidnav.outputs import check_output_dir
@@ -76,19 +76,35 @@ def load_grid(path: Path) -> tuple[Grid, TrialFunction | None, RunLayout, str]:
         UserError: the file cannot be read, or its TOML, kind or content is invalid.
     """
     text = read_config_text(path)
+    return (*grid_of_text(text, path), text)
+
+
+def grid_of_text(text: str, path: Path) -> tuple[Grid, TrialFunction | None, RunLayout]:
+    """The grid, run function and results layout of config ``text`` (read from ``path``, or
+    written by a ``skidnav study`` shortcut from its flags).
+
+    Raises:
+        UserError: its TOML, kind or content is invalid (naming ``path``).
+    """
     document = parse_tables(text, path)
     kind = study_kind(document, path)
     if kind == EXPERIMENT_KIND:
-        return config_from_tables(document, path), None, EXPERIMENT_LAYOUT, text
+        return config_from_tables(document, path), None, EXPERIMENT_LAYOUT
     chosen = study(kind)
     grid = chosen.grid(document, path)
-    return grid, chosen.trial(grid), chosen.layout, text
+    return grid, chosen.trial(grid), chosen.layout
 
 
-def run_command(args: argparse.Namespace) -> int:
-    """Run the experiment or study; print where the results are."""
-    allow_env_modules(args.env_module)
-    grid, trial, layout, text = load_grid(args.config)
+def run_grid(
+    loaded: tuple[Grid, TrialFunction | None, RunLayout],
+    text: str,
+    args: argparse.Namespace,
+    config_path: Path | None = None,
+) -> RunOutcome:
+    """Run (or resume) the ``loaded`` grid of config ``text`` in ``args.out`` (default
+    ``runs/<name>``) on the backend of ``args`` (:func:`add_backend_arguments`, ``no_progress``);
+    print where the results are."""
+    grid, trial, layout = loaded
     out = check_output_dir(args.out if args.out is not None else Path("runs") / grid.name)
     outcome = run_experiment(
         grid,
@@ -98,7 +114,7 @@ def run_command(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         trial=trial,
         source_text=text,
-        config_path=args.config,
+        config_path=config_path,
         progress=not args.no_progress,
         layout=layout,
     )
@@ -106,6 +122,14 @@ def run_command(args: argparse.Namespace) -> int:
         f"{outcome.n_runs} runs in {outcome.out_dir} ({outcome.executed} run now, "
         f"{outcome.skipped} already done) in {outcome.wall_time:.1f} s"
     )
+    return outcome
+
+
+def run_command(args: argparse.Namespace) -> int:
+    """Run the experiment or study; print where the results are."""
+    allow_env_modules(args.env_module)
+    grid, trial, layout, text = load_grid(args.config)
+    outcome = run_grid((grid, trial, layout), text, args, args.config)
     if args.report:
         from skidnav.experiments.report.html import write_report
 

@@ -61,6 +61,8 @@ class Study(Protocol):
 STUDY_MODULES: dict[str, str] = {
     "kinematic-models": "skidnav.studies.kinematic_models.study",
     "policy-search": "skidnav.studies.policy_search.study",
+    "generalisation": "skidnav.studies.generalisation.study",
+    "transfer": "skidnav.studies.transfer.study",
 }
 """Study kind → the module defining its ``STUDY``."""
 

@@ -24,19 +24,21 @@ policy to another map. This study measures whether it does:
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from gymnasium.wrappers import TimeLimit
 
 from skidnav.agents.catalog import build_agent, observation_for, train
-from skidnav.agents.training import greedy_rollout, rollout_summary
+from skidnav.agents.training import TrainingLog, greedy_rollout, rollout_summary
 from skidnav.envs.mapset import MapSetEnv, world_env
 from skidnav.seeding import GENERALISATION_ROLES, RUN_ROLES, child, child_sequences, seed_int
 from skidnav.sim.features import POSE_GOAL_NAMES
+from skidnav.studies.generalisation.grid import GeneralisationGrid
 
 DEFAULT_OPTIONS: Mapping[str, Any] = {"map_kind": "obstacles", "slip": "thesis"}
 """The worlds' env options unless a study sets them."""
@@ -103,6 +105,23 @@ def split_worlds(
         if _map_key(world_env(seed, 1, **options)) in seen:
             raise ValueError(f"held-out world {seed} has the map of a training world")
     return Split(training, held_out, evaluation)
+
+
+@functools.lru_cache(maxsize=4)
+def _split(
+    root_seed: int,
+    training: int,
+    held_out: int,
+    rollouts: int,
+    options: tuple[tuple[str, str], ...],
+) -> Split:
+    return split_worlds(root_seed, training, held_out, rollouts, dict(options))
+
+
+def grid_split(grid: GeneralisationGrid) -> Split:
+    """The split of ``grid``'s worlds and evaluation seeds (computed once per process)."""
+    options = tuple(sorted(grid.env_options.items()))
+    return _split(grid.root_seed, grid.training_maps, grid.held_out_maps, grid.rollouts, options)
 
 
 def run_streams(root_seed: int, seed: int) -> dict[str, np.random.SeedSequence]:
@@ -198,6 +217,13 @@ def exploration_stream(seed: int) -> np.random.Generator:
     return np.random.default_rng(child(seed, 0))
 
 
+class GeneralisationRun(NamedTuple):
+    """One run's results and its training log (one entry per training episode)."""
+
+    result: GeneralisationResult
+    log: TrainingLog
+
+
 def generalisation_run(
     agent_name: str,
     seed: int,
@@ -209,7 +235,7 @@ def generalisation_run(
     env_options: Mapping[str, Any] | None = None,
     max_steps: int = 300,
     eval_epsilon: float = 0.05,
-) -> GeneralisationResult:
+) -> GeneralisationRun:
     """Train ``agent_name`` (run ``seed``) on the split's training worlds and evaluate it on both
     sides (module doc, steps 2–3). ``env_options``: the worlds' env options (``map_kind``,
     ``slip``, ``observation``, ``lidar_rays``…)."""
@@ -230,9 +256,10 @@ def generalisation_run(
         for worlds in (split.training, split.held_out)
     ]
     (on_training, on_held_out, noisy_training, noisy_held_out) = sides
-    return GeneralisationResult(
+    result = GeneralisationResult(
         agent_name, seed, int(successes.size), int(np.sum(log.lengths)),
         float(successes[-100:].mean()) if successes.size else math.nan,
         on_training[0], on_held_out[0], on_training[1], on_held_out[1],
         eval_epsilon, noisy_training[0], noisy_held_out[0],
     )  # fmt: skip
+    return GeneralisationRun(result, log)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import gymnasium
 import numpy as np
@@ -21,7 +21,7 @@ import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents.catalog import agent_context
 from skidnav.agents.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
-from skidnav.agents.training import greedy_evaluation, rollout_summary
+from skidnav.agents.training import TrainingLog, greedy_evaluation, rollout_summary
 from skidnav.seeding import seed_int
 
 ENV_ID = "skidnav/SkidSteerNav-v0"
@@ -40,6 +40,14 @@ class TransferResult:
     length_physics: float
 
 
+class TransferRun(NamedTuple):
+    """One seed's gap and its training log on the kinematic simulator (one entry per
+    episode)."""
+
+    result: TransferResult
+    log: TrainingLog
+
+
 def transfer_run(
     agent_name: str,
     seed: int,
@@ -49,7 +57,7 @@ def transfer_run(
     env_options: Mapping[str, Any] | None = None,
     rollouts: int = 5,
     max_steps: int = 300,
-) -> TransferResult:
+) -> TransferRun:
     """Train ``agent_name`` on the kinematic env of seed ``seed``'s world and evaluate it on both
     dynamics (module doc). ``env_options``: keyword arguments of the env (``map_kind``,
     ``slip``, ``floor``…; ``floor`` applies to the physical robot only)."""
@@ -64,13 +72,16 @@ def transfer_run(
         agent_name, n_states, 4, dict(params or {}), np.random.default_rng(agent_stream),
         **agent_context(agent_name, kinematic.unwrapped),
     )  # fmt: skip
-    train_agent_fast(agent, kinematic, episodes, max_steps=max_steps, seed=seed_int(episode_stream))
+    log = train_agent_fast(
+        agent, kinematic, episodes, max_steps=max_steps, seed=seed_int(episode_stream)
+    )
     seeds = [int(s) for s in np.random.default_rng(evaluation).integers(0, 2**31, rollouts)]
     lengths = [
         [rollout.length for rollout in greedy_evaluation(agent, env, max_steps, seeds)]
         for env in (kinematic, physical)
     ]
     on_kinematic, on_physics = (rollout_summary(each) for each in lengths)
-    return TransferResult(
+    result = TransferResult(
         agent_name, seed, on_kinematic[0], on_physics[0], on_kinematic[1], on_physics[1]
     )
+    return TransferRun(result, log)
