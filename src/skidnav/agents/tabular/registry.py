@@ -31,7 +31,7 @@ AGENT_MODULES: dict[str, str] = {
     "dyna-q": "skidnav.agents.tabular.dyna_q",
     "dyna-q-plus": "skidnav.agents.tabular.dyna_q_plus",
     "prioritized-sweeping": "skidnav.agents.tabular.prioritized_sweeping",
-    "dyna-kinematic": "skidnav.agents.tabular.model_based",
+    "dyna-kinematic": "skidnav.agents.tabular.dyna_kinematic",
     "trajectory-prioritized": "skidnav.agents.tabular.trajectory_prioritized",
     "dyna-full": "skidnav.agents.tabular.dyna_full",
     "dyna-sweep": "skidnav.agents.tabular.dyna_sweep",

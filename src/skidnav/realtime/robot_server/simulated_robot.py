@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from skidnav.errors import UserError
-from skidnav.realtime.arena import build_map, seed_streams, start_pose
+from skidnav.realtime.arena import arena_map, seed_streams, start_pose
 from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.control.records import EventLog
 from skidnav.realtime.link import protocol as pr
@@ -171,7 +171,7 @@ def build_robot(
     floor: str | None = None,
 ) -> SimRobot:
     """A simulated robot at the start pose of the map ``map_spec`` (see
-    :func:`skidnav.realtime.arena.build_map`), its floor the slip preset ``slip`` with relative
+    :func:`skidnav.realtime.arena.arena_map`), its floor the slip preset ``slip`` with relative
     drift amplitude ``drift`` and period ``drift_period`` [s]; random streams from ``seed``.
     ``physics`` (one of :data:`~skidnav.realtime.robot_server.dynamics.PHYSICS`) chooses what moves
     it;
@@ -188,7 +188,7 @@ def build_robot(
     robot = robot or RobotParams()
     grid = grid or Discretization()
     streams = seed_streams(seed)
-    grid_map = build_map(map_spec, seed, grid)
+    grid_map = arena_map(map_spec, seed, grid)
     try:
         field = make_slip_field(
             slip,
