@@ -1,6 +1,7 @@
 """Experiment configs: frozen, validated dataclasses loaded from TOML.
 
-An experiment is the grid agents × maps × slip presets × seeds (SPEC §5). The TOML layout is::
+An experiment is the grid agents × maps × slip presets × seeds (docs/experiments.md). The TOML
+layout is::
 
     [experiment]
     name = "quick"

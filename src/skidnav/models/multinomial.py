@@ -1,4 +1,4 @@
-"""Sparse multinomial transition model learned from counts (the thesis's model; SPEC §4.2).
+"""Sparse multinomial transition model learned from counts (Alhawary (2020), ch. 7).
 
 From real transitions the model keeps N(s, a, s′), and estimates
 

@@ -1,9 +1,8 @@
-"""The navigation MDP as compiled kernels: one action of the skid-steer robot, with slip,
-collisions and reward (SPEC §1–3). The Gymnasium env (through
-:func:`skidnav.sim.task.step_arrays`), the batch simulator, the fused trainers all
-call :func:`transition`, and the simulated robot server
-(:func:`skidnav.sim.task.drive_substep`) its sub-step, so there is one
-implementation of the dynamics.
+"""The navigation MDP as compiled kernels: one action of the skid-steer robot, with slip, collisions
+and reward (Alhawary (2020), App. A.1; docs/simulator.md). The Gymnasium env (through
+:func:`skidnav.sim.task.step_arrays`), the batch simulator, the fused trainers all call
+:func:`transition`, and the simulated robot server (:func:`skidnav.sim.task.drive_substep`) its
+sub-step, so there is one implementation of the dynamics.
 
 One action = ``substeps`` sub-steps of ``dt`` seconds. In each sub-step (:func:`substep`), with the
 robot in coarse region ρ at simulated time t:
@@ -310,10 +309,11 @@ def simulate_action(
 
 @inline_jit
 def action_reward(rewards: RewardScheme, at_goal: bool, collided: bool, variance: float) -> float:
-    """The reward of an action (SPEC §3): ``rewards.goal`` if it ended in the goal cell (the
-    episode terminates), else ``rewards.collision`` after a collision, else ``rewards.step −
-    rewards.variance_weight · variance``, ``variance`` [rad²/s²] being the wheel-speed variance of
-    the region where it ended (whichever estimate the caller uses)."""
+    """The reward of an action (Alhawary (2020), App. A.1.2; docs/simulator.md): ``rewards.goal`` if
+    it ended in the goal cell (the episode terminates), else ``rewards.collision`` after a
+    collision, else ``rewards.step − rewards.variance_weight · variance``, ``variance`` [rad²/s²]
+    being the wheel-speed variance of the region where it ended (whichever estimate the caller
+    uses)."""
     if at_goal:
         return rewards.goal
     if collided:

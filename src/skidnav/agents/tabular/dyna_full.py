@@ -1,5 +1,6 @@
 """The thesis's combination: Dyna-Q with the multinomial model, kinematic-model planning on pairs
-never visited, and planning prioritized around the shortest discovered trajectories (SPEC §4).
+never visited, and planning prioritized around the shortest discovered trajectories
+(Alhawary (2020), ch. 7).
 
 Each planning update, once a successful trajectory exists, takes with probability
 ``trajectory_share`` the next pair of the trajectory sweeps (backward from the goal, then the

@@ -1,4 +1,4 @@
-"""Dyna-Q with the multinomial model plus a learned kinematic model (thesis; SPEC §4 item 3).
+"""Dyna-Q with the multinomial model plus a learned kinematic model (Alhawary (2020), ch. 7).
 
 After each real step (s, a, r, s′) with the env's ``info``:
 

@@ -1,5 +1,6 @@
 """Compiled parts of the thesis's model-based agents: kinematic-model planning on pairs never
-visited and planning prioritized around the shortest discovered trajectories (SPEC §4 items 3–4).
+visited and planning prioritized around the shortest discovered trajectories (Alhawary (2020),
+ch. 7; docs/agents/dyna-kinematic.md, docs/agents/trajectory-prioritized.md).
 
 One planner (:class:`PlannerArrays`) serves ``dyna-kinematic``, ``trajectory-prioritized`` and
 ``dyna-full``; their configs only change the shares of the three kinds of planning update

@@ -28,7 +28,8 @@ from skidnav.experiments.store import TrialResult
 from skidnav.stats import curve_band
 
 ARENA = (0.62, 0.505)
-"""Arena width and height [m] (SPEC §1)."""
+"""Arena width and height [m] (the thesis arena, Alhawary (2020), App. A.1.1; as
+:class:`~skidnav.robot.params.RobotParams`)."""
 DPI = 90
 
 

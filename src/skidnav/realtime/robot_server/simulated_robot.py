@@ -6,7 +6,8 @@ One control period of ``dt`` seconds of robot time is one step of the robot's
 wheel-speed commands instead of the four actions), or the MuJoCo robot (``physics="mujoco"``):
 
 1. commands whose latency has elapsed take effect (a FIFO of (due time, ω_L, ω_R));
-2. each wheel loses U(0, η(ρ, t)) in magnitude (the slip field, possibly drifting, SPEC §2);
+2. each wheel loses U(0, η(ρ, t)) in magnitude (the slip field, possibly drifting,
+   :mod:`skidnav.robot.slip`);
 3. kinematic: the ICR model with x_ICR[ρ] gives the body twist; the robot's integrator
    (``RobotParams.integrator``: explicit Euler or the exact constant-twist step) advances the
    pose, clipped to the arena. MuJoCo: the slipped speeds are the wheel servos' set points and
