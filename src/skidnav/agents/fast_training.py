@@ -4,17 +4,15 @@
 :func:`skidnav.agents.training.train_for_steps` on the same envs.
 
 Episodes run in compiled stretches (:func:`skidnav.agents.fused_loop.learn_stretch`, at most
-:data:`STRETCH` steps each): the env's compiled step (:mod:`skidnav.agents.env_steps`),
-ε-greedy, and the agent's own learning step — the very kernel its ``observe`` calls, so there is
-one learning step per agent. Between stretches Python makes room in the agent's buffers
-(``reserve``); between episodes it does what the agent does in ``end_episode`` (ε decay,
-trajectory bookkeeping, kinematic refits by the compiled Bayesian ridge) and the greedy
-evaluation rollouts (also compiled). Same signature, same output, and the same numbers as the
-plain loop for the same seed (tested), except ``wall_time``. Other envs (the navigation env with
-``dynamics="mujoco"`` among them: its physics is not compiled), or agents that are not a
-:class:`~skidnav.agents.tabular.agent.TabularAgent`, fall back to the plain loop. The navigation
-env's
-``trail`` (for rendering) is not recorded.
+:data:`STRETCH` steps each): the env's compiled step (:mod:`skidnav.agents.env_steps`), ε-greedy,
+and the agent's own learning step — the very kernel its ``observe`` calls, so there is one learning
+step per agent. Between stretches Python makes room in the agent's buffers (``reserve``); between
+episodes it does what the agent does in ``end_episode`` (ε decay, trajectory bookkeeping, kinematic
+refits by the compiled Bayesian ridge) and the greedy evaluation rollouts (also compiled). Same
+signature, same output, and the same numbers as the plain loop for the same seed (tested), except
+``wall_time``. Other envs (the navigation env with ``dynamics="mujoco"`` among them: its physics is
+not compiled), or agents that are not a :class:`~skidnav.agents.tabular.agent.TabularAgent`, fall
+back to the plain loop. The navigation env's ``trail`` (for rendering) is not recorded.
 """
 
 from __future__ import annotations

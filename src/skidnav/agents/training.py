@@ -21,9 +21,8 @@ from skidnav.errors import UserError
 
 
 class Learner(Protocol):
-    """What the loop needs from an agent (every
-    :class:`~skidnav.agents.tabular.agent.TabularAgent`, and
-    the agents on continuous states). A state is what :func:`as_state` makes of an observation:
+    """What the loop needs from an agent (every :class:`~skidnav.agents.tabular.agent.TabularAgent`,
+    and the agents on continuous states). A state is what :func:`as_state` makes of an observation:
     an int for a Discrete observation, a float64 array for a Box one."""
 
     planning_updates: int

@@ -99,12 +99,10 @@ def make_env(
     ``[env] max_episode_steps``, else the registered limit (:func:`action_limit` reads it
     back). Runs train and evaluate on ``env.unwrapped``: the trainer enforces that limit itself.
 
-    An agent's ``discretization`` (n_x, n_y, n_headings) with the map's cells becomes the env's
-    own discretization (finer heading bins, the compiled trainer); one with finer cells than
-    the map's leaves the env on poses, which :func:`agent_view` turns into the states of the
-    finer grid (:class:`~skidnav.experiments.reference.finegrid.FineStates`). ``observation``
-    overrides
-    both.
+    An agent's ``discretization`` (n_x, n_y, n_headings) with the map's cells becomes the env's own
+    discretization (finer heading bins, the compiled trainer); one with finer cells than the map's
+    leaves the env on poses, which :func:`agent_view` turns into the states of the finer grid
+    (:class:`~skidnav.experiments.reference.finegrid.FineStates`). ``observation`` overrides both.
     """
     config = spec.config
     options: dict[str, Any] = dict(config.env_options)
@@ -389,14 +387,13 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
 
 def _oracle_columns(reference: float, oracle: Oracle | None) -> dict[str, float]:
     """The summary columns of the run's references: L* and C*
-    (:mod:`~skidnav.experiments.reference.oracle`;
-    without an oracle, C* = L*: a grid maze's moves cost one each, and elsewhere both are NaN);
-    the means of the oracle's own rollouts (the action-optimal policy's lengths, NaN when any of
-    them failed, and the cost-optimal policy's costs), the share of the action-optimal rollouts
-    that reached the goal and the mean length of those that did: from one exact pose a greedy
-    policy over cells can loop (an action that works on average over the cell hits a wall from
-    that point, and is chosen again), so the oracle's expected length is a reference, not a
-    policy every agent could follow."""
+    (:mod:`~skidnav.experiments.reference.oracle`; without an oracle, C* = L*: a grid maze's moves
+    cost one each, and elsewhere both are NaN); the means of the oracle's own rollouts (the
+    action-optimal policy's lengths, NaN when any of them failed, and the cost-optimal policy's
+    costs), the share of the action-optimal rollouts that reached the goal and the mean length of
+    those that did: from one exact pose a greedy policy over cells can loop (an action that works on
+    average over the cell hits a wall from that point, and is chosen again), so the oracle's
+    expected length is a reference, not a policy every agent could follow."""
     nan = float("nan")
     if oracle is None:
         return {
@@ -422,10 +419,10 @@ def _optimum(reference: float, oracle: Oracle | None, objective: str) -> float:
 
 def _plan_columns(plan: StartPlan | None, rule: ConvergenceRule | None) -> dict[str, float]:
     """The summary columns of the world's start plan
-    (:mod:`skidnav.experiments.reference.start_plan`):
-    its length [actions] (NaN when none was found), the share of its replays that reached the
-    goal, and whether its replays pass the run's convergence test (1.0 / 0.0; NaN when the test
-    is measured in cost, which the replays do not record)."""
+    (:mod:`skidnav.experiments.reference.start_plan`): its length [actions] (NaN when none was
+    found), the share of its replays that reached the goal, and whether its replays pass the run's
+    convergence test (1.0 / 0.0; NaN when the test is measured in cost, which the replays do not
+    record)."""
     nan = float("nan")
     if plan is None or not len(plan.actions):
         return {"start_plan_length": nan, "start_plan_success": nan, "start_plan_passes": nan}

@@ -12,11 +12,10 @@ robot in coarse region ρ at simulated time t:
    [0, 1) (two per sub-step: left, right). Callers fill ``noise`` with ``rng.random(2·substeps)``
    (the env) or the same draws one by one inside a compiled loop (the trainers): same stream,
    same numbers, and no Generator crosses the Python/numba boundary on every step;
-3. the ICR model with the region's x_ICR[ρ], effective wheel radius r[ρ] and half track c[ρ]
-   (the robot's own unless the floor was calibrated, :mod:`skidnav.robot.floors`) gives
-   (v_x, v_y, yaw_rate); the robot's integrator (explicit Euler
-   or the exact constant-twist step, ``RobotParams.integrator``) advances the pose, which is
-   clipped to the arena;
+3. the ICR model with the region's x_ICR[ρ], effective wheel radius r[ρ] and half track c[ρ] (the
+   robot's own unless the floor was calibrated, :mod:`skidnav.robot.floors`) gives (v_x, v_y,
+   yaw_rate); the robot's integrator (explicit Euler or the exact constant-twist step,
+   ``RobotParams.integrator``) advances the pose, which is clipped to the arena;
 4. if the new position lies in a wall cell the motion stops: the position stays at the last free
    sub-step, the heading of the colliding sub-step is kept, and the action is a collision;
    otherwise the sub-step is logged as (ρ, ω_L_cmd, ω_R_cmd, v_x, v_y, yaw_rate).

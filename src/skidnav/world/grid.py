@@ -282,12 +282,12 @@ def refine_map(grid_map: GridMap, shape: tuple[int, int]) -> GridMap:
     f of the map's (:func:`refinement_factor`).
 
     Fine cell (i′, j′) covers part of coarse cell (i′ // f_x, j′ // f_y) and inherits its wall, so
-    the walls occupy the same metres (the zero-width last level maps to the last level). Start
-    and goal become the fine cells holding the centres of the coarse ones (for an even f the
-    centre lies on that cell's lower edge). The goal of the refined map is one fine cell, 1/(f_x ·
-    f_y) of the coarse goal's area, as the MDP defines a goal
-    (:mod:`skidnav.sim.navigation`): users that keep the world's task take the coarse goal
-    cell instead (:func:`skidnav.experiments.reference.finegrid.goal_states`).
+    the walls occupy the same metres (the zero-width last level maps to the last level). Start and
+    goal become the fine cells holding the centres of the coarse ones (for an even f the centre lies
+    on that cell's lower edge). The goal of the refined map is one fine cell, 1/(f_x · f_y) of the
+    coarse goal's area, as the MDP defines a goal (:mod:`skidnav.sim.navigation`): users that keep
+    the world's task take the coarse goal cell instead
+    (:func:`skidnav.experiments.reference.finegrid.goal_states`).
 
     >>> walls = border_walls((5, 5))
     >>> fine = refine_map(GridMap(walls, start=(1, 1), goal=(2, 3)), (13, 13))

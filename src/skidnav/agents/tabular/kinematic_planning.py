@@ -8,8 +8,7 @@ One planner (:class:`PlannerArrays`) serves ``dyna-kinematic``, ``trajectory-pri
 
 * **trajectory** — the next pair of the sweep lists built from the best trajectories (built in
   Python, :mod:`skidnav.agents.tabular.trajectory_prioritized`): half of this share walks the
-  trajectory
-  pairs (backward from the goal), half walks their neighbourhood;
+  trajectory pairs (backward from the goal), half walks their neighbourhood;
 * **frontier** (kinematic) — a visited pair drawn uniformly, a random action predicted from its
   state by the kinematic model, and a random action at the predicted state: so the updates reach
   the states one predicted step around the visited set;

@@ -123,18 +123,17 @@ def model_based_step(
 
 
 class ModelBasedAgent(DynaQAgent):
-    """Shared machinery of ``dyna-kinematic``, ``trajectory-prioritized`` and ``dyna-full``:
-    multinomial model, optional kinematic model, optional best-trajectory sweeps.
+    """Shared machinery of ``dyna-kinematic``, ``trajectory-prioritized``, ``dyna-full`` and
+    ``dyna-sweep``: multinomial model, optional kinematic model, optional best-trajectory sweeps.
 
     Context keyword arguments (from :func:`~skidnav.agents.tabular.registry.make_agent`): ``task``
-    (a
-    :class:`NavigationTask`, e.g. ``env.unwrapped.task``) or ``robot`` and ``discretization``.
+    (a :class:`NavigationTask`, e.g. ``env.unwrapped.task``) or ``robot`` and ``discretization``.
     Without a discretization the agent has no geometry, whatever ``n_states`` is: no kinematic
     model, no spatial neighbours. With one, kinematic planning starts at the first real step whose
     ``info`` carries a ``kinematic_log`` (an env that never supplies one gets plain replay, not
     predictions of the untrained prior). ``true_kinematics``: the simulator's expected body
-    velocities, float64 (n_regions, 4, 3) (the kinematic env's ``true_kinematics``), which an
-    agent whose ``kinematic_model`` is "true" plans with (:func:`hold_kinematic_model`).
+    velocities, float64 (n_regions, 4, 3) (the kinematic env's ``true_kinematics``), which an agent
+    whose ``kinematic_model`` is "true" plans with (:func:`hold_kinematic_model`).
     """
 
     uses_kinematic: ClassVar[bool] = False
@@ -376,9 +375,9 @@ def hold_kinematic_model(
 ) -> None:
     """Make ``model`` the one an agent's ``kinematic_model`` names
     (:class:`~skidnav.agents.tabular.config.KinematicModelFields`): "learned" leaves it learning,
-    "prior"
-    holds the prior, "true" holds ``true_kinematics`` (float64 (n_regions, 4, 3), the simulator's
-    expected body velocities; ValueError when there are none, as on a physics or real robot)."""
+    "prior" holds the prior, "true" holds ``true_kinematics`` (float64 (n_regions, 4, 3), the
+    simulator's expected body velocities; ValueError when there are none, as on a physics or real
+    robot)."""
     if source == "prior":
         model.hold()
     elif source == "true":

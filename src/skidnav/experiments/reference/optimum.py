@@ -1,17 +1,15 @@
 """The continuous optimum of a world: the oracle on fine state grids, and the path length [m]
 of its best policy — the reference of the discretization gap (docs/discretization-gap.md).
 
-For each grid of ``[experiment] optimum_grids`` (n_x, n_y, n_headings; a refinement of the
-map's cells, :mod:`skidnav.experiments.reference.finegrid`) the oracle's model of the world is
-sampled and
+For each grid of ``[experiment] optimum_grids`` (n_x, n_y, n_headings; a refinement of the map's
+cells, :mod:`skidnav.experiments.reference.finegrid`) the oracle's model of the world is sampled and
 solved on that grid (:func:`skidnav.experiments.reference.oracle.solve`, the world's own goal cell
-and
-start pose), which gives V*(start), the expected actions of the best policy over that grid's
-states under the sampled model. Its greedy policy is then rolled out ``optimum_rollouts`` times
-in the world itself (the env on poses, each rollout from a reset with its own seed, at most the
-run's action limit), and the path length [m] of each rollout that reached the goal is measured
-as the runs' final length is (:func:`skidnav.experiments.metrics.path_length`, through the poses
-after each action).
+and start pose), which gives V*(start), the expected actions of the best policy over that grid's
+states under the sampled model. Its greedy policy is then rolled out ``optimum_rollouts`` times in
+the world itself (the env on poses, each rollout from a reset with its own seed, at most the run's
+action limit), and the path length [m] of each rollout that reached the goal is measured as the
+runs' final length is (:func:`skidnav.experiments.metrics.path_length`, through the poses after each
+action).
 
 V*(start) of a finer grid is not a bound on what a policy of the pose can do, and a finer grid's
 policy is not always better in the world: a policy over cells can press the robot against a wall

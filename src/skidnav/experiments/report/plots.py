@@ -1,6 +1,5 @@
 """Figures of an experiment, as PNG bytes (with :mod:`skidnav.studies.continuity.trajectory_plot`,
-the
-only modules of skidnav that import matplotlib).
+the only modules of skidnav that import matplotlib).
 
 Every figure function takes the tidy tables (or run arrays) and returns PNG bytes, so the report
 embeds them without touching matplotlib. The Agg backend is forced: no display is needed.

@@ -253,14 +253,13 @@ def drive(
     resume: tuple[int, dict[str, Any] | None] = (0, None),
     policy_name: str | None = None,
 ) -> tuple[int, EpisodeLoop]:
-    """Connect driver ``driver_name`` (a sim server logs to ``out/sim-server.jsonl``), run the
-    loop of ``agent`` with its files in ``out`` from episode ``resume[0]`` (loop state
-    ``resume[1]`` restored first, if any), SIGINT and SIGTERM tripping its safety monitor, and
-    shut the driver down, the loop's scoring kernels compiled before connecting; returns (exit
-    code of :meth:`EpisodeLoop.run`, the loop). With a ``policy_name``, ``agent`` is a frozen
-    continuous policy
-    (:class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`) run by :class:`PolicyLoop`;
-    else a tabular agent run by :class:`RealtimeLoop`.
+    """Connect driver ``driver_name`` (a sim server logs to ``out/sim-server.jsonl``), run the loop
+    of ``agent`` with its files in ``out`` from episode ``resume[0]`` (loop state ``resume[1]``
+    restored first, if any), SIGINT and SIGTERM tripping its safety monitor, and shut the driver
+    down, the loop's scoring kernels compiled before connecting; returns (exit code of
+    :meth:`EpisodeLoop.run`, the loop). With a ``policy_name``, ``agent`` is a frozen continuous
+    policy (:class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`) run by
+    :class:`PolicyLoop`; else a tabular agent run by :class:`RealtimeLoop`.
 
     Raises:
         UserError: the robot cannot be reached.

@@ -175,8 +175,7 @@ def build_robot(
     :func:`skidnav.realtime.arena.arena_map`), its floor the slip preset ``slip`` with relative
     drift amplitude ``drift`` and period ``drift_period`` [s]; random streams from ``seed``.
     ``physics`` (one of :data:`~skidnav.realtime.robot_server.dynamics.PHYSICS`) chooses what moves
-    it;
-    for ``mujoco``, ``floor`` names one material for the whole floor (None: the preset's).
+    it; for ``mujoco``, ``floor`` names one material for the whole floor (None: the preset's).
 
     Raises:
         UserError: an unknown preset, physics or material.
