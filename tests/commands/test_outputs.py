@@ -85,7 +85,7 @@ COMMANDS: dict[str, tuple[list[str], str]] = {
     ),
     "robot run": (
         ["robot", "run", "--agent", "q-learning", "--out", "{dir}"],
-        "skidnav.realtime.control.run.run_from_args",
+        "skidnav.realtime.control.run.run_robot",
     ),
     "robot study": (
         ["robot", "study", "--config", str(REALTIME), "--out", "{dir}"],

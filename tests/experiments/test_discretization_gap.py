@@ -23,7 +23,7 @@ from skidnav.studies.gap import gap_rows, gap_section, optimum_rows
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap, border_walls, generate_map
 
-FORWARD = 0.0225 * 1.7  # metres of one forward action without slip (SPEC §1)
+FORWARD = 0.0225 * 1.7  # metres of one forward action without slip (docs/simulator.md)
 
 
 def _corridor(observation: str) -> gymnasium.Env:

@@ -1,12 +1,12 @@
 """The env steps the fused loop (:mod:`skidnav.agents.fused_loop`) drives: compiled twins of
 ``env.step`` that draw the same numbers and change the same state.
 
-An env step is ``step(env, state, action, rng) -> (next state, reward, terminated, collided,
-rows logged, cost)`` (the cost the env reports in ``info["cost"]``) on a NamedTuple ``env``
-holding the env's mutable state in arrays, with a ``pose``
-(float64 (3,)) and a ``log`` (float64 (n, 6)) the agents' experience carries
-(:class:`skidnav.agents.learning.Experience`). It is registered for the NamedTuple's class in
-:data:`ENV_STEPS` and called through :func:`env_step`.
+An env step is
+``step(env, state, action, rng) -> (next state, reward, terminated, collided, rows logged, cost)``
+(the cost the env reports in ``info["cost"]``) on a NamedTuple ``env`` holding the env's mutable
+state in arrays, with a ``pose`` (float64 (3,)) and a ``log`` (float64 (n, 6)) the agents'
+experience carries (:class:`skidnav.agents.learning.Experience`). It is registered for the
+NamedTuple's class in :data:`ENV_STEPS` and called through :func:`env_step`.
 """
 
 from __future__ import annotations

@@ -211,9 +211,14 @@ def _add_run(commands: Any) -> None:
 
 
 def _run_loop(args: argparse.Namespace) -> int:
-    from skidnav.realtime.control.run import run_from_args
+    from skidnav.realtime.control.run import RobotRunSettings, run_robot
 
     check_output_dir(args.out)
+    settings = RobotRunSettings(
+        out=args.out, driver=args.driver, agent=args.agent, policy=args.policy,
+        policy_file=args.policy_file, config=args.config, preset=args.preset,
+        episodes=args.episodes, time_scale=args.time_scale, reset=args.reset, resume=args.resume,
+    )  # fmt: skip
 
     def progress(line: str) -> None:
         if not args.quiet:
@@ -223,7 +228,7 @@ def _run_loop(args: argparse.Namespace) -> int:
         print(f"\n{message} — press Enter when ready", file=sys.stderr, flush=True)
         sys.stdin.readline()
 
-    code, summary = run_from_args(args, progress=progress, wait_for_operator=wait_for_operator)
+    code, summary = run_robot(settings, progress=progress, wait_for_operator=wait_for_operator)
     if not args.quiet:
         print(file=sys.stderr)
     print(summary)

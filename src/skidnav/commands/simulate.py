@@ -1,6 +1,5 @@
 """``skidnav world simulate``: drive the simulated robot with an action script or a random policy,
-and
-draw its trajectory (PNG) and optionally save it as CSV.
+and draw its trajectory (PNG) and optionally save it as CSV.
 
 A script runs to its last action (the env's usual 500-action episode limit does not cut it), or
 until the robot reaches the goal, which ends the episode: the summary then says how many of the

@@ -36,8 +36,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     """Drive a skid-steer robot to a goal through an arena with walls and a slippery floor.
 
     ## Description
-    A small four-wheel skid-steer robot (SPEC §1, the thesis robot: r = 2.25 cm, c = 6 cm,
-    x_ICR = 5 cm) moves in a 0.62 m × 0.505 m arena. Each action commands both wheels for
+    A small four-wheel skid-steer robot (the thesis robot, Alhawary (2020), App. A.1.1: r = 2.25 cm,
+    c = 6 cm, x_ICR = 5 cm) moves in a 0.62 m × 0.505 m arena. Each action commands both wheels for
     10 × 0.1 s; the floor slows the wheels by a random, region-dependent amount (the slip field),
     and the skid makes turns slide the body sideways. The robot must reach the goal cell in as few
     actions as possible while bumping into walls as little as possible.
@@ -82,36 +82,34 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     termination.
 
     ## Info
-    Built by :func:`skidnav.envs.step_info.step_info`, as the real-time loop's: ``pose``
-    (x [m], y [m], heading [rad]), ``cell`` (i, j, heading_bin), ``collision`` (bool),
-    ``wheel_speeds`` (ω_L, ω_R of the last sub-step after slip [rad/s]), ``region`` (flat slip
-    region at the end of the action), ``kinematic_log`` float64 (n_free_substeps, 6), columns
-    [region, omega_left_cmd, omega_right_cmd, v_x, v_y, yaw_rate] (what the Bayesian ridge
-    kinematic model learns from), ``cost`` (see Rewards; 0 at a reset), and ``step_info``: the
-    same as a typed
+    Built by :func:`skidnav.envs.step_info.step_info`, as the real-time loop's: ``pose`` (x [m],
+    y [m], heading [rad]), ``cell`` (i, j, heading_bin), ``collision`` (bool), ``wheel_speeds``
+    (ω_L, ω_R of the last sub-step after slip [rad/s]), ``region`` (flat slip region at the end of
+    the action), ``kinematic_log`` float64 (n_free_substeps, 6), columns [region, omega_left_cmd,
+    omega_right_cmd, v_x, v_y, yaw_rate] (what the Bayesian ridge kinematic model learns from),
+    ``cost`` (see Rewards; 0 at a reset), and ``step_info``: the same as a typed
     :class:`~skidnav.envs.step_info.StepInfo`.
 
     ## Arguments
     ``map_kind`` ("free", "obstacles", "maze") or ``map_file`` (plain-text map) or ``grid_map``;
     ``world_seed`` (draws the map and the slip field; the map does not change between episodes);
     ``slip`` preset ("thesis", "slippery", "rough", "rough-physics", "slippery-physics") or
-    ``slip_field``; ``drift_amplitude`` and
-    ``drift_period`` [s] (non-stationary slip; the clock runs across episodes and restarts when
-    ``reset`` is given a seed); ``robot`` (:class:`RobotParams`, e.g. ``integrator="exact"``);
-    ``discretization``; ``observation`` ("discrete", "pose", "features"); ``lidar_rays`` (k ≥ 0,
-    default 8) and ``lidar_range`` [m] (> 0, default 0.3) of the features; ``variance``;
-    ``render_mode`` ("rgb_array" or "ansi"); ``action`` ("discrete", the default, or
-    "continuous"); ``control_period`` [s]: the duration of one action, a whole number of the
-    robot's sub-steps of ``robot.dt`` (default ``robot.action_duration``, 1 s: the robot's
-    ``substeps`` are replaced by ``control_period / dt``);
-    ``dynamics``: "kinematic" (the ICR model of SPEC §1, the default) or "mujoco" (the MuJoCo
-    robot of :mod:`skidnav.physics`, the ``physics`` extra: the same spaces, rewards, walls and
-    episode rules, the slip field's wheel-speed loss applied to the servo set points, the motion
-    that of the physics — :mod:`skidnav.physics.mdp` — and the kinematic log filled from the
-    measured body twist; ``wheel_speeds`` are the measured ones; the MuJoCo state restarts at
-    every ``reset``); ``floor``: with "mujoco", one material of
-    :data:`skidnav.physics.materials.MATERIALS` for the whole floor, or None (default) for the
-    slip preset's materials (:func:`skidnav.physics.materials.region_materials`).
+    ``slip_field``; ``drift_amplitude`` and ``drift_period`` [s] (non-stationary slip; the clock
+    runs across episodes and restarts when ``reset`` is given a seed); ``robot``
+    (:class:`RobotParams`, e.g. ``integrator="exact"``); ``discretization``; ``observation``
+    ("discrete", "pose", "features"); ``lidar_rays`` (k ≥ 0, default 8) and ``lidar_range`` [m]
+    (> 0, default 0.3) of the features; ``variance``; ``render_mode`` ("rgb_array" or "ansi");
+    ``action`` ("discrete", the default, or "continuous"); ``control_period`` [s]: the duration of
+    one action, a whole number of the robot's sub-steps of ``robot.dt`` (default
+    ``robot.action_duration``, 1 s: the robot's ``substeps`` are replaced by
+    ``control_period / dt``); ``dynamics``: "kinematic" (the ICR model of Kozłowski & Pazderski
+    (2004), the default) or "mujoco" (the MuJoCo robot of :mod:`skidnav.physics`, the ``physics``
+    extra: the same spaces, rewards, walls and episode rules, the slip field's wheel-speed loss
+    applied to the servo set points, the motion that of the physics — :mod:`skidnav.physics.mdp` —
+    and the kinematic log filled from the measured body twist; ``wheel_speeds`` are the measured
+    ones; the MuJoCo state restarts at every ``reset``); ``floor``: with "mujoco", one material of
+    :data:`skidnav.physics.materials.MATERIALS` for the whole floor, or None (default) for the slip
+    preset's materials (:func:`skidnav.physics.materials.region_materials`).
 
     >>> import gymnasium, skidnav
     >>> env = gymnasium.make("skidnav/SkidSteerNav-v0", map_kind="free", world_seed=1)

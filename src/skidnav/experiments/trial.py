@@ -36,7 +36,7 @@ import numpy as np
 from skidnav.agents.catalog import CatalogAgent, CatalogEntry, entry
 from skidnav.agents.interface import Agent
 from skidnav.agents.tabular.agent import TabularAgent
-from skidnav.agents.training import Greedy, TrainingLog
+from skidnav.agents.training import TrainingLog, greedy_path
 from skidnav.envs.registration import allowed_env_modules, registered_env_id, with_env_modules
 from skidnav.errors import UserError
 from skidnav.experiments.config import CONVERGENCE_OBJECTIVES, ExperimentConfig, MapSpec
@@ -52,6 +52,7 @@ from skidnav.experiments.reference.finegrid import (
     refines_positions,
     state_grid,
 )
+from skidnav.experiments.reference.optimum import world_optima
 from skidnav.experiments.reference.oracle import Oracle, compute_oracle, load_or_compute_oracle
 from skidnav.experiments.reference.start_plan import StartPlan, start_plan
 from skidnav.experiments.runs import RunSpec, expand_runs
@@ -60,7 +61,7 @@ from skidnav.seeding import RUN_ROLES, WORLD_ROLES, child_sequences, seed_int
 from skidnav.world.discretization import Discretization, heading_bin
 from skidnav.world.grid import GridMap, border_walls, refine_map
 from skidnav.world.mapfile import load_map
-from skidnav.world.maps import build_map as build_world_map
+from skidnav.world.maps import build_map
 
 logger = logging.getLogger(__name__)
 
@@ -77,10 +78,10 @@ _warmed_up: set[tuple[Any, ...]] = set()
 up."""
 
 
-def build_map(spec: MapSpec, rng: np.random.Generator) -> GridMap:
-    """The map of a run (:func:`skidnav.world.maps.build_map` of its ``[[maps]]`` entry): read
-    from its file or generated with ``rng`` and its options."""
-    return build_world_map(rng, kind=spec.kind, file=spec.file or None, options=dict(spec.options))
+def config_map(entry: MapSpec, rng: np.random.Generator) -> GridMap:
+    """The map of one ``[[maps]]`` entry of a config (:func:`skidnav.world.maps.build_map`):
+    read from its file, or generated with ``rng`` and its options."""
+    return build_map(rng, kind=entry.kind, file=entry.file or None, options=dict(entry.options))
 
 
 def make_env(
@@ -99,12 +100,10 @@ def make_env(
     ``[env] max_episode_steps``, else the registered limit (:func:`action_limit` reads it
     back). Runs train and evaluate on ``env.unwrapped``: the trainer enforces that limit itself.
 
-    An agent's ``discretization`` (n_x, n_y, n_headings) with the map's cells becomes the env's
-    own discretization (finer heading bins, the compiled trainer); one with finer cells than
-    the map's leaves the env on poses, which :func:`agent_view` turns into the states of the
-    finer grid (:class:`~skidnav.experiments.reference.finegrid.FineStates`). ``observation``
-    overrides
-    both.
+    An agent's ``discretization`` (n_x, n_y, n_headings) with the map's cells becomes the env's own
+    discretization (finer heading bins, the compiled trainer); one with finer cells than the map's
+    leaves the env on poses, which :func:`agent_view` turns into the states of the finer grid
+    (:class:`~skidnav.experiments.reference.finegrid.FineStates`). ``observation`` overrides both.
     """
     config = spec.config
     options: dict[str, Any] = dict(config.env_options)
@@ -148,20 +147,6 @@ def action_limit(env: gymnasium.Env[Any, Any]) -> int:
     (``env.spec.max_episode_steps``), or 10,000 for an env registered without one."""
     limit = env.spec.max_episode_steps if env.spec is not None else None
     return int(limit or 10_000)
-
-
-def greedy_rollout(
-    agent: Greedy, env: gymnasium.Env[Any, Any], seed: int, max_steps: int
-) -> tuple[np.ndarray, bool]:
-    """Follow the greedy policy from the start; returns (poses (T+1, 3) [m, m, rad], reached)."""
-    state, info = env.reset(seed=seed)
-    poses = [info.get("pose", (np.nan, np.nan, np.nan))]
-    for _ in range(max_steps):
-        state, _, terminated, truncated, info = env.step(agent.greedy_action(state))
-        poses.append(info.get("pose", (np.nan, np.nan, np.nan)))
-        if terminated or truncated:
-            return np.asarray(poses, dtype=np.float64), bool(terminated)
-    return np.asarray(poses, dtype=np.float64), False
 
 
 def value_maps(q: np.ndarray, grid_map: GridMap) -> tuple[np.ndarray, np.ndarray]:
@@ -261,7 +246,7 @@ def _world(
     """(map or None, training env, evaluation env, action limit) of a run, the map drawn with
     ``map_rng``; the envs unwrapped (:func:`make_env`)."""
     skid = spec.config.env_id == SKID_ENV_ID
-    grid_map = build_map(spec.map, map_rng) if skid else None
+    grid_map = config_map(spec.map, map_rng) if skid else None
     env = make_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
     eval_env = make_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
     return grid_map, agent_view(spec, env), agent_view(spec, eval_env), action_limit(env)
@@ -293,7 +278,7 @@ def warm_up(spec: ExperimentRun) -> None:
     key: tuple[Any, ...] = (spec.config.env_id, spec.agent.name, repr(spec.agent.params))
     levels = spec.agent.discretization
     if levels:  # the same kernels, or the plain loop over finer states (docs/discretization-gap.md)
-        fine = refines_positions(levels, build_map(spec.map, np.random.default_rng(0)))
+        fine = refines_positions(levels, config_map(spec.map, np.random.default_rng(0)))
         key += (fine,)
     if key in _warmed_up:
         return
@@ -321,7 +306,7 @@ def warm_up(spec: ExperimentRun) -> None:
             greedy_eval_env=eval_env if spec.config.greedy_eval else None,
             greedy_seeds=[2, 3],
         )
-    greedy_rollout(built.agent, eval_env, 2, max(WARM_UP_LIMITS))
+    greedy_path(built.agent, eval_env, max(WARM_UP_LIMITS), seed=2)
     if grid_map is not None:
         _world_arrays(built.agent, grid_map, env)
     if grid_map is not None and _has_oracle(eval_env):
@@ -371,9 +356,8 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     plan = start_plan(eval_env, eval_seeds, max_steps) if oracle is not None else None
     optima = {}
     if grid_map is not None and config.optimum_grids and _has_oracle(eval_env):
-        from skidnav.experiments.reference.optimum import world_optima  # it builds on this module
-
-        optima = world_optima(spec, grid_map, slip_seed, world_streams["oracle"], max_steps)
+        pose_env = make_env(spec, grid_map, slip_seed, observation="pose")
+        optima = world_optima(config, pose_env, world_streams["oracle"], max_steps)
     log = built.train(
         env,
         config.episodes,
@@ -382,7 +366,7 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
         greedy_seeds=eval_seeds,
     )
     episodes = _episode_arrays(log)
-    poses, reached = greedy_rollout(built.agent, eval_env, eval_seeds[0], max_steps)
+    poses, reached = greedy_path(built.agent, eval_env, max_steps, seed=eval_seeds[0])
     arrays = {"greedy_poses": poses}
     if grid_map is not None:
         arrays.update(_world_arrays(built.agent, grid_map, env))
@@ -403,14 +387,13 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
 
 def _oracle_columns(reference: float, oracle: Oracle | None) -> dict[str, float]:
     """The summary columns of the run's references: L* and C*
-    (:mod:`~skidnav.experiments.reference.oracle`;
-    without an oracle, C* = L*: a grid maze's moves cost one each, and elsewhere both are NaN);
-    the means of the oracle's own rollouts (the action-optimal policy's lengths, NaN when any of
-    them failed, and the cost-optimal policy's costs), the share of the action-optimal rollouts
-    that reached the goal and the mean length of those that did: from one exact pose a greedy
-    policy over cells can loop (an action that works on average over the cell hits a wall from
-    that point, and is chosen again), so the oracle's expected length is a reference, not a
-    policy every agent could follow."""
+    (:mod:`~skidnav.experiments.reference.oracle`; without an oracle, C* = L*: a grid maze's moves
+    cost one each, and elsewhere both are NaN); the means of the oracle's own rollouts (the
+    action-optimal policy's lengths, NaN when any of them failed, and the cost-optimal policy's
+    costs), the share of the action-optimal rollouts that reached the goal and the mean length of
+    those that did: from one exact pose a greedy policy over cells can loop (an action that works on
+    average over the cell hits a wall from that point, and is chosen again), so the oracle's
+    expected length is a reference, not a policy every agent could follow."""
     nan = float("nan")
     if oracle is None:
         return {
@@ -436,10 +419,10 @@ def _optimum(reference: float, oracle: Oracle | None, objective: str) -> float:
 
 def _plan_columns(plan: StartPlan | None, rule: ConvergenceRule | None) -> dict[str, float]:
     """The summary columns of the world's start plan
-    (:mod:`skidnav.experiments.reference.start_plan`):
-    its length [actions] (NaN when none was found), the share of its replays that reached the
-    goal, and whether its replays pass the run's convergence test (1.0 / 0.0; NaN when the test
-    is measured in cost, which the replays do not record)."""
+    (:mod:`skidnav.experiments.reference.start_plan`): its length [actions] (NaN when none was
+    found), the share of its replays that reached the goal, and whether its replays pass the run's
+    convergence test (1.0 / 0.0; NaN when the test is measured in cost, which the replays do not
+    record)."""
     nan = float("nan")
     if plan is None or not len(plan.actions):
         return {"start_plan_length": nan, "start_plan_success": nan, "start_plan_passes": nan}
@@ -492,7 +475,7 @@ def _check_config(config: ExperimentConfig) -> None:
     first = expand_runs(config)[0]
     try:
         for map_spec in config.maps:
-            grid_map = build_map(map_spec, np.random.default_rng(0))
+            grid_map = config_map(map_spec, np.random.default_rng(0))
             check_grids(config, grid_map, map_spec.label, entries)
         make_env(first, grid_map, 0).close()
     except gymnasium.error.Error as error:

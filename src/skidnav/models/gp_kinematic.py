@@ -1,7 +1,7 @@
 """Learned skid-steer kinematics by Gaussian-process regression, one set of GPs per slip region.
 
-The alternative to the Bayesian-ridge model (:mod:`skidnav.models.kinematic`, SPEC §4 item 3)
-named by the thesis's future work: per coarse slip region, three independent GP regressions
+The alternative to the Bayesian-ridge model (:mod:`skidnav.models.kinematic`) named by the thesis's
+future work (Alhawary (2020), §7.1): per coarse slip region, three independent GP regressions
 (Rasmussen & Williams 2006, ch. 2, Algorithm 2.1) map the *commanded* wheel speeds
 (ω_L, ω_R) [rad/s] to each output of the body twist v_x [m/s], v_y [m/s] and yaw_rate [rad/s],
 learned from the free sub-steps of the kinematic log (columns

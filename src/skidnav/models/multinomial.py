@@ -1,4 +1,4 @@
-"""Sparse multinomial transition model learned from counts (the thesis's model; SPEC §4.2).
+"""Sparse multinomial transition model learned from counts (Alhawary (2020), ch. 7).
 
 From real transitions the model keeps N(s, a, s′), and estimates
 
@@ -8,9 +8,8 @@ From real transitions the model keeps N(s, a, s′), and estimates
 
 It is exact on a deterministic MDP after one visit per pair. Memory grows with the number of
 distinct observed pairs and outcomes (growable arrays and open-addressing hash tables, see
-:mod:`skidnav.models.multinomial_kernels`), never with S²·A. The predecessor relation ("which (s,
-a) have
-led to s′") is kept too, for prioritized sweeping (Sutton & Barto (2018) §8.4).
+:mod:`skidnav.models.multinomial_kernels`), never with S²·A. The predecessor relation ("which (s, a)
+have led to s′") is kept too, for prioritized sweeping (Sutton & Barto (2018) §8.4).
 
 The arrays live in :attr:`MultinomialModel.arrays` (a :class:`MultinomialArrays` named tuple) so
 compiled planners can read and update them directly; call :meth:`MultinomialModel.reserve` with the

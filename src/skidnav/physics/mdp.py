@@ -1,5 +1,5 @@
 """The navigation MDP on the physical robot: one action of the MuJoCo robot, scored by the
-kinematic MDP's own rules (SPEC §3, §7).
+kinematic MDP's own rules (docs/simulator.md, docs/physics.md).
 
 :func:`physics_transition` is the physics twin of
 :func:`skidnav.sim.navigation.command_transition` (and :func:`simulate_physics_action` of

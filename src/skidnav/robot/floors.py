@@ -71,8 +71,7 @@ class CalibratedFloor(NamedTuple):
 
 def parse_floors(text: str) -> dict[str, CalibratedFloor]:
     """The floors of a ``skidnav world floors calibrate --out`` document; ValueError naming the
-    first
-    problem (not JSON, a missing or non-finite field, r or c not > 0, a material twice)."""
+    first problem (not JSON, a missing or non-finite field, r or c not > 0, a material twice)."""
     try:
         document = json.loads(text)
         fits = document["fits"]

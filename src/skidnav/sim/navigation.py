@@ -1,9 +1,8 @@
-"""The navigation MDP as compiled kernels: one action of the skid-steer robot, with slip,
-collisions and reward (SPEC §1–3). The Gymnasium env (through
-:func:`skidnav.sim.task.step_arrays`), the batch simulator, the fused trainers all
-call :func:`transition`, and the simulated robot server
-(:func:`skidnav.sim.task.drive_substep`) its sub-step, so there is one
-implementation of the dynamics.
+"""The navigation MDP as compiled kernels: one action of the skid-steer robot, with slip, collisions
+and reward (Alhawary (2020), App. A.1; docs/simulator.md). The Gymnasium env (through
+:func:`skidnav.sim.task.step_arrays`), the batch simulator, the fused trainers all call
+:func:`transition`, and the simulated robot server (:func:`skidnav.sim.task.drive_substep`) its
+sub-step, so there is one implementation of the dynamics.
 
 One action = ``substeps`` sub-steps of ``dt`` seconds. In each sub-step (:func:`substep`), with the
 robot in coarse region ρ at simulated time t:
@@ -13,11 +12,10 @@ robot in coarse region ρ at simulated time t:
    [0, 1) (two per sub-step: left, right). Callers fill ``noise`` with ``rng.random(2·substeps)``
    (the env) or the same draws one by one inside a compiled loop (the trainers): same stream,
    same numbers, and no Generator crosses the Python/numba boundary on every step;
-3. the ICR model with the region's x_ICR[ρ], effective wheel radius r[ρ] and half track c[ρ]
-   (the robot's own unless the floor was calibrated, :mod:`skidnav.robot.floors`) gives
-   (v_x, v_y, yaw_rate); the robot's integrator (explicit Euler
-   or the exact constant-twist step, ``RobotParams.integrator``) advances the pose, which is
-   clipped to the arena;
+3. the ICR model with the region's x_ICR[ρ], effective wheel radius r[ρ] and half track c[ρ] (the
+   robot's own unless the floor was calibrated, :mod:`skidnav.robot.floors`) gives (v_x, v_y,
+   yaw_rate); the robot's integrator (explicit Euler or the exact constant-twist step,
+   ``RobotParams.integrator``) advances the pose, which is clipped to the arena;
 4. if the new position lies in a wall cell the motion stops: the position stays at the last free
    sub-step, the heading of the colliding sub-step is kept, and the action is a collision;
    otherwise the sub-step is logged as (ρ, ω_L_cmd, ω_R_cmd, v_x, v_y, yaw_rate).
@@ -310,10 +308,11 @@ def simulate_action(
 
 @inline_jit
 def action_reward(rewards: RewardScheme, at_goal: bool, collided: bool, variance: float) -> float:
-    """The reward of an action (SPEC §3): ``rewards.goal`` if it ended in the goal cell (the
-    episode terminates), else ``rewards.collision`` after a collision, else ``rewards.step −
-    rewards.variance_weight · variance``, ``variance`` [rad²/s²] being the wheel-speed variance of
-    the region where it ended (whichever estimate the caller uses)."""
+    """The reward of an action (Alhawary (2020), App. A.1.2; docs/simulator.md): ``rewards.goal`` if
+    it ended in the goal cell (the episode terminates), else ``rewards.collision`` after a
+    collision, else ``rewards.step − rewards.variance_weight · variance``, ``variance`` [rad²/s²]
+    being the wheel-speed variance of the region where it ended (whichever estimate the caller
+    uses)."""
     if at_goal:
         return rewards.goal
     if collided:

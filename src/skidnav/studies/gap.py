@@ -21,7 +21,7 @@ from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.report.analysis import aggregate, cells, convergence_table
 from skidnav.experiments.store import ResultStore
-from skidnav.experiments.trial import build_map
+from skidnav.experiments.trial import config_map
 from skidnav.world.discretization import Discretization
 
 GAP_METRICS = (
@@ -54,7 +54,7 @@ def grid_text(config: ExperimentConfig, label: str, map_label: str) -> str:
     levels = agent.discretization
     if not levels:
         spec = next(m for m in config.maps if m.label == map_label)
-        shape = build_map(spec, np.random.default_rng(0)).shape
+        shape = config_map(spec, np.random.default_rng(0)).shape
         levels = (*shape, Discretization().n_headings)
     return " × ".join(str(v) for v in levels)
 

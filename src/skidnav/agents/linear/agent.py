@@ -7,16 +7,15 @@ float64 (n_actions, n_features), ``q(s, a) = Σ w[a, active features of s]``. Ev
 comes from its ``numpy.random.Generator``; the updates are compiled kernels
 (:mod:`skidnav.agents.linear.updates`).
 
-Contract (as the tabular agents', on observations): ``act(obs)`` ε-greedy with uniform
-tie-breaking — except right after ``observe`` of a non-terminal step whose agent already chose
-the next action (Sarsa(λ) needs a′ for its update): then ``act(next_obs)`` returns that action,
-so behaviour and update agree; ``greedy_action(obs)`` the lowest-index greedy action (draws
-nothing); ``observe(obs, action, reward, next_obs, terminated, truncated, info)`` learns from
-one real step (bootstraps unless terminated, so a time limit still bootstraps; the signature of
-:class:`skidnav.agents.training.Learner`); ``end_episode()`` decays ε and
-forgets the episode (the chosen next action, eligibility traces); ``save(path)`` writes
-``path.npz`` and ``path.json`` (never pickle), read back by
-:func:`skidnav.agents.linear.registry.load_linear_agent`.
+Contract (as the tabular agents', on observations): ``act(obs)`` ε-greedy with uniform tie-breaking
+— except right after ``observe`` of a non-terminal step whose agent already chose the next action
+(Sarsa(λ) needs a′ for its update): then ``act(next_obs)`` returns that action, so behaviour and
+update agree; ``greedy_action(obs)`` the lowest-index greedy action (draws nothing);
+``observe(obs, action, reward, next_obs, terminated, truncated, info)`` learns from one real step
+(bootstraps unless terminated, so a time limit still bootstraps; the signature of
+:class:`skidnav.agents.training.Learner`); ``end_episode()`` decays ε and forgets the episode (the
+chosen next action, eligibility traces); ``save(path)`` writes ``path.npz`` and ``path.json``
+(never pickle), read back by :func:`skidnav.agents.linear.registry.load_linear_agent`.
 """
 
 from __future__ import annotations

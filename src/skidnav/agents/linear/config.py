@@ -1,8 +1,7 @@
 """Hyperparameters of the linear agents: frozen dataclasses validated on construction.
 
 They extend the tabular :class:`~skidnav.agents.tabular.config.QLearningConfig` (α, γ, ε and its
-decay,
-the initial value, the same checks and ``from_mapping``) with the tile coder:
+decay, the initial value, the same checks and ``from_mapping``) with the tile coder:
 :class:`LinearConfig` ⊂ :class:`LinearSarsaConfig` and :class:`LinearDynaConfig`.
 
 >>> LinearConfig(tiles=[4, 4, 8]).tiles

@@ -10,16 +10,15 @@ After each real step (s, a, r, s′) with the env's ``info``:
    buffer, row for row beside the features;
 3. what the tabular ``dyna-kinematic`` learns from the step, with its own code
    (:mod:`skidnav.agents.tabular.model_based`, :mod:`skidnav.agents.tabular.kinematic_planning`):
-   the free
-   sub-steps of ``info["kinematic_log"]`` fed to the per-region Bayesian ridge
+   the free sub-steps of ``info["kinematic_log"]`` fed to the per-region Bayesian ridge
    :class:`~skidnav.models.kinematic.KinematicModel`; the reward into the reward statistics of its
    outcome (free step by region, collision, goal arrival); the goal cell of a termination and the
    wall cell a collision ran into (guessed from the pose) marked as known;
 4. ``kinematic_steps`` updates of
-:func:`skidnav.agents.linear.kinematic_planning.kinematic_planning`:
-   a remembered pose perturbed by a Gaussian, a random action, the next pose predicted by the
-   kinematic model against the known walls and goals, the learned mean reward, and the
-   Q-learning update of the two poses' observations.
+   :func:`skidnav.agents.linear.kinematic_planning.kinematic_planning`: a remembered pose perturbed
+   by a Gaussian, a random action, the next pose predicted by the kinematic model against the known
+   walls and goals, the learned mean reward, and the Q-learning update of the two poses'
+   observations.
 
 At the end of an episode the kinematic model refits on its schedule (as ``dyna-kinematic``'s).
 The geometry (robot, discretization, map for the range readings, goal cell) comes from the
@@ -335,9 +334,8 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
         counters[kp.EPISODE_LENGTH] = 0  # the episode's pairs are not kept
 
     def plan_kinematic(self, n_updates: int) -> int:
-        """``n_updates`` kinematic planning updates from the remembered poses; returns how
-        many updated a value
-        (:func:`~skidnav.agents.linear.kinematic_planning.kinematic_planning`)."""
+        """``n_updates`` kinematic planning updates from the remembered poses; returns how many
+        updated a value (:func:`~skidnav.agents.linear.kinematic_planning.kinematic_planning`)."""
         assert self.kinematic is not None
         config = self._config
         settings = KinematicPlanning(

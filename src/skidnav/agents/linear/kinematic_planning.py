@@ -1,9 +1,9 @@
 """Compiled planning of ``linear-dyna-kinematic``: Q-learning updates of linear action values on
 continuous poses imagined near visited ones and moved by the learned kinematic model.
 
-The thesis's kinematic-model planning (SPEC §4 item 3;
-:mod:`skidnav.agents.tabular.kinematic_planning`
-for the tabular agents) carried to tile-coded continuous observations. One planning update
+The thesis's kinematic-model planning (Alhawary (2020), ch. 7;
+:mod:`skidnav.agents.tabular.kinematic_planning` for the tabular agents) carried to tile-coded
+continuous observations (docs/agents/linear-dyna.md). One planning update
 (:func:`kinematic_planning`):
 
 1. a pose (x [m], y [m], heading [rad]) of the recent-state memory drawn uniformly

@@ -1,8 +1,7 @@
 """Linear agents by name: :func:`make_linear_agent`, :func:`load_linear_agent`.
 
 The same convention as :mod:`skidnav.agents.tabular.registry` (each module defines ``AGENT_NAME``
-and
-``AGENT_CLASS``, imported only when asked for), for agents on ``Box`` observations.
+and ``AGENT_CLASS``, imported only when asked for), for agents on ``Box`` observations.
 
 >>> import numpy as np
 >>> from gymnasium.spaces import Box

@@ -2,11 +2,10 @@
 
 The goal tracker reads only the goal's distance d [m] and bearing β (cos β, sin β) of the
 ``"features"`` observation (:mod:`skidnav.sim.features`) and ignores the lidar ranges: like the
-discrete goal-seeker of :mod:`skidnav.studies.generalisation`, what it achieves on a map
-measures how open the straight line from start to goal is, not what a policy can learn. It meets
+discrete goal-seeker of :mod:`skidnav.studies.generalisation`, what it achieves on a map measures
+how open the straight line from start to goal is, not what a policy can learn. It meets
 :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`, so it runs wherever a learned
-continuous
-policy does (the continuous env, ``skidnav robot run --policy goal-tracker``).
+continuous policy does (the continuous env, ``skidnav robot run --policy goal-tracker``).
 
 The control law, a proportional point-stabilising controller in the spirit of the kinematic
 position control of a unicycle (Siegwart, Nourbakhsh & Scaramuzza (2011), *Introduction to

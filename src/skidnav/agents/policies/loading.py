@@ -1,11 +1,10 @@
 """Saved continuous policies by file format: :func:`load_policy` and :data:`POLICY_LOADERS`.
 
 A learner that hands out :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy` objects
-saves
-them as a JSON file (``NAME.json``, beside whatever arrays it needs, e.g. ``NAME.npz``) whose
-``"format"`` field names the learner's format. :func:`load_policy` reads that field and hands
-the file to the loader registered for it, so ``skidnav robot run --policy-file NAME.json`` runs
-any learner's policy without knowing the learner.
+saves them as a JSON file (``NAME.json``, beside whatever arrays it needs, e.g. ``NAME.npz``) whose
+``"format"`` field names the learner's format. :func:`load_policy` reads that field and hands the
+file to the loader registered for it, so ``skidnav robot run --policy-file NAME.json`` runs any
+learner's policy without knowing the learner.
 
 To register a format, add ``"FORMAT": "package.module:function"`` to :data:`POLICY_LOADERS`;
 the module is imported only when a file of that format is loaded. The function takes the path

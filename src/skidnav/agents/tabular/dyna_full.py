@@ -1,5 +1,6 @@
 """The thesis's combination: Dyna-Q with the multinomial model, kinematic-model planning on pairs
-never visited, and planning prioritized around the shortest discovered trajectories (SPEC §4).
+never visited, and planning prioritized around the shortest discovered trajectories
+(Alhawary (2020), ch. 7).
 
 Each planning update, once a successful trajectory exists, takes with probability
 ``trajectory_share`` the next pair of the trajectory sweeps (backward from the goal, then the
@@ -15,7 +16,8 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from skidnav.agents.tabular.config import QLearningConfig
-from skidnav.agents.tabular.model_based import DynaKinematicConfig, ModelBasedAgent
+from skidnav.agents.tabular.dyna_kinematic import DynaKinematicConfig
+from skidnav.agents.tabular.model_based import ModelBasedAgent
 from skidnav.agents.tabular.trajectory_prioritized import TrajectoryPrioritizedConfig
 
 

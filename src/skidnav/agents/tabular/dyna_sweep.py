@@ -71,9 +71,8 @@ class DynaSweepAgent(ModelBasedAgent):
     def end_episode(self) -> None:
         """As :meth:`ModelBasedAgent.end_episode`, then, once a goal is known, solve the models
         again if the episode changed their structure (a wall found or cleared, a goal found, a
-        kinematic refit);
-        what else the episode taught (new pairs, new counts) is left to the per-step planning
-        until the next solution."""
+        kinematic refit); what else the episode taught (new pairs, new counts) is left to the
+        per-step planning until the next solution."""
         super().end_episode()
         structure = self._structure()
         if not self.planner.goals.any() or structure == self._solved:

@@ -1,5 +1,6 @@
 """Compiled parts of the thesis's model-based agents: kinematic-model planning on pairs never
-visited and planning prioritized around the shortest discovered trajectories (SPEC §4 items 3–4).
+visited and planning prioritized around the shortest discovered trajectories (Alhawary (2020),
+ch. 7; docs/agents/dyna-kinematic.md, docs/agents/trajectory-prioritized.md).
 
 One planner (:class:`PlannerArrays`) serves ``dyna-kinematic``, ``trajectory-prioritized`` and
 ``dyna-full``; their configs only change the shares of the three kinds of planning update
@@ -7,8 +8,7 @@ One planner (:class:`PlannerArrays`) serves ``dyna-kinematic``, ``trajectory-pri
 
 * **trajectory** — the next pair of the sweep lists built from the best trajectories (built in
   Python, :mod:`skidnav.agents.tabular.trajectory_prioritized`): half of this share walks the
-  trajectory
-  pairs (backward from the goal), half walks their neighbourhood;
+  trajectory pairs (backward from the goal), half walks their neighbourhood;
 * **frontier** (kinematic) — a visited pair drawn uniformly, a random action predicted from its
   state by the kinematic model, and a random action at the predicted state: so the updates reach
   the states one predicted step around the visited set;

@@ -1,21 +1,12 @@
-"""Dyna-Q with the multinomial model plus a learned kinematic model (thesis; SPEC §4 item 3).
+"""The shared machinery of the model-based tabular agents (``dyna-kinematic``,
+``trajectory-prioritized``, ``dyna-full``, ``dyna-sweep``): :class:`ModelBasedAgent`, a Dyna-Q
+agent with the multinomial model, an optional kinematic model and optional sweeps of the best
+trajectories found, all learned in one compiled step (:func:`model_based_step`); the saved
+geometry and planner, and their checks.
 
-After each real step (s, a, r, s′) with the env's ``info``:
-
-1. direct RL: one TD update of ``q[s, a]``;
-2. model learning: count the transition in the multinomial model; feed the free sub-steps of
-   ``info["kinematic_log"]`` to the per-region Bayesian ridge kinematic model; record the reward
-   in the reward statistics; weigh the map's evidence — the cell the robot ended in is free, the
-   guessed wall cell of a collision is a wall — and mark the goal cell of a termination (the
-   kinematic table around cells that changed is recomputed at the end of the episode);
-3. planning: ``planning_steps`` updates. With probability ``kinematic_share`` an update goes to the
-   *frontier*: a visited pair drawn uniformly, a random action predicted from its state, and a
-   random action at the predicted state; otherwise to a uniformly drawn visited pair (Dyna-Q).
-   Pairs visited are answered by the multinomial model, pairs never visited by the kinematic
-   table (see :mod:`skidnav.agents.tabular.kinematic_planning`).
-
-At the end of each episode the kinematic model refits on its schedule and, if it did, the whole
-prediction table ``pred_next[s, a]`` is recomputed. See docs/agents/dyna-kinematic.md.
+Each subclass switches parts on (``uses_kinematic``, ``uses_trajectories``) and names its config:
+docs/agents/dyna-kinematic.md, docs/agents/trajectory-prioritized.md, docs/agents/dyna-full.md,
+docs/agents/dyna-sweep.md.
 """
 
 from __future__ import annotations
@@ -23,7 +14,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, fields
 from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
@@ -31,13 +22,7 @@ import numpy as np
 from skidnav._jit import jit
 from skidnav.agents.learning import PLANNING_UPDATES, Experience, learning_step
 from skidnav.agents.tabular import kinematic_planning as kp
-from skidnav.agents.tabular.config import (
-    MODEL_BASED_PLANNING_MODE,
-    DynaQConfig,
-    KinematicModelFields,
-    QLearningConfig,
-    _check,
-)
+from skidnav.agents.tabular.config import KinematicModelFields, QLearningConfig
 from skidnav.agents.tabular.dyna_q import DynaQAgent
 from skidnav.errors import shown
 from skidnav.models.kinematic import KinematicModel
@@ -49,25 +34,6 @@ from skidnav.sim.q_values import td_update, visit_step_size
 from skidnav.world.discretization import Discretization, GridShape
 
 logger = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class DynaKinematicConfig(DynaQConfig, KinematicModelFields):
-    """Dyna-Q with kinematic-model planning (:class:`KinematicModelFields` for the model)."""
-
-    planning_steps: int = 10
-    """Planning updates n after each real step."""
-    planning_mode: str = MODEL_BASED_PLANNING_MODE
-    """How the model answers (:data:`~skidnav.agents.tabular.config.MODEL_BASED_PLANNING_MODE`)."""
-    kinematic_share: float = 0.5
-    """Share of planning updates sent to the frontier of the visited set, in [0, 1]."""
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        _check(
-            0.0 <= self.kinematic_share <= 1.0, "kinematic_share in [0, 1]", self.kinematic_share
-        )
-        self.kinematic_config()  # validates the kinematic fields
 
 
 def geometry_from_task(task: NavigationTask) -> tuple[RobotParams, Discretization]:
@@ -157,18 +123,17 @@ def model_based_step(
 
 
 class ModelBasedAgent(DynaQAgent):
-    """Shared machinery of ``dyna-kinematic``, ``trajectory-prioritized`` and ``dyna-full``:
-    multinomial model, optional kinematic model, optional best-trajectory sweeps.
+    """Shared machinery of ``dyna-kinematic``, ``trajectory-prioritized``, ``dyna-full`` and
+    ``dyna-sweep``: multinomial model, optional kinematic model, optional best-trajectory sweeps.
 
     Context keyword arguments (from :func:`~skidnav.agents.tabular.registry.make_agent`): ``task``
-    (a
-    :class:`NavigationTask`, e.g. ``env.unwrapped.task``) or ``robot`` and ``discretization``.
+    (a :class:`NavigationTask`, e.g. ``env.unwrapped.task``) or ``robot`` and ``discretization``.
     Without a discretization the agent has no geometry, whatever ``n_states`` is: no kinematic
     model, no spatial neighbours. With one, kinematic planning starts at the first real step whose
     ``info`` carries a ``kinematic_log`` (an env that never supplies one gets plain replay, not
     predictions of the untrained prior). ``true_kinematics``: the simulator's expected body
-    velocities, float64 (n_regions, 4, 3) (the kinematic env's ``true_kinematics``), which an
-    agent whose ``kinematic_model`` is "true" plans with (:func:`hold_kinematic_model`).
+    velocities, float64 (n_regions, 4, 3) (the kinematic env's ``true_kinematics``), which an agent
+    whose ``kinematic_model`` is "true" plans with (:func:`hold_kinematic_model`).
     """
 
     uses_kinematic: ClassVar[bool] = False
@@ -410,9 +375,9 @@ def hold_kinematic_model(
 ) -> None:
     """Make ``model`` the one an agent's ``kinematic_model`` names
     (:class:`~skidnav.agents.tabular.config.KinematicModelFields`): "learned" leaves it learning,
-    "prior"
-    holds the prior, "true" holds ``true_kinematics`` (float64 (n_regions, 4, 3), the simulator's
-    expected body velocities; ValueError when there are none, as on a physics or real robot)."""
+    "prior" holds the prior, "true" holds ``true_kinematics`` (float64 (n_regions, 4, 3), the
+    simulator's expected body velocities; ValueError when there are none, as on a physics or real
+    robot)."""
     if source == "prior":
         model.hold()
     elif source == "true":
@@ -533,16 +498,3 @@ def _dataclass_from_json(cls: Any, value: Any, where: str) -> Any:
         if not ok:
             raise ValueError(f"expected {where}.{name} like {default!r}, got {shown(item)}")
     return cls(**value)
-
-
-class DynaKinematicAgent(ModelBasedAgent):
-    """Dyna-Q whose planning also reaches never-visited pairs through the kinematic model."""
-
-    name: ClassVar[str] = "dyna-kinematic"
-    config_class: ClassVar[type[QLearningConfig]] = DynaKinematicConfig
-    uses_kinematic: ClassVar[bool] = True
-    uses_trajectories: ClassVar[bool] = False
-
-
-AGENT_NAME = "dyna-kinematic"
-AGENT_CLASS = DynaKinematicAgent

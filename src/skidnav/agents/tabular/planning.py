@@ -1,10 +1,9 @@
 """Compiled planning loops over the multinomial model (Sutton & Barto (2018) ch. 8).
 
-Each loop applies the one update rule of :mod:`skidnav.sim.q_values` (``update_toward``) to
-targets computed by :func:`skidnav.models.multinomial_kernels.model_target`, and returns the number
-of
-value updates it made. All draws are ``rng.random()``. Prioritized sweeping of a most-probable
-model averages a tie over its tied outcomes instead of drawing it (:func:`sweep`).
+Each loop applies the one update rule of :mod:`skidnav.sim.q_values` (``update_toward``) to targets
+computed by :func:`skidnav.models.multinomial_kernels.model_target`, and returns the number of value
+updates it made. All draws are ``rng.random()``. Prioritized sweeping of a most-probable model
+averages a tie over its tied outcomes instead of drawing it (:func:`sweep`).
 """
 
 from __future__ import annotations
@@ -154,14 +153,13 @@ def sweep(
     tied pair's priority falls below θ like any other's (with a redrawn tie it did not, and the
     queue cycled over the tied pairs while the others waited).
 
-    One loop body computes every target, a queued pair's for its update and a predecessor's for
-    its priority, over arrays bound once and with one exit: an inlined helper that binds an array
-    it last uses in a branch (or binds the 21-array model) pays an atomic increment and decrement
-    per array at every call (see :mod:`skidnav.models.multinomial_kernels`). On the obstacles arena
-    a
-    quarter of the predecessors are tied; their target as a compiled call on the model cost
-    ~0.3 µs each, half of the sweep's time. Pair slots and keys index through
-    ``unsigned_index`` (no wrap of negative indices)."""
+    One loop body computes every target, a queued pair's for its update and a predecessor's for its
+    priority, over arrays bound once and with one exit: an inlined helper that binds an array it
+    last uses in a branch (or binds the 21-array model) pays an atomic increment and decrement per
+    array at every call (see :mod:`skidnav.models.multinomial_kernels`). On the obstacles arena a
+    quarter of the predecessors are tied; their target as a compiled call on the model cost ~0.3 µs
+    each, half of the sweep's time. Pair slots and keys index through ``unsigned_index`` (no wrap of
+    negative indices)."""
     priority, item, position, size = heap.priority, heap.item, heap.position, heap.size
     pair_table, pair_key, entry_pair = model.pair_table, model.pair_key, model.entry_pair
     target_table, target_state = model.target_table, model.target_state

@@ -65,9 +65,8 @@ def prioritized_sweeping_step(
     rng: np.random.Generator,
 ) -> None:
     """The learning step of prioritized sweeping
-    (:func:`~skidnav.agents.tabular.planning.sweep_step`,
-    or ``sampled_sweep_step`` for the sampling modes: model count, priority of the pair, then up
-    to ``planning_steps`` pops)."""
+    (:func:`~skidnav.agents.tabular.planning.sweep_step`, or ``sampled_sweep_step`` for the sampling
+    modes: model count, priority of the pair, then up to ``planning_steps`` pops)."""
     s = settings
     if s.mode == MOST_PROBABLE:  # inlined, its arrays bound in this branch only
         updates = sweep_step(

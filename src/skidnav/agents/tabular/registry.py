@@ -1,8 +1,7 @@
 """Agents by name: :func:`make_agent`, :func:`load_agent`, :func:`available_agents`.
 
-Convention for an agent module (docs/agents/core.md): it defines ``AGENT_NAME`` (the registry
-name) and ``AGENT_CLASS`` (a :class:`~skidnav.agents.tabular.agent.TabularAgent` subclass whose
-``name``
+Convention for an agent module (docs/agents/core.md): it defines ``AGENT_NAME`` (the registry name)
+and ``AGENT_CLASS`` (a :class:`~skidnav.agents.tabular.agent.TabularAgent` subclass whose ``name``
 equals ``AGENT_NAME`` and whose ``config_class`` is its frozen config dataclass). The registry maps
 names to module paths and imports a module only when its agent is asked for.
 
@@ -31,7 +30,7 @@ AGENT_MODULES: dict[str, str] = {
     "dyna-q": "skidnav.agents.tabular.dyna_q",
     "dyna-q-plus": "skidnav.agents.tabular.dyna_q_plus",
     "prioritized-sweeping": "skidnav.agents.tabular.prioritized_sweeping",
-    "dyna-kinematic": "skidnav.agents.tabular.model_based",
+    "dyna-kinematic": "skidnav.agents.tabular.dyna_kinematic",
     "trajectory-prioritized": "skidnav.agents.tabular.trajectory_prioritized",
     "dyna-full": "skidnav.agents.tabular.dyna_full",
     "dyna-sweep": "skidnav.agents.tabular.dyna_sweep",

@@ -1,5 +1,5 @@
-"""Dyna-Q with planning prioritized around the shortest discovered trajectories (thesis idea,
-our procedure; SPEC §4 item 4).
+"""Dyna-Q with planning prioritized around the shortest discovered trajectories (the idea of
+Alhawary (2020), §4.6.2 and ch. 7; the procedure is ours, docs/agents/trajectory-prioritized.md).
 
 The thesis found that the *order* of planning updates matters and organised them around the
 shortest start→goal trajectories found so far; its exact procedure is not known. Ours

@@ -1,17 +1,15 @@
 """The continuous optimum of a world: the oracle on fine state grids, and the path length [m]
 of its best policy — the reference of the discretization gap (docs/discretization-gap.md).
 
-For each grid of ``[experiment] optimum_grids`` (n_x, n_y, n_headings; a refinement of the
-map's cells, :mod:`skidnav.experiments.reference.finegrid`) the oracle's model of the world is
-sampled and
+For each grid of ``[experiment] optimum_grids`` (n_x, n_y, n_headings; a refinement of the map's
+cells, :mod:`skidnav.experiments.reference.finegrid`) the oracle's model of the world is sampled and
 solved on that grid (:func:`skidnav.experiments.reference.oracle.solve`, the world's own goal cell
-and
-start pose), which gives V*(start), the expected actions of the best policy over that grid's
-states under the sampled model. Its greedy policy is then rolled out ``optimum_rollouts`` times
-in the world itself (the env on poses, each rollout from a reset with its own seed, at most the
-run's action limit), and the path length [m] of each rollout that reached the goal is measured
-as the runs' final length is (:func:`skidnav.experiments.metrics.path_length`, through the poses
-after each action).
+and start pose), which gives V*(start), the expected actions of the best policy over that grid's
+states under the sampled model. Its greedy policy is then rolled out ``optimum_rollouts`` times in
+the world itself (the env on poses, each rollout from a reset with its own seed, at most the run's
+action limit), and the path length [m] of each rollout that reached the goal is measured as the
+runs' final length is (:func:`skidnav.experiments.metrics.path_length`, through the poses after each
+action).
 
 V*(start) of a finer grid is not a bound on what a policy of the pose can do, and a finer grid's
 policy is not always better in the world: a policy over cells can press the robot against a wall
@@ -36,14 +34,14 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from skidnav.agents.training import greedy_path
 from skidnav.errors import CorruptFileError
+from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.metrics import path_length
 from skidnav.experiments.reference.finegrid import FineStates, TablePolicy, state_grid
 from skidnav.experiments.reference.oracle import _key, cache_dir, solve, write_cache
-from skidnav.experiments.trial import ExperimentRun, greedy_rollout, make_env
 from skidnav.savedfile import ArraySpec, SavedArchive
 from skidnav.seeding import seed_int
-from skidnav.world.grid import GridMap
 
 logger = logging.getLogger(__name__)
 
@@ -82,7 +80,7 @@ def compute_optimum(
     policy, fine = TablePolicy(solution.q), FineStates(nav, grid)
     lengths, actions = [], []
     for rollout_seed in seeds:
-        poses, reached = greedy_rollout(policy, fine, int(rollout_seed), max_steps)
+        poses, reached = greedy_path(policy, fine, max_steps, seed=int(rollout_seed))
         if reached:
             lengths.append(path_length(poses))
             actions.append(len(poses) - 1)
@@ -151,19 +149,14 @@ def optimum_columns(optima: Sequence[Optimum]) -> dict[str, float]:
 
 
 def world_optima(
-    spec: ExperimentRun,
-    grid_map: GridMap,
-    slip_seed: int,
-    stream: np.random.SeedSequence,
-    max_steps: int,
+    config: ExperimentConfig, env: Any, stream: np.random.SeedSequence, max_steps: int
 ) -> dict[str, float]:
-    """The summary columns of the continuous optimum of the run's world on each of the config's
-    ``optimum_grids`` (:mod:`skidnav.experiments.reference.optimum`), drawn from the world's oracle
-    ``stream`` (its children: the sampling seed, then one per rollout): the same for every agent
-    of a world."""
-    config = spec.config
+    """The summary columns of the continuous optimum of a run's world on each of ``config``'s
+    ``optimum_grids`` (module docs): ``env`` is the run's skid-steer env on poses
+    (:func:`skidnav.experiments.trial.make_env` with ``observation="pose"``), the seeds are drawn
+    from the world's oracle ``stream`` (its children: the sampling seed, then one per rollout), so
+    they are the same for every agent of a world."""
     seeds = [seed_int(child) for child in stream.spawn(1 + config.optimum_rollouts)]
-    env = make_env(spec, grid_map, slip_seed, observation="pose")
     optima = [
         load_or_compute_optimum(env, levels, config.optimum_samples, seeds[0], seeds[1:], max_steps)
         for levels in config.optimum_grids

@@ -24,10 +24,10 @@ For a skid-steer world (map, slip field, robot, discretization) the oracle
    from one exact pose (an action that works on average over a cell fails from that point), so
    these rollouts are a diagnostic, not the reference.
 
-The oracle keeps both greedy policies: ``q``, the action-optimal one (L*, ``rollout_lengths``),
-and ``cost_q``, the cost-optimal one (C*, ``rollout_costs``), whose objective is the agents'
-own. Its costs use the slip field's true variance η²/12 even when
-the env rewards the observed variance (``variance="observed"``), which estimates it.
+The oracle keeps both greedy policies: ``q``, the action-optimal one (L*, ``rollout_lengths``), and
+``cost_q``, the cost-optimal one (C*, ``rollout_costs``), whose objective is the agents' own. Its
+costs use the slip field's true variance η²/12 even when the env rewards the observed variance
+(``variance="observed"``), which estimates it.
 
 Results are cached on disk (``$SKIDNAV_CACHE_DIR``, default ``~/.cache/skidnav``) under a hash of
 everything they depend on (the task's arrays, the start pose, the sample count and seed, the
@@ -36,13 +36,12 @@ after its arrays are checked against the world (a damaged file is computed again
 of every agent on one world compute it once, in any process. The slip field is sampled at time
 0: with a drifting floor the oracle is that of the initial floor.
 
-**On a finer state grid** (``grid``: an agent's ``discretization`` that refines the map's cells,
-or a grid of the continuous optimum, :mod:`skidnav.experiments.reference.optimum`) the same steps
-run on
-the world's task refined to that grid (:func:`skidnav.experiments.reference.finegrid.refined_task`:
-the
-same walls in metres), and every fine state inside the map's goal cell counts as the goal, so
-the task stays the world's own: only the states a policy sees are finer.
+**On a finer state grid** (``grid``: an agent's ``discretization`` that refines the map's cells, or
+a grid of the continuous optimum, :mod:`skidnav.experiments.reference.optimum`) the same steps run
+on the world's task refined to that grid
+(:func:`skidnav.experiments.reference.finegrid.refined_task`: the same walls in metres), and every
+fine state inside the map's goal cell counts as the goal, so the task stays the world's own: only
+the states a policy sees are finer.
 """
 
 from __future__ import annotations
@@ -231,10 +230,9 @@ def compute_oracle(
     """The oracle of ``env``'s world (module docs), without the cache.
 
     Args:
-        env: a ``skidnav/SkidSteerNav-v0`` env (wrapped or not) with discrete observations, or
-            a :class:`~skidnav.experiments.reference.finegrid.FineStates` view of one (the oracle
-            on its
-            finer grid); its evaluation resets are used for the rollouts.
+        env: a ``skidnav/SkidSteerNav-v0`` env (wrapped or not) with discrete observations, or a
+            :class:`~skidnav.experiments.reference.finegrid.FineStates` view of one (the oracle on
+            its finer grid); its evaluation resets are used for the rollouts.
         n_samples: sampled poses per state (each tries every action), ≥ 1.
         seed: seed of the sampling generator.
         seeds: evaluation seeds (one rollout each).

@@ -3,9 +3,8 @@ every agent's evaluation starts, the calibration of the convergence test
 (:mod:`skidnav.experiments.metrics`).
 
 The oracle's L* is the expected number of actions of the best policy over cells when the poses
-within a cell are spread (:mod:`skidnav.experiments.reference.oracle`). Every evaluation starts
-from one
-exact pose, from which a policy can do better than that expectation, and from which the oracle's
+within a cell are spread (:mod:`skidnav.experiments.reference.oracle`). Every evaluation starts from
+one exact pose, from which a policy can do better than that expectation, and from which the oracle's
 own greedy cell policy can loop for ever (an action that works on average over a cell hits a wall
 from that point, the robot is put back in the same cell, and the same action is chosen again).
 So each world also gets the **start plan**: the fewest-actions action sequence from the exact

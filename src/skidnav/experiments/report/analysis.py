@@ -1,4 +1,5 @@
-"""Aggregates over seeds and the comparisons behind the thesis claims (SPEC §5).
+"""Aggregates over seeds and the comparisons behind the thesis claims (Alhawary (2020), ch. 7;
+docs/experiments.md, "Statistics").
 
 Every interval is a seeded percentile bootstrap (:mod:`skidnav.stats`); each table
 cell gets its own generator keyed by the root seed and the cell's labels, so the numbers do not

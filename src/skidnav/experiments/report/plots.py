@@ -1,6 +1,5 @@
 """Figures of an experiment, as PNG bytes (with :mod:`skidnav.studies.continuity.trajectory_plot`,
-the
-only modules of skidnav that import matplotlib).
+the only modules of skidnav that import matplotlib).
 
 Every figure function takes the tidy tables (or run arrays) and returns PNG bytes, so the report
 embeds them without touching matplotlib. The Agg backend is forced: no display is needed.
@@ -29,7 +28,8 @@ from skidnav.experiments.store import TrialResult
 from skidnav.stats import curve_band
 
 ARENA = (0.62, 0.505)
-"""Arena width and height [m] (SPEC §1)."""
+"""Arena width and height [m] (the thesis arena, Alhawary (2020), App. A.1.1; as
+:class:`~skidnav.robot.params.RobotParams`)."""
 DPI = 90
 
 

@@ -1,9 +1,9 @@
 """The "thesis reproduction" section of the report: each thesis claim next to what was measured.
 
-Claims (SPEC §5, thesis): model-based agents converge up to 16× faster than Q-learning; success
-rate rises by up to 70 %; no significant difference in final trajectory length; a rough floor
-about doubles the success rate of a slippery one. The verdicts only read the intervals; nothing
-is tuned to agree with the thesis.
+Claims (Alhawary (2020), ch. 7): model-based agents converge up to 16× faster than Q-learning;
+success rate rises by up to 70 %; no significant difference in final trajectory length; a rough
+floor about doubles the success rate of a slippery one. The verdicts only read the intervals;
+nothing is tuned to agree with the thesis.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""The real-time loop of a tabular agent: it acts on a robot and learns online (SPEC §6,
-docs/realtime.md).
+"""The real-time loop of a tabular agent: it acts on a robot and learns online
+(docs/realtime.md).
 
 One action = ``substeps`` control periods of ``period`` seconds of robot time (``period /
 time_scale`` wall seconds) of the discrete action's wheel speeds

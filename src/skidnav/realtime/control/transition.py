@@ -9,7 +9,7 @@ the body-frame finite differences consistent with the explicit-Euler model are
 
 keyed by the coarse region of p₀, with the commanded wheel speeds of the action.
 
-Reward: the env's rule, :func:`skidnav.sim.navigation.action_reward` (SPEC §3: +10 and
+Reward: the env's rule, :func:`skidnav.sim.navigation.action_reward` (docs/simulator.md: +10 and
 termination when the action ends in the goal cell; −10 after a collision; otherwise −1 − 10·var),
 var being the observed (thesis) variance of the wheel speeds measured during forward actions in
 the region where the action ends, corrected for pose noise (:class:`WheelSpeedStats`). A real

@@ -1,23 +1,21 @@
 """What moves the simulated robot for one control period: the kinematic model or MuJoCo physics.
 
 :class:`~skidnav.realtime.robot_server.simulated_robot.SimRobot` keeps the commands, latency, clock
-and tracker
-noise; a :class:`Dynamics` only turns (pose, wheel commands, time, two uniforms) into the pose one
-period later. Both implementations share the slip field's wheel-speed loss (each wheel loses
-u·η(ρ, t) in magnitude, u the period's uniform, η of the region under the robot, drifting as
-:func:`skidnav.sim.navigation.slip_scale` says) and the wall rule (a period that would end
-in a wall cell leaves the robot where it was, turned to its new heading):
+and tracker noise; a :class:`Dynamics` only turns (pose, wheel commands, time, two uniforms) into
+the pose one period later. Both implementations share the slip field's wheel-speed loss (each wheel
+loses u·η(ρ, t) in magnitude, u the period's uniform, η of the region under the robot, drifting as
+:func:`skidnav.sim.navigation.slip_scale` says) and the wall rule (a period that would end in a wall
+cell leaves the robot where it was, turned to its new heading):
 
 - :class:`KinematicDynamics`: the simulator's own sub-step,
   :func:`skidnav.sim.task.drive_substep` (the ICR model with x_ICR of the region).
 - :class:`PhysicsDynamics`: :meth:`skidnav.physics.mujoco_robot.PhysicsRobot.substep` — the slipped
   speeds become the set points of the MuJoCo robot's wheel servos and the physics runs for the
   period, on the floor materials of the slip preset
-  (:func:`skidnav.physics.materials.region_materials`) or one material everywhere. A blocked
-  period is undone with :meth:`~skidnav.physics.mujoco_robot.PhysicsRobot.place`, which also brings
-  the
-  body to rest (a bump stops it); so is a period that ends outside the arena (the kinematic
-  model clips the pose to the arena instead).
+  (:func:`skidnav.physics.materials.region_materials`) or one material everywhere. A blocked period
+  is undone with :meth:`~skidnav.physics.mujoco_robot.PhysicsRobot.place`, which also brings the
+  body to rest (a bump stops it); so is a period that ends outside the arena (the kinematic model
+  clips the pose to the arena instead).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The simulated robot server: a :class:`~skidnav.realtime.robot_server.simulated_robot.SimRobot`
-behind the line
-protocol (docs/protocol.md), for hardware-in-the-loop runs of the real-time platform.
+behind the line protocol (docs/protocol.md), for hardware-in-the-loop runs of the real-time
+platform.
 
 Every control period (``robot.dt`` of robot time, ``robot.dt / time_scale`` of wall time) the
 server advances the physics and sends one ``pose`` (unless dropped). It serves one client at a
@@ -10,13 +10,13 @@ stall the physics: what a client does not read queues up to ``send_limit`` bytes
 client is dropped; a read takes what has arrived, at most ``READ_LIMIT`` bytes per wake-up.
 
 What the robot answers, and when it stops on its own, is the
-:class:`~skidnav.realtime.robot_server.simulated_robot.
-Firmware` of the connection (docs/protocol.md, "What a robot must do"); the server adds the
-transport: it reads everything that arrived before handing it over as one batch (so a stalled
-robot applies only the newest command), stops the wheels when the client disconnects, and drops
-a client the firmware declares idle, so a dead controller never locks the robot. With a secret
-(``options.secret``) it authenticates every line after the client's ``hello`` and every line it
-sends (:mod:`~skidnav.realtime.link.auth`), and hangs up on a client that fails; without one,
+:class:`~skidnav.realtime.robot_server.simulated_robot.Firmware` of the connection
+(docs/protocol.md, "What a robot must do"); the server adds the transport: it reads everything that
+arrived before handing it over as one batch (so a stalled robot applies only the newest command),
+stops the wheels when the client disconnects, and drops a client the firmware declares idle, so a
+dead controller never locks the robot. With a secret (``options.secret``) it authenticates every
+line after the client's ``hello`` and every line it sends (:mod:`~skidnav.realtime.link.auth`), and
+hangs up on a client that fails; without one,
 :func:`~skidnav.realtime.robot_server.transport.bind_listener` serves loopback only.
 
 Every received command, stop, fault, wheel change, late period and connection is appended to a

@@ -6,7 +6,8 @@ One control period of ``dt`` seconds of robot time is one step of the robot's
 wheel-speed commands instead of the four actions), or the MuJoCo robot (``physics="mujoco"``):
 
 1. commands whose latency has elapsed take effect (a FIFO of (due time, ω_L, ω_R));
-2. each wheel loses U(0, η(ρ, t)) in magnitude (the slip field, possibly drifting, SPEC §2);
+2. each wheel loses U(0, η(ρ, t)) in magnitude (the slip field, possibly drifting,
+   :mod:`skidnav.robot.slip`);
 3. kinematic: the ICR model with x_ICR[ρ] gives the body twist; the robot's integrator
    (``RobotParams.integrator``: explicit Euler or the exact constant-twist step) advances the
    pose, clipped to the arena. MuJoCo: the slipped speeds are the wheel servos' set points and
@@ -32,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from skidnav.errors import UserError
-from skidnav.realtime.arena import build_map, seed_streams, start_pose
+from skidnav.realtime.arena import arena_map, seed_streams, start_pose
 from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.control.records import EventLog
 from skidnav.realtime.link import protocol as pr
@@ -171,11 +172,10 @@ def build_robot(
     floor: str | None = None,
 ) -> SimRobot:
     """A simulated robot at the start pose of the map ``map_spec`` (see
-    :func:`skidnav.realtime.arena.build_map`), its floor the slip preset ``slip`` with relative
+    :func:`skidnav.realtime.arena.arena_map`), its floor the slip preset ``slip`` with relative
     drift amplitude ``drift`` and period ``drift_period`` [s]; random streams from ``seed``.
     ``physics`` (one of :data:`~skidnav.realtime.robot_server.dynamics.PHYSICS`) chooses what moves
-    it;
-    for ``mujoco``, ``floor`` names one material for the whole floor (None: the preset's).
+    it; for ``mujoco``, ``floor`` names one material for the whole floor (None: the preset's).
 
     Raises:
         UserError: an unknown preset, physics or material.
@@ -188,7 +188,7 @@ def build_robot(
     robot = robot or RobotParams()
     grid = grid or Discretization()
     streams = seed_streams(seed)
-    grid_map = build_map(map_spec, seed, grid)
+    grid_map = arena_map(map_spec, seed, grid)
     try:
         field = make_slip_field(
             slip,

@@ -31,7 +31,7 @@ from skidnav.errors import UserError, first_line, shown
 from skidnav.experiments.config import MAX_EPISODES, MAX_SEEDS, AgentSpec, MapSpec
 from skidnav.experiments.runner import run_experiment
 from skidnav.experiments.store import ResultStore, RunLayout
-from skidnav.realtime.arena import build_map
+from skidnav.realtime.arena import arena_map
 from skidnav.realtime.config import (
     RealtimeConfig,
     RunSettings,
@@ -252,7 +252,7 @@ def build_grid(tables: Mapping[str, Any], settings: StudySettings) -> StudyGrid:
     for config in configs:
         for agent in settings.agents:
             make_config(agent, config.agents.get(agent))  # UserError if unknown or invalid
-    build_map(base.map, seed, Discretization())  # UserError if unreadable
+    arena_map(base.map, seed, Discretization())  # UserError if unreadable
     return StudyGrid(
         agents=tuple(AgentSpec(name, name) for name in settings.agents),
         maps=(_map_spec(base.map),),

@@ -27,7 +27,7 @@ import numpy as np
 
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import TrialResult
-from skidnav.realtime.arena import build_map
+from skidnav.realtime.arena import arena_map
 from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.control.loop import EXIT_INTERRUPTED
 from skidnav.realtime.control.records import EpisodeResult
@@ -106,7 +106,7 @@ def realtime_run(
     ``sim`` driver, its files in ``out``; (exit code, episode results)."""
     config = run_config(spec)
     robot, grid = RobotParams(), Discretization()
-    grid_map = build_map(config.run.map, config.run.seed, grid)
+    grid_map = arena_map(config.run.map, config.run.seed, grid)
     name = spec.agent.name
     context = agent_context(name, robot, grid)
     rng = np.random.default_rng(child_sequences(spec.run_seed.sequence(), RUN_ROLES)["agent"])

@@ -161,10 +161,10 @@ def tuning_runs(config: ExperimentConfig) -> list[ExperimentRun]:
 def run_map(spec: ExperimentRun) -> GridMap:
     """The map run ``spec`` trains on (drawn as :func:`skidnav.experiments.trial.measure_trial`
     draws it: from the first child of the world stream)."""
-    from skidnav.experiments.trial import build_map
+    from skidnav.experiments.trial import config_map
 
     map_seed = child_sequences(spec.world_seed.sequence(), WORLD_ROLES)["map"]
-    return build_map(spec.map, np.random.default_rng(map_seed))
+    return config_map(spec.map, np.random.default_rng(map_seed))
 
 
 def _map_key(grid_map: GridMap) -> tuple[Any, ...]:

@@ -1,26 +1,24 @@
 """The CMA-ES state between generations, saved so that a long search can resume exactly.
 
 A checkpoint is one file, ``NAME.npz`` (never pickle), written atomically after a generation's
-``tell``, so that a kill at any moment leaves either the old checkpoint or the new one, whole.
-It holds float64 arrays — the optimizer's moving parts, the mean m (n,), the covariance matrix
-C (n, n), the evolution paths p_σ and p_c (n,), and the learning curve so far ``records``
-(G + 1, 9) (:func:`~skidnav.agents.policies.search.curve.records_table`) — and ``meta``, uint8, the
-UTF-8
-JSON of the format, the version, the step size σ, the generation G and the search's config.
-``NAME.json``, written after it, is a copy for reading (and the mark of a search in a folder):
-the same JSON with the curve as rows. On loading it must be that copy or an older
-generation's (a kill between the two writes); anything else (an edited copy) is refused.
+``tell``, so that a kill at any moment leaves either the old checkpoint or the new one, whole. It
+holds float64 arrays — the optimizer's moving parts, the mean m (n,), the covariance matrix C
+(n, n), the evolution paths p_σ and p_c (n,), and the learning curve so far ``records`` (G + 1, 9)
+(:func:`~skidnav.agents.policies.search.curve.records_table`) — and ``meta``, uint8, the UTF-8 JSON
+of the format, the version, the step size σ, the generation G and the search's config.
+``NAME.json``, written after it, is a copy for reading (and the mark of a search in a folder): the
+same JSON with the curve as rows. On loading it must be that copy or an older generation's (a kill
+between the two writes); anything else (an edited copy) is refused.
 
-Everything else of the optimizer (weights, learning rates, the termination history) is rebuilt
-from the config, so a file can change nothing but the state, and every value is checked before
-use: σ in (0, 10³²] (cmaes caps σ there itself), every component of m below 10³² in magnitude
-(cmaes asserts it of its mean and candidates:
-:data:`~skidnav.agents.policies.search.config.MAX_PARAMETER`),
-finite paths and C, and the curve as the config's search writes it. The optimizer's own random
-generator is not saved: the search reseeds it at every generation from the root seed
+Everything else of the optimizer (weights, learning rates, the termination history) is rebuilt from
+the config, so a file can change nothing but the state, and every value is checked before use: σ in
+(0, 10³²] (cmaes caps σ there itself), every component of m below 10³² in magnitude (cmaes asserts
+it of its mean and candidates: :data:`~skidnav.agents.policies.search.config.MAX_PARAMETER`), finite
+paths and C, and the curve as the config's search writes it. The optimizer's own random generator is
+not saved: the search reseeds it at every generation from the root seed
 (:func:`skidnav.agents.policies.search.cmaes.sampler_seed`), so a resumed search draws what an
-uninterrupted one would. The termination history (``should_stop``) is not restored; the search
-stops after its generations, never on it.
+uninterrupted one would. The termination history (``should_stop``) is not restored; the search stops
+after its generations, never on it.
 
 The optimizer is ``cmaes.CMA`` (Nomura & Shibata 2024, arXiv:2402.01373); its state entries are read
 and written by name (the attributes its pickle support copies; C itself rather than the

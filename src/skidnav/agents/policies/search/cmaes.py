@@ -4,15 +4,13 @@ CMA-ES (Hansen & Ostermeier 2001; Hansen 2016, "The CMA Evolution Strategy: A Tu
 arXiv:1604.00772) samples λ parameter vectors from N(m, σ² C), ranks them by their score and
 moves m, σ and C toward the better ones. Here (docs/agents/cmaes.md):
 
-1. the parameters are those of :class:`~skidnav.agents.policies.search.tanh_policy.TanhPolicy`,
-from m = 0
-   (the policy that stands still), σ = ``sigma0``, C = I;
+1. the parameters are those of :class:`~skidnav.agents.policies.search.tanh_policy.TanhPolicy`, from
+   m = 0 (the policy that stands still), σ = ``sigma0``, C = I;
 2. each generation asks λ candidates and scores each by its mean undiscounted return over
    ``episodes_per_candidate`` real episodes (plus ``progress_weight`` × its mean gain in goal
    distance [m], 0 by default), all λ · E episodes in one vector env
    (:class:`~skidnav.agents.policies.search.rollouts.PopulationRollouts`); CMA-ES minimises, so it
-   is
-   told the negated scores; the learning curve reports plain returns;
+   is told the negated scores; the learning curve reports plain returns;
 3. every candidate of a generation meets the same E episode seeds (common random numbers: the
    ranking compares policies, not slip noise); the seeds change from one generation to the next;
 4. the distribution's mean m is the search's policy: after every ``eval_every``-th generation
@@ -155,11 +153,11 @@ class CMAESSearch:
         last one after the mean's final evaluation.
 
         The evaluations after generation g are those of
-        :func:`~skidnav.agents.policies.search.curve.
-        scheduled` (g a multiple of ``eval_every``), whatever the search's length: the records
-        and the checkpoint hold those alone, so a search resumed with more generations records
-        what one run of them would. The mean after the last generation is evaluated besides when
-        that generation is not scheduled: its record, in the result only, gets the evaluation.
+        :func:`~skidnav.agents.policies.search.curve.scheduled` (g a multiple of ``eval_every``),
+        whatever the search's length: the records and the checkpoint hold those alone, so a search
+        resumed with more generations records what one run of them would. The mean after the last
+        generation is evaluated besides when that generation is not scheduled: its record, in the
+        result only, gets the evaluation.
         """
         start = time.perf_counter() - self._clock_offset
         report = on_generation if on_generation is not None else _ignore

@@ -125,8 +125,8 @@ class SearchConfig:
     @property
     def n_parameters(self) -> int:
         """n, the parameters of the policy searched
-        (:func:`~skidnav.agents.policies.search.tanh_policy.
-        parameter_count` of 7 + ``lidar_rays`` features and ``hidden`` units)."""
+        (:func:`~skidnav.agents.policies.search.tanh_policy.parameter_count` of 7 + ``lidar_rays``
+        features and ``hidden`` units)."""
         return parameter_count(7 + self.lidar_rays, self.hidden)
 
     def memory_bytes(self) -> tuple[int, int]:

@@ -1,13 +1,12 @@
 """Saved tanh policies: ``NAME.npz`` (the arrays) and ``NAME.json`` (what they mean), no pickle.
 
 The archive holds three float64 arrays: ``parameters`` (n,), ``observation_low`` and
-``observation_high`` (d,). The JSON holds the format and version, the layout's integers and
-floats (``hidden``, ``lidar_rays``, ``lidar_range`` [m], ``wheel_speed`` [rad/s]) and free
-``provenance`` (the search's config and counters). Loading reads the JSON first (size and
-nesting limited), derives n and d from it, and checks every array's name, dtype and shape against
-them before any data is read (:class:`skidnav.savedfile.SavedArchive`), then every parameter
-below :data:`~skidnav.agents.policies.search.config.MAX_PARAMETER` in magnitude (as a search keeps
-them);
+``observation_high`` (d,). The JSON holds the format and version, the layout's integers and floats
+(``hidden``, ``lidar_rays``, ``lidar_range`` [m], ``wheel_speed`` [rad/s]) and free ``provenance``
+(the search's config and counters). Loading reads the JSON first (size and nesting limited), derives
+n and d from it, and checks every array's name, dtype and shape against them before any data is read
+(:class:`skidnav.savedfile.SavedArchive`), then every parameter below
+:data:`~skidnav.agents.policies.search.config.MAX_PARAMETER` in magnitude (as a search keeps them);
 a bad file is one :class:`~skidnav.errors.CorruptFileError` line naming it.
 
 >>> import tempfile

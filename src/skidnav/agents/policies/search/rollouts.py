@@ -3,10 +3,10 @@
 Candidate p's episode e runs in sub-env ``p · E + e`` of a vector env of P · E sub-envs made by
 ``gymnasium.make_vec`` (the native vector env, :mod:`skidnav.envs.vector`). Every sub-env runs
 exactly one episode: the vector env is reset with the seeds ``seeds[e]`` repeated for every
-candidate — so all candidates meet the same slip noise
-(common random numbers) — and stepped with every candidate's wheel speeds until all episodes
-ended. Gymnasium's next-step autoreset then restarts a finished sub-env at its next step; its
-outputs from then on are masked out and its action is (0, 0).
+candidate — so all candidates meet the same slip noise (common random numbers) — and stepped with
+every candidate's wheel speeds until all episodes ended. Gymnasium's next-step autoreset then
+restarts a finished sub-env at its next step; its outputs from then on are masked out and its action
+is (0, 0).
 
 The vector env takes one seed per sub-env in ``reset(seed=[...])`` (an int would seed sub-env k
 with seed + k, so no two candidates would meet the same noise), and must autoreset at the next

@@ -1,4 +1,6 @@
-"""Robot drivers by name: ``sim``, ``tcp``, ``serial`` and ``ros2`` (docs/realtime.md).
+"""Robot drivers by name, ``sim``, ``tcp``, ``serial`` and ``ros2`` (docs/realtime.md), configured
+from a run's :class:`~skidnav.realtime.config.RealtimeConfig`; the links they speak over are in
+:mod:`skidnav.realtime.link`.
 
 ``sim`` starts ``skidnav robot sim-server`` as a child process on a free loopback port (with the
 run's map, seed, time scale and ``[sim]`` settings, and a lease as long as the run's command
