@@ -44,7 +44,6 @@ from skidnav.experiments.metrics import (
     ConvergenceRule,
     evaluation_summary,
     run_metrics,
-    within_tolerance,
 )
 from skidnav.experiments.reference.finegrid import (
     FineStates,
@@ -52,9 +51,7 @@ from skidnav.experiments.reference.finegrid import (
     refines_positions,
     state_grid,
 )
-from skidnav.experiments.reference.optimum import world_optima
-from skidnav.experiments.reference.oracle import Oracle, compute_oracle, load_or_compute_oracle
-from skidnav.experiments.reference.start_plan import StartPlan, start_plan
+from skidnav.experiments.reference.world import warm_up_references, world_reference
 from skidnav.experiments.runs import RunSpec, expand_runs
 from skidnav.experiments.store import EPISODE_COLUMNS, TrialResult
 from skidnav.seeding import RUN_ROLES, WORLD_ROLES, child_sequences, seed_int
@@ -309,9 +306,9 @@ def warm_up(spec: ExperimentRun) -> None:
     greedy_path(built.agent, eval_env, max(WARM_UP_LIMITS), seed=2)
     if grid_map is not None:
         _world_arrays(built.agent, grid_map, env)
-    if grid_map is not None and _has_oracle(eval_env):
-        compute_oracle(_oracle_env(spec, grid_map, 0, eval_env), 1, 0, [2], max(WARM_UP_LIMITS))
-        start_plan(eval_env, [2], max(WARM_UP_LIMITS))
+    if grid_map is not None:
+        oracle_env = functools.partial(_oracle_env, spec, grid_map, 0, eval_env)
+        warm_up_references(eval_env, oracle_env, 2, max(WARM_UP_LIMITS))
     _warmed_up.add(key)
 
 
@@ -345,19 +342,12 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     eval_seeds = [seed_int(s) for s in evaluation]
     env.reset(seed=seed_int(run_streams["episodes"]))
     built = _agent(spec, env, run_streams["agent"], max_steps)
-    oracle = None
-    if grid_map is not None and _has_oracle(eval_env):
-        oracle_seed = seed_int(world_streams["oracle"])
-        oracle_env = _oracle_env(spec, grid_map, slip_seed, eval_env)
-        oracle = load_or_compute_oracle(
-            oracle_env, config.oracle_samples, oracle_seed, eval_seeds, max_steps
-        )
-    reference = _reference_length(oracle, eval_env)
-    plan = start_plan(eval_env, eval_seeds, max_steps) if oracle is not None else None
-    optima = {}
-    if grid_map is not None and config.optimum_grids and _has_oracle(eval_env):
-        pose_env = make_env(spec, grid_map, slip_seed, observation="pose")
-        optima = world_optima(config, pose_env, world_streams["oracle"], max_steps)
+    envs = None
+    if grid_map is not None:
+        oracle_env = functools.partial(_oracle_env, spec, grid_map, slip_seed, eval_env)
+        pose_env = functools.partial(make_env, spec, grid_map, slip_seed, observation="pose")
+        envs = (oracle_env, pose_env)
+    world = world_reference(config, eval_env, envs, world_streams["oracle"], eval_seeds, max_steps)
     log = built.train(
         env,
         config.episodes,
@@ -371,7 +361,7 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     if grid_map is not None:
         arrays.update(_world_arrays(built.agent, grid_map, env))
     rule = None
-    optimum = _optimum(reference, oracle, config.convergence_objective)
+    optimum = world.optimum(config.convergence_objective)
     if math.isfinite(optimum) and config.greedy_eval:
         rule = ConvergenceRule(
             optimum, config.convergence_tolerance, config.convergence_window,
@@ -379,79 +369,8 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
         )  # fmt: skip
     summary = run_metrics(episodes, poses, reached, rule)
     summary["action_limit"] = float(max_steps)
-    summary.update(_oracle_columns(reference, oracle))
-    summary.update(_plan_columns(plan, rule))
-    summary.update(optima)
+    summary.update(world.summary_columns(rule))
     return TrialResult(spec.run_id, spec.coordinates, episodes, summary, arrays)
-
-
-def _oracle_columns(reference: float, oracle: Oracle | None) -> dict[str, float]:
-    """The summary columns of the run's references: L* and C*
-    (:mod:`~skidnav.experiments.reference.oracle`; without an oracle, C* = L*: a grid maze's moves
-    cost one each, and elsewhere both are NaN); the means of the oracle's own rollouts (the
-    action-optimal policy's lengths, NaN when any of them failed, and the cost-optimal policy's
-    costs), the share of the action-optimal rollouts that reached the goal and the mean length of
-    those that did: from one exact pose a greedy policy over cells can loop (an action that works on
-    average over the cell hits a wall from that point, and is chosen again), so the oracle's
-    expected length is a reference, not a policy every agent could follow."""
-    nan = float("nan")
-    if oracle is None:
-        return {
-            "oracle_length": reference, "oracle_rollout_length": nan,
-            "oracle_cost": reference, "oracle_rollout_cost": nan,
-            "oracle_rollout_success": nan, "oracle_reached_length": nan,
-        }  # fmt: skip
-    lengths = oracle.rollout_lengths
-    reached = lengths[lengths > 0]
-    return {
-        "oracle_length": reference, "oracle_rollout_length": oracle.rollout_mean,
-        "oracle_cost": oracle.start_cost, "oracle_rollout_cost": oracle.rollout_cost,
-        "oracle_rollout_success": float(reached.size / lengths.size),
-        "oracle_reached_length": float(reached.mean()) if reached.size else nan,
-    }  # fmt: skip
-
-
-def _optimum(reference: float, oracle: Oracle | None, objective: str) -> float:
-    """What convergence is measured against: L* (``reference``), or with the "cost" objective
-    the oracle's C* (L* where there is no oracle: a grid maze's moves cost one each)."""
-    return oracle.start_cost if objective == "cost" and oracle is not None else reference
-
-
-def _plan_columns(plan: StartPlan | None, rule: ConvergenceRule | None) -> dict[str, float]:
-    """The summary columns of the world's start plan
-    (:mod:`skidnav.experiments.reference.start_plan`): its length [actions] (NaN when none was
-    found), the share of its replays that reached the goal, and whether its replays pass the run's
-    convergence test (1.0 / 0.0; NaN when the test is measured in cost, which the replays do not
-    record)."""
-    nan = float("nan")
-    if plan is None or not len(plan.actions):
-        return {"start_plan_length": nan, "start_plan_success": nan, "start_plan_passes": nan}
-    lengths = plan.rollout_lengths
-    mean, share = evaluation_summary(lengths[None, :])
-    passes = nan
-    if rule is not None and rule.measure == "greedy_length":
-        passes = float(within_tolerance(mean, share, rule)[0])
-    return {
-        "start_plan_length": float(len(plan.actions)),
-        "start_plan_success": float(share[0]),
-        "start_plan_passes": passes,
-    }
-
-
-def _has_oracle(env: gymnasium.Env[Any, Any]) -> bool:
-    """True unless the skid-steer env runs on physics (``[env] dynamics = "mujoco"``): the
-    oracle solves the kinematic MDP, so a physics run's L* and optimality gap are NaN."""
-    return getattr(env.unwrapped, "dynamics", "kinematic") == "kinematic"
-
-
-def _reference_length(oracle: Oracle | None, env: gymnasium.Env[Any, Any]) -> float:
-    """L* of a run: the oracle's V*(start) on the skid-steer env; on a deterministic grid maze
-    its breadth-first shortest path (``shortest_path_length``, exact there); else NaN."""
-    if oracle is not None:
-        return oracle.start_value
-    shortest = getattr(env.unwrapped, "shortest_path_length", None)
-    length = int(shortest()) if callable(shortest) else -1
-    return float(length) if length > 0 else float("nan")
 
 
 def check_config(config: ExperimentConfig, path: Path | str | None = None) -> None:
