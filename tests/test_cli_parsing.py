@@ -20,7 +20,7 @@ from skidnav.cli import COMMANDS, main, requested_modules
         (["run", "c.toml", "--jobs", "two"], "skidnav: error: run: argument --jobs"),
         (
             ["world", "map", "generate", "--kind", "nope"],
-            "skidnav: error: map generate: argument --kind",
+            "skidnav: error: world map generate: argument --kind",
         ),
         (["robot", "run", "--bogus"], "skidnav: error: robot run: "),
         (["camera"], "skidnav: error: camera: the following arguments are required"),

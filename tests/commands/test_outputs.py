@@ -26,17 +26,17 @@ COMMANDS: dict[str, tuple[list[str], str]] = {
     "run": (["run", "{config}", "--out", "{dir}"], "skidnav.commands.run.run_experiment"),
     "tune": (["tune", "{tune}", "--out", "{dir}"], "skidnav.commands.tune.tune_experiment"),
     "generalise": (
-        ["generalise", "--out", "{file}"],
+        ["study", "generalise", "--out", "{file}"],
         "skidnav.studies.generalisation.split_worlds",
     ),
     "transfer": (["study", "transfer", "--out", "{file}"], "skidnav.studies.transfer.transfer_run"),
     "floors calibrate": (
-        ["floors", "calibrate", "--out", "{file}"],
+        ["world", "floors", "calibrate", "--out", "{file}"],
         "skidnav.physics.calibration.calibrate",
     ),
     "continuity": (
-        ["continuity", "--out", "{dir}"],
-        "skidnav.studies.continuity.comparison.run_comparison",
+        ["study", "continuity", "--out", "{dir}"],
+        "skidnav.commands.continuity.run_loaded",
     ),
     "search": (
         ["study", "search", "--out", "{dir}"],

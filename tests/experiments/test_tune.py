@@ -15,6 +15,7 @@ import pytest
 from optuna.trial import TrialState
 
 from skidnav.cli import main
+from skidnav.configtables import toml_key, toml_value
 from skidnav.errors import RunsFailedError, UserError
 from skidnav.experiments.config import config_to_dict
 from skidnav.experiments.configfile import load_config, parse_config
@@ -33,7 +34,6 @@ from skidnav.studies.tuning.search import (
     tune_experiment,
     tuning_runs,
 )
-from skidnav.studies.tuning.tuned_file import toml_key, toml_value
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 

@@ -11,20 +11,31 @@ Ctrl-C or SIGKILL resumes with nothing finished lost), the tidy Parquet tables, 
 the sessions in ``metadata.json``.
 
 :data:`STUDY_MODULES` lists the studies; each module defines ``STUDY``, an object of the
-:class:`Study` protocol. Only the named study's module is imported.
+:class:`Study` protocol. Only the named study's module is imported. Two things a study may add:
+``trial_in(grid, out)`` instead of ``trial(grid)`` when its runs write files of their own into
+the results directory ``out`` (:func:`trial_of`), and ``backends`` when it runs on fewer
+backends than the runner offers (:func:`backends_of`).
+
+An experiment's report draws the sections some studies add to it (the discretization-gap
+table): :data:`EXPERIMENT_SECTIONS` lists them, the one place the commands take them from
+(:func:`experiment_sections`), so the experiment report imports no study. docs/experiments.md,
+"A study is a config".
 """
 
 from __future__ import annotations
 
 import importlib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from skidnav.errors import UserError
-from skidnav.experiments.runner import TrialFunction
+from skidnav.experiments.runner import BACKENDS, TrialFunction
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import RunLayout
+
+if TYPE_CHECKING:
+    from skidnav.experiments.report.html import ExperimentSection
 
 EXPERIMENT_KIND = "experiment"
 """The ``kind`` of a plain experiment config (agents × maps × presets × seeds)."""
@@ -58,8 +69,16 @@ class Study(Protocol):
         ...
 
 
-STUDY_MODULES: dict[str, str] = {}
+STUDY_MODULES: dict[str, str] = {
+    "continuity": "skidnav.studies.continuity.study",
+    "robot-study": "skidnav.studies.hardware.study",
+}
 """Study kind → the module defining its ``STUDY``."""
+
+EXPERIMENT_SECTIONS: tuple[str, ...] = ("skidnav.studies.gap:gap_section",)
+"""The sections studies add to an experiment report, ``"module:function"``, in page order; each
+function takes the summaries and the config and returns an HTML fragment
+(:data:`skidnav.experiments.report.html.ExperimentSection`)."""
 
 
 def study_kind(document: Mapping[str, Any], path: Path | str) -> str:
@@ -79,3 +98,40 @@ def study(kind: str) -> Study:
     """The study of ``kind`` (a key of :data:`STUDY_MODULES`)."""
     found: Study = importlib.import_module(STUDY_MODULES[kind]).STUDY
     return found
+
+
+def study_of_results(kind: str, where: Path | str) -> Study:
+    """The study whose results are of ``kind`` (``config.json``'s, a study's ``layout.kind``).
+
+    Raises:
+        UserError: no study writes results of that kind.
+    """
+    if kind not in STUDY_MODULES:
+        known = ", ".join([EXPERIMENT_KIND, *sorted(STUDY_MODULES)])
+        raise UserError(f"{where}: holds {kind!r} results; known kinds: {known}")
+    return study(kind)
+
+
+def trial_of(chosen: Study, grid: Grid, out: Path) -> TrialFunction:
+    """The function executing one run of ``grid`` with its results in ``out``: the study's
+    ``trial_in(grid, out)`` when it has one (its runs write files of their own there, as the
+    hardware-in-the-loop study's real-time logs), else ``trial(grid)``."""
+    trial_in: Callable[[Grid, Path], TrialFunction] | None = getattr(chosen, "trial_in", None)
+    return trial_in(grid, out) if trial_in is not None else chosen.trial(grid)
+
+
+def backends_of(chosen: Study) -> tuple[str, ...]:
+    """The runner backends the study runs on: its ``backends`` when it names them (the
+    hardware-in-the-loop study's runs keep wall-clock pace, one at a time), else all of
+    :data:`~skidnav.experiments.runner.BACKENDS`."""
+    backends: tuple[str, ...] = getattr(chosen, "backends", BACKENDS)
+    return backends
+
+
+def experiment_sections() -> tuple[ExperimentSection, ...]:
+    """The functions of :data:`EXPERIMENT_SECTIONS` (their modules imported now)."""
+    sections: list[ExperimentSection] = []
+    for entry in EXPERIMENT_SECTIONS:
+        module, name = entry.split(":")
+        sections.append(getattr(importlib.import_module(module), name))
+    return tuple(sections)

@@ -9,9 +9,6 @@ Agents without a ``[tune.space]`` table keep their params. It is written atomica
 
 from __future__ import annotations
 
-import json
-import math
-import re
 from collections.abc import Sequence
 from datetime import UTC, datetime
 from pathlib import Path
@@ -21,6 +18,7 @@ import optuna
 from optuna.trial import TrialState
 
 from skidnav.atomicfile import write_atomic
+from skidnav.configtables import toml_key, toml_value
 from skidnav.experiments.config import (
     DEFAULT_ENV_ID,
     AgentSpec,
@@ -34,36 +32,6 @@ from skidnav.experiments.provenance import code_version
 from skidnav.studies.tuning.config import TuneConfig
 
 TUNED = "tuned.toml"
-_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
-
-
-def toml_value(value: Any) -> str:
-    """A TOML literal of a scalar, list or flat dict (what configs hold).
-
-    >>> toml_value({"alpha": 0.5, "mode": "sample", "steps": [1, 2], "on": True})
-    '{ alpha = 0.5, mode = "sample", steps = [1, 2], on = true }'
-    """
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        if math.isnan(value):
-            return "nan"
-        return repr(value) if math.isfinite(value) else ("inf" if value > 0 else "-inf")
-    if isinstance(value, str):
-        return json.dumps(value)  # a JSON string is a TOML basic string
-    if isinstance(value, list | tuple):
-        return "[" + ", ".join(toml_value(item) for item in value) + "]"
-    if isinstance(value, dict):
-        items = ", ".join(f"{toml_key(key)} = {toml_value(item)}" for key, item in value.items())
-        return "{ " + items + " }" if items else "{}"
-    raise TypeError(f"expected a TOML scalar, list or table, got {value!r}")
-
-
-def toml_key(key: str) -> str:
-    """A TOML key: bare when it may be, else quoted."""
-    return key if _BARE_KEY.match(key) else json.dumps(key)
 
 
 def _comment(lines: Sequence[str]) -> list[str]:
