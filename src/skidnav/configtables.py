@@ -3,7 +3,8 @@
 A problem is one :class:`~skidnav.errors.UserError` line ``"WHERE: PROBLEM"``, where ``WHERE``
 names the table (``[run]``, ``[[maps]] #2``, ``[tune.space.q-learning] alpha``) and a value read
 from the file is quoted in part (:func:`~skidnav.errors.shown`). A path in a config is relative to
-the config file's folder.
+the config file's folder. A config the code writes (``tuned.toml``, a study shortcut's config)
+spells its values with :func:`toml_value` and :func:`toml_key`.
 """
 
 from __future__ import annotations

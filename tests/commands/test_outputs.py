@@ -36,12 +36,12 @@ COMMANDS: dict[str, tuple[list[str], str]] = {
     ),
     "continuity": (
         ["study", "continuity", "--out", "{dir}"],
-        "skidnav.studies.continuity.comparison.run_comparison",
+        "skidnav.commands.run.run_experiment",
     ),
-    "search": (["study", "search", "--out", "{dir}"], "skidnav.commands.search.run_experiment"),
+    "search": (["study", "search", "--out", "{dir}"], "skidnav.commands.run.run_experiment"),
     "kinematic compare": (
         ["study", "kinematic", "compare", "--out", "{dir}"],
-        "skidnav.commands.kinematic.run_experiment",
+        "skidnav.commands.run.run_experiment",
     ),
     "reproduce": (
         ["study", "reproduce", "sutton-barto", "--out", "{dir}"],

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from skidnav.cli import build_parser, main
-from skidnav.commands.run import grid_of_text, load_grid
+from skidnav.commands.run import load_grid, parse_grid
 from skidnav.commands.shortcut import FLAGS
 from skidnav.configtables import toml_document
 
@@ -63,4 +63,4 @@ def shipped_config_grid_and_defaults(verb: str, config: str) -> tuple[Any, Any]:
     arguments = build_parser().parse_args(["study", verb])
     module = importlib.import_module(f"skidnav.commands.{arguments.func.__module__.split('.')[-1]}")
     text = toml_document(module.config_document(arguments))
-    return load_grid(CONFIGS / config)[0], grid_of_text(text, FLAGS)[0]
+    return load_grid(CONFIGS / config).grid, parse_grid(text, FLAGS).grid

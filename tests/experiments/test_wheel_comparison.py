@@ -1,5 +1,5 @@
 """``skidnav study continuity``: discrete agents and wheel-speed learners on one world, same
-seeds."""
+seeds (the study through the runner: tests/experiments/test_continuity_study.py)."""
 
 from __future__ import annotations
 
@@ -52,8 +52,12 @@ def test_the_command_writes_the_table_and_the_picture(tmp_path: Path) -> None:
         "study", "continuity", "--map", "free", "--world-seed", "3", "--max-steps", "30",
         "--episodes", "4", "--generations", "2", "--population", "4", "--rollouts", "2",
         "--seeds", "1", "--learners", "dyna-full,ppo,sac,goal-tracker", "--out", str(out),
+        "--backend", "serial", "--no-progress",
     ])  # fmt: skip
     assert code == 0
+    assert 'learners = ["dyna-full", "ppo", "sac", "goal-tracker"]' in (
+        (out / "config.toml").read_text()
+    )
     runs = pd.read_csv(out / "runs.csv")
     assert list(runs["learner"]) == ["dyna-full", "ppo", "sac", "goal-tracker"]
     table = pd.read_csv(out / "table.csv")

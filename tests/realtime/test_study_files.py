@@ -24,8 +24,8 @@ def _finished_study(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[Pa
     real-time run: a second call with the same command line runs nothing)."""
     config, out = study_config(tmp_path), tmp_path / "study"
     monkeypatch.setattr("skidnav.studies.hardware.trial.realtime_run", fake_realtime([]))
-    tables, settings = load_study(config, {"episodes": 2})
-    assert run_study(tables, settings, out).finished == 4
+    grid, text = load_study(config, {"episodes": 2})
+    assert run_study(grid, out, source_text=text).finished == 4
     argv = ["robot", "study", "--config", str(config), "--episodes", "2", "--quiet"]
     return out, [*argv, "--out", str(out)]
 

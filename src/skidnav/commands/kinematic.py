@@ -10,16 +10,12 @@ run OUT/config.toml --out OUT``, resumes it); then the table of means over seeds
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from skidnav.commands.run import add_backend_arguments
+from skidnav.commands.shortcut import add_run_arguments, run_text
 from skidnav.errors import UserError
-from skidnav.experiments.runner import run_experiment
 from skidnav.experiments.store import ResultStore
-from skidnav.outputs import check_output_dir
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.studies.kinematic_models.grid import ModelComparison, comparison_toml
-from skidnav.studies.kinematic_models.study import STUDY
 from skidnav.studies.kinematic_models.table import describe, table_rows, text_table
 
 FLAGS = ("seeds", "samples", "slip", "drift", "drift_period", "train_fraction", "window")
@@ -47,14 +43,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--train-fraction", type=float, default=0.5, help="first part of the log fitted on"
     )
     compare.add_argument("--window", type=int, default=500, help="samples kept per region")
-    compare.add_argument(
-        "--out",
-        type=Path,
-        default=None,
-        help="results directory (default: runs/kinematic-models)",
-    )
-    add_backend_arguments(compare)
-    compare.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_run_arguments(compare, "kinematic-models")
     compare.set_defaults(func=_compare)
 
 
@@ -71,19 +60,8 @@ def comparison_from_flags(args: argparse.Namespace) -> ModelComparison:
 
 def _compare(args: argparse.Namespace) -> int:
     comparison = comparison_from_flags(args)
-    out = check_output_dir(args.out if args.out is not None else Path("runs") / comparison.name)
-    run_experiment(
-        comparison,
-        out,
-        backend=args.backend,
-        jobs=args.jobs,
-        scheduler=args.scheduler,
-        trial=STUDY.trial(comparison),
-        source_text=comparison_toml(comparison),
-        progress=not args.no_progress,
-        layout=STUDY.layout,
-    )
-    summaries = ResultStore(out, STUDY.layout).load_tables()[1]
+    loaded, outcome = run_text(comparison_toml(comparison), args)
+    summaries = ResultStore(outcome.out_dir, loaded.layout).load_tables()[1]
     print(describe(comparison))
     for line in text_table(table_rows(comparison, summaries)):
         print(line)

@@ -3,7 +3,9 @@
 ``skidnav robot sim-server`` runs the simulated robot server; ``skidnav robot run`` runs an agent
 (or a frozen continuous policy) in real time against a robot driver; ``skidnav robot study``
 runs agents × presets × seeds against the sim server through the experiment runner and
-tabulates success (studies/hardware/study.py).
+tabulates success: a shortcut that writes the study's config of its flags (``kind =
+"robot-study"``, saved as ``OUT/config.toml``; ``skidnav run`` runs and resumes it alike) and
+runs it (:mod:`skidnav.studies.hardware.study`).
 """
 
 from __future__ import annotations
@@ -237,7 +239,11 @@ def _run_loop(args: argparse.Namespace) -> int:
 
 def _add_study(commands: Any) -> None:
     study = commands.add_parser(
-        "study", help="hardware-in-the-loop study: agents × presets × seeds on the sim server"
+        "study",
+        help="hardware-in-the-loop study: agents × presets × seeds on the sim server",
+        description='Write the study config of these flags (kind = "robot-study", the '
+        "real-time config by its path) to OUT/config.toml and run it as 'skidnav run' does "
+        "(serially; resumable on the same --out); then the tables, OUT/study.md.",
     )
     study.add_argument("--config", type=Path, required=True, help="configs/realtime.toml")
     study.add_argument("--agents", help="comma-separated agent names ([study] agents)")
@@ -260,7 +266,7 @@ def _run_study(args: argparse.Namespace) -> int:
         "time_scale": args.time_scale,
         "seeds": args.seeds,
     }
-    tables, settings = load_study(args.config, overrides)
+    grid, text = load_study(args.config, overrides)
     check_output_dir(args.out)
 
     def progress(line: str) -> None:
@@ -270,7 +276,7 @@ def _run_study(args: argparse.Namespace) -> int:
     def announce(line: str) -> None:
         print(f"\r{line:<79}", file=sys.stderr, flush=True)
 
-    outcome = run_study(tables, settings, args.out, progress=progress, announce=announce)
+    outcome = run_study(grid, args.out, source_text=text, progress=progress, announce=announce)
     done_before = outcome.finished - outcome.executed
     tables_line = f"tables in {args.out / 'study.md'}" if outcome.finished else "no tables yet"
     print(

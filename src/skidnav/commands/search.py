@@ -19,13 +19,14 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from skidnav.commands.run import parse_grid, run_loaded
+from skidnav.commands.shortcut import FLAGS
 from skidnav.errors import UserError
-from skidnav.experiments.runner import run_experiment
 from skidnav.experiments.runs import expand_runs
 from skidnav.outputs import check_output_dir
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.studies.policy_search.export import export_search
-from skidnav.studies.policy_search.grid import LAYOUT, PolicySearchGrid, grid_toml
+from skidnav.studies.policy_search.grid import PolicySearchGrid, grid_toml
 from skidnav.studies.policy_search.trial import SearchTrial
 
 if TYPE_CHECKING:
@@ -105,14 +106,9 @@ def _search(args: argparse.Namespace) -> int:
     out = check_output_dir(args.out)
     if (out / "checkpoint.json").exists() and not (out / "config.json").exists():
         raise UserError(f"{out}: holds a search in an earlier format; choose another --out")
-    outcome = run_experiment(
-        grid,
-        out,
-        backend="serial",
-        trial=SearchTrial(out / "checkpoints", print_generation),
-        source_text=grid_toml(grid),
-        layout=LAYOUT,
-    )
+    loaded = parse_grid(grid_toml(grid), FLAGS)
+    trial = SearchTrial(out / "checkpoints", print_generation)  # the study's, printing progress
+    outcome = run_loaded(loaded, out, backend="serial", trial=trial)
     if outcome.executed == 0:
         print(f"{out}: the search had finished already")
     (run,) = expand_runs(grid)

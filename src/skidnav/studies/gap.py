@@ -3,9 +3,10 @@ success rate, the convergence episode (Kaplan–Meier, censored runs as censored
 greedy path length [m] and its gap to the world's continuous optimum
 (:mod:`skidnav.experiments.reference.optimum`), and the optimum with its convergence check.
 
-A section of ``skidnav report`` when the runs hold optimum columns (``[experiment]
-optimum_grids``); ``python -m skidnav.studies.gap RUN_DIR`` prints the same tables as
-Markdown.
+A section of ``skidnav report`` (:func:`gap_section`, one of the experiment report's extra
+sections, :func:`skidnav.studies.kind.experiment_sections`) when the runs hold optimum columns
+(``[experiment] optimum_grids``); ``python -m skidnav.studies.gap RUN_DIR`` prints the same
+tables as Markdown.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from skidnav.agents.catalog import entry
 from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.report.analysis import aggregate, cells, convergence_table
+from skidnav.experiments.report.page import interval_text
 from skidnav.experiments.store import ResultStore
 from skidnav.experiments.trial import config_map
 from skidnav.world.discretization import Discretization
@@ -60,8 +62,6 @@ def grid_text(config: ExperimentConfig, label: str, map_label: str) -> str:
 
 
 def _interval(frame: pd.DataFrame, metric: str, scale: float = 1.0, digits: int = 2) -> str:
-    from skidnav.experiments.report.html import interval_text  # the report imports this module
-
     row = frame[frame["metric"] == metric].iloc[0]
     low, high = float(row["mean_low"]), float(row["mean_high"])
     return interval_text(float(row["mean"]) * scale, low * scale, high * scale, digits)
@@ -99,8 +99,6 @@ def gap_rows(summaries: pd.DataFrame, config: ExperimentConfig) -> pd.DataFrame:
 
 def _median_text(row: pd.Series) -> str:
     """KM median [interval]; "> T (censored)" when more than half of the runs never converged."""
-    from skidnav.experiments.report.html import interval_text
-
     if not np.isfinite(row["median"]):
         return f"> {row['censored_at']:.0f} (censored)"
     return interval_text(row["median"], row["median_low"], row["median_high"], 0)

@@ -12,6 +12,11 @@ the sessions in ``metadata.json``.
 
 :data:`STUDY_MODULES` lists the studies; each module defines ``STUDY``, an object of the
 :class:`Study` protocol. Only the named study's module is imported.
+
+An experiment's report draws the sections some studies add to it (the discretization-gap
+table): :data:`EXPERIMENT_SECTIONS` lists them, the one place the commands take them from
+(:func:`experiment_sections`), so the experiment report imports no study. docs/experiments.md,
+"A study is a config".
 """
 
 from __future__ import annotations
@@ -19,13 +24,18 @@ from __future__ import annotations
 import importlib
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from skidnav.errors import UserError
-from skidnav.experiments.runner import TrialFunction
+from skidnav.experiments.runner import BACKENDS, TrialFunction
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import RunLayout
 
+if TYPE_CHECKING:
+    from skidnav.experiments.report.html import ExperimentSection
+
+STUDY_BACKENDS: tuple[str, ...] = BACKENDS
+"""Every backend of the runner: what a study runs on unless it says otherwise."""
 EXPERIMENT_KIND = "experiment"
 """The ``kind`` of a plain experiment config (agents × maps × presets × seeds)."""
 
@@ -36,10 +46,13 @@ class Study(Protocol):
     Attributes:
         kind: the config's ``kind`` value, e.g. ``"continuity"``.
         layout: what its results directory holds (``layout.kind`` equals :attr:`kind`).
+        backends: the runner backends it runs on (:data:`STUDY_BACKENDS` unless its runs keep
+            wall-clock pace one at a time, as the hardware-in-the-loop study's).
     """
 
     kind: str
     layout: RunLayout
+    backends: tuple[str, ...]
 
     def grid(self, document: Mapping[str, Any], path: Path) -> Grid:
         """The validated grid of the parsed TOML ``document`` read from ``path``.
@@ -49,8 +62,11 @@ class Study(Protocol):
         """
         ...
 
-    def trial(self, grid: Grid) -> TrialFunction:
-        """The function executing one run of ``grid`` (importable by worker processes)."""
+    def trial(self, grid: Grid, out: Path) -> TrialFunction:
+        """The function executing one run of ``grid`` whose results go to the directory ``out``
+        (importable by worker processes). Most runs write nothing themselves; a run that does
+        (the hardware-in-the-loop study's real-time logs, a policy search's checkpoint) writes
+        under ``out``."""
         ...
 
     def report(self, run_dir: Path) -> str:
@@ -63,8 +79,15 @@ STUDY_MODULES: dict[str, str] = {
     "policy-search": "skidnav.studies.policy_search.study",
     "generalisation": "skidnav.studies.generalisation.study",
     "transfer": "skidnav.studies.transfer.study",
+    "continuity": "skidnav.studies.continuity.study",
+    "robot-study": "skidnav.studies.hardware.study",
 }
 """Study kind → the module defining its ``STUDY``."""
+
+EXPERIMENT_SECTIONS: tuple[str, ...] = ("skidnav.studies.gap:gap_section",)
+"""The sections studies add to an experiment report, ``"module:function"``, in page order; each
+function takes the summaries and the config and returns an HTML fragment
+(:data:`skidnav.experiments.report.html.ExperimentSection`)."""
 
 
 def study_kind(document: Mapping[str, Any], path: Path | str) -> str:
@@ -84,3 +107,24 @@ def study(kind: str) -> Study:
     """The study of ``kind`` (a key of :data:`STUDY_MODULES`)."""
     found: Study = importlib.import_module(STUDY_MODULES[kind]).STUDY
     return found
+
+
+def study_of_results(kind: str, where: Path | str) -> Study:
+    """The study whose results are of ``kind`` (``config.json``'s, a study's ``layout.kind``).
+
+    Raises:
+        UserError: no study writes results of that kind.
+    """
+    if kind not in STUDY_MODULES:
+        known = ", ".join([EXPERIMENT_KIND, *sorted(STUDY_MODULES)])
+        raise UserError(f"{where}: holds {kind!r} results; known kinds: {known}")
+    return study(kind)
+
+
+def experiment_sections() -> tuple[ExperimentSection, ...]:
+    """The functions of :data:`EXPERIMENT_SECTIONS` (their modules imported now)."""
+    sections: list[ExperimentSection] = []
+    for entry in EXPERIMENT_SECTIONS:
+        module, name = entry.split(":")
+        sections.append(getattr(importlib.import_module(module), name))
+    return tuple(sections)

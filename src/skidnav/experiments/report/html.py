@@ -6,23 +6,24 @@ tables, per-cell figures (learning curves, per-seed metrics, final greedy trajec
 them animated (:mod:`skidnav.physics.render`), value maps with preferred headings, greedy-policy
 maps), provenance (config, versions, sessions with their code versions). The numbers are what
 was measured.
+
+The page shell is shared with the studies' reports (:mod:`skidnav.experiments.report.page`). An
+experiment report takes extra sections from its caller (:data:`ExperimentSection`: the commands
+pass the studies' sections, e.g. the discretization-gap table, :mod:`skidnav.studies.kind`), so
+this module imports no study.
 """
 
 from __future__ import annotations
 
-import base64
 import html
-import json
 import logging
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from skidnav.atomicfile import remove_stale_temporaries, write_atomic
-from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig, config_to_dict
-from skidnav.experiments.provenance import CODE_KEYS, describe_code
 from skidnav.experiments.report import plots
 from skidnav.experiments.report.analysis import (
     METRICS,
@@ -36,6 +37,16 @@ from skidnav.experiments.report.analysis import (
     stats_rng,
     survival_columns,
 )
+from skidnav.experiments.report.page import (
+    config_and_provenance,
+    gif_image,
+    image,
+    interval_text,
+    page,
+    report_path,
+    table,
+    write_page,
+)
 from skidnav.experiments.report.reproduction import reproduction_section
 from skidnav.experiments.store import ResultStore, TrialResult
 from skidnav.physics.materials import region_materials
@@ -43,55 +54,17 @@ from skidnav.physics.render import Arena, animate, describe
 from skidnav.robot.floors import PRESET_FLOORS
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField
-from skidnav.studies.gap import gap_section
 from skidnav.survival import performance_profile, profile_band
 
 logger = logging.getLogger(__name__)
 
-STYLE = """
-body{font-family:system-ui,sans-serif;max-width:1250px;margin:2em auto;padding:0 1em;color:#222}
-table{border-collapse:collapse;font-size:13px;margin:0.6em 0}
-td,th{border:1px solid #ccc;padding:3px 7px;text-align:right}
-th{background:#f0f0f0} td:first-child,th:first-child{text-align:left}
-img{max-width:100%} pre{background:#f6f6f6;padding:0.8em;overflow-x:auto;font-size:12px}
-.yes{color:#17631b;font-weight:600} .no{color:#9b1c1c;font-weight:600}
-.note{color:#555;font-size:13px}
-"""
-
-
-def interval_text(mean: float, low: float, high: float, digits: int = 2) -> str:
-    """``"12.30 [10.10, 14.20]"``; the estimate alone when the interval is undefined (one seed);
-    ``"–"`` when the estimate is.
-
-    >>> interval_text(12.3, 10.1, 14.2), interval_text(12.0, float("nan"), float("nan"))
-    ('12.30 [10.10, 14.20]', '12.00')
-    """
-    if mean != mean:  # NaN
-        return "–"
-    if low != low or high != high:
-        return f"{mean:.{digits}f}"
-    return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
-
-
-def image(png: bytes, alt: str) -> str:
-    """An <img> tag embedding ``png`` as base64."""
-    encoded = base64.b64encode(png).decode("ascii")
-    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{encoded}">'
+ExperimentSection = Callable[[pd.DataFrame, ExperimentConfig], str]
+"""An extra section of an experiment report: the summaries (one row per run) and the config in,
+an HTML fragment out (empty when it has nothing to show)."""
 
 
 ANIMATION_FRAMES = 90
 """Frames of the report's animations (about 16 ms each for MuJoCo on a CPU renderer)."""
-
-
-def gif_image(gif: bytes, alt: str) -> str:
-    """An <img> tag embedding an animated GIF as base64."""
-    encoded = base64.b64encode(gif).decode("ascii")
-    return f'<img alt="{html.escape(alt)}" src="data:image/gif;base64,{encoded}">'
-
-
-def table(frame: pd.DataFrame) -> str:
-    """An HTML table of preformatted string cells."""
-    return frame.to_html(index=False, escape=True, border=0)
 
 
 def aggregate_table(aggregates: pd.DataFrame, map_label: str, preset: str) -> str:
@@ -287,30 +260,6 @@ def setup(config: ExperimentConfig, metadata: dict[str, object], n_runs: int) ->
     )
 
 
-def sessions_table(metadata: dict[str, object]) -> str:
-    """The sessions that wrote the results (start, code, runs done), and a warning when the runs
-    come from more than one code version."""
-    sessions = metadata.get("sessions")
-    if not isinstance(sessions, list) or not sessions:
-        return ""
-    rows = [
-        {
-            "session started (UTC)": str(entry.get("started", "?")),
-            "code": describe_code({key: entry.get(key) for key in CODE_KEYS}),
-            "runs done": str(entry.get("runs_done", "?")),
-            "completed": "yes" if entry.get("completed") else "no (killed or interrupted)",
-        }
-        for entry in sessions
-    ]
-    codes = {row["code"] for row in rows if row["runs done"] not in ("0", "?")}
-    warning = (
-        f"<p class='no'>These results were produced by {len(codes)} different code versions.</p>"
-        if len(codes) > 1
-        else ""
-    )
-    return warning + table(pd.DataFrame.from_records(rows))
-
-
 def animated_run(runs: list[TrialResult], baseline: str) -> tuple[TrialResult, str]:
     """The run to animate, and why: the non-baseline agent whose final greedy rollout reached
     the goal in the fewest actions, else the first run."""
@@ -413,8 +362,9 @@ def figures_for_cell(
     return "\n".join(parts)
 
 
-def build_report(run_dir: Path | str) -> str:
-    """The report of a results directory as one HTML string."""
+def build_report(run_dir: Path | str, sections: Sequence[ExperimentSection] = ()) -> str:
+    """The report of a results directory as one HTML string; ``sections`` are drawn after the
+    thesis reproduction, in order (the commands pass the studies' sections)."""
     store = ResultStore(run_dir)
     config = store.config()
     episodes, summaries = store.load_tables()
@@ -431,7 +381,7 @@ def build_report(run_dir: Path | str) -> str:
         performance_profiles(summaries, config),
         budget_section(comparisons, aggregates, config),
         reproduction_section(comparisons, surfaces, summaries, config),
-        gap_section(summaries, config),
+        *(section(summaries, config) for section in sections),
     ]
     if not surfaces.empty:
         body.append(image(plots.surface_bars(surfaces), "rough vs slippery"))
@@ -442,33 +392,20 @@ def build_report(run_dir: Path | str) -> str:
             aggregate_table(aggregates, map_label, preset),
             figures_for_cell(store, config, episodes, summaries, aggregates, map_label, preset),
         ]
-    body += [
-        "<h2>Config (resolved)</h2>",
-        f"<pre>{html.escape(json.dumps(config_to_dict(config), indent=2))}</pre>",
-        "<h2>Provenance</h2>",
-        sessions_table(metadata),
-        f"<pre>{html.escape(json.dumps(metadata.get('versions', {}), indent=2))}</pre>",
-    ]
-    return (
-        "<!DOCTYPE html><html><head><meta charset='utf-8'>"
-        f"<title>skidnav: {html.escape(config.name)}</title><style>{STYLE}</style></head>"
-        f"<body>{''.join(body)}</body></html>"
-    )
+    body += config_and_provenance(config_to_dict(config), metadata)
+    return page(f"skidnav: {config.name}", body)
 
 
-def write_report(run_dir: Path | str, output: Path | str | None = None) -> Path:
-    """Write the report of ``run_dir`` (default ``RUN_DIR/report.html``) atomically, so a kill
-    leaves the previous report or none, never part of one; returns its path. Temporaries left
-    beside it by report writers that died are removed first.
+def write_report(
+    run_dir: Path | str,
+    output: Path | str | None = None,
+    sections: Sequence[ExperimentSection] = (),
+) -> Path:
+    """Write the report of the experiment in ``run_dir`` (:func:`build_report` with its extra
+    ``sections``) to :func:`report_path`, atomically (:func:`write_page`); returns its path.
 
     Raises:
         UserError: the results are missing or damaged, or the report cannot be written there.
     """
-    path = Path(output) if output is not None else Path(run_dir) / "report.html"
-    text = build_report(run_dir)
-    remove_stale_temporaries(path.parent, path.name)
-    try:
-        write_atomic(path, text.encode("utf-8"))
-    except OSError as error:
-        raise UserError(f"{path}: cannot write the report ({error.strerror or error})") from None
-    return path
+    path = report_path(run_dir, output)
+    return write_page(path, build_report(run_dir, sections))

@@ -1,5 +1,6 @@
 """What continuity buys, measured: discrete agents against wheel-speed learners on one world
-(``skidnav study continuity``; docs/continuity.md).
+(``skidnav study continuity``, or a ``kind = "continuity"`` config run by ``skidnav run``:
+:mod:`skidnav.studies.continuity.study`; docs/continuity.md).
 
 Every learner of :data:`LEARNERS` trains on the same world (map, slip field) from the same seeds,
 and its final deterministic policy is rolled out from the start on the same evaluation seeds
@@ -17,10 +18,17 @@ deterministic policy first reached the goal in every evaluation rollout of a che
 deep agents: a check after every episode on the evaluation seeds; CMA-ES: its mean policy,
 checked every ``eval_every`` generations on its own evaluation seeds); NaN if never within the
 budget. Both kinds of action use the same control period, so times and energies compare.
+
+A :class:`ComparisonConfig` is the runner's grid (:class:`~skidnav.experiments.runs.Grid`): the
+learners are its agents, the world its one map and preset, and seed index k of every learner is
+one world of the runner, whose stream (:func:`run_seed`) every learner's run k trains from.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
+import json
 import math
 import time
 from collections.abc import Sequence
@@ -33,7 +41,8 @@ import numpy as np
 from skidnav.agents.policies.goal_tracker import GoalTracker
 from skidnav.checks import check_integer
 from skidnav.envs.registration import ENV_ID
-from skidnav.errors import first_line
+from skidnav.errors import first_line, shown
+from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.seeding import RUN_ROLES, child, seed_int, streams
 from skidnav.studies.continuity.traces import (
     Policy,
@@ -49,7 +58,9 @@ DISCRETE_PARAMS = {
 }
 """The discrete learners and their settings (the thesis's, with 100 planning updates)."""
 WHEEL_LEARNERS = ("cmaes", "ppo", "sac")
-LEARNERS = (*DISCRETE_PARAMS, *WHEEL_LEARNERS, "goal-tracker")
+REFERENCE = "goal-tracker"
+"""The reference controller: it learns nothing, so its runs are alike (one is enough)."""
+LEARNERS = (*DISCRETE_PARAMS, *WHEEL_LEARNERS, REFERENCE)
 MAX_COUNTS = {
     "seeds": 1000, "episodes": 10**6, "generations": 10**6, "population": 10**4,
     "rollouts": 10**4, "max_steps": 10**5,
@@ -62,9 +73,10 @@ evaluation seeds (shared by every learner and run)."""
 
 @dataclass(frozen=True)
 class ComparisonConfig:
-    """One comparison.
+    """One comparison, and the runner's grid of its runs (learner × seed index).
 
     Attributes:
+        name: names its results (``skidnav run``'s default ``--out`` is ``runs/NAME``).
         map_kind, world_seed, slip: the world (the env's arguments). max_steps: actions per
             episode, training and rollouts. control_period: one action [s], both kinds.
         learners: names from :data:`LEARNERS`. seeds: runs per learner, ≥ 1. root_seed: of
@@ -73,6 +85,7 @@ class ComparisonConfig:
         rollouts: evaluation rollouts of each final policy (and of each check).
     """
 
+    name: str = "continuity"
     map_kind: str = "obstacles"
     world_seed: int = 3
     slip: str = "slippery"
@@ -87,9 +100,15 @@ class ComparisonConfig:
     rollouts: int = 5
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.name, str) and self.name):
+            raise ValueError(f"expected a non-empty name, got {shown(self.name)}")
+        if not isinstance(self.learners, tuple):
+            raise ValueError(f"expected a list of learners, got {shown(self.learners)}")
         unknown = [name for name in self.learners if name not in LEARNERS]
         if unknown or not self.learners:
             raise ValueError(f"expected learners from {', '.join(LEARNERS)}, got {unknown}")
+        if len(set(self.learners)) != len(self.learners):
+            raise ValueError(f"expected distinct learners, got {shown(self.learners)}")
         for name in ("seeds", "episodes", "generations", "population", "rollouts", "max_steps"):
             check_integer(name, getattr(self, name), 1, MAX_COUNTS[name])
         check_integer("world_seed", self.world_seed, 0)
@@ -111,6 +130,46 @@ class ComparisonConfig:
             "map_kind": self.map_kind, "world_seed": self.world_seed, "slip": self.slip,
             "max_episode_steps": self.max_steps, "control_period": self.control_period, **kind,
         }  # fmt: skip
+
+    @property
+    def agents(self) -> tuple[AgentSpec, ...]:
+        """The learners as the grid's agents (label = name)."""
+        return tuple(AgentSpec(learner, learner) for learner in self.learners)
+
+    @property
+    def maps(self) -> tuple[MapSpec, ...]:
+        """The one map of the grid (the env builds it from ``world_seed``)."""
+        return (MapSpec(self.map_kind, kind=self.map_kind),)
+
+    @property
+    def presets(self) -> tuple[str, ...]:
+        """The one slip preset of the grid."""
+        return (self.slip,)
+
+    @property
+    def n_runs(self) -> int:
+        """Runs of the grid: every learner × seed index (the goal tracker's are alike)."""
+        return len(self.learners) * self.seeds
+
+    def fingerprint(self) -> str:
+        """SHA-256 of the canonical JSON of :func:`comparison_to_dict` (names a results
+        directory)."""
+        text = json.dumps(comparison_to_dict(self), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+def comparison_to_dict(config: ComparisonConfig) -> dict[str, Any]:
+    """The config as a JSON-ready dict (inverse of :func:`comparison_from_dict`)."""
+    data = dataclasses.asdict(config)
+    data["learners"] = list(config.learners)
+    return data
+
+
+def comparison_from_dict(data: dict[str, Any]) -> ComparisonConfig:
+    """The config saved by :func:`comparison_to_dict` (ValueError, TypeError or KeyError if
+    invalid)."""
+    values = {**data, "learners": tuple(data["learners"])}
+    return ComparisonConfig(**values)
 
 
 class LearnerRun(NamedTuple):
@@ -145,7 +204,9 @@ def evaluation_seeds(config: ComparisonConfig) -> list[int]:
 
 def run_seed(config: ComparisonConfig, index: int) -> int:
     """The integer seed of every learner's run ``index`` (31 bits: PyTorch and the legacy NumPy
-    seeding that Stable-Baselines3 calls take no more)."""
+    seeding that Stable-Baselines3 calls take no more): drawn from child ``index`` of the root's
+    child 0, the stream the runner names world ``index`` of the grid (:mod:`skidnav.experiments.
+    runs`; its one map and preset), shared by every learner (common random numbers)."""
     return seed_int(child(child(config.root_seed, 0), index)) % 2**31
 
 
@@ -170,7 +231,7 @@ def train_learner(config: ComparisonConfig, learner: str, seed: int) -> LearnerR
 def _kind(learner: str) -> str:
     if learner in DISCRETE_PARAMS:
         return "discrete"
-    return learner if learner in ("cmaes", "goal-tracker") else "deep"
+    return learner if learner in ("cmaes", REFERENCE) else "deep"
 
 
 def _train_discrete(
@@ -239,7 +300,7 @@ def run_comparison(config: ComparisonConfig, progress: Any = None) -> list[Learn
     """Every learner × seed of ``config`` (the reference once: it does not learn)."""
     runs = []
     for learner in config.learners:
-        for index in range(1 if learner == "goal-tracker" else config.seeds):
+        for index in range(1 if learner == REFERENCE else config.seeds):
             run = train_learner(config, learner, run_seed(config, index))
             runs.append(run)
             if progress is not None:

@@ -21,6 +21,7 @@ from skidnav.studies.agent_grid import read_grid, training_episodes
 from skidnav.studies.generalisation.evaluation import generalisation_run, grid_split
 from skidnav.studies.generalisation.grid import KIND, LAYOUT, GeneralisationGrid
 from skidnav.studies.generalisation.report import report_section
+from skidnav.studies.kind import STUDY_BACKENDS
 
 
 def generalisation_trial(spec: RunSpec[GeneralisationGrid]) -> TrialResult:
@@ -43,6 +44,7 @@ class GeneralisationStudy:
 
     kind: str = KIND
     layout: RunLayout = LAYOUT
+    backends = STUDY_BACKENDS
 
     def grid(self, document: Mapping[str, Any], path: Path) -> GeneralisationGrid:
         """The validated grid of a parsed config; every agent's name and params checked as a
@@ -59,7 +61,7 @@ class GeneralisationStudy:
                 raise UserError(f"{path}: [[agents]] {error}") from None
         return grid
 
-    def trial(self, grid: GeneralisationGrid) -> TrialFunction:
+    def trial(self, grid: GeneralisationGrid, out: Path) -> TrialFunction:
         """:func:`generalisation_trial`."""
         return generalisation_trial
 

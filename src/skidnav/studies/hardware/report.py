@@ -165,7 +165,7 @@ def markdown_report(
 
     Args:
         summaries: one row per finished run (``summaries.parquet``: grid coordinates and the
-            metrics of :func:`skidnav.studies.hardware.study.run_summary`).
+            metrics of :func:`skidnav.studies.hardware.trial.run_summary`).
         settings: root seed, agents, baseline and bootstrap settings (the study's grid).
         conditions: every preset of the grid, in order → (slip preset, drifting slip?).
     """

@@ -1,223 +1,141 @@
 """Hardware-in-the-loop study: agents × floor/slip presets × seeds on the sim server, run by the
-experiment runner (docs/realtime.md, "Hardware-in-the-loop study").
+experiment runner as a study kind, ``kind = "robot-study"`` (docs/realtime.md,
+"Hardware-in-the-loop study").
 
-The study is a grid (:class:`StudyGrid`, a :class:`~skidnav.experiments.runs.Grid`): agents ×
-the config's ``[run] map`` × presets × seeds. :func:`skidnav.experiments.runner.run_experiment`
-expands, seeds, stores, locks and resumes it as it does an experiment's, with the study's
-results layout (:data:`STUDY_LAYOUT`) and its trial function,
+A study config names its kind, the ``[study]`` table (:class:`~skidnav.studies.hardware.grid.
+StudySettings`) and the real-time tables it runs: its own (``[run]``, ``[sim]``, ``[agents.*]``,
+``[presets.*]``, as in ``configs/realtime.toml``), or those of the real-time config that
+``[study] config`` names, whose own ``[study]`` table the study's keys then override::
+
+    kind = "robot-study"
+
+    [study]
+    config = "realtime.toml"      # relative to this file
+    seeds = 2
+
+``skidnav run CONFIG`` runs it (serially: a run keeps wall-clock pace); ``skidnav robot study
+--config REALTIME [--agents …]`` writes such a config of its flags (:func:`study_config_text`) and
+runs it with the same grid, runner, trial and files (:func:`run_study`), then writes the tables
+``OUT/study.md``. Everything a run needs lives in the config: each run starts its own sim server
+on a free loopback port, so there is no address to give.
+
+The grid (:class:`~skidnav.studies.hardware.grid.StudyGrid`) is agents × the config's ``[run]
+map`` × presets × seeds. :func:`skidnav.experiments.runner.run_experiment` expands, seeds,
+stores, locks and resumes it as it does an experiment's, with the study's results layout
+(:data:`STUDY_LAYOUT`) and its trial function,
 :class:`~skidnav.studies.hardware.trial.RealtimeTrial`: one real-time run on the ``sim`` driver.
 Seeds as in an experiment (:mod:`skidnav.experiments.runs`): every agent of a (preset, seed)
 meets the same world, and each run has its own stream for the agent. A run without a run file
-starts over. The tables of ``OUT/study.md`` (:mod:`skidnav.studies.hardware.report`) come from the
-store's summaries through :mod:`skidnav.experiments.report.analysis`. The comparison mirrors the
-thesis's real-robot results (SPEC §5: model-based ≈ +12 % success; the rough floor about
-doubles the success of the slippery one).
+starts over. The tables (:mod:`skidnav.studies.hardware.report`) come from the store's summaries
+through :mod:`skidnav.experiments.report.analysis`. The comparison mirrors the thesis's
+real-robot results (model-based ≈ +12 % success; the rough floor about doubles the success of
+the slippery one).
 """
 
 from __future__ import annotations
 
-import dataclasses
-import hashlib
-import json
-import math
+import copy
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
 
 from skidnav.atomicfile import write_user_file
-from skidnav.configtables import build_dataclass, table
+from skidnav.configtables import resolve_path, table, toml_value
 from skidnav.errors import UserError, first_line, shown
-from skidnav.experiments.config import MAX_EPISODES, MAX_SEEDS, AgentSpec, MapSpec
-from skidnav.experiments.runner import run_experiment
+from skidnav.experiments.configfile import parse_tables
+from skidnav.experiments.report.page import markdown_html
+from skidnav.experiments.runner import TrialFunction, run_experiment
+from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import ResultStore, RunLayout
-from skidnav.realtime.arena import arena_map
-from skidnav.realtime.config import (
-    RealtimeConfig,
-    RunSettings,
-    SimSettings,
-    config_from_mapping,
-    read_tables,
-    with_overrides,
-)
+from skidnav.realtime.config import read_tables, resolve_map_paths
 from skidnav.realtime.control.loop import EXIT_INTERRUPTED
-from skidnav.savedfile import ArraySpec, up_to
+from skidnav.savedfile import ArraySpec, read_config_text, up_to
+from skidnav.studies.hardware.grid import (
+    StudyGrid,
+    build_grid,
+    grid_from_dict,
+    grid_to_dict,
+    study_settings,
+)
 from skidnav.studies.hardware.report import markdown_report
 from skidnav.studies.hardware.trial import EPISODE_COLUMNS, RealtimeTrial, ignore
-from skidnav.world.discretization import Discretization
-from skidnav.world.grid import MAP_KINDS
+from skidnav.studies.kind import Study
 
 __all__ = [
+    "STUDY",
     "STUDY_LAYOUT",
     "StudyGrid",
     "StudyOutcome",
-    "StudySettings",
     "build_grid",
+    "grid_from_dict",
+    "grid_to_dict",
     "load_study",
     "run_study",
+    "study_config_text",
+    "study_grid",
 ]
 
+KIND = "robot-study"
+"""The study's kind, in its configs and its results' ``config.json``."""
 
-@dataclass(frozen=True)
-class StudySettings:
-    """What a study runs, validated on construction.
 
-    Attributes:
-        agents: agent names (registry). presets: ``[presets.NAME]`` tables of the config.
-        seeds: runs per (agent, preset).
-        episodes: episodes per run (None: the preset's ``[run] episodes``).
-        time_scale: robot s per wall s (None: the preset's ``[run] time_scale``).
+def study_grid(document: Mapping[str, Any], path: Path) -> StudyGrid:
+    """The grid of a parsed study config ``document`` read from ``path`` (module doc).
+
+    Raises:
+        UserError: one line naming the file, the table or key and what was expected.
     """
-
-    agents: tuple[str, ...] = ("q-learning", "dyna-kinematic")
-    presets: tuple[str, ...] = (
-        "rough-stationary",
-        "slippery-stationary",
-        "rough-drifting",
-        "slippery-drifting",
-    )
-    seeds: int = 1
-    episodes: int | None = None
-    time_scale: float | None = None
-
-    def __post_init__(self) -> None:
-        for name in ("agents", "presets"):
-            names = getattr(self, name)
-            named = isinstance(names, tuple) and all(isinstance(n, str) and n for n in names)
-            if not (named and names and len(set(names)) == len(names)):
-                raise ValueError(
-                    f"expected one or more distinct {name[:-1]} names, got {shown(names)}"
-                )
-        _check_count("seeds", self.seeds, MAX_SEEDS)
-        if self.episodes is not None:
-            _check_count("episodes", self.episodes, MAX_EPISODES)
-        scale = self.time_scale
-        if scale is not None and not (isinstance(scale, int | float) and 0 < scale < math.inf):
-            raise ValueError(f"expected a finite time_scale > 0, got {shown(scale)}")
-
-
-def _check_root_seed(name: str, value: object) -> None:
-    """ValueError unless ``value`` is an integer >= 0 (a ``SeedSequence`` entropy)."""
-    if not (isinstance(value, int) and not isinstance(value, bool) and value >= 0):
-        raise ValueError(f"expected {name} to be an integer >= 0, got {shown(value)}")
-
-
-def _check_count(name: str, value: object, most: int) -> None:
-    """ValueError unless ``value`` is an integer in [1, ``most``]."""
-    if not (isinstance(value, int) and not isinstance(value, bool) and 1 <= value <= most):
-        raise ValueError(f"expected {name} to be an integer in [1, {most:,}], got {shown(value)}")
-
-
-def load_study(path: Path, overrides: Mapping[str, Any]) -> tuple[dict[str, Any], StudySettings]:
-    """(TOML tables without ``[study]``, settings from ``[study]`` with ``overrides`` — keys of
-    :class:`StudySettings`, None values ignored — on top); UserError if unreadable or invalid."""
-    data = read_tables(path)
-    study = dict(table(data.pop("study", {}), f"{path}: [study]"))
-    study.update({key: value for key, value in overrides.items() if value is not None})
-    for key in ("agents", "presets"):
-        if isinstance(study.get(key), str):
-            study[key] = [name.strip() for name in study[key].split(",") if name.strip()]
-        if key in study and isinstance(study[key], list | tuple):
-            study[key] = tuple(study[key])
-    return data, build_dataclass(StudySettings, study, "[study]")
-
-
-@dataclass(frozen=True)
-class StudyGrid:
-    """A study as the runner's grid (:class:`~skidnav.experiments.runs.Grid`) and as the
-    statistics' settings (:class:`~skidnav.experiments.report.analysis.StatsSettings`).
-
-    Attributes:
-        agents: one per agent name (label = name; hyperparameters: ``configs``' ``agents``).
-        maps: the one map of every run, the config's ``[run] map``.
-        presets: preset names; ``configs``: the config of each, with the study's episodes and
-            time scale (its ``[run] map`` and ``seed`` are the study's; a run's seed comes from
-            its world stream).
-        seeds: runs per (agent, preset). root_seed: the config's ``[run] seed``.
-        bootstrap_samples, confidence: of every interval of the tables.
-    """
-
-    agents: tuple[AgentSpec, ...]
-    maps: tuple[MapSpec, ...]
-    presets: tuple[str, ...]
-    configs: tuple[RealtimeConfig, ...]
-    seeds: int
-    root_seed: int
-    name: str = "robot-study"
-    bootstrap_samples: int = 2000
-    confidence: float = 0.95
-
-    def __post_init__(self) -> None:
-        if not (self.agents and len(self.maps) == 1 and len(self.configs) == len(self.presets)):
-            raise ValueError("expected agents, one map and one config per preset")
-        _check_count("seeds", self.seeds, MAX_SEEDS)
-        _check_root_seed("root_seed", self.root_seed)
-
-    @property
-    def agent_labels(self) -> list[str]:
-        """Agent labels in grid order."""
-        return [agent.label for agent in self.agents]
-
-    @property
-    def baseline(self) -> str:
-        """The agent the others are compared to: Q-learning if in the study, else the first."""
-        return "q-learning" if "q-learning" in self.agent_labels else self.agent_labels[0]
-
-    @property
-    def n_runs(self) -> int:
-        """Runs of the grid."""
-        return len(self.agents) * len(self.presets) * self.seeds
-
-    def fingerprint(self) -> str:
-        """SHA-256 of the canonical JSON of :func:`grid_to_dict` (names a study directory)."""
-        text = json.dumps(grid_to_dict(self), sort_keys=True, separators=(",", ":"))
-        return hashlib.sha256(text.encode()).hexdigest()
-
-    def conditions(self) -> dict[str, tuple[str, bool]]:
-        """Preset → (slip preset of its floor, drifting slip?)."""
-        return {
-            p: (c.sim.slip, c.sim.drift > 0)
-            for p, c in zip(self.presets, self.configs, strict=True)
-        }
-
-
-def grid_to_dict(grid: StudyGrid) -> dict[str, Any]:
-    """The grid as a JSON-ready dict (inverse of :func:`grid_from_dict`)."""
-    return {
-        "name": grid.name,
-        "agents": [agent.name for agent in grid.agents],
-        "map": {"label": grid.maps[0].label, "kind": grid.maps[0].kind, "file": grid.maps[0].file},
-        "presets": [
-            {"name": preset, "run": asdict(c.run), "sim": asdict(c.sim), "agents": dict(c.agents)}
-            for preset, c in zip(grid.presets, grid.configs, strict=True)
-        ],
-        "seeds": grid.seeds,
-        "root_seed": grid.root_seed,
-        "bootstrap_samples": grid.bootstrap_samples,
-        "confidence": grid.confidence,
-    }
-
-
-def grid_from_dict(data: dict[str, Any]) -> StudyGrid:
-    """The grid saved by :func:`grid_to_dict` (KeyError, TypeError or ValueError if invalid)."""
-    presets = data["presets"]
-    configs = tuple(
-        RealtimeConfig(
-            run=RunSettings(**p["run"]), sim=SimSettings(**p["sim"]), agents=dict(p["agents"])
+    data = copy.deepcopy(dict(document))
+    data.pop("kind", None)
+    where = f"{path}: [study]"
+    study = dict(table(data.pop("study", {}), where))
+    source = study.pop("config", None)
+    tables_path = path
+    if source is None:
+        resolve_map_paths(data, path.parent)
+    elif not isinstance(source, str) or data:
+        raise UserError(
+            f"{where} config: expected the name of a real-time config and no other table "
+            f"here, got {shown(source)} and {', '.join(data) or 'none'}"
         )
-        for p in presets
-    )
-    return StudyGrid(
-        agents=tuple(AgentSpec(name, name) for name in data["agents"]),
-        maps=(MapSpec(**data["map"]),),
-        presets=tuple(str(p["name"]) for p in presets),
-        configs=configs,
-        seeds=data["seeds"],
-        root_seed=data["root_seed"],
-        name=data["name"],
-        bootstrap_samples=data["bootstrap_samples"],
-        confidence=data["confidence"],
-    )
+    else:
+        tables_path = resolve_path(source, path.parent)
+        data = read_tables(tables_path)
+        study = {**table(data.pop("study", {}), f"{tables_path}: [study]"), **study}
+    settings = study_settings(study, where)
+    try:
+        return build_grid(data, settings)
+    except UserError as error:
+        raise UserError(f"{tables_path}: {error}") from None
+
+
+def study_config_text(config: Path, overrides: Mapping[str, Any]) -> str:
+    """The study config of ``skidnav robot study --config CONFIG``: the real-time ``config`` by
+    its absolute path and the ``[study]`` keys given as ``overrides`` (None values left out;
+    agents and presets as comma-separated strings or lists)."""
+    lines = [
+        "# the config of `skidnav robot study`: skidnav run it to resume",
+        f'kind = "{KIND}"',
+        "",
+        "[study]",
+        f"config = {toml_value(str(config.resolve()))}",
+    ]
+    for key, value in overrides.items():
+        if value is not None:
+            lines.append(f"{key} = {toml_value(value)}")
+    return "\n".join(lines) + "\n"
+
+
+def load_study(config: Path, overrides: Mapping[str, Any]) -> tuple[StudyGrid, str]:
+    """(grid, config text) of the study ``skidnav robot study --config CONFIG`` with the
+    ``overrides`` of :func:`study_config_text` runs.
+
+    Raises:
+        UserError: ``config`` or the overrides are unreadable or invalid (one line).
+    """
+    read_config_text(config)  # an unreadable config named as itself, before the study's text
+    text = study_config_text(config, overrides)
+    return study_grid(parse_tables(text, config), config), text
 
 
 def study_file_specs(grid: StudyGrid) -> dict[str, ArraySpec]:
@@ -227,63 +145,8 @@ def study_file_specs(grid: StudyGrid) -> dict[str, ArraySpec]:
     return {f"episode.{key}": ArraySpec((episodes,), kinds="fiub") for key in EPISODE_COLUMNS}
 
 
-STUDY_LAYOUT = RunLayout(
-    "robot-study", EPISODE_COLUMNS, grid_to_dict, grid_from_dict, study_file_specs
-)
+STUDY_LAYOUT = RunLayout(KIND, EPISODE_COLUMNS, grid_to_dict, grid_from_dict, study_file_specs)
 """The results directory of a study (:class:`~skidnav.experiments.store.RunLayout`)."""
-
-
-def build_grid(tables: Mapping[str, Any], settings: StudySettings) -> StudyGrid:
-    """The grid of ``settings`` over the config ``tables``, checked before anything runs.
-
-    Raises:
-        UserError: an unknown agent or preset, invalid hyperparameters, an unreadable map, a
-            negative root seed, or a preset that sets ``[run] map``, ``seed`` or manual reset.
-    """
-    from skidnav.agents.tabular.registry import make_config
-
-    base = config_from_mapping(tables).run
-    seed = base.seed
-    try:
-        _check_root_seed("[run] seed", seed)
-    except ValueError as error:
-        raise UserError(str(error)) from None
-    configs = tuple(_preset_config(tables, settings, preset, base) for preset in settings.presets)
-    for config in configs:
-        for agent in settings.agents:
-            make_config(agent, config.agents.get(agent))  # UserError if unknown or invalid
-    arena_map(base.map, seed, Discretization())  # UserError if unreadable
-    return StudyGrid(
-        agents=tuple(AgentSpec(name, name) for name in settings.agents),
-        maps=(_map_spec(base.map),),
-        presets=settings.presets,
-        configs=configs,
-        seeds=settings.seeds,
-        root_seed=seed,
-    )
-
-
-def _preset_config(
-    tables: Mapping[str, Any], settings: StudySettings, preset: str, base: RunSettings
-) -> RealtimeConfig:
-    """The config of ``preset`` with the study's episodes and time scale, without the tables of
-    other drivers than ``sim``."""
-    config = config_from_mapping(tables, preset)
-    run = config.run
-    if (run.map, run.seed, run.reset) != (base.map, base.seed, "auto"):
-        raise UserError(
-            f"[presets.{preset}]: a study runs every preset on the [run] map from the [run] "
-            "seed, resetting automatically; this preset sets [run] map, seed or reset"
-        )
-    config = dataclasses.replace(config, drivers={})  # the sim driver needs none
-    return with_overrides(config, episodes=settings.episodes, time_scale=settings.time_scale)
-
-
-def _map_spec(spec: str) -> MapSpec:
-    """A ``[run] map`` (a kind, or a map file's absolute path) as the grid's map."""
-    if spec in MAP_KINDS:
-        return MapSpec(spec, kind=spec)
-    return MapSpec(Path(spec).stem, file=spec)
 
 
 class StudyOutcome(NamedTuple):
@@ -297,21 +160,22 @@ class StudyOutcome(NamedTuple):
 
 
 def run_study(
-    tables: Mapping[str, Any],
-    settings: StudySettings,
+    grid: StudyGrid,
     out: Path,
     *,
+    source_text: str = "",
     progress: Callable[[str], None] = ignore,
     announce: Callable[[str], None] = ignore,
 ) -> StudyOutcome:
-    """Run (or resume) every run of the study in ``out`` through the experiment runner, then
-    write ``study.md`` (also after an interruption, from the runs finished by then).
+    """Run (or resume) every run of ``grid`` in ``out`` through the experiment runner, as
+    ``skidnav run`` does with the study's config ``source_text`` (saved as ``config.toml``), then
+    write ``study.md`` (also after an interruption, from the runs finished by then); ``progress``
+    gets the real-time loop's status lines, ``announce`` one line per finished run.
 
     Raises:
-        UserError: bad settings or config (before anything is written), ``out`` holds other
-            results or is in use, a run's robot cannot be reached, a file cannot be written.
+        UserError: ``out`` holds other results or is in use, a run's robot cannot be reached, a
+            file cannot be written.
     """
-    grid = build_grid(tables, settings)
     if (out / "study.csv").exists() and not (out / "config.json").exists():
         raise UserError(f"{out}: holds a study in an earlier format; choose another --out")
     store = ResultStore(out, STUDY_LAYOUT)
@@ -319,7 +183,10 @@ def run_study(
     trial = RealtimeTrial(out, progress, announce)
     try:
         try:
-            outcome = run_experiment(grid, out, backend="serial", trial=trial, layout=STUDY_LAYOUT)
+            outcome = run_experiment(
+                grid, out, backend="serial", trial=trial, source_text=source_text,
+                layout=STUDY_LAYOUT,
+            )  # fmt: skip
         except KeyboardInterrupt:
             finished = write_report(store, grid, consolidate=True)
             return StudyOutcome(EXIT_INTERRUPTED, grid.n_runs, finished, finished - before)
@@ -339,3 +206,33 @@ def write_report(store: ResultStore, grid: StudyGrid, *, consolidate: bool = Fal
     text = markdown_report(summaries, grid, grid.conditions())
     write_user_file(store.root / "study.md", text.encode("utf-8"), "report")
     return len(summaries)
+
+
+class HardwareStudy:
+    """The hardware-in-the-loop study (:class:`~skidnav.studies.kind.Study`): serial only, its
+    runs writing their real-time files into the results directory."""
+
+    kind = KIND
+    layout = STUDY_LAYOUT
+    backends: tuple[str, ...] = ("serial",)
+
+    def grid(self, document: Mapping[str, Any], path: Path) -> Grid:
+        """:func:`study_grid`."""
+        return study_grid(document, path)
+
+    def trial(self, grid: Grid, out: Path) -> TrialFunction:
+        """One real-time run per call, its files in ``out/runs/AGENT/PRESET/seed-N``."""
+        return RealtimeTrial(out)
+
+    def report(self, run_dir: Path) -> str:
+        """The study's tables of ``run_dir`` (:func:`~skidnav.studies.hardware.report.
+        markdown_report`) as HTML."""
+        store = ResultStore(run_dir, STUDY_LAYOUT)
+        grid: StudyGrid = store.config()
+        summaries = store.load_tables()[1]
+        text = markdown_report(summaries, grid, grid.conditions())
+        return "<h2>Hardware-in-the-loop study</h2>" + markdown_html(text)
+
+
+STUDY: Study = HardwareStudy()
+"""The hardware-in-the-loop study, as :data:`skidnav.studies.kind.STUDY_MODULES` finds it."""

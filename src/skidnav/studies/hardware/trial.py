@@ -1,17 +1,16 @@
-"""The trial function of a hardware-in-the-loop study (studies/hardware/study.py): one real-time
-run.
+"""The trial function of a hardware-in-the-loop study (:mod:`skidnav.studies.hardware.study`):
+one real-time run.
 
 :class:`RealtimeTrial` is what :func:`skidnav.experiments.runner.run_experiment` calls for every
-run of a :class:`~skidnav.studies.hardware.study.StudyGrid`: a new agent, drawing from the run
-stream,
-acts in real time (:class:`~skidnav.realtime.control.loop.RealtimeLoop`) on the ``sim`` driver,
-which starts its own server on a free loopback port with the root seed drawn from the run's world
-stream (its :data:`~skidnav.seeding.ARENA_ROLES` children: map, slip field, robot noise, dropped
-poses; the same for every agent of a preset and seed). The agent draws from the ``agent`` child
-of the run stream (:data:`~skidnav.seeding.RUN_ROLES`), as in an experiment. The loop's files
-(``run.jsonl``, ``checkpoints/``, ``sim-server.jsonl``) go to ``OUT/runs/AGENT/PRESET/seed-N/``;
-the per-episode results (:data:`EPISODE_COLUMNS`) and the run's metrics (:func:`run_summary`) go
-back to the runner, which stores them.
+run of a :class:`~skidnav.studies.hardware.grid.StudyGrid`: a new agent, drawing from the run
+stream, acts in real time (:class:`~skidnav.realtime.control.loop.RealtimeLoop`) on the ``sim``
+driver, which starts its own server on a free loopback port with the root seed drawn from the
+run's world stream (its :data:`~skidnav.seeding.ARENA_ROLES` children: map, slip field, robot
+noise, dropped poses; the same for every agent of a preset and seed). The agent draws from the
+``agent`` child of the run stream (:data:`~skidnav.seeding.RUN_ROLES`), as in an experiment. The
+loop's files (``run.jsonl``, ``checkpoints/``, ``sim-server.jsonl``) go to
+``OUT/runs/AGENT/PRESET/seed-N/``; the per-episode results (:data:`EPISODE_COLUMNS`) and the
+run's metrics (:func:`run_summary`) go back to the runner, which stores them.
 """
 
 from __future__ import annotations
@@ -21,7 +20,7 @@ import shutil
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -34,10 +33,8 @@ from skidnav.realtime.control.records import EpisodeResult
 from skidnav.realtime.control.run import agent_context, drive, new_agent, warm_up_agent
 from skidnav.robot.params import RobotParams
 from skidnav.seeding import RUN_ROLES, child_sequences, seed_int
+from skidnav.studies.hardware.grid import StudyGrid
 from skidnav.world.discretization import Discretization
-
-if TYPE_CHECKING:
-    from skidnav.studies.hardware.study import StudyGrid
 
 EPISODE_COLUMNS = ("return", "length", "success", "collisions", "aborted", "wall_time")
 """Per-episode arrays of a study run: undiscounted return, actions, goal reached (and not

@@ -10,7 +10,7 @@ from typing import Any
 from skidnav.experiments.runner import TrialFunction
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import RunLayout
-from skidnav.studies.kind import Study
+from skidnav.studies.kind import STUDY_BACKENDS, Study
 from skidnav.studies.kinematic_models.grid import (
     KIND,
     LAYOUT,
@@ -28,12 +28,13 @@ class KinematicModelsStudy:
 
     kind: str = KIND
     layout: RunLayout = LAYOUT
+    backends = STUDY_BACKENDS
 
     def grid(self, document: Mapping[str, Any], path: Path) -> ModelComparison:
         """The comparison of the config ``document`` read from ``path`` (UserError if invalid)."""
         return comparison_from_document(document, path)
 
-    def trial(self, grid: Grid) -> TrialFunction:
+    def trial(self, grid: Grid, out: Path) -> TrialFunction:
         """:func:`~skidnav.studies.kinematic_models.trial.comparison_trial`."""
         return comparison_trial
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from skidnav.experiments.report.html import image, interval_text
+from skidnav.experiments.report.page import image, interval_text
 from skidnav.experiments.store import ResultStore
 from skidnav.stats import bootstrap_interval
 from skidnav.studies.policy_search.grid import LAYOUT, PolicySearchGrid

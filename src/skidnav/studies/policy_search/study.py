@@ -10,7 +10,7 @@ from typing import Any
 from skidnav.experiments.runner import TrialFunction
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import RunLayout
-from skidnav.studies.kind import Study
+from skidnav.studies.kind import STUDY_BACKENDS, Study
 from skidnav.studies.policy_search.grid import KIND, LAYOUT, PolicySearchGrid, grid_from_document
 from skidnav.studies.policy_search.report import report_section
 from skidnav.studies.policy_search.trial import SearchTrial
@@ -22,16 +22,16 @@ class PolicySearchStudy:
 
     kind: str = KIND
     layout: RunLayout = LAYOUT
+    backends = STUDY_BACKENDS
 
     def grid(self, document: Mapping[str, Any], path: Path) -> PolicySearchGrid:
         """The study of the config ``document`` read from ``path`` (UserError if invalid)."""
         return grid_from_document(document, path)
 
-    def trial(self, grid: Grid) -> TrialFunction:
-        """A :class:`~skidnav.studies.policy_search.trial.SearchTrial` without checkpoints: the
-        runner is given no results directory here, so a search cut short starts over (the
-        runs finished stay); ``skidnav study search`` checkpoints its search."""
-        return SearchTrial()
+    def trial(self, grid: Grid, out: Path) -> TrialFunction:
+        """A :class:`~skidnav.studies.policy_search.trial.SearchTrial` checkpointing each search
+        in ``out/checkpoints``: a search cut short continues from its last generation."""
+        return SearchTrial(out / "checkpoints")
 
     def report(self, run_dir: Path) -> str:
         """:func:`~skidnav.studies.policy_search.report.report_section`."""

@@ -19,6 +19,7 @@ from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import RunLayout, TrialResult
 from skidnav.physics.backend import PhysicsUnavailable, load_mujoco
 from skidnav.studies.agent_grid import read_grid, training_episodes
+from skidnav.studies.kind import STUDY_BACKENDS
 from skidnav.studies.transfer.evaluation import transfer_run
 from skidnav.studies.transfer.grid import KIND, LAYOUT, TransferGrid
 from skidnav.studies.transfer.report import report_section
@@ -50,6 +51,7 @@ class TransferStudy:
 
     kind: str = KIND
     layout: RunLayout = LAYOUT
+    backends = STUDY_BACKENDS
 
     def grid(self, document: Mapping[str, Any], path: Path) -> TransferGrid:
         """The validated grid of a parsed config; every agent a tabular one, its params checked
@@ -72,7 +74,7 @@ class TransferStudy:
                 raise UserError(f"{path}: [[agents]] {error}") from None
         return grid
 
-    def trial(self, grid: TransferGrid) -> TrialFunction:
+    def trial(self, grid: TransferGrid, out: Path) -> TrialFunction:
         """:func:`transfer_trial`, once MuJoCo loads (UserError naming what is missing)."""
         try:
             load_mujoco()
