@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.catalog import agent_names, entry, train
+from skidnav.agents.catalog import agent_names, entry
 from skidnav.agents.deep.dqn import DQNConfig
 from skidnav.agents.interface import Agent, EpisodeTrainingAgent, StepLearningAgent
 from skidnav.agents.linear.config import LinearConfig
@@ -77,21 +77,23 @@ def test_the_observation_each_agent_learns_over() -> None:
         entry("linear-q").build(dyna_maze(), {}, np.random.SeedSequence(0), 10)
 
 
-def _trained_linear_q(shorthand: bool) -> tuple[Any, TrainingLog]:
-    """linear-q built by the catalog and trained 3 episodes, by its entry or the shorthand."""
+def _trained_linear_q(bound_again: bool) -> tuple[Any, TrainingLog]:
+    """linear-q built by the catalog and trained 3 episodes, as built or bound again to its
+    entry (as an agent loaded from a file is)."""
     env = _pose_env().unwrapped
     built = entry("linear-q").build(env, {"tiles": [3]}, np.random.SeedSequence(2), 30)
     env.reset(seed=5)
-    if shorthand:
-        return built.agent, train(
-            built.agent, env, 3, max_steps=30, greedy_eval_env=None, greedy_seeds=None
+    if bound_again:
+        bound = entry("linear-q").bind(built.agent)
+        return bound.agent, bound.train(
+            env, 3, max_steps=30, greedy_eval_env=None, greedy_seeds=None
         )
     return built.agent, built.train(env, 3, max_steps=30, greedy_eval_env=None, greedy_seeds=None)
 
 
-def test_step_learners_answer_their_protocol_and_train_alike_through_the_shorthand() -> None:
-    (linear, log), (_, shorthand_log) = _trained_linear_q(False), _trained_linear_q(True)
-    np.testing.assert_array_equal(log.returns, shorthand_log.returns)
+def test_step_learners_answer_their_protocol_and_train_alike_when_bound_again() -> None:
+    (linear, log), (_, bound_log) = _trained_linear_q(False), _trained_linear_q(True)
+    np.testing.assert_array_equal(log.returns, bound_log.returns)
     assert log.lengths.sum() > 3
     assert isinstance(linear, StepLearningAgent) and not isinstance(linear, EpisodeTrainingAgent)
     tabular = entry("dyna-q").build(dyna_maze(), {}, np.random.SeedSequence(0), 10).agent

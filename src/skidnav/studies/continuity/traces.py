@@ -5,12 +5,11 @@ trajectories that jerk between full-speed commands. This module measures that on
 :func:`record_rollout` runs one episode of a policy (a callable observation → action; adapters
 :func:`tabular_policy` for a tabular agent's greedy action, :func:`wheel_speed_policy` for a
 :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy` on ``action="continuous"``) and
-returns a
-:class:`Trace`; :func:`trace_metrics` turns a trace into the numbers below; :func:`aggregate`
-and :func:`comparison_table` average them over many traces with bootstrap intervals
-(:mod:`skidnav.stats`). Definitions, T being the number of actions of the trace, Δt its control
-period [s], p_t = (x_t, y_t, ψ_t) its poses (t = 0 … T) and ω_t = (ω_L,t, ω_R,t) its commanded
-wheel speeds (t = 0 … T − 1); docs/continuity.md says why each one.
+returns a :class:`Trace`; :func:`trace_metrics` turns a trace into the numbers below;
+:func:`aggregate` and :func:`comparison_table` average them over many traces with bootstrap
+intervals (:mod:`skidnav.stats`). Definitions, T being the number of actions of the trace, Δt its
+control period [s], p_t = (x_t, y_t, ψ_t) its poses (t = 0 … T) and ω_t = (ω_L,t, ω_R,t) its
+commanded wheel speeds (t = 0 … T − 1); docs/continuity.md says why each one.
 
 1. **success**: 1 if the episode terminated (the goal was reached), else 0.
 2. **time to goal** [s]: T · Δt for a success; NaN for a failure (so means are over successes).

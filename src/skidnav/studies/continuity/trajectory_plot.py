@@ -3,10 +3,9 @@
 
 The arena is drawn as the experiment report draws it
 (:func:`~skidnav.experiments.report.plots.draw_cells`): the whole cell grid, y up; walls grey, the
-start
-cell green, the goal cell red. Each policy is one coloured line through the poses of its trace
-from the start pose (a dot) to its last pose: a filled circle when it reached the goal, a cross
-when it did not; the legend names the policy and its time to goal.
+start cell green, the goal cell red. Each policy is one coloured line through the poses of its trace
+from the start pose (a dot) to its last pose: a filled circle when it reached the goal, a cross when
+it did not; the legend names the policy and its time to goal.
 """
 
 from __future__ import annotations

@@ -33,7 +33,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from gymnasium.wrappers import TimeLimit
 
-from skidnav.agents.catalog import build_agent, observation_for, train
+from skidnav.agents.catalog import entry
 from skidnav.agents.training import TrainingLog, greedy_rollout, rollout_summary
 from skidnav.envs.mapset import MapSetEnv, world_env
 from skidnav.seeding import GENERALISATION_ROLES, RUN_ROLES, child, child_sequences, seed_int
@@ -240,14 +240,16 @@ def generalisation_run(
     sides (module doc, steps 2–3). ``env_options``: the worlds' env options (``map_kind``,
     ``slip``, ``observation``, ``lidar_rays``…)."""
     options = {**DEFAULT_OPTIONS, **(env_options or {})}
-    options["observation"] = observation_for(agent_name, options.get("observation"))
+    known = entry(agent_name)
+    options["observation"] = known.env_observation(options.get("observation"))
     streams = run_streams(root_seed, seed)
     env = MapSetEnv(split.training, **options)
-    agent = build_agent(agent_name, env, dict(params or {}), streams["agent"], max_steps)
+    built = known.build(env, dict(params or {}), streams["agent"], max_steps)
+    agent = built.agent
     limited = TimeLimit(env, max_steps)
     limited.reset(seed=seed_int(streams["episodes"]))
-    log = train(
-        agent, limited, episodes, max_steps=max_steps, greedy_eval_env=None, greedy_seeds=None
+    log = built.train(
+        limited, episodes, max_steps=max_steps, greedy_eval_env=None, greedy_seeds=None
     )
     successes = np.asarray(log.successes, dtype=float)
     sides = [

@@ -12,7 +12,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from skidnav.agents.catalog import check_params
+from skidnav.agents.catalog import entry
 from skidnav.errors import UserError
 from skidnav.experiments.runner import TrialFunction
 from skidnav.experiments.runs import RunSpec
@@ -56,7 +56,7 @@ class GeneralisationStudy:
         grid = read_grid(GeneralisationGrid, document, path, KIND)
         for agent in grid.agents:
             try:
-                check_params(agent.name, agent.params_dict())
+                entry(agent.name).config(agent.params_dict())
             except UserError as error:
                 raise UserError(f"{path}: [[agents]] {error}") from None
         return grid

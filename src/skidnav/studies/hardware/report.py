@@ -2,12 +2,11 @@
 docs/realtime.md).
 
 Every statistic comes from :mod:`skidnav.experiments.report.analysis`, over the store's summaries
-(one
-row per run): a cell's estimate is the mean over its seeds of the runs' own rates and lengths,
-with a percentile-bootstrap interval (none from one seed) drawn by the cell's own generator,
-keyed by the root seed and the cell's labels. An agent minus the baseline (Q-learning) is paired
-by (preset, seed): both met the same world. The rough and the slippery floor are different
-worlds, compared unpaired. This module only formats.
+(one row per run): a cell's estimate is the mean over its seeds of the runs' own rates and lengths,
+with a percentile-bootstrap interval (none from one seed) drawn by the cell's own generator, keyed
+by the root seed and the cell's labels. An agent minus the baseline (Q-learning) is paired by
+(preset, seed): both met the same world. The rough and the slippery floor are different worlds,
+compared unpaired. This module only formats.
 """
 
 from __future__ import annotations

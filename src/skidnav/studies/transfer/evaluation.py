@@ -18,7 +18,7 @@ import gymnasium
 import numpy as np
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.catalog import agent_context
+from skidnav.agents.catalog import entry
 from skidnav.agents.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import TrainingLog, greedy_evaluation, rollout_summary
@@ -70,7 +70,7 @@ def transfer_run(
     n_states = int(kinematic.observation_space.n)  # type: ignore[attr-defined]
     agent = make_agent(
         agent_name, n_states, 4, dict(params or {}), np.random.default_rng(agent_stream),
-        **agent_context(agent_name, kinematic.unwrapped),
+        **entry(agent_name).context(kinematic.unwrapped),
     )  # fmt: skip
     log = train_agent_fast(
         agent, kinematic, episodes, max_steps=max_steps, seed=seed_int(episode_stream)

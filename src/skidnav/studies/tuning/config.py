@@ -21,8 +21,7 @@
 
 Every problem raises :class:`~skidnav.errors.UserError` naming the file and the key, like the rest
 of the config. The search itself is :mod:`skidnav.studies.tuning.search`, the ``tuned.toml`` it
-writes
-:mod:`skidnav.studies.tuning.tuned_file`.
+writes :mod:`skidnav.studies.tuning.tuned_file`.
 """
 
 from __future__ import annotations
