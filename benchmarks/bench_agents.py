@@ -40,9 +40,10 @@ from skidnav.agents.fast_training import train_agent_fast
 from skidnav.agents.tabular.planning import dyna_planning
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import train_agent
-from skidnav.commands.reproduce import BOOK, PLANNING_STEPS, dyna_maze_runs
 from skidnav.envs.mazes import dyna_maze
 from skidnav.models.multinomial_kernels import MOST_PROBABLE
+from skidnav.studies.sutton_barto.grid import BOOK, TextbookChecks
+from skidnav.studies.sutton_barto.trial import dyna_maze_run
 
 SCALE = 3  # 486-state maze: a model with every pair seen
 REPEATS = 3  # each rate is the best of this many timings (the machine is shared)
@@ -214,6 +215,18 @@ def sweeping_rates() -> tuple[float, float, float]:
         trainer(agent, dyna_maze(SCALE), SWEEP_EPISODES, seed=0)
         rates.append(agent.planning_updates / (time.perf_counter() - start))
     return rates[0], rates[1], rates[2]
+
+
+DYNA_MAZE = TextbookChecks(examples=("dyna-maze",))
+"""Example 8.1's checks: Dyna-Q with n = 0, 5, 50 on the Dyna Maze."""
+PLANNING_STEPS = DYNA_MAZE.planning_steps
+
+
+def dyna_maze_runs(runs: int) -> None:
+    """``runs`` runs of every Example 8.1 check (the study's run, compiled), run k seeded k."""
+    for check in DYNA_MAZE.checks():
+        for seed in range(runs):
+            dyna_maze_run(check, np.random.default_rng(seed), seed)
 
 
 def plain_dyna_maze_seconds(runs: int) -> float:

@@ -45,7 +45,7 @@ COMMANDS: dict[str, tuple[list[str], str]] = {
     ),
     "reproduce": (
         ["study", "reproduce", "sutton-barto", "--out", "{dir}"],
-        "skidnav.commands.reproduce._report_dyna_maze",
+        "skidnav.commands.run.run_experiment",
     ),
     "map generate": (
         ["world", "map", "generate", "--out", "{file}"],

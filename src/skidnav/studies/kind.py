@@ -81,6 +81,7 @@ STUDY_MODULES: dict[str, str] = {
     "transfer": "skidnav.studies.transfer.study",
     "continuity": "skidnav.studies.continuity.study",
     "robot-study": "skidnav.studies.hardware.study",
+    "sutton-barto-checks": "skidnav.studies.sutton_barto.study",
 }
 """Study kind → the module defining its ``STUDY``."""
 
