@@ -1,9 +1,9 @@
 """``skidnav run CONFIG``: run (or resume) an experiment grid or a study (a config with a
 ``kind``, :mod:`skidnav.studies.kind`) on the one runner.
 
-The study shortcuts (``skidnav study continuity``, ``skidnav robot study``) write the config of
-their flags and run it through :func:`parse_grid` and :func:`run_loaded`, the path of ``skidnav
-run``: the same grid, runs, files and resume."""
+The study shortcuts (``skidnav study …``, ``skidnav robot study``; :mod:`skidnav.commands.shortcut`)
+write the config of their flags and run it through :func:`parse_grid` and :func:`run_loaded`, the
+path of ``skidnav run``: the same grid, runs, files and resume."""
 
 from __future__ import annotations
 
@@ -19,12 +19,7 @@ from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import EXPERIMENT_LAYOUT, RunLayout
 from skidnav.outputs import check_output_dir
 from skidnav.savedfile import read_config_text
-from skidnav.studies.kind import (
-    EXPERIMENT_KIND,
-    Study,
-    study,
-    study_kind,
-)
+from skidnav.studies.kind import EXPERIMENT_KIND, Study, study, study_kind
 
 
 def add_parser(subparsers: Any) -> None:
