@@ -61,6 +61,15 @@ def _workers(pid: int) -> list[psutil.Process]:
         return []
 
 
+def _command_line(child: psutil.Process) -> list[str]:
+    """``child``'s command line; empty for one that has just ended (a zombie not yet reaped, or
+    gone: short-lived children such as ``git`` for the provenance come and go)."""
+    try:
+        return child.cmdline()
+    except (psutil.ZombieProcess, psutil.NoSuchProcess, psutil.AccessDenied):
+        return []
+
+
 def _started(process: subprocess.Popen[bytes], out: Path, backend: str) -> list[psutil.Process]:
     """Wait until the sweep is mid-way: two runs written and, on the process backend, both pool
     workers alive (the first run of each algorithm runs in the parent before the pool starts).
@@ -68,7 +77,7 @@ def _started(process: subprocess.Popen[bytes], out: Path, backend: str) -> list[
     deadline = time.monotonic() + 180
     while process.poll() is None and time.monotonic() < deadline:
         children = _workers(process.pid)
-        workers = [c for c in children if "spawn_main" in " ".join(c.cmdline())]
+        workers = [c for c in children if "spawn_main" in " ".join(_command_line(c))]
         if len(_finished(out)) >= 2 and (backend == "serial" or len(workers) == 2):
             return children
         time.sleep(0.02)
