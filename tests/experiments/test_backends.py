@@ -120,7 +120,7 @@ def test_sigkill_mid_sweep_then_resume(
     while any(_alive(child) for child in children) and time.monotonic() < deadline:
         time.sleep(0.1)
     survivors = [child for child in children if _alive(child)]
-    commands = [" ".join(child.cmdline()) for child in survivors]
+    commands = [" ".join(_command_line(child)) for child in survivors]
     for child in survivors:  # do not leave them behind when the check fails
         child.kill()
     assert not survivors, f"processes of the killed sweep still alive: {commands}"
