@@ -15,7 +15,7 @@ Prints (planning rates: best of three timings each):
   queue empties before the budget, its updates per second of planning time alone
   (:func:`sweeping_planning_time_rate`), and its rate later in learning, once the queue no
   longer empties (:func:`sweeping_long_run`);
-* the wall time of the 30 Dyna Maze runs of ``skidnav reproduce`` (Sutton & Barto (2018)
+* the wall time of the 30 Dyna Maze runs of ``skidnav study reproduce`` (Sutton & Barto (2018)
   Example 8.1, n = 0, 5, 50, without writing files; fused maze trainer) against the same runs of
   the plain-Python Dyna-Q (a few runs, scaled to 30).
 
@@ -37,12 +37,13 @@ import numpy as np
 from plain_python import interpreted
 
 from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import make_agent
+from skidnav.agents.tabular.planning import dyna_planning
+from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import train_agent
-from skidnav.commands.reproduce import BOOK, PLANNING_STEPS, dyna_maze_runs
 from skidnav.envs.mazes import dyna_maze
-from skidnav.kernels.multinomial import MOST_PROBABLE
-from skidnav.kernels.planning import dyna_planning
+from skidnav.models.multinomial_kernels import MOST_PROBABLE
+from skidnav.studies.sutton_barto.grid import BOOK, TextbookChecks
+from skidnav.studies.sutton_barto.trial import dyna_maze_run
 
 SCALE = 3  # 486-state maze: a model with every pair seen
 REPEATS = 3  # each rate is the best of this many timings (the machine is shared)
@@ -216,6 +217,18 @@ def sweeping_rates() -> tuple[float, float, float]:
     return rates[0], rates[1], rates[2]
 
 
+DYNA_MAZE = TextbookChecks(examples=("dyna-maze",))
+"""Example 8.1's checks: Dyna-Q with n = 0, 5, 50 on the Dyna Maze."""
+PLANNING_STEPS = DYNA_MAZE.planning_steps
+
+
+def dyna_maze_runs(runs: int) -> None:
+    """``runs`` runs of every Example 8.1 check (the study's run, compiled), run k seeded k."""
+    for check in DYNA_MAZE.checks():
+        for seed in range(runs):
+            dyna_maze_run(check, np.random.default_rng(seed), seed)
+
+
 def plain_dyna_maze_seconds(runs: int) -> float:
     """Wall time of ``runs`` runs of :func:`dyna_maze_runs` with :class:`PlainDynaQ`."""
     start = time.perf_counter()
@@ -312,7 +325,7 @@ def compile_trajectory_kernels(grid: Any) -> None:
     """Compile (or load from the cache) the kernels a model-based agent first calls when an
     episode reaches the goal, which the warm-up episodes may not do: otherwise a cold cache puts
     their compilation (~1.4 s) inside the timed episodes."""
-    from skidnav.kernels import kinematic_planning as kp
+    from skidnav.agents.tabular import kinematic_planning as kp
 
     trajectory = kp.loop_erase(np.zeros(2, dtype=np.int64), 4, 12_500)
     kp.neighbourhood_keys(trajectory, np.zeros((grid.n_x, grid.n_y), np.bool_), grid, 4, True)

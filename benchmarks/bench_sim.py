@@ -10,7 +10,7 @@ import numpy as np
 from plain_python import interpreted
 
 from skidnav.envs.navigation import SkidSteerNavEnv
-from skidnav.kernels.navigation import simulate_batch
+from skidnav.sim.navigation import simulate_batch
 
 TARGET_BATCH = 1_000_000
 TARGET_API = 30_000

@@ -26,7 +26,7 @@ from plain_python import interpreted
 
 import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import AGENT_MODULES, make_agent
+from skidnav.agents.tabular.registry import AGENT_MODULES, make_agent
 from skidnav.agents.training import train_agent
 
 MAX_STEPS = 300

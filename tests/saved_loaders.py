@@ -64,7 +64,7 @@ def _map_file(folder: Path) -> tuple[Path, list[Path]]:
 
 
 def _tabular_agent(folder: Path) -> tuple[Path, list[Path]]:
-    from skidnav.agents.registry import make_agent
+    from skidnav.agents.tabular.registry import make_agent
 
     agent = make_agent("dyna-q", 54, 4, {"planning_steps": 3}, np.random.default_rng(0))
     agent.q[:] = np.random.default_rng(1).random(agent.q.shape)
@@ -75,7 +75,7 @@ def _tabular_agent(folder: Path) -> tuple[Path, list[Path]]:
 def _linear_agent(folder: Path) -> tuple[Path, list[Path]]:
     from gymnasium.spaces import Box
 
-    from skidnav.agents.continuous.registry import make_linear_agent
+    from skidnav.agents.linear.registry import make_linear_agent
 
     space = Box(low=np.zeros(3), high=np.ones(3), dtype=np.float64)
     agent = make_linear_agent("linear-q", space, 4, {"tiles": [4], "n_tilings": 2})
@@ -101,8 +101,8 @@ def _load_kinematic_model(path: Path) -> Any:
 
 
 def _tanh_policy(folder: Path) -> tuple[Path, list[Path]]:
-    from skidnav.policysearch.policy import PolicyLayout, TanhPolicy
-    from skidnav.policysearch.policyfile import save_policy
+    from skidnav.agents.policies.search.policy_file import save_policy
+    from skidnav.agents.policies.search.tanh_policy import PolicyLayout, TanhPolicy
 
     layout = PolicyLayout(np.zeros(9), np.ones(9), hidden=2, wheel_speed=1.7, lidar_rays=2)
     parameters = np.linspace(-1.0, 1.0, layout.n_parameters)
@@ -118,8 +118,8 @@ def _ppo_policy(folder: Path) -> tuple[Path, list[Path]]:
 
 
 def _cma_checkpoint(folder: Path) -> tuple[Path, list[Path]]:
-    from skidnav.policysearch.search import run_search
-    from tests.policysearch.test_search import TINY
+    from skidnav.agents.policies.search.cmaes import run_search
+    from tests.agents.policies.test_search import TINY
 
     config = dataclasses.replace(TINY, generations=1, population=4, eval_every=1)
     run_search(config, checkpoint=folder / "checkpoint")
@@ -127,8 +127,8 @@ def _cma_checkpoint(folder: Path) -> tuple[Path, list[Path]]:
 
 
 def _load_cma_checkpoint(path: Path) -> Any:
-    from skidnav.policysearch.checkpoint import load_checkpoint
-    from skidnav.policysearch.policy import parameter_count
+    from skidnav.agents.policies.search.checkpoint import load_checkpoint
+    from skidnav.agents.policies.search.tanh_policy import parameter_count
 
     return load_checkpoint(path, parameter_count(7 + 8, 0))
 
@@ -206,7 +206,7 @@ def _load_tables(root: Path) -> Any:
 def _journal(folder: Path) -> tuple[Path, list[Path]]:
     import optuna
 
-    from skidnav.experiments.tuning import open_storage
+    from skidnav.studies.tuning.search import open_storage
 
     path = folder / "journal.log"
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -235,16 +235,16 @@ LOADERS: dict[str, Loader] = {
     "experiment config": Loader(
         _experiment_config, _import("skidnav.experiments.configfile:load_config")
     ),
-    "tune config": Loader(_tune_config, _import("skidnav.experiments.tuneconfig:load_tune_config")),
+    "tune config": Loader(_tune_config, _import("skidnav.studies.tuning.config:load_tune_config")),
     "realtime config": Loader(_realtime_config, _import("skidnav.realtime.config:load_config")),
     "map file": Loader(_map_file, _import("skidnav.world.mapfile:load_map")),
-    "tabular agent": Loader(_tabular_agent, _import("skidnav.agents.registry:load_agent")),
+    "tabular agent": Loader(_tabular_agent, _import("skidnav.agents.tabular.registry:load_agent")),
     "linear agent": Loader(
-        _linear_agent, _import("skidnav.agents.continuous.registry:load_linear_agent")
+        _linear_agent, _import("skidnav.agents.linear.registry:load_linear_agent")
     ),
     "kinematic model": Loader(_kinematic_model, _load_kinematic_model),
-    "tanh policy": Loader(_tanh_policy, _import("skidnav.agents.policy_files:load_policy")),
-    "ppo policy": Loader(_ppo_policy, _import("skidnav.agents.policy_files:load_policy")),
+    "tanh policy": Loader(_tanh_policy, _import("skidnav.agents.policies.loading:load_policy")),
+    "ppo policy": Loader(_ppo_policy, _import("skidnav.agents.policies.loading:load_policy")),
     "CMA-ES checkpoint": Loader(_cma_checkpoint, _load_cma_checkpoint),
     "real-time checkpoint": Loader(_realtime_checkpoint, _latest_checkpoint),
     "calibration": Loader(

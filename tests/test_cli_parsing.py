@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from skidnav.cli import SUBCOMMAND_MODULES, main, requested_modules
+from skidnav.cli import COMMANDS, main, requested_modules
 
 
 @pytest.mark.parametrize(
@@ -18,7 +18,10 @@ from skidnav.cli import SUBCOMMAND_MODULES, main, requested_modules
         (["nosuch"], "skidnav: error: argument command: invalid choice: 'nosuch'"),
         (["run"], "skidnav: error: run: the following arguments are required: config"),
         (["run", "c.toml", "--jobs", "two"], "skidnav: error: run: argument --jobs"),
-        (["map", "generate", "--kind", "nope"], "skidnav: error: map generate: argument --kind"),
+        (
+            ["world", "map", "generate", "--kind", "nope"],
+            "skidnav: error: world map generate: argument --kind",
+        ),
         (["robot", "run", "--bogus"], "skidnav: error: robot run: "),
         (["camera"], "skidnav: error: camera: the following arguments are required"),
     ],
@@ -36,9 +39,13 @@ def test_an_argument_error_is_one_line(
 
 
 def test_only_the_named_subcommand_is_imported() -> None:
-    assert requested_modules(["-v", "robot", "sim-server"]) == ["skidnav.commands.robot"]
-    assert requested_modules(["--help"]) == list(SUBCOMMAND_MODULES.values())
-    assert requested_modules(["nosuch"]) == list(SUBCOMMAND_MODULES.values())
+    assert requested_modules(["-v", "robot", "sim-server"]) == {"robot": "skidnav.commands.robot"}
+    assert requested_modules(["study", "continuity", "x.toml"]) == {
+        "study": {"continuity": "skidnav.commands.continuity"}
+    }
+    assert requested_modules(["study", "--help"]) == {"study": COMMANDS["study"]}
+    assert requested_modules(["--help"]) == COMMANDS
+    assert requested_modules(["nosuch"]) == COMMANDS
     probe = (
         "import sys; from skidnav.cli import build_parser, requested_modules;"
         "build_parser(requested_modules(['robot', 'sim-server']));"
@@ -55,4 +62,16 @@ def test_help_still_lists_every_subcommand(capsys: pytest.CaptureFixture[str]) -
         main(["--help"])
     assert leave.value.code == 0
     listing = capsys.readouterr().out
-    assert all(name in listing for name in SUBCOMMAND_MODULES)
+    assert all(name in listing for name in COMMANDS)
+    assert len(COMMANDS) <= 8
+
+
+@pytest.mark.parametrize("group", ["study", "world"])
+def test_a_group_lists_its_verbs(group: str, capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as leave:
+        main([group, "--help"])
+    assert leave.value.code == 0
+    listing = capsys.readouterr().out
+    verbs = COMMANDS[group]
+    assert isinstance(verbs, dict)
+    assert all(verb in listing for verb in verbs)

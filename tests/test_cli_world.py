@@ -1,4 +1,4 @@
-"""``skidnav map`` and ``skidnav simulate`` from the command line."""
+"""``skidnav world map`` and ``skidnav world simulate`` from the command line."""
 
 import os
 import subprocess
@@ -24,12 +24,14 @@ def run_cli(*args: str) -> subprocess.CompletedProcess:
 
 def test_map_generate_then_show_as_text_and_png(tmp_path, capsys):
     path = tmp_path / "maze.txt"
-    assert main(["map", "generate", "--kind", "maze", "--seed", "2", "--out", str(path)]) == 0
-    assert main(["map", "show", str(path)]) == 0
+    assert (
+        main(["world", "map", "generate", "--kind", "maze", "--seed", "2", "--out", str(path)]) == 0
+    )
+    assert main(["world", "map", "show", str(path)]) == 0
     shown = capsys.readouterr().out
     assert "skidnav-map 1" in shown and shown.count("S") >= 1
     png = tmp_path / "maze.png"
-    assert main(["map", "show", str(path), "--png", str(png)]) == 0
+    assert main(["world", "map", "show", str(path), "--png", str(png)]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
@@ -37,6 +39,7 @@ def test_simulate_writes_a_picture_and_csv(tmp_path, capsys):
     png, table = tmp_path / "t.png", tmp_path / "t.csv"
     code = main(
         [
+            "world",
             "simulate",
             "--map-kind",
             "free",
@@ -56,7 +59,7 @@ def test_simulate_writes_a_picture_and_csv(tmp_path, capsys):
     assert b"\r" not in table.read_bytes()  # plain "\n" line endings on every platform
 
 
-ONE_STEP = ["simulate", "--map-kind", "free", "--actions", "f"]
+ONE_STEP = ["world", "simulate", "--map-kind", "free", "--actions", "f"]
 EDGE_MAP = "skidnav-map 1\nwidth 6\nheight 5\nmap\n######\n#....S\n#....#\n#G...#\n######\n"
 """A hand-written map with the start in the last column (i = 5: the arena's edge x = W)."""
 
@@ -64,23 +67,35 @@ EDGE_MAP = "skidnav-map 1\nwidth 6\nheight 5\nmap\n######\n#....S\n#....#\n#G...
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["simulate", "--actions", "f f jump"], "unknown action 'jump'"),
-        (["map", "show", "missing.txt"], "missing.txt: no such map file"),
-        (["map", "generate", "--size", "3", "3"], "at least 5"),
-        (["simulate", "--random", "0"], "--random >= 1"),
-        (["simulate", "--drift", "-1", "--random", "1"], "expected drift_amplitude >= 0"),
-        (["simulate", "--world-seed", "-5", "--random", "1"], "expected --world-seed >= 0"),
-        (["simulate", "--seed", "-5", "--random", "1"], "expected --seed >= 0"),
+        (["world", "simulate", "--actions", "f f jump"], "unknown action 'jump'"),
+        (["world", "map", "show", "missing.txt"], "missing.txt: no such map file"),
+        (["world", "map", "generate", "--size", "3", "3"], "at least 5"),
+        (["world", "simulate", "--random", "0"], "--random >= 1"),
+        (["world", "simulate", "--drift", "-1", "--random", "1"], "expected drift_amplitude >= 0"),
+        (
+            ["world", "simulate", "--world-seed", "-5", "--random", "1"],
+            "expected --world-seed >= 0",
+        ),
+        (["world", "simulate", "--seed", "-5", "--random", "1"], "expected --seed >= 0"),
         ([*ONE_STEP, "--out", "/nonexistent/x.png"], "/nonexistent/x.png: cannot write"),
         ([*ONE_STEP, "--out", "{tmp}/x.unknown"], "x.unknown: unknown picture format"),
         (
             [*ONE_STEP, "--out", "{tmp}/t.png", "--csv", "/nonexistent/x.csv"],
             "/nonexistent/x.csv: cannot write there (no directory /nonexistent); choose another",
         ),
-        (["simulate", "--map", "{edge}", "--actions", "f"], "m.txt:6:6: start 'S' in the last"),
-        (["map", "generate", "--out", "/nonexistent/x.txt"], "/nonexistent/x.txt: cannot write"),
-        (["map", "show", "{map}", "--png", "/nonexistent/x.png"], "/nonexistent/x.png: cannot"),
-        (["map", "generate", "--size", "1001", "5"], "at most 1000 × 1000 cells"),
+        (
+            ["world", "simulate", "--map", "{edge}", "--actions", "f"],
+            "m.txt:6:6: start 'S' in the last",
+        ),
+        (
+            ["world", "map", "generate", "--out", "/nonexistent/x.txt"],
+            "/nonexistent/x.txt: cannot write",
+        ),
+        (
+            ["world", "map", "show", "{map}", "--png", "/nonexistent/x.png"],
+            "/nonexistent/x.png: cannot",
+        ),
+        (["world", "map", "generate", "--size", "1001", "5"], "at most 1000 × 1000 cells"),
     ],
 )
 def test_user_errors_are_one_line_and_exit_2(args, message, tmp_path):
@@ -97,15 +112,30 @@ def test_user_errors_are_one_line_and_exit_2(args, message, tmp_path):
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["simulate", "--actions-file", "/dev/zero"], "action file (a character device, not a"),
-        (["simulate", "--actions-file", "{huge}"], "action file larger than 2,097,152 bytes"),
-        (["simulate", "--actions-file", "{tmp}/none"], "none: no such action file"),
-        (["simulate", "--actions-file", "{long}"], "100,001 actions, expected at most 100,000"),
-        (["simulate", "--actions", "f " + "x" * 10**5], "unknown action 'xxxxxxxxx"),
-        (["simulate", "--random", "100001"], "expected --random >= 1 and <= 100,000"),
-        (["map", "show", "/dev/zero"], "/dev/zero: cannot read map file (a character device"),
-        (["simulate", "--map", "/dev/zero", "--actions", "f"], "map file (a character device"),
-        (["map", "show", "{huge}"], "huge.txt: map file larger than 4,194,304 bytes"),
+        (
+            ["world", "simulate", "--actions-file", "/dev/zero"],
+            "action file (a character device, not a",
+        ),
+        (
+            ["world", "simulate", "--actions-file", "{huge}"],
+            "action file larger than 2,097,152 bytes",
+        ),
+        (["world", "simulate", "--actions-file", "{tmp}/none"], "none: no such action file"),
+        (
+            ["world", "simulate", "--actions-file", "{long}"],
+            "100,001 actions, expected at most 100,000",
+        ),
+        (["world", "simulate", "--actions", "f " + "x" * 10**5], "unknown action 'xxxxxxxxx"),
+        (["world", "simulate", "--random", "100001"], "expected --random >= 1 and <= 100,000"),
+        (
+            ["world", "map", "show", "/dev/zero"],
+            "/dev/zero: cannot read map file (a character device",
+        ),
+        (
+            ["world", "simulate", "--map", "/dev/zero", "--actions", "f"],
+            "map file (a character device",
+        ),
+        (["world", "map", "show", "{huge}"], "huge.txt: map file larger than 4,194,304 bytes"),
     ],
 )
 def test_arguments_naming_endless_or_huge_inputs_are_one_line(args, message, tmp_path, capsys):
@@ -122,7 +152,7 @@ def test_a_map_file_naming_the_environment_does_not_print_it():
     # the 40 quoted characters show part of the name, never a value.
     env = {"SKIDNAV_TEST_VARIABLE_WITH_A_LONG_NAME_XY": "never-printed"}
     result = subprocess.run(
-        [sys.executable, "-m", "skidnav.cli", "map", "show", "/proc/self/environ"],
+        [sys.executable, "-m", "skidnav.cli", "world", "map", "show", "/proc/self/environ"],
         env={**env, **os.environ, "PYTHONPATH": SRC},
         capture_output=True,
         text=True,
@@ -138,7 +168,7 @@ def test_a_script_runs_to_its_end_past_the_episode_limit(tmp_path, capsys):
     script = tmp_path / "script.txt"
     script.write_text("l r " * 300)  # 600 turns in place: never the goal, past the 500 limit
     table = tmp_path / "t.csv"
-    args = ["simulate", "--map-kind", "free", "--actions-file", str(script)]
+    args = ["world", "simulate", "--map-kind", "free", "--actions-file", str(script)]
     assert main([*args, "--out", str(tmp_path / "t.png"), "--csv", str(table)]) == 0
     assert capsys.readouterr().out.startswith("600 actions,")
     assert len(table.read_text().splitlines()) == 1 + 601
@@ -150,7 +180,16 @@ def test_a_script_that_reaches_the_goal_says_what_it_did_not_run(tmp_path, capsy
     room.write_text("skidnav-map 1\nwidth 8\nheight 5\nmap\n" + "########\n" * 2
                     + "#S.G...#\n" + "########\n" * 2)  # fmt: skip
     code = main(
-        ["simulate", "--map", str(room), "--actions", "f " * 20, "--out", str(tmp_path / "r.png")]
+        [
+            "world",
+            "simulate",
+            "--map",
+            str(room),
+            "--actions",
+            "f " * 20,
+            "--out",
+            str(tmp_path / "r.png"),
+        ]
     )
     out = capsys.readouterr().out
     assert code == 0 and "reached the goal (the episode ended there: " in out

@@ -1,5 +1,5 @@
 """The one seeding convention (seeding.py): named children of a root seed, the experiment's spawn
-tree, the arena's streams and ``skidnav simulate``'s separate env and policy streams."""
+tree, the arena's streams and ``skidnav world simulate``'s separate env and policy streams."""
 
 import csv
 
@@ -66,7 +66,7 @@ def test_the_experiment_spawn_tree_is_unchanged() -> None:
 
 def test_simulate_draws_its_policy_and_env_noise_from_separate_children(tmp_path) -> None:
     table = tmp_path / "t.csv"
-    arguments = ["simulate", "--map-kind", "free", "--random", "30", "--seed", "6"]
+    arguments = ["world", "simulate", "--map-kind", "free", "--random", "30", "--seed", "6"]
     assert main([*arguments, "--out", str(tmp_path / "t.png"), "--csv", str(table)]) == 0
     with table.open() as handle:
         actions = [int(row["action"]) for row in csv.DictReader(handle)][1:]

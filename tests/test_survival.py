@@ -224,7 +224,7 @@ def test_bootstraps_are_fast() -> None:
 
 
 def test_plots_return_png() -> None:
-    from skidnav.experiments.plots import performance_profiles, speedup_vs_budget
+    from skidnav.experiments.report.plots import performance_profiles, speedup_vs_budget
 
     episodes = np.arange(1, 101)
     share = np.clip(episodes / 80, 0, 1)

@@ -16,46 +16,66 @@ from collections.abc import Sequence
 from skidnav.commands.parsing import OneLineParser
 from skidnav.errors import EXIT_RUNS_FAILED, RunsFailedError, UserError
 
-SUBCOMMAND_MODULES = {
-    "map": "skidnav.commands.map",
-    "simulate": "skidnav.commands.simulate",
+COMMANDS: dict[str, str | dict[str, str]] = {
     "run": "skidnav.commands.run",
-    "tune": "skidnav.commands.tune",
     "report": "skidnav.commands.report",
-    "reproduce": "skidnav.commands.reproduce",
+    "tune": "skidnav.commands.tune",
+    "study": {
+        "continuity": "skidnav.commands.continuity",
+        "generalise": "skidnav.commands.generalise",
+        "transfer": "skidnav.commands.transfer",
+        "kinematic": "skidnav.commands.kinematic",
+        "search": "skidnav.commands.search",
+        "reproduce": "skidnav.commands.reproduce",
+    },
+    "world": {
+        "map": "skidnav.commands.map",
+        "simulate": "skidnav.commands.simulate",
+        "floors": "skidnav.commands.floors",
+    },
     "robot": "skidnav.commands.robot",
     "camera": "skidnav.commands.camera",
-    "floors": "skidnav.commands.floors",
-    "transfer": "skidnav.commands.transfer",
-    "generalise": "skidnav.commands.generalise",
-    "kinematic": "skidnav.commands.kinematic",
-    "continuity": "skidnav.commands.continuity",
-    "search": "skidnav.commands.search",
 }
-"""Subcommand name → the module that adds it (``add_parser(subparsers)``)."""
+"""The command tree: a verb → the module that adds it (``add_parser(subparsers)``), or a group
+→ its verbs and their modules (``skidnav study continuity …``)."""
+GROUP_HELP = {
+    "study": "questions asked of the runner: shortcuts that write a study config and run it",
+    "world": "maps, one simulated episode, floor presets",
+}
+"""One line of help per group of :data:`COMMANDS`."""
 DISK_FULL = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
 """``errno`` of a write that found no room: no space left, over quota, file too large."""
 
 
-def requested_modules(argv: Sequence[str]) -> list[str]:
-    """The subcommand modules to import for ``argv``: only the named subcommand's, so that e.g.
-    ``skidnav robot sim-server`` does not import OpenCV or scikit-learn; all of them when no
-    known subcommand is named (``--help``, a typo), so argparse can list them."""
+def requested_modules(argv: Sequence[str]) -> dict[str, str | dict[str, str]]:
+    """The part of :data:`COMMANDS` to import for ``argv``: only the named verb's module (in a
+    group, only the named verb's), so that e.g. ``skidnav robot sim-server`` does not import
+    OpenCV or scikit-learn; all of them (of the group) when none is named (``--help``, a typo),
+    so argparse can list them."""
     words = [word for word in argv if not word.startswith("-")]
-    if words and words[0] in SUBCOMMAND_MODULES:
-        return [SUBCOMMAND_MODULES[words[0]]]
-    return list(SUBCOMMAND_MODULES.values())
+    if not words or words[0] not in COMMANDS:
+        return COMMANDS
+    entry = COMMANDS[words[0]]
+    if isinstance(entry, dict) and len(words) > 1 and words[1] in entry:
+        return {words[0]: {words[1]: entry[words[1]]}}
+    return {words[0]: entry}
 
 
-def build_parser(modules: Sequence[str] = tuple(SUBCOMMAND_MODULES.values())) -> OneLineParser:
-    """The argument parser with the subcommands of ``modules`` (default: every one)."""
+def build_parser(commands: dict[str, str | dict[str, str]] = COMMANDS) -> OneLineParser:
+    """The argument parser with the verbs of ``commands`` (default: every one)."""
     parser = OneLineParser(
         prog="skidnav", description="Model-based RL navigation for skid-steer robots."
     )
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
     subparsers = parser.add_subparsers(dest="command", required=True)
-    for module_name in modules:
-        importlib.import_module(module_name).add_parser(subparsers)
+    for name, entry in commands.items():
+        if isinstance(entry, str):
+            importlib.import_module(entry).add_parser(subparsers)
+            continue
+        group = subparsers.add_parser(name, help=GROUP_HELP[name], description=GROUP_HELP[name])
+        verbs = group.add_subparsers(dest=f"{name}_command", required=True)
+        for module_name in entry.values():
+            importlib.import_module(module_name).add_parser(verbs)
     return parser
 
 

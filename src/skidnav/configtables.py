@@ -3,13 +3,17 @@
 A problem is one :class:`~skidnav.errors.UserError` line ``"WHERE: PROBLEM"``, where ``WHERE``
 names the table (``[run]``, ``[[maps]] #2``, ``[tune.space.q-learning] alpha``) and a value read
 from the file is quoted in part (:func:`~skidnav.errors.shown`). A path in a config is relative to
-the config file's folder.
+the config file's folder. A config the code writes (``tuned.toml``, a study shortcut's config)
+spells its values with :func:`toml_value` and :func:`toml_key`.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable
+import json
+import math
+import re
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -17,7 +21,18 @@ from skidnav.errors import UserError, shown
 
 T = TypeVar("T")
 
-__all__ = ["build_dataclass", "check_keys", "resolve_path", "table", "table_array"]
+__all__ = [
+    "build_dataclass",
+    "check_keys",
+    "resolve_path",
+    "table",
+    "table_array",
+    "toml_document",
+    "toml_key",
+    "toml_value",
+]
+
+_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
 
 
 def table(value: Any, where: str) -> dict[str, Any]:
@@ -75,3 +90,62 @@ def resolve_path(value: str, folder: Path) -> Path:
     """The absolute, resolved path of ``value``, a path written in a config file whose folder is
     ``folder`` (an absolute ``value`` stays where it points)."""
     return (folder / value).resolve()
+
+
+def toml_value(value: Any) -> str:
+    """A TOML literal of a scalar, list or flat dict (what configs hold).
+
+    >>> toml_value({"alpha": 0.5, "mode": "sample", "steps": [1, 2], "on": True})
+    '{ alpha = 0.5, mode = "sample", steps = [1, 2], on = true }'
+    """
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        return repr(value) if math.isfinite(value) else ("inf" if value > 0 else "-inf")
+    if isinstance(value, str):
+        return json.dumps(value)  # a JSON string is a TOML basic string
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(toml_value(item) for item in value) + "]"
+    if isinstance(value, dict):
+        items = ", ".join(f"{toml_key(key)} = {toml_value(item)}" for key, item in value.items())
+        return "{ " + items + " }" if items else "{}"
+    raise TypeError(f"expected a TOML scalar, list or table, got {value!r}")
+
+
+def toml_key(key: str) -> str:
+    """A TOML key: bare when it may be, else quoted."""
+    return key if _BARE_KEY.match(key) else json.dumps(key)
+
+
+def toml_document(document: Mapping[str, Any]) -> str:
+    """The TOML text of a config ``document``: its top-level values first, then each table
+    ``[name]`` and each array of tables ``[[name]]`` (a list of dicts), in the document's order;
+    a table's own tables inline.
+
+    >>> print(toml_document({"kind": "x", "run": {"seeds": 2}, "agents": [{"name": "a"}]}))
+    kind = "x"
+    <BLANKLINE>
+    [run]
+    seeds = 2
+    <BLANKLINE>
+    [[agents]]
+    name = "a"
+    <BLANKLINE>
+    """
+    lines = [f"{toml_key(k)} = {toml_value(v)}" for k, v in document.items() if not _is_table(v)]
+    for name, value in document.items():
+        tables = [value] if isinstance(value, dict) else value if _is_table(value) else []
+        header = f"[{toml_key(name)}]" if isinstance(value, dict) else f"[[{toml_key(name)}]]"
+        for each in tables:
+            lines += ["", header, *(f"{toml_key(k)} = {toml_value(v)}" for k, v in each.items())]
+    return "\n".join(lines) + "\n"
+
+
+def _is_table(value: Any) -> bool:
+    """A table or a non-empty array of tables (written under a header of its own)."""
+    is_array = isinstance(value, list) and bool(value)
+    return isinstance(value, dict) or (is_array and all(isinstance(v, dict) for v in value))

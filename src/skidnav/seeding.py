@@ -13,13 +13,14 @@ Two consumers never share a stream (architecture.md, "Randomness").
 * :data:`RUN_ROLES` — one run of an experiment: the agent, the training episodes (the env's
   ``reset`` seed).
 * :data:`ARENA_ROLES` — the integer seed of one world outside an experiment (a real-time run, the
-  sim server, ``skidnav simulate``): map, slip field, the simulated robot (slip draws, noise,
-  dropped poses; the env's ``reset`` seed in ``skidnav simulate``), the agent or random policy.
-  The env's ``world_seed`` uses the first two, so the env and the sim server given one seed build
-  the same map and floor.
-* :data:`GENERALISATION_ROLES` — the root seed of ``skidnav generalise``: the training worlds and
-  the held-out worlds (each spawned once per world), the runs (spawned once per seed, each with
-  :data:`RUN_ROLES`) and the evaluation rollouts' seeds (the same for every agent and run).
+  sim server, ``skidnav world simulate``): map, slip field, the simulated robot (slip draws, noise,
+  dropped poses; the env's ``reset`` seed in ``skidnav world simulate``), the agent or random
+  policy. The env's ``world_seed`` uses the first two, so the env and the sim server given one
+  seed build the same map and floor.
+* :data:`GENERALISATION_ROLES` — the root seed of ``skidnav study generalise``: the training
+  worlds and the held-out worlds (each spawned once per world), the runs (spawned once per seed,
+  each with :data:`RUN_ROLES`) and the evaluation rollouts' seeds (the same for every agent and
+  run).
 """
 
 from __future__ import annotations

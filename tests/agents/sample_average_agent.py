@@ -10,9 +10,9 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
-from skidnav.agents.core import TabularAgent
-from skidnav.kernels.learning import Experience, learning_step
-from skidnav.kernels.tabular import td_update
+from skidnav.agents.learning import Experience, learning_step
+from skidnav.agents.tabular.agent import TabularAgent
+from skidnav.sim.q_values import td_update
 
 
 class AverageArrays(NamedTuple):

@@ -16,9 +16,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skidnav.agents.registry import load_agent, make_agent
+from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.cli import main
-from skidnav.commands.reproduce import dyna_maze_runs
 from skidnav.errors import CorruptFileError
 from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
 from skidnav.robot.params import RobotParams
@@ -41,7 +40,7 @@ import numpy as np
 
 rng = np.random.default_rng(1)
 if sys.argv[1] == "agent":
-    from skidnav.agents.registry import make_agent
+    from skidnav.agents.tabular.registry import make_agent
 
     saved = make_agent("dyna-q", 5400, 4, {}, rng)
     saved.q[:] = rng.random(saved.q.shape)  # incompressible: far past the limit
@@ -228,11 +227,13 @@ def _error_line(stderr: str) -> str:
 
 def test_a_picture_on_a_full_disk_leaves_the_previous_one(tmp_path: Path) -> None:
     room, picture = tmp_path / "room.txt", tmp_path / "room.png"
-    assert main(["map", "generate", "--kind", "maze", "--out", str(room)]) == 0
-    assert main(["map", "show", str(room), "--png", str(picture)]) == 0
+    assert main(["world", "map", "generate", "--kind", "maze", "--out", str(room)]) == 0
+    assert main(["world", "map", "show", str(room), "--png", str(picture)]) == 0
     size = picture.stat().st_size
     picture.write_bytes(b"the previous picture")
-    result = skidnav_with_full_disk(["map", "show", str(room), "--png", str(picture)], size // 2)
+    result = skidnav_with_full_disk(
+        ["world", "map", "show", str(room), "--png", str(picture)], size // 2
+    )
     assert result.returncode == 2
     assert _error_line(result.stderr) == (
         f"skidnav: error: {picture}: cannot write the picture (File too large)"
@@ -241,18 +242,32 @@ def test_a_picture_on_a_full_disk_leaves_the_previous_one(tmp_path: Path) -> Non
     assert sorted(p.name for p in tmp_path.iterdir()) == ["room.png", "room.txt"]
 
 
-def test_reproduce_on_a_full_disk_keeps_whole_files(tmp_path: Path) -> None:
-    dyna_maze_runs(1, planning_steps=(5,))  # compiled and cached before the disk fills
-    (tmp_path / "dyna_maze.png").write_bytes(b"the previous plot")
-    args = ["reproduce", "sutton-barto", "--runs", "1", "--out", str(tmp_path)]
-    result = skidnav_with_full_disk(args, max_file_bytes=8000)  # the CSV fits, the plot not
+def test_reproduce_on_a_full_disk_keeps_whole_files(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    args = ["study", "reproduce", "sutton-barto", "--runs", "1", "--backend", "serial"]
+    args += ["--no-progress", "--out"]
+    assert main([*args, str(tmp_path / "warm")]) == 0  # compiled and cached before the disk fills
+    out = tmp_path / "out"
+    out.mkdir()
+    plot = out / "dyna_maze.png"
+    plot.write_bytes(b"the previous plot")
+    # the results (run files, tables, metadata: < 12 kB each) and the first CSV fit, the plot not
+    result = skidnav_with_full_disk([*args, str(out)], max_file_bytes=20_000)
     assert result.returncode == 2
-    plot = tmp_path / "dyna_maze.png"
     assert _error_line(result.stderr) == (
         f"skidnav: error: {plot}: cannot write the plot (File too large)"
     )
     assert plot.read_bytes() == b"the previous plot"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["dyna_maze.csv", "dyna_maze.png"]
-    with (tmp_path / "dyna_maze.csv").open(newline="") as stream:
+    assert sorted(p.name for p in out.iterdir()) == [
+        ".skidnav.lock", "config.json", "config.toml", "dyna_maze.csv", "dyna_maze.png",
+        "episodes.parquet", "metadata.json", "runs", "summaries.csv", "summaries.parquet",
+    ]  # fmt: skip
+    assert len(list((out / "runs").iterdir())) == 13  # every run whole
+    with (out / "dyna_maze.csv").open(newline="") as stream:
         rows = list(csv.reader(stream))
     assert rows[0] == ["planning_steps", "run", "episode", "steps"] and len(rows) == 1 + 3 * 50
+    capsys.readouterr()
+    assert main([*args, str(out)]) == 0  # with room again, the same command finishes the files
+    assert "(0 run now, 13 already done)" in capsys.readouterr().out
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

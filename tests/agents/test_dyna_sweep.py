@@ -9,15 +9,15 @@ import numpy as np
 
 import skidnav  # noqa: F401  (registers the env)
 from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import load_agent, make_agent
+from skidnav.agents.tabular.model_sweep import model_value_iteration
+from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.experiments.metrics import (
     ConvergenceRule,
     convergence_episode,
     evaluation_summary,
     within_tolerance,
 )
-from skidnav.experiments.oracle import compute_oracle
-from skidnav.kernels.model_sweep import model_value_iteration
+from skidnav.experiments.reference.oracle import compute_oracle
 
 PARAMS = {
     "alpha": 0.5, "gamma": 0.95, "epsilon": 0.1, "planning_steps": 10,

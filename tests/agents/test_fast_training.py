@@ -15,10 +15,10 @@ import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents.fast_training import evaluate_q_fast, train_agent_fast, train_for_steps_fast
-from skidnav.agents.registry import make_agent
+from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import TrainingLog, train_agent, train_for_steps
 from skidnav.envs.mazes import blocking_maze, dyna_maze
-from skidnav.experiments.oracle import compute_oracle
+from skidnav.experiments.reference.oracle import compute_oracle
 from skidnav.world.discretization import Discretization
 
 AGENTS = (
@@ -150,7 +150,7 @@ import json, sys
 import numpy as np, gymnasium as gym
 import skidnav.envs
 from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import make_agent
+from skidnav.agents.tabular.registry import make_agent
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
 robot = RobotParams(arena_width=0.3, arena_height=0.3)
@@ -189,7 +189,7 @@ _MAZE_SCRIPT = """
 import json
 import numpy as np
 from skidnav.agents.fast_training import evaluate_q_fast, train_agent_fast, train_for_steps_fast
-from skidnav.agents.registry import make_agent
+from skidnav.agents.tabular.registry import make_agent
 from skidnav.envs.mazes import dyna_maze, shortcut_maze
 out = {}
 for index, name in enumerate(("q-learning", "dyna-q", "dyna-q-plus", "prioritized-sweeping")):

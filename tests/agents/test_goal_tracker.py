@@ -11,8 +11,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import skidnav  # noqa: F401  (registers the env)
-from skidnav.agents.goal_tracker import GoalTracker, GoalTrackerConfig
-from skidnav.agents.wheel_policy import WheelSpeedPolicy
+from skidnav.agents.policies.goal_tracker import GoalTracker, GoalTrackerConfig
+from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
 from skidnav.robot.kinematics import body_velocities
 from skidnav.robot.params import RobotParams
 

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.catalog import agent_context, build_agent
-from skidnav.agents.continuous.registry import load_linear_agent
+from skidnav.agents.catalog import entry
 from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import load_agent, make_agent
+from skidnav.agents.linear.registry import load_linear_agent
+from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.agents.training import train_agent
 from skidnav.errors import CorruptFileError, UserError
 from skidnav.experiments.configfile import parse_config
@@ -37,7 +37,8 @@ def _env() -> gym.Env[Any, Any]:
 def _trained(source: str, episodes: int = 6) -> tuple[Any, gym.Env[Any, Any]]:
     env = _env()
     params = {**OPTIONS, "kinematic_model": source}
-    agent = build_agent("dyna-full", env.unwrapped, params, np.random.SeedSequence(4), 300)
+    built = entry("dyna-full").build(env.unwrapped, params, np.random.SeedSequence(4), 300)
+    agent = built.agent
     train_agent_fast(agent, env, episodes, seed=4, max_steps=300)
     return agent, env
 
@@ -65,9 +66,10 @@ def test_learned_refits_prior_and_true_hold_their_velocities() -> None:
 
 def test_only_an_agent_asking_for_the_truth_is_handed_it() -> None:
     nav: Any = _env().unwrapped
-    assert "true_kinematics" not in agent_context("dyna-full", nav, {"kinematic_model": "prior"})
-    assert "true_kinematics" not in agent_context("dyna-full", nav, {})
-    context = agent_context("dyna-full", nav, {"kinematic_model": "true"})
+    dyna_full = entry("dyna-full")
+    assert "true_kinematics" not in dyna_full.context(nav, {"kinematic_model": "prior"})
+    assert "true_kinematics" not in dyna_full.context(nav, {})
+    context = dyna_full.context(nav, {"kinematic_model": "true"})
     np.testing.assert_array_equal(context["true_kinematics"], nav.true_kinematics)
     with pytest.raises(ValueError, match=r"^expected the simulator's true_kinematics"):
         make_agent("dyna-full", nav.discretization.n_states, 4, {"kinematic_model": "true"},
@@ -113,9 +115,10 @@ def test_the_linear_agent_holds_its_model_too(source: str, tmp_path: Path) -> No
     env = gym.make("skidnav/SkidSteerNav-v0", map_kind="obstacles", world_seed=2,
                    slip="slippery", observation="pose")  # fmt: skip
     params = {"kinematic_steps": 5, "kinematic_refit_every": 50, "kinematic_model": source}
-    agent = build_agent(
-        "linear-dyna-kinematic", env.unwrapped, params, np.random.SeedSequence(1), 60
+    built = entry("linear-dyna-kinematic").build(
+        env.unwrapped, params, np.random.SeedSequence(1), 60
     )
+    agent: Any = built.agent
     train_agent(agent, env, 3, max_steps=60, seed=1)
     assert agent.kinematic.refits == 0 and agent.kinematic.counts.sum() > 50
     expected = (

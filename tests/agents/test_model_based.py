@@ -11,16 +11,16 @@ import numpy as np
 import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.dyna_kinematic import ModelBasedAgent
 from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import load_agent, make_agent
+from skidnav.agents.tabular import kinematic_planning as kp
+from skidnav.agents.tabular.model_based import ModelBasedAgent
+from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.agents.training import greedy_rollout, train_agent
 from skidnav.envs.mazes import dyna_maze
 from skidnav.errors import CorruptFileError
-from skidnav.kernels import kinematic_planning as kp
-from skidnav.kernels.navigation import transition
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField
+from skidnav.sim.navigation import transition
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap, border_walls
 

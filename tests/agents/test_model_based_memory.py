@@ -21,7 +21,7 @@ import gymnasium as gym
 import numpy as np
 import skidnav.envs
 from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import make_agent
+from skidnav.agents.tabular.registry import make_agent
 from skidnav.world.discretization import Discretization
 
 def run(grid, map_kind, steps):

@@ -11,8 +11,10 @@ import numpy as np
 import pytest
 
 import skidnav.envs  # noqa: F401  (registers the envs)
-from skidnav.agents import registry
+from skidnav.agents.catalog import entry
 from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
+from skidnav.agents.tabular import registry
+from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.agents.training import train_agent, train_for_steps
 from skidnav.envs.mazes import dyna_maze
 
@@ -66,3 +68,13 @@ def test_the_new_agent_saves_and_loads(tmp_path: Path) -> None:
     assert type(loaded).__name__ == "SampleAverageAgent"
     np.testing.assert_array_equal(loaded.visits, agent.visits)  # type: ignore[attr-defined]
     assert loaded.steps == agent.steps > 0
+
+
+def test_the_catalog_describes_the_new_agent_from_the_registry() -> None:
+    described = entry("sample-average-q")
+    assert (described.family, described.observation) == ("tabular", "discrete")
+    env = dyna_maze(max_episode_steps=400)
+    built = described.build(env, {"epsilon": 0.2}, np.random.SeedSequence(3), 300)
+    log = built.train(env, 5, max_steps=300, greedy_eval_env=None, greedy_seeds=None)
+    assert isinstance(built.agent, TabularAgent)
+    assert built.agent.visits.sum() == built.agent.steps == log.lengths.sum() > 0

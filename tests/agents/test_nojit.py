@@ -12,7 +12,7 @@ import numpy as np
 TRAINING = """
 import sys
 import numpy as np
-from skidnav.agents.registry import make_agent
+from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import train_agent
 from skidnav.envs.mazes import dyna_maze
 

@@ -14,7 +14,7 @@ import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import make_agent
+from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import train_agent
 from skidnav.envs.mazes import dyna_maze
 from skidnav.robot.params import RobotParams

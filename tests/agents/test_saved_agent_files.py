@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skidnav.agents.registry import load_agent, make_agent
+from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.agents.training import train_agent
 from skidnav.cli import main
 from skidnav.envs.mazes import dyna_maze

@@ -6,8 +6,14 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from skidnav.agents.registry import available_agents, make_agent
-from skidnav.agents.training import TrainingLog, train_agent, train_for_steps
+from skidnav.agents.tabular.registry import available_agents, make_agent
+from skidnav.agents.training import (
+    TrainingLog,
+    greedy_path,
+    greedy_rollout,
+    train_agent,
+    train_for_steps,
+)
 from skidnav.envs.mazes import blocking_maze, dyna_maze
 
 
@@ -115,3 +121,29 @@ def test_train_for_steps_counts_cumulative_reward() -> None:
     assert cumulative.shape == (600,) and np.all(np.diff(cumulative) >= 0)
     assert cumulative[-1] == agent.episodes  # +1 per goal reached
     assert env.total_steps == 600 and env.walls[3, 8] and not env.walls[3, 0]
+
+
+class Forward:
+    """Always the first action (forward on the skid-steer env, up in the mazes)."""
+
+    def greedy_action(self, state: object) -> int:
+        return 0
+
+
+def test_greedy_path_records_the_reset_pose_and_every_action_pose() -> None:
+    env = gym.make("skidnav/SkidSteerNav-v0", map_kind="free", world_seed=1).unwrapped
+    poses, reached = greedy_path(Forward(), env, 6, seed=3)
+    length = greedy_rollout(Forward(), env, 6, seed=3)
+    assert reached == (length >= 0)
+    assert poses.shape == ((length if reached else 6) + 1, 3) and poses.dtype == np.float64
+    _, info = env.reset(seed=3)
+    expected = [info["pose"]]
+    for _ in range(len(poses) - 1):
+        expected.append(env.step(0)[4]["pose"])
+    np.testing.assert_array_equal(poses, np.asarray(expected))
+    assert poses[1, 0] > poses[0, 0]  # it moved forward (+x) from the start
+
+
+def test_greedy_path_of_an_env_without_poses_is_nan_rows() -> None:
+    poses, reached = greedy_path(Forward(), dyna_maze(), 4)
+    assert poses.shape == (5, 3) and np.isnan(poses).all() and not reached

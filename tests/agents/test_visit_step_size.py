@@ -7,12 +7,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skidnav.agents.config import PrioritizedSweepingConfig, QLearningConfig
-from skidnav.agents.continuous.config import LinearConfig
-from skidnav.agents.registry import load_agent, make_agent
+from skidnav.agents.linear.config import LinearConfig
+from skidnav.agents.tabular.config import PrioritizedSweepingConfig, QLearningConfig
+from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.agents.training import train_agent
 from skidnav.envs.mazes import dyna_maze
-from skidnav.kernels.tabular import visit_step_size
+from skidnav.sim.q_values import visit_step_size
 
 DECAYING = ("q-learning", "dyna-q", "dyna-q-plus")
 

@@ -26,33 +26,46 @@ COMMANDS: dict[str, tuple[list[str], str]] = {
     "run": (["run", "{config}", "--out", "{dir}"], "skidnav.commands.run.run_experiment"),
     "tune": (["tune", "{tune}", "--out", "{dir}"], "skidnav.commands.tune.tune_experiment"),
     "generalise": (
-        ["generalise", "--out", "{file}"],
-        "skidnav.experiments.generalisation.split_worlds",
+        ["study", "generalise", "--out", "{dir}"],
+        "skidnav.commands.run.run_experiment",
     ),
-    "transfer": (["transfer", "--out", "{file}"], "skidnav.experiments.transfer.transfer_run"),
+    "transfer": (["study", "transfer", "--out", "{dir}"], "skidnav.commands.run.run_experiment"),
     "floors calibrate": (
-        ["floors", "calibrate", "--out", "{file}"],
+        ["world", "floors", "calibrate", "--out", "{file}"],
         "skidnav.physics.calibration.calibrate",
     ),
     "continuity": (
-        ["continuity", "--out", "{dir}"],
-        "skidnav.experiments.wheel_comparison.run_comparison",
+        ["study", "continuity", "--out", "{dir}"],
+        "skidnav.commands.run.run_experiment",
     ),
-    "search": (["search", "--out", "{dir}"], "skidnav.policysearch.search.run_search"),
+    "search": (["study", "search", "--out", "{dir}"], "skidnav.commands.run.run_experiment"),
+    "kinematic compare": (
+        ["study", "kinematic", "compare", "--out", "{dir}"],
+        "skidnav.commands.run.run_experiment",
+    ),
     "reproduce": (
-        ["reproduce", "sutton-barto", "--out", "{dir}"],
-        "skidnav.commands.reproduce._report_dyna_maze",
+        ["study", "reproduce", "sutton-barto", "--out", "{dir}"],
+        "skidnav.commands.run.run_experiment",
     ),
-    "map generate": (["map", "generate", "--out", "{file}"], "skidnav.commands.map.generate_map"),
-    "map show": (["map", "show", "{map}", "--png", "{file}"], "skidnav.commands.map.load_map"),
-    "simulate --out": (["simulate", "--out", "{file}"], "skidnav.commands.simulate._make_env"),
+    "map generate": (
+        ["world", "map", "generate", "--out", "{file}"],
+        "skidnav.commands.map.generate_map",
+    ),
+    "map show": (
+        ["world", "map", "show", "{map}", "--png", "{file}"],
+        "skidnav.commands.map.load_map",
+    ),
+    "simulate --out": (
+        ["world", "simulate", "--out", "{file}"],
+        "skidnav.commands.simulate._make_env",
+    ),
     "simulate --csv": (
-        ["simulate", "--out", "{tmp}/t.png", "--csv", "{file}"],
+        ["world", "simulate", "--out", "{tmp}/t.png", "--csv", "{file}"],
         "skidnav.commands.simulate._make_env",
     ),
     "report": (
         ["report", "{tmp}", "--output", "{file}"],
-        "skidnav.experiments.report.write_report",
+        "skidnav.experiments.report.html.write_report",
     ),
     "camera calibrate": (
         ["camera", "calibrate", "--source", "0", "--out", "{file}"],
@@ -72,11 +85,11 @@ COMMANDS: dict[str, tuple[list[str], str]] = {
     ),
     "robot run": (
         ["robot", "run", "--agent", "q-learning", "--out", "{dir}"],
-        "skidnav.realtime.control.run.run_from_args",
+        "skidnav.realtime.control.run.run_robot",
     ),
     "robot study": (
         ["robot", "study", "--config", str(REALTIME), "--out", "{dir}"],
-        "skidnav.realtime.study.run_study",
+        "skidnav.studies.hardware.study.run_study",
     ),
 }
 
@@ -92,7 +105,9 @@ def inputs(tmp_path: Path) -> dict[str, str]:
 
     (tmp_path / "tiny.toml").write_text(TINY_TOML)
     (tmp_path / "tune.toml").write_text(TINY_TUNE)
-    assert main(["map", "generate", "--kind", "free", "--out", str(tmp_path / "m.txt")]) == 0
+    assert (
+        main(["world", "map", "generate", "--kind", "free", "--out", str(tmp_path / "m.txt")]) == 0
+    )
     (tmp_path / "blocker").write_text("a file, not a directory\n")
     return {
         "config": str(tmp_path / "tiny.toml"),
@@ -151,7 +166,7 @@ def test_a_full_disk_a_writer_did_not_report_is_one_line(
         raise OSError(errno.ENOSPC, "No space left on device", "/data/journal.log")
 
     monkeypatch.setattr("skidnav.commands.map.generate_map", full)
-    assert main(["map", "generate"]) == 2
+    assert main(["world", "map", "generate"]) == 2
     assert capsys.readouterr().err.strip() == (
         "skidnav: error: /data/journal.log: cannot write (No space left on device)"
     )
@@ -161,4 +176,4 @@ def test_a_full_disk_a_writer_did_not_report_is_one_line(
 
     monkeypatch.setattr("skidnav.commands.map.generate_map", broken)
     with pytest.raises(OSError, match="Input/output error"):  # not the user's to fix
-        main(["map", "generate"])
+        main(["world", "map", "generate"])

@@ -1,6 +1,6 @@
 """Code that builds the env gets its action limit from Gymnasium's ``TimeLimit``: the experiment
 runs (config ``max_steps`` or ``[env] max_episode_steps``, else the registered 500) and
-``skidnav simulate`` (the length of its script or ``--random N``)."""
+``skidnav world simulate`` (the length of its script or ``--random N``)."""
 
 from __future__ import annotations
 
@@ -83,7 +83,7 @@ def test_simulate_runs_past_the_registered_limit(
 ) -> None:
     table = tmp_path / "t.csv"
     backwards = " ".join(["b"] * 620)  # into the wall behind the start: never the goal
-    arguments = ["simulate", "--map-kind", "free", "--actions", backwards]
+    arguments = ["world", "simulate", "--map-kind", "free", "--actions", backwards]
     assert main([*arguments, "--out", str(tmp_path / "t.png"), "--csv", str(table)]) == 0
     assert capsys.readouterr().out.startswith("620 actions")
     assert len(table.read_text().splitlines()) == 1 + 1 + 620

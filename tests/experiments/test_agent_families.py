@@ -8,7 +8,7 @@ import pytest
 
 from skidnav.errors import UserError
 from skidnav.experiments.configfile import parse_config
-from skidnav.experiments.report import build_report
+from skidnav.experiments.report.html import build_report
 from skidnav.experiments.runner import run_experiment
 from skidnav.experiments.store import ResultStore
 from skidnav.experiments.trial import check_config

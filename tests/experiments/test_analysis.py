@@ -8,15 +8,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from skidnav.experiments.analysis import (
+from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec
+from skidnav.experiments.report.analysis import (
     aggregate,
     compare_surfaces,
     compare_to_baseline,
     convergence_table,
 )
-from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec
-from skidnav.experiments.report import aggregate_table
-from skidnav.experiments.reproduction import reproduction_section
+from skidnav.experiments.report.html import aggregate_table
+from skidnav.experiments.report.reproduction import reproduction_section
 
 CONFIG = ExperimentConfig(
     "synthetic",
@@ -137,8 +137,8 @@ def test_floor_claim_points_to_the_surfaces_config() -> None:
 
 
 def test_budget_rows_and_figure_for_a_planning_sweep() -> None:
-    from skidnav.experiments.analysis import budget_rows
-    from skidnav.experiments.report import budget_section
+    from skidnav.experiments.report.analysis import budget_rows
+    from skidnav.experiments.report.html import budget_section
 
     config = ExperimentConfig(
         "budget",

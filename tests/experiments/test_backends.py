@@ -61,6 +61,15 @@ def _workers(pid: int) -> list[psutil.Process]:
         return []
 
 
+def _command_line(child: psutil.Process) -> list[str]:
+    """``child``'s command line; empty for one that has just ended (a zombie not yet reaped, or
+    gone: short-lived children such as ``git`` for the provenance come and go)."""
+    try:
+        return child.cmdline()
+    except (psutil.ZombieProcess, psutil.NoSuchProcess, psutil.AccessDenied):
+        return []
+
+
 def _started(process: subprocess.Popen[bytes], out: Path, backend: str) -> list[psutil.Process]:
     """Wait until the sweep is mid-way: two runs written and, on the process backend, both pool
     workers alive (the first run of each algorithm runs in the parent before the pool starts).
@@ -68,7 +77,7 @@ def _started(process: subprocess.Popen[bytes], out: Path, backend: str) -> list[
     deadline = time.monotonic() + 180
     while process.poll() is None and time.monotonic() < deadline:
         children = _workers(process.pid)
-        workers = [c for c in children if "spawn_main" in " ".join(c.cmdline())]
+        workers = [c for c in children if "spawn_main" in " ".join(_command_line(c))]
         if len(_finished(out)) >= 2 and (backend == "serial" or len(workers) == 2):
             return children
         time.sleep(0.02)
@@ -111,7 +120,7 @@ def test_sigkill_mid_sweep_then_resume(
     while any(_alive(child) for child in children) and time.monotonic() < deadline:
         time.sleep(0.1)
     survivors = [child for child in children if _alive(child)]
-    commands = [" ".join(child.cmdline()) for child in survivors]
+    commands = [" ".join(_command_line(child)) for child in survivors]
     for child in survivors:  # do not leave them behind when the check fails
         child.kill()
     assert not survivors, f"processes of the killed sweep still alive: {commands}"

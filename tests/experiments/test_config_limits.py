@@ -15,7 +15,7 @@ import pytest
 from skidnav.cli import main
 from skidnav.errors import UserError
 from skidnav.experiments.configfile import load_config, load_config_and_text
-from skidnav.experiments.tuneconfig import load_tune_config
+from skidnav.studies.tuning.config import load_tune_config
 from tests.experiments.exp_support import TINY_TOML, cli_command, cli_env
 
 DEEP = 5000

@@ -13,12 +13,12 @@ import pytest
 from PIL import Image
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.registry import make_agent
-from skidnav.agents.wheel_policy import WheelSpeedPolicy
+from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
+from skidnav.agents.tabular.registry import make_agent
 from skidnav.envs.navigation import SkidSteerNavEnv
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import UserError
-from skidnav.experiments.continuity import (
+from skidnav.studies.continuity.traces import (
     Trace,
     aggregate,
     comparison_table,
@@ -28,8 +28,8 @@ from skidnav.experiments.continuity import (
     trace_metrics,
     wheel_speed_policy,
 )
-from skidnav.experiments.generalisation import GoalSeeker
-from skidnav.experiments.trajectory_plot import save_trajectory_picture, trajectory_picture
+from skidnav.studies.continuity.trajectory_plot import save_trajectory_picture, trajectory_picture
+from skidnav.studies.generalisation import GoalSeeker
 
 FULL = 1.7
 DISCRETE_COMMANDS = [(FULL, FULL), (-FULL, -FULL), (-FULL, FULL), (FULL, -FULL)]

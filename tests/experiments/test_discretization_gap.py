@@ -8,22 +8,24 @@ import pytest
 
 import skidnav  # noqa: F401  (registers the env)
 from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import make_agent
+from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import train_agent
+from skidnav.commands.report import write_results_report
 from skidnav.errors import UserError
 from skidnav.experiments.config import config_from_dict, config_to_dict
 from skidnav.experiments.configfile import parse_config
-from skidnav.experiments.finegrid import FineStates, state_grid
-from skidnav.experiments.gap import gap_rows, gap_section, optimum_rows
-from skidnav.experiments.optimum import Optimum, compute_optimum, optimum_columns
-from skidnav.experiments.oracle import compute_oracle, solve
+from skidnav.experiments.reference.finegrid import FineStates, state_grid
+from skidnav.experiments.reference.optimum import Optimum, compute_optimum, optimum_columns
+from skidnav.experiments.reference.oracle import compute_oracle, solve
+from skidnav.experiments.report.html import build_report
 from skidnav.experiments.runner import run_experiment
 from skidnav.experiments.store import ResultStore
 from skidnav.experiments.trial import check_config
+from skidnav.studies.gap import gap_rows, gap_section, optimum_rows
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap, border_walls, generate_map
 
-FORWARD = 0.0225 * 1.7  # metres of one forward action without slip (SPEC §1)
+FORWARD = 0.0225 * 1.7  # metres of one forward action without slip (docs/simulator.md)
 
 
 def _corridor(observation: str) -> gymnasium.Env:
@@ -137,6 +139,10 @@ def test_a_gap_study_runs_and_tabulates(tmp_path):
     shown = [f"{100 * g:.1f}" if g == g else "–" for g in gap]
     assert rows["gap to optimum [%]"].tolist() == shown
     assert "<h2>Discretization gap</h2>" in gap_section(summaries, config)
+    # the report draws it as a section the commands pass (the report imports no study)
+    page = write_results_report(tmp_path).read_text()
+    assert page.count("<h2>Discretization gap</h2>") == 1
+    assert "<h2>Discretization gap</h2>" not in build_report(tmp_path)
 
 
 def test_the_optimum_is_the_best_policy_over_the_grids_and_its_check_leaves_the_finest_out():
@@ -219,7 +225,7 @@ def test_agents_that_cannot_use_finer_cells_are_refused(agent, message):
 
 
 def test_the_table_printer_refuses_a_directory_without_results(tmp_path, capsys):
-    from skidnav.experiments.gap import main
+    from skidnav.studies.gap import main
 
     assert main([str(tmp_path / "none")]) == 2
     error = capsys.readouterr().err

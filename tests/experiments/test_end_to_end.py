@@ -133,7 +133,7 @@ def test_report_cli_writes_one_self_contained_file(serial_results: Path, tmp_pat
 def test_report_animates_one_greedy_trajectory_per_cell(serial_results: Path) -> None:
     from PIL import Image
 
-    from skidnav.experiments.report import build_report
+    from skidnav.experiments.report.html import build_report
     from skidnav.physics.backend import offscreen_rendering
 
     text = build_report(serial_results)

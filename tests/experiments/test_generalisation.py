@@ -1,5 +1,5 @@
 """The generalisation study: seeded splits of maps, training on a map set, evaluation on both
-sides, and ``skidnav generalise``."""
+sides; the study as a config run by ``skidnav run``, and ``skidnav study generalise``."""
 
 from __future__ import annotations
 
@@ -13,16 +13,50 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skidnav.experiments import generalisation
-from skidnav.experiments.generalisation import (
+from skidnav.cli import main
+from skidnav.studies.agent_grid import study_results
+from skidnav.studies.generalisation import evaluation as generalisation
+from skidnav.studies.generalisation.evaluation import (
     GoalSeeker,
     evaluate_on,
     generalisation_run,
     references,
     split_worlds,
 )
+from skidnav.studies.generalisation.report import results_of, summary_text
+from skidnav.studies.generalisation.study import STUDY
+from tests.experiments.study_support import (
+    check_bad_key_is_one_line,
+    check_serial_and_process_agree,
+    run_config,
+    shipped_config_grid_and_defaults,
+)
 
 TINY = {"dimensions": [4, 5, 6], "tiles": [3]}
+TINY_CONFIG = """
+kind = "generalisation"
+
+[generalisation]
+seeds = 2
+training_maps = 2
+held_out_maps = 1
+episodes = 8
+max_steps = 40
+map_kind = "free"
+rollouts = 2
+eval_epsilon = 0.2
+root_seed = 3
+
+[[agents]]
+name = "linear-q"
+params = { dimensions = [4, 5], tiles = [3] }
+"""
+"""1 agent × 2 seeds = 2 runs of 8 short episodes on 2 free maps."""
+SHORTCUT = ["study", "generalise", "--agent", "linear-q", "--seeds", "2", "--training-maps", "2",
+            "--held-out-maps", "1", "--episodes", "8", "--max-steps", "40", "--map-kind", "free",
+            "--rollouts", "2", "--eval-epsilon", "0.2", "--root-seed", "3",
+            "--params", 'linear-q={"dimensions": [4, 5], "tiles": [3]}']  # fmt: skip
+"""The flags of :data:`TINY_CONFIG` (named ``generalisation``, as the shortcut names it)."""
 
 
 def test_split_is_seeded_disjoint_and_sized() -> None:
@@ -56,7 +90,7 @@ def test_evaluation_tells_a_goal_seeker_from_a_spinner() -> None:
 def test_same_seed_same_run_and_shares_are_shares() -> None:
     split = split_worlds(1, 2, 1, 2)
     runs = [
-        generalisation_run("linear-q", 0, split, 4, root_seed=1, params=TINY, max_steps=40)
+        generalisation_run("linear-q", 0, split, 4, root_seed=1, params=TINY, max_steps=40).result
         for _ in range(2)
     ]
     np.testing.assert_equal(astuple(runs[0]), astuple(runs[1]))  # NaN equals NaN here
@@ -69,23 +103,27 @@ def test_dqn_trains_on_a_map_set() -> None:
     pytest.importorskip("stable_baselines3")
     split = split_worlds(2, 2, 1, 1)
     params = {"learning_starts": 10, "buffer_size": 100, "hidden": [8]}
-    run = generalisation_run("dqn", 0, split, 2, root_seed=2, params=params, max_steps=20)
-    assert run.episodes == 2 and run.steps <= 40
+    run, log = generalisation_run("dqn", 0, split, 2, root_seed=2, params=params, max_steps=20)
+    assert run.episodes == 2 and run.steps <= 40 and run.steps == int(np.sum(log.lengths))
 
 
 def test_command_writes_one_row_per_agent_and_seed(tmp_path: Path) -> None:
-    out = tmp_path / "generalisation.csv"
+    out = tmp_path / "generalisation"
     done = subprocess.run(
-        [sys.executable, "-m", "skidnav.cli", "generalise", "--agent", "linear-q", "--seeds", "2",
+        [sys.executable, "-m", "skidnav.cli", "study", "generalise", "--agent", "linear-q",
+        "--seeds", "2",
          "--training-maps", "2", "--held-out-maps", "1", "--episodes", "2", "--max-steps", "20",
          "--rollouts", "1", "--params", 'linear-q={"dimensions": [4, 5], "tiles": [2]}',
-         "--out", str(out)],
+         "--out", str(out), "--backend", "serial"],
         capture_output=True, text=True, timeout=300,
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
-    rows = list(csv.DictReader(out.open()))
+    rows = list(csv.DictReader((out / "generalisation.csv").open()))
     assert [(row["agent"], row["seed"]) for row in rows] == [("linear-q", "0"), ("linear-q", "1")]
     assert "held-out − training" in done.stdout and "reference goal-seeker" in done.stdout
+    assert sorted(path.name for path in (out / "runs").iterdir()) == [
+        "run-000000.npz", "run-000001.npz"
+    ]  # fmt: skip
 
 
 def test_references_are_measured_on_the_split() -> None:
@@ -98,8 +136,8 @@ def test_references_are_measured_on_the_split() -> None:
 @pytest.mark.parametrize(
     "arguments, message",
     [
-        (["--seeds", "0"], "--seeds"),
-        (["--eval-epsilon", "nan"], "--eval-epsilon"),
+        (["--seeds", "0"], "expected seeds to be an integer in [1, 1,000], got 0"),
+        (["--eval-epsilon", "nan"], "expected eval_epsilon in [0, 1], got nan"),
         (["--params", "linear-q"], "AGENT=JSON"),
         (["--params", "linear-q={"], "not JSON"),
         (["--params", "linear-q=[1]"], "JSON object"),
@@ -109,7 +147,7 @@ def test_references_are_measured_on_the_split() -> None:
 )
 def test_bad_arguments_are_one_line(arguments: list[str], message: str) -> None:
     done = subprocess.run(
-        [sys.executable, "-m", "skidnav.cli", "generalise", *arguments],
+        [sys.executable, "-m", "skidnav.cli", "study", "generalise", *arguments, "--out", "x"],
         capture_output=True, text=True, timeout=120,
     )  # fmt: skip
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
@@ -146,3 +184,49 @@ def test_exploration_does_not_draw_the_rollout_s_slip_noise(
     evaluate_on(GoalSeeker(), split.held_out, split.evaluation, 20, 0.3, **options)
     env_streams = [np.random.default_rng(int(s)).bit_generator.state for s in split.evaluation]
     assert states and all(a != b for a, b in zip(states, env_streams, strict=True))
+
+
+def test_a_config_run_by_skidnav_run_gives_one_file_per_run_on_every_backend(
+    tmp_path: Path,
+) -> None:
+    (tmp_path / "tiny.toml").write_text(TINY_CONFIG)
+    check_serial_and_process_agree(tmp_path / "tiny.toml", tmp_path, 2)
+    grid, summaries = study_results(tmp_path / "serial", STUDY.layout)
+    assert grid.name == "tiny" and list(summaries["agent"]) == ["linear-q", "linear-q"]
+    assert "<h2>Generalisation to maps never seen</h2>" in STUDY.report(tmp_path / "serial")
+
+
+@pytest.mark.parametrize(
+    "text, expected",
+    [
+        (TINY_CONFIG.replace("episodes =", "episods ="), "[generalisation]: unknown key 'episods'"),
+        (TINY_CONFIG + "[extra]\n", "top level: unknown key 'extra'"),
+        (TINY_CONFIG.replace("params =", "parms ="), "[[agents]] #1: unknown key 'parms'"),
+        (TINY_CONFIG.replace('"free"', '"moon"'), "expected map_kind one of free, obstacles"),
+        (TINY_CONFIG.replace("tiles = [3]", "tiles = [0]"), "agent 'linear-q': expected tiles"),
+        (TINY_CONFIG.replace('kind = "generalisation"', 'kind = "generalization"'), "kind:"),
+    ],
+)
+def test_a_bad_config_is_one_line_naming_the_file_and_key(
+    text: str, expected: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    check_bad_key_is_one_line(tmp_path / "bad.toml", text, expected, capsys)
+
+
+def test_the_shortcut_and_the_config_give_the_same_table(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    shortcut = tmp_path / "shortcut"
+    assert main([*SHORTCUT, "--out", str(shortcut), "--backend", "serial", "--no-progress"]) == 0
+    printed = capsys.readouterr().out
+    (tmp_path / "generalisation.toml").write_text(TINY_CONFIG)  # named as the shortcut names it
+    run_config(tmp_path / "generalisation.toml", tmp_path / "config", "--backend", "serial")
+    table = summary_text(results_of(study_results(tmp_path / "config", STUDY.layout)[1]))
+    assert table in printed and "linear-q" in table
+    run_config(tmp_path / "generalisation.toml", shortcut)  # the same config: nothing to run
+    assert "(0 run now, 2 already done)" in capsys.readouterr().out
+
+
+def test_the_shipped_config_is_the_command_s_defaults() -> None:
+    shipped, defaults = shipped_config_grid_and_defaults("generalise", "generalisation.toml")
+    assert shipped == defaults and shipped.fingerprint() == defaults.fingerprint()

@@ -19,7 +19,7 @@ from skidnav.experiments.provenance import (
     git_commit,
     source_digest,
 )
-from skidnav.experiments.report import build_report
+from skidnav.experiments.report.html import build_report
 from skidnav.experiments.store import ResultStore
 from tests.experiments.exp_support import TINY_TOML
 

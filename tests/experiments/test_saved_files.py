@@ -18,7 +18,7 @@ import pytest
 
 from skidnav.cli import main
 from skidnav.errors import CorruptFileError
-from skidnav.experiments.oracle import cache_dir, load_or_compute_oracle
+from skidnav.experiments.reference.oracle import cache_dir, load_or_compute_oracle
 from skidnav.experiments.store import ResultStore
 from skidnav.jsondepth import json_depth
 from skidnav.savedfile import parse_json
@@ -161,7 +161,7 @@ def test_a_damaged_oracle_cache_is_computed_again(
         {key: value for key, value in members.items() if key != "sweeps"},
     ):
         write_npz(cached, damage)
-        with caplog.at_level(logging.WARNING, logger="skidnav.experiments.oracle"):
+        with caplog.at_level(logging.WARNING, logger="skidnav.experiments.reference.oracle"):
             again = load_or_compute_oracle(_small_env(), 2, 3, [0], 40)
         assert "oracle cache unreadable" in caplog.text
         caplog.clear()

@@ -3,13 +3,15 @@ renamed agent, a bound tightened) fails here, not in a user's long run."""
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 
 import pytest
 
+from skidnav.commands.run import load_grid
 from skidnav.experiments.configfile import load_config
-from skidnav.experiments.tuneconfig import load_tune_config
 from skidnav.realtime.config import load_config as load_realtime_config
+from skidnav.studies.tuning.config import load_tune_config
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 SHIPPED = sorted(CONFIGS.glob("*.toml"))
@@ -26,6 +28,9 @@ def test_shipped_config_loads(path: Path) -> None:
     elif path.name.startswith("tune-"):
         experiment, tune = load_tune_config(path)
         assert experiment.agents and tune is not None
+    elif "kind" in tomllib.loads(path.read_text()):  # a study config (docs/experiments.md)
+        loaded = load_grid(path)
+        assert loaded.study is not None and loaded.grid.n_runs > 0
     else:
         config = load_config(path)
         assert config.agents and config.seeds > 0 and config.episodes > 0

@@ -9,9 +9,9 @@ import gymnasium as gym
 import numpy as np
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.experiments.start_plan import start_plan
-from skidnav.kernels.navigation import transition
+from skidnav.experiments.reference.start_plan import start_plan
 from skidnav.robot.params import RobotParams
+from skidnav.sim.navigation import transition
 from skidnav.world.discretization import Discretization
 
 

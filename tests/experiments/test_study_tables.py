@@ -9,7 +9,7 @@ import pytest
 
 from skidnav.cli import main
 from skidnav.experiments.store import ResultStore
-from skidnav.realtime.experiment_study import study_summaries
+from skidnav.studies.hardware.experiment_tables import study_summaries
 
 
 def test_study_tables_summarise_each_run_from_its_episodes(

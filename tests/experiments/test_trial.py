@@ -13,11 +13,12 @@ import pytest
 
 from skidnav import cli
 from skidnav._jit import jit_disabled
-from skidnav.agents.registry import available_agents
+from skidnav.agents.tabular.registry import available_agents
 from skidnav.agents.training import TrainingLog
 from skidnav.errors import UserError
 from skidnav.experiments import trial
 from skidnav.experiments.configfile import parse_config
+from skidnav.experiments.reference.world import WorldReference
 from skidnav.experiments.runner import run_experiment
 from skidnav.experiments.runs import expand_runs
 from skidnav.experiments.store import TrialResult
@@ -158,10 +159,12 @@ def test_an_evaluation_costs_the_mean_of_its_rollouts_that_reached_the_goal() ->
 
 
 def test_without_an_oracle_the_reference_cost_is_the_length() -> None:
-    maze = trial._oracle_columns(14.0, None)  # a grid maze: every move costs one
-    assert maze["oracle_cost"] == maze["oracle_length"] == 14.0
-    assert np.isnan(maze["oracle_rollout_cost"]) and np.isnan(maze["oracle_rollout_length"])
-    other = trial._oracle_columns(float("nan"), None)
+    maze = WorldReference(14.0, None, None, {})  # a grid maze: every move costs one
+    columns = maze.summary_columns(None)
+    assert columns["oracle_cost"] == columns["oracle_length"] == 14.0 == maze.optimum("cost")
+    assert np.isnan(columns["oracle_rollout_cost"]) and np.isnan(columns["oracle_rollout_length"])
+    assert np.isnan(columns["start_plan_length"])
+    other = WorldReference(float("nan"), None, None, {}).summary_columns(None)
     assert np.isnan(other["oracle_cost"])
 
 

@@ -15,15 +15,16 @@ import pytest
 from optuna.trial import TrialState
 
 from skidnav.cli import main
+from skidnav.configtables import toml_key, toml_value
 from skidnav.errors import RunsFailedError, UserError
 from skidnav.experiments.config import config_to_dict
 from skidnav.experiments.configfile import load_config, parse_config
 from skidnav.experiments.runs import RunSpec, expand_runs
 from skidnav.experiments.store import TrialResult
 from skidnav.experiments.trial import measure_trial
-from skidnav.experiments.tuneconfig import ParamRange, TuneConfig, load_tune_config
-from skidnav.experiments.tunedfile import toml_key, toml_value
-from skidnav.experiments.tuning import (
+from skidnav.stats import iqm
+from skidnav.studies.tuning.config import ParamRange, TuneConfig, load_tune_config
+from skidnav.studies.tuning.search import (
     JOURNAL,
     TUNE_STREAM,
     check_separation,
@@ -33,7 +34,6 @@ from skidnav.experiments.tuning import (
     tune_experiment,
     tuning_runs,
 )
-from skidnav.stats import iqm
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
@@ -127,7 +127,7 @@ def test_tune_table_parses() -> None:
 
 
 def load_tune_config_text(text: str) -> tuple[Any, TuneConfig]:
-    from skidnav.experiments.tuneconfig import parse_tune
+    from skidnav.studies.tuning.config import parse_tune
 
     config = parse_config(text, "t.toml")
     return config, parse_tune(tomllib.loads(text)["tune"], config, Path("t.toml"))
@@ -322,9 +322,11 @@ def test_a_tuning_map_file_equal_to_an_evaluation_map_is_refused(tmp_path: Path)
 
 
 def main_map_text(tmp_path: Path) -> str:
-    """A map file's text, written by ``skidnav map generate``."""
+    """A map file's text, written by ``skidnav world map generate``."""
     path = tmp_path / "generated.txt"
-    assert main(["map", "generate", "--kind", "free", "--seed", "3", "--out", str(path)]) == 0
+    assert (
+        main(["world", "map", "generate", "--kind", "free", "--seed", "3", "--out", str(path)]) == 0
+    )
     return path.read_text()
 
 

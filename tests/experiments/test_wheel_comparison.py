@@ -1,4 +1,5 @@
-"""``skidnav continuity``: discrete agents and wheel-speed learners on one world, same seeds."""
+"""``skidnav study continuity``: discrete agents and wheel-speed learners on one world, same
+seeds (the study through the runner: tests/experiments/test_continuity_study.py)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import pandas as pd
 import pytest
 
 from skidnav.cli import main
-from skidnav.experiments.wheel_comparison import (
+from skidnav.studies.continuity.comparison import (
     ComparisonConfig,
     evaluation_seeds,
     first_learned,
@@ -48,11 +49,15 @@ def test_episodes_to_learn_is_the_first_check_with_every_rollout_at_the_goal() -
 def test_the_command_writes_the_table_and_the_picture(tmp_path: Path) -> None:
     out = tmp_path / "cmp"
     code = main([
-        "continuity", "--map", "free", "--world-seed", "3", "--max-steps", "30",
+        "study", "continuity", "--map", "free", "--world-seed", "3", "--max-steps", "30",
         "--episodes", "4", "--generations", "2", "--population", "4", "--rollouts", "2",
         "--seeds", "1", "--learners", "dyna-full,ppo,sac,goal-tracker", "--out", str(out),
+        "--backend", "serial", "--no-progress",
     ])  # fmt: skip
     assert code == 0
+    assert 'learners = ["dyna-full", "ppo", "sac", "goal-tracker"]' in (
+        (out / "config.toml").read_text()
+    )
     runs = pd.read_csv(out / "runs.csv")
     assert list(runs["learner"]) == ["dyna-full", "ppo", "sac", "goal-tracker"]
     table = pd.read_csv(out / "table.csv")
@@ -80,7 +85,7 @@ def test_the_command_writes_the_table_and_the_picture(tmp_path: Path) -> None:
 def test_bad_arguments_are_one_line(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], message: str
 ) -> None:
-    assert main(["continuity", "--out", str(tmp_path / "x"), *argv]) == 2
+    assert main(["study", "continuity", "--out", str(tmp_path / "x"), *argv]) == 2
     error = capsys.readouterr().err.strip()
     assert message in error and "\n" not in error
 
@@ -89,14 +94,17 @@ def test_an_out_that_is_a_file_is_one_line(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     (tmp_path / "file").write_text("")
-    assert main(["continuity", "--out", str(tmp_path / "file"), "--learners", "q-learning"]) == 2
+    assert (
+        main(["study", "continuity", "--out", str(tmp_path / "file"), "--learners", "q-learning"])
+        == 2
+    )
     assert "not a directory" in capsys.readouterr().err
 
 
 def test_a_discrete_agent_does_not_draw_the_env_s_numbers(monkeypatch: pytest.MonkeyPatch) -> None:
     """The agent's stream is not the one the env's episodes are reset from (both on
     ``default_rng(seed)``, exploration repeated the slip noise's numbers)."""
-    from skidnav.agents import registry
+    from skidnav.agents.tabular import registry
 
     states: list[dict[str, object]] = []  # each agent's generator as it was given
     make_agent = registry.make_agent

@@ -1,13 +1,12 @@
 """The Gaussian-process kinematic model (and the ridge model's predictive interval): calibration
-on a known linear model with Gaussian noise, mean recovery, the window bound, the CLI."""
+on a known linear model with Gaussian noise, mean recovery, the window bound. The comparison of
+the two models: tests/studies/test_kinematic_models.py."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from skidnav.cli import main
-from skidnav.commands.kinematic import Z_LEVEL
 from skidnav.models.gp_kinematic import (
     MAX_WINDOW,
     GaussianProcessConfig,
@@ -15,6 +14,7 @@ from skidnav.models.gp_kinematic import (
 )
 from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
 from skidnav.robot.params import RobotParams
+from skidnav.studies.kinematic_models.trial import Z_LEVEL
 from skidnav.world.discretization import Discretization
 
 REGION = 3
@@ -124,41 +124,3 @@ def test_config_and_queries_are_validated() -> None:
         model.predict(np.array([4]), np.zeros((1, 2)))
     mean, std = model.predict(np.array([1]), np.zeros((1, 2)))
     assert np.isnan(mean).all() and np.isnan(std).all()  # nothing fitted
-
-
-def test_cli_compares_both_models_on_a_tiny_budget(capsys: pytest.CaptureFixture[str]) -> None:
-    arguments = ["kinematic", "compare", "--seeds", "2", "--samples", "300", "--window", "20"]
-    assert main([*arguments, "--drift", "0.5"]) == 0
-    lines = capsys.readouterr().out.splitlines()
-    assert "drift A = 0.5 over P = 30 s" in lines[0]
-    assert [line.split()[:2] for line in lines[2:]] == [
-        [model, output] for model in ("ridge", "gp") for output in ("v_x", "v_y", "yaw_rate")
-    ]
-
-
-@pytest.mark.parametrize(
-    ("option", "value", "message"),
-    [
-        ("--seeds", "0", "expected --seeds in [1, 1000], got 0"),
-        ("--samples", "99", "expected --samples in [100, 1,000,000], got 99"),
-        ("--drift", "-1", "expected --drift >= 0, got -1.0"),
-        ("--drift-period", "0", "expected --drift-period > 0 s, got 0.0"),
-        ("--train-fraction", "1", "expected --train-fraction in [0.1, 0.9], got 1.0"),
-        ("--window", "10", "expected --window in [20, 2000], got 10"),
-        ("--slip", "ice", "invalid choice: 'ice'"),
-    ],
-)
-def test_bad_arguments_give_one_line_and_exit_code_2(
-    capsys: pytest.CaptureFixture[str], option: str, value: str, message: str
-) -> None:
-    assert _exit_code(["kinematic", "compare", option, value]) == 2
-    err = capsys.readouterr().err
-    assert err.count("\n") == 1 and message in err, err
-
-
-def _exit_code(argv: list[str]) -> int:
-    """``main``'s return value, or the code argparse exits with."""
-    try:
-        return main(argv)
-    except SystemExit as exit_:
-        return int(exit_.code or 0)

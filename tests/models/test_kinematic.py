@@ -7,18 +7,18 @@ import math
 import numpy as np
 import pytest
 
-from skidnav.kernels.kinematic_prediction import (
+from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+from skidnav.models.kinematic_prediction import (
     PREDICT_COLLISION,
     PREDICT_FREE,
     PREDICT_GOAL,
     collision_wall_cell,
 )
-from skidnav.kernels.navigation import pose_state, transition
-from skidnav.kernels.navigation_api import build_task
-from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
 from skidnav.robot.kinematics import body_velocities
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import make_slip_field
+from skidnav.sim.navigation import pose_state, transition
+from skidnav.sim.task import build_task
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap, border_walls
 

@@ -6,8 +6,14 @@ import numpy as np
 import pytest
 
 from skidnav.errors import CorruptFileError
-from skidnav.kernels.multinomial import EXPECTED, MOST_PROBABLE, SAMPLE, find_pair, model_target
 from skidnav.models.multinomial import MultinomialModel
+from skidnav.models.multinomial_kernels import (
+    EXPECTED,
+    MOST_PROBABLE,
+    SAMPLE,
+    find_pair,
+    model_target,
+)
 
 
 def deterministic_mdp(n_states: int, n_actions: int, seed: int) -> tuple[np.ndarray, np.ndarray]:

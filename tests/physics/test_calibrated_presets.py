@@ -7,14 +7,14 @@ import pytest
 
 pytest.importorskip("mujoco")
 
-from skidnav.kernels.navigation_api import build_task, drive_substep
 from skidnav.physics.calibration import calibrate
 from skidnav.physics.materials import MATERIALS, region_materials
 from skidnav.physics.mjcf import PhysicsParams, uniform_floor
-from skidnav.physics.robot import PhysicsRobot
+from skidnav.physics.mujoco_robot import PhysicsRobot
 from skidnav.robot.floors import PRESET_FLOORS, calibrated_floors
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
+from skidnav.sim.task import build_task, drive_substep
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import generate_map
 
@@ -22,7 +22,7 @@ ROBOT = RobotParams()
 
 
 def test_the_shipped_floors_are_those_a_new_calibration_gives() -> None:
-    """``src/skidnav/data/floors.json`` is ``skidnav floors calibrate`` (60 s, seed 0) as the
+    """``src/skidnav/data/floors.json`` is ``skidnav world floors calibrate`` (60 s, seed 0) as the
     physics model stands: recalibrate after changing a material or the robot model."""
     shipped = calibrated_floors()
     fits = calibrate(list(MATERIALS), np.random.default_rng(0), segments=60)

@@ -1,4 +1,4 @@
-"""``skidnav floors calibrate``: the ICR fit on the physics robot, and its command line."""
+"""``skidnav world floors calibrate``: the ICR fit on the physics robot, and its command line."""
 
 from __future__ import annotations
 
@@ -46,7 +46,7 @@ def test_physics_robot_turns_as_if_its_track_were_wider_and_grippier_floors_wide
 
 def run_cli(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "skidnav.cli", "floors", "calibrate", *args],
+        [sys.executable, "-m", "skidnav.cli", "world", "floors", "calibrate", *args],
         capture_output=True, text=True, timeout=120,
     )  # fmt: skip
 

@@ -17,7 +17,7 @@ from gymnasium.utils.env_checker import check_env
 
 import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents.fast_training import FusedEnv
-from skidnav.agents.registry import make_agent
+from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import greedy_rollout, train_agent
 from skidnav.physics import backend
 from skidnav.physics.backend import PhysicsUnavailable

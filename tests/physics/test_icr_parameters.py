@@ -1,5 +1,5 @@
 """``icr_parameters``: the ICR model's reading of the kinematic regressions, shared by
-``skidnav floors calibrate`` and the reading of a learned model's coefficients."""
+``skidnav world floors calibrate`` and the reading of a learned model's coefficients."""
 
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ pytest.importorskip("mujoco")
 from skidnav.physics import backend
 from skidnav.physics.materials import MATERIALS, material, region_materials
 from skidnav.physics.mjcf import PhysicsParams, arena_mjcf, uniform_floor
-from skidnav.physics.robot import PhysicsRobot
+from skidnav.physics.mujoco_robot import PhysicsRobot
 from skidnav.robot.kinematics import body_velocities
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import make_slip_field

@@ -22,10 +22,15 @@ from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.control.records import EventLog
 from skidnav.realtime.link import protocol as pr
 from skidnav.realtime.link.auth import Session
-from skidnav.realtime.sim.lockstep import LockstepServer
-from skidnav.realtime.sim.robot import SimRobot, SimRobotConfig, build_robot, warm_up
-from skidnav.realtime.sim.server import SimServer
-from skidnav.realtime.sim.transport import bind_listener
+from skidnav.realtime.robot_server.lockstep import LockstepServer
+from skidnav.realtime.robot_server.server import SimServer
+from skidnav.realtime.robot_server.simulated_robot import (
+    SimRobot,
+    SimRobotConfig,
+    build_robot,
+    warm_up,
+)
+from skidnav.realtime.robot_server.transport import bind_listener
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import make_slip_field
 from skidnav.world.discretization import Discretization

@@ -9,7 +9,7 @@ import pytest
 from skidnav.errors import UserError
 from skidnav.realtime.config import config_from_mapping
 from skidnav.realtime.control.run import agent_context
-from skidnav.realtime.link.drivers import SimDriver, make_driver
+from skidnav.realtime.drivers import SimDriver, make_driver
 from skidnav.realtime.link.line_client import LineClient, SerialLink, TcpLink
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization

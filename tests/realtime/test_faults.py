@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 
-from skidnav.agents.registry import load_agent
+from skidnav.agents.tabular.registry import load_agent
 from skidnav.realtime.control.checkpoint import Checkpoints
 from tests.realtime.realtime_helpers import (
     ServerProcess,

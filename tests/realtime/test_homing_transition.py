@@ -10,11 +10,11 @@ import sys
 import numpy as np
 import pytest
 
-from skidnav.realtime.arena import build_map, seed_streams, start_pose
+from skidnav.realtime.arena import arena_map, seed_streams, start_pose
 from skidnav.realtime.control.homing import HomingController
 from skidnav.realtime.control.transition import IcrEstimates, WheelSpeedStats, log_row, reward_of
 from skidnav.realtime.link.interface import Pose
-from skidnav.realtime.sim.robot import SimRobot, SimRobotConfig, build_robot
+from skidnav.realtime.robot_server.simulated_robot import SimRobot, SimRobotConfig, build_robot
 from skidnav.robot.kinematics import body_velocities, euler_step
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
@@ -35,7 +35,7 @@ def test_homing_brings_the_robot_to_the_start_state(spec: str, slip: str, seed: 
         seed=seed,
         config=SimRobotConfig(pose_noise=0.001),
     )
-    grid_map = build_map(spec, seed, GRID)
+    grid_map = arena_map(spec, seed, GRID)
     rng = np.random.default_rng(seed)
     free = np.argwhere(~grid_map.occupancy)
     i, j = free[int(rng.integers(len(free)))]
@@ -91,7 +91,7 @@ def test_wheel_speed_stats_match_numpy_variance() -> None:
 
 
 def test_reward_rule_matches_the_env() -> None:
-    grid_map = build_map("free", 0, GRID)
+    grid_map = arena_map("free", 0, GRID)
     stats = WheelSpeedStats(GRID.n_regions, RobotParams())
     goal = Pose(0, *GRID.cell_centre(*grid_map.goal), 0.0)
     assert reward_of(goal, True, grid_map.goal, GRID, stats) == (10.0, True)
@@ -190,7 +190,7 @@ def test_homing_with_the_estimated_icr_reaches_the_start_on_a_shifted_floor() ->
     assert estimates.values()[seen] == pytest.approx(-0.03, abs=0.005)
     unseen = estimates.sums[:, 1] == 0.0
     assert np.all(estimates.values()[unseen] == RobotParams().x_icr)  # the prior there
-    grid_map = build_map("free", 2, GRID)
+    grid_map = arena_map("free", 2, GRID)
     controller = HomingController(grid_map, GRID, 1.7, tolerance=0.008, x_icr=estimates.values())
     x, y = GRID.cell_centre(grid_map.start[0] + 6, grid_map.start[1] + 5)
     robot.pose = (x, y, 2.0)
@@ -199,8 +199,8 @@ def test_homing_with_the_estimated_icr_reaches_the_start_on_a_shifted_floor() ->
 
 
 SCORING_KERNELS = """
-from skidnav.kernels.navigation import action_reward
-from skidnav.realtime.arena import build_map
+from skidnav.sim.navigation import action_reward
+from skidnav.realtime.arena import arena_map
 from skidnav.realtime.control.transition import compile_scoring
 from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.params import RobotParams
@@ -209,7 +209,7 @@ from skidnav.world.discretization import Discretization, cell_of, region_of, sta
 kernels = (state_of, cell_of, region_of, wrap_angle, action_reward)
 assert not any(kernel.signatures for kernel in kernels)
 grid = Discretization()
-compile_scoring(build_map("obstacles", 0, grid), grid, RobotParams())
+compile_scoring(arena_map("obstacles", 0, grid), grid, RobotParams())
 print([kernel.__name__ for kernel in kernels if not kernel.signatures])
 """
 

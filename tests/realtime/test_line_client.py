@@ -12,7 +12,7 @@ import pytest
 from skidnav.realtime.control.safety import SafetyLimits, SafetyMonitor
 from skidnav.realtime.link import protocol as pr
 from skidnav.realtime.link.line_client import LineClient, SerialLink, TcpLink
-from skidnav.realtime.sim.transport import FdChannel
+from skidnav.realtime.robot_server.transport import FdChannel
 from tests.realtime.realtime_helpers import ServerThread, wait_for
 
 

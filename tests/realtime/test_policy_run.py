@@ -15,12 +15,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skidnav.agents import policy_files
-from skidnav.agents.goal_tracker import GoalTracker
+from skidnav.agents.policies import loading
+from skidnav.agents.policies.goal_tracker import GoalTracker
 from skidnav.cli import main
-from skidnav.envs.features import PoseFeatures
-from skidnav.realtime.arena import build_map
+from skidnav.realtime.arena import arena_map
 from skidnav.realtime.control.checkpoint import Checkpoints
+from skidnav.sim.features import PoseFeatures
 from skidnav.world.discretization import Discretization
 from tests.realtime.realtime_helpers import ServerThread, read_events, wait_for, write_config
 from tests.realtime.test_faults import POSE_TIMEOUT, STOP_WITHIN, assert_quiet_until_reconnect
@@ -59,9 +59,7 @@ def load_overdriven(path: Path, data: dict[str, Any]) -> Overdriven:
 @pytest.fixture
 def overdriven_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
     """Factory of saved ``test-overdriven`` policies, the format registered for the test."""
-    monkeypatch.setitem(
-        policy_files.POLICY_LOADERS, "test-overdriven", f"{__name__}:load_overdriven"
-    )
+    monkeypatch.setitem(loading.POLICY_LOADERS, "test-overdriven", f"{__name__}:load_overdriven")
 
     def write(**fields: Any) -> Path:
         path = tmp_path / "overdriven.json"
@@ -160,7 +158,7 @@ def test_lost_poses_stop_a_continuous_policy_and_the_run_goes_on(
     assert (summary["episodes"], summary["aborted"], summary["exit_code"]) == (3, 1, 0)
 
     grid = Discretization()
-    features = PoseFeatures(build_map("free", SEED, grid), grid, 8, 0.3)
+    features = PoseFeatures(arena_map("free", SEED, grid), grid, 8, 0.3)
     transitions = assert_commands_follow_the_policy(events, Overdriven(2.0), features)
     assert any(max(map(abs, t["output"])) > LIMIT for t in transitions)  # clipping happened
     commands = {tuple(t["command"]) for t in transitions}
@@ -224,7 +222,7 @@ def test_goal_tracker_reaches_the_goal_through_the_sim_driver_and_resumes(
     assert "1 reached the goal" in capsys.readouterr().out
     events = read_events(out / "run.jsonl")
     grid = Discretization()
-    features = PoseFeatures(build_map("free", SEED, grid), grid, 8, 0.3)
+    features = PoseFeatures(arena_map("free", SEED, grid), grid, 8, 0.3)
     transitions = assert_commands_follow_the_policy(events, GoalTracker(), features)
     assert transitions[-1]["terminated"] and transitions[-1]["reward"] == 10.0
     assert all(t["log_rows"] >= 1 for t in transitions[1:])
@@ -318,8 +316,8 @@ def test_a_policy_with_weights_no_search_writes_is_one_line(
 ) -> None:
     """Weights of 10³² and more (the search keeps them below: cmaes asserts it) would overflow
     the policy's sums to NaN on the robot: refused when the file is loaded."""
-    from skidnav.policysearch.policy import PolicyLayout, TanhPolicy
-    from skidnav.policysearch.policyfile import save_policy
+    from skidnav.agents.policies.search.policy_file import save_policy
+    from skidnav.agents.policies.search.tanh_policy import PolicyLayout, TanhPolicy
 
     layout = PolicyLayout(np.zeros(9), np.ones(9), hidden=2, wheel_speed=1.7, lidar_rays=2)
     npz_path, json_path = save_policy(
@@ -417,7 +415,7 @@ def test_a_slow_policy_is_not_driven_into_a_wall(
     taking 20 ms (a third of a period at this time scale) never pushes the robot against the
     wall; the bumper stops it before, as a collision."""
     monkeypatch.setitem(
-        policy_files.POLICY_LOADERS, "test-slow-forward", f"{__name__}:load_slow_forward"
+        loading.POLICY_LOADERS, "test-slow-forward", f"{__name__}:load_slow_forward"
     )
     (tmp_path / "wall.txt").write_text(WALL_AHEAD, encoding="utf-8")
     policy = tmp_path / "slow.json"

@@ -13,7 +13,7 @@ import pytest
 from skidnav.errors import UserError
 from skidnav.realtime.config import config_from_mapping
 from skidnav.realtime.control.safety import SafetyLimits, SafetyMonitor
-from skidnav.realtime.link.drivers import make_driver as driver_by_name
+from skidnav.realtime.drivers import make_driver as driver_by_name
 from skidnav.realtime.link.ros2 import Ros2Config
 from skidnav.realtime.link.ros2_messages import (
     heading_from_quaternion,

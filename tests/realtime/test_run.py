@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from skidnav.agents.registry import load_agent
+from skidnav.agents.tabular.registry import load_agent
 from skidnav.cli import main
 from skidnav.realtime.config import load_config
 from skidnav.realtime.control.checkpoint import Checkpoints

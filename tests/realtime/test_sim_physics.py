@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from skidnav.realtime.link import protocol as pr
-from skidnav.realtime.sim.robot import SimRobotConfig, build_robot
+from skidnav.realtime.robot_server.simulated_robot import SimRobotConfig, build_robot
 from tests.realtime import test_faults, test_sim_server
 from tests.realtime.realtime_helpers import (
     RawClient,

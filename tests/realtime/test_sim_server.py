@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from skidnav.realtime.link import protocol as pr
-from skidnav.realtime.sim.robot import SimRobot, SimRobotConfig, build_robot
+from skidnav.realtime.robot_server.simulated_robot import SimRobot, SimRobotConfig, build_robot
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import make_slip_field
 from skidnav.world.discretization import Discretization

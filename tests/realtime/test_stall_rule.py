@@ -14,7 +14,7 @@ import pytest
 from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.control.records import EventLog
 from skidnav.realtime.link import protocol as pr
-from skidnav.realtime.sim.robot import Firmware
+from skidnav.realtime.robot_server.simulated_robot import Firmware
 from tests.realtime.realtime_helpers import bench_robot
 
 HOST = 1000.0  # the host's clock reads 1000 s when the robot's reads 0

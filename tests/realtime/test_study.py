@@ -19,16 +19,15 @@ from skidnav.experiments.runs import RunSpec, expand_runs
 from skidnav.experiments.store import ResultStore
 from skidnav.realtime.control.loop import EXIT_INTERRUPTED
 from skidnav.realtime.control.records import EpisodeResult
-from skidnav.realtime.study import (
+from skidnav.studies.hardware.report import markdown_report
+from skidnav.studies.hardware.study import (
     STUDY_LAYOUT,
-    build_grid,
     grid_from_dict,
     grid_to_dict,
     load_study,
     run_study,
 )
-from skidnav.realtime.study_report import markdown_report
-from skidnav.realtime.study_trial import run_config
+from skidnav.studies.hardware.trial import run_config
 from tests.realtime.realtime_helpers import write_config
 from tests.realtime.test_run import small_room_map
 
@@ -113,6 +112,45 @@ def test_study_runs_through_the_runner_and_skips_finished_runs(
     assert [s["runs_done"] for s in metadata["sessions"]] == [4, 0]
 
 
+def test_the_study_is_a_config_that_skidnav_run_runs_resumes_and_reports(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    config, out, calls = study_config(tmp_path), tmp_path / "study", []
+    monkeypatch.setattr("skidnav.studies.hardware.trial.realtime_run", fake_realtime(calls))
+    argv = ["robot", "study", "--config", str(config), "--agents", "q-learning", "--quiet"]
+    assert main([*argv, "--episodes", "2", "--out", str(out)]) == 0
+    assert len(calls) == 2
+    saved = out / "config.toml"  # the shortcut's config, as skidnav run saves a config
+    assert 'kind = "robot-study"' in saved.read_text()
+    capsys.readouterr()
+    # skidnav run on it (serially, this study's only backend) finds every run done
+    assert main(["run", str(saved), "--out", str(out), "--no-progress", "--report"]) == 0
+    assert f"2 runs in {out} (0 run now, 2 already done)" in capsys.readouterr().out
+    assert len(calls) == 2
+    report = (out / "report.html").read_text()
+    assert "<h1>skidnav robot-study: robot-study</h1>" in report
+    assert "<h2>Hardware-in-the-loop study</h2>" in report
+    assert "<td>q-learning</td><td>rough-stationary</td><td>1</td><td>2</td>" in report
+    assert main(["run", str(saved), "--out", str(out), "--backend", "process"]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.endswith("a robot-study study runs only with --backend serial, not process")
+    # the same study written out in one file (the real-time tables inline) is the same grid
+    inline = tmp_path / "inline" / "study.toml"
+    inline.parent.mkdir()
+    study = 'agents = ["q-learning"]\nepisodes = 2'
+    text = config.read_text().replace('agents = ["q-learning", "dyna-q"]', study)
+    inline.write_text('kind = "robot-study"\n' + text)
+    assert main(["run", str(inline), "--out", str(out), "--no-progress"]) == 0
+    assert "(0 run now, 2 already done)" in capsys.readouterr().out
+    # a config with [study] config takes no real-time table of its own
+    mixed = tmp_path / "mixed.toml"
+    mixed.write_text(f'kind = "robot-study"\n[study]\nconfig = "{config}"\n[sim]\nslip = "rough"\n')
+    assert main(["run", str(mixed), "--out", str(tmp_path / "mixed")]) == 2
+    assert "[study] config: expected the name of a real-time config and no other table" in (
+        capsys.readouterr().err
+    )
+
+
 FakeRun = Callable[[RunSpec[Any], Path, Callable[[str], None]], tuple[int, list[EpisodeResult]]]
 
 
@@ -142,10 +180,10 @@ def fake_realtime(calls: list[str], interrupt_at: int = 0) -> FakeRun:
 def test_an_interrupted_study_resumes_with_no_run_lost_or_repeated(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    tables, settings = load_study(study_config(tmp_path), {"seeds": 2, "episodes": 3})
+    grid, text = load_study(study_config(tmp_path), {"seeds": 2, "episodes": 3})
     out, calls = tmp_path / "study", []
-    monkeypatch.setattr("skidnav.realtime.study_trial.realtime_run", fake_realtime(calls, 3))
-    first = run_study(tables, settings, out)
+    monkeypatch.setattr("skidnav.studies.hardware.trial.realtime_run", fake_realtime(calls, 3))
+    first = run_study(grid, out, source_text=text)
     assert first == (EXIT_INTERRUPTED, 8, 2, 2)
     store = ResultStore(out, STUDY_LAYOUT)
     assert store.finished() == {"run-000000", "run-000001"}
@@ -153,8 +191,8 @@ def test_an_interrupted_study_resumes_with_no_run_lost_or_repeated(
     interrupted = out / "runs" / "q-learning" / "slippery-drifting" / "seed-0"
     assert (interrupted / "run.jsonl").exists()  # unfinished: no run file
 
-    monkeypatch.setattr("skidnav.realtime.study_trial.realtime_run", fake_realtime(calls))
-    second = run_study(tables, settings, out)
+    monkeypatch.setattr("skidnav.studies.hardware.trial.realtime_run", fake_realtime(calls))
+    second = run_study(grid, out, source_text=text)
     assert second == (0, 8, 8, 6)
     assert calls[3:] == [f"run-{i:06d}" for i in range(2, 8)]  # the interrupted run again
     assert store.finished() == {f"run-{i:06d}" for i in range(8)}
@@ -165,8 +203,7 @@ def test_an_interrupted_study_resumes_with_no_run_lost_or_repeated(
 
 
 def test_runs_meet_the_worlds_of_the_runner_seeds(tmp_path: Path) -> None:
-    tables, settings = load_study(study_config(tmp_path), {"seeds": 2})
-    grid = build_grid(tables, settings)
+    grid, _ = load_study(study_config(tmp_path), {"seeds": 2})
     runs = expand_runs(grid)
     assert len(runs) == grid.n_runs == 8
     seeds = {(s.agent.name, s.preset, s.seed): run_config(s).run.seed for s in runs}
@@ -285,9 +322,9 @@ def test_study_settings_and_one_line_errors(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     config = study_config(tmp_path)
-    tables, settings = load_study(config, {"seeds": 3, "agents": "dyna-q", "episodes": None})
-    assert "study" not in tables and settings.agents == ("dyna-q",)
-    assert settings.presets == PRESETS and settings.seeds == 3
+    grid, study_text = load_study(config, {"seeds": 3, "agents": "dyna-q", "episodes": None})
+    assert grid.agent_labels == ["dyna-q"] and grid.presets == PRESETS and grid.seeds == 3
+    assert "episodes" not in study_text and f'config = "{config}"' in study_text
     with pytest.raises(UserError, match="seeds"):
         load_study(config, {"seeds": 0})
     with pytest.raises(UserError, match="expected one or more distinct agent names"):
@@ -321,7 +358,7 @@ def test_study_settings_and_one_line_errors(
     assert not out.exists()
 
     config.write_text(text)
-    monkeypatch.setattr("skidnav.realtime.study_trial.realtime_run", fake_realtime([]))
+    monkeypatch.setattr("skidnav.studies.hardware.trial.realtime_run", fake_realtime([]))
     assert main([*argv, "--episodes", "2", "--agents", "q-learning"]) == 0
     assert main([*argv, "--episodes", "3", "--agents", "q-learning"]) == 2
     assert (
@@ -331,7 +368,7 @@ def test_study_settings_and_one_line_errors(
             f"skidnav: error: {out}: holds results of a different config; choose another --out"
         )
     )
-    assert main(["report", str(out)]) == 2
+    assert main(["report", str(out), "--study"]) == 2  # an experiment's study tables
     assert f"{out}: holds 'robot-study' results, not 'experiment' results" in (
         capsys.readouterr().err
     )

@@ -13,7 +13,7 @@ import pytest
 
 from skidnav.cli import main
 from skidnav.experiments.store import directory_lock
-from skidnav.realtime.study import load_study, run_study
+from skidnav.studies.hardware.study import load_study, run_study
 from tests.realtime.realtime_helpers import cli_env, wait_for
 from tests.realtime.test_study import fake_realtime, study_config
 from tests.saved_file_support import skidnav_with_full_disk
@@ -23,9 +23,9 @@ def _finished_study(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[Pa
     """(out, command line) of a study whose four runs are finished (by a stand-in for the
     real-time run: a second call with the same command line runs nothing)."""
     config, out = study_config(tmp_path), tmp_path / "study"
-    monkeypatch.setattr("skidnav.realtime.study_trial.realtime_run", fake_realtime([]))
-    tables, settings = load_study(config, {"episodes": 2})
-    assert run_study(tables, settings, out).finished == 4
+    monkeypatch.setattr("skidnav.studies.hardware.trial.realtime_run", fake_realtime([]))
+    grid, text = load_study(config, {"episodes": 2})
+    assert run_study(grid, out, source_text=text).finished == 4
     argv = ["robot", "study", "--config", str(config), "--episodes", "2", "--quiet"]
     return out, [*argv, "--out", str(out)]
 

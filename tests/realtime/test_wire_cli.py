@@ -88,7 +88,7 @@ def test_bad_arguments_end_in_one_line_and_exit_code_2(
 def test_the_sim_server_takes_the_integrator_asked_for(
     integrator: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import skidnav.realtime.sim.robot as sim_robot
+    from skidnav.realtime.robot_server import simulated_robot
 
     built = []
 
@@ -96,7 +96,7 @@ def test_the_sim_server_takes_the_integrator_asked_for(
         built.append(arguments["robot"])
         raise SystemExit(0)  # stop before the server binds
 
-    monkeypatch.setattr(sim_robot, "build_robot", build)
+    monkeypatch.setattr(simulated_robot, "build_robot", build)
     run_cli(["robot", "sim-server", "--port", "0", "--integrator", integrator])
     assert [robot.integrator for robot in built] == [integrator]  # type: ignore[attr-defined]
 

@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.control.records import EventLog
 from skidnav.realtime.link import protocol as pr
-from skidnav.realtime.sim.robot import Firmware, SimRobot
+from skidnav.realtime.robot_server.simulated_robot import Firmware, SimRobot
 from tests.realtime.realtime_helpers import bench_robot
 
 FIELDS = sorted({f.name for cls in pr.MESSAGE_TYPES.values() for f in fields(cls)} | {"v", "type"})

@@ -5,10 +5,10 @@ import json
 import numpy as np
 import pytest
 
-from skidnav.kernels.navigation_api import build_task, drive_substep
 from skidnav.robot.floors import calibrated_floor, parse_floors
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import make_slip_field
+from skidnav.sim.task import build_task, drive_substep
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import generate_map
 

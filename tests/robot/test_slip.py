@@ -1,7 +1,6 @@
 import numpy as np
 import pytest
 
-from skidnav.kernels.navigation_api import build_task
 from skidnav.robot.kinematics import (
     apply_slip,
     body_velocities,
@@ -10,6 +9,7 @@ from skidnav.robot.kinematics import (
 )
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
+from skidnav.sim.task import build_task
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import generate_map
 

@@ -1,5 +1,6 @@
-"""The one map builder (world/maps.py) behind the experiment trial, the real-time arena and the
-skid-steer env: identical maps for one description and seed, one-line errors."""
+"""The one map builder (world/maps.py) behind a config's ``[[maps]]`` entry (experiments.trial),
+the real-time arena and the skid-steer env: identical maps for one description and seed,
+one-line errors."""
 
 import numpy as np
 import pytest
@@ -7,8 +8,8 @@ import pytest
 from skidnav.envs.navigation import SkidSteerNavEnv
 from skidnav.errors import UserError
 from skidnav.experiments.config import MapSpec
-from skidnav.experiments.trial import build_map as trial_map
-from skidnav.realtime.arena import build_map as arena_map
+from skidnav.experiments.trial import config_map
+from skidnav.realtime.arena import arena_map
 from skidnav.seeding import ARENA_ROLES, child_sequences
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap, generate_map
@@ -31,7 +32,7 @@ def map_rng(seed: int) -> np.random.Generator:
 def test_the_three_users_build_the_same_map_for_one_seed(kind: str, seed: int) -> None:
     arena = arena_map(kind, seed, GRID)
     env = SkidSteerNavEnv(map_kind=kind, world_seed=seed, discretization=GRID).grid_map
-    trial = trial_map(MapSpec(kind, kind), map_rng(seed))
+    trial = config_map(MapSpec(kind, kind), map_rng(seed))
     direct = generate_map(kind, map_rng(seed), (GRID.n_x, GRID.n_y))
     assert same(arena, env) and same(env, trial) and same(trial, direct)
     if kind != "free":  # another seed, another layout
@@ -51,7 +52,8 @@ def test_a_file_is_read_by_all_three_and_checked_against_the_size(tmp_path) -> N
     save_map(grid_map, path)
     rng = np.random.default_rng(0)
     env = SkidSteerNavEnv(map_file=path, discretization=GRID).grid_map
-    for built in (arena_map(str(path), 9, GRID), env, trial_map(MapSpec("m", file=str(path)), rng)):
+    entry = MapSpec("m", file=str(path))
+    for built in (arena_map(str(path), 9, GRID), env, config_map(entry, rng)):
         assert same(built, grid_map)
     with pytest.raises(MapFileError, match=r"^\S*m.txt: map is \(25, 25\), expected \(10, 10\)$"):
         build_map(rng, file=path, shape=(10, 10))

@@ -1,5 +1,6 @@
-"""Tabular agents over one shared core (docs/agents/core.md).
-
-``make_agent(name, n_states, n_actions, config, rng)`` and ``load_agent(path)`` live in
-:mod:`skidnav.agents.registry`; the plain training loop in :mod:`skidnav.agents.training`.
+"""Agents by family: ``tabular/`` (a Q table over the discrete state), ``linear/`` (tile-coded
+features), ``deep/`` (Stable-Baselines3), ``policies/`` (wheel-speed policies and CMA-ES search);
+the learning-step registry (:mod:`skidnav.agents.learning`), the two training loops
+(:mod:`skidnav.agents.training`, :mod:`skidnav.agents.fast_training`) and the catalog of every
+agent by name (:mod:`skidnav.agents.catalog`). docs/agents/core.md describes the tabular core.
 """

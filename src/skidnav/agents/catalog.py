@@ -1,17 +1,22 @@
-"""Every agent by name, whatever it learns over: the one door of the experiment runner.
+"""Every agent by name, described once: the one door of the experiment runner.
 
-Three families, each with its own registry:
+:func:`entry` gives the :class:`AgentEntry` of a registered name — its family, the observation
+it learns over, its config class, how it is built and how it is trained — and callers ask it
+once and use the entry. Three families, each with its own registry and protocol
+(:mod:`skidnav.agents.interface`):
 
-* **tabular** (:mod:`skidnav.agents.registry`): a Q table over the env's ``Discrete``
-  observation; trained by the compiled trainer
-  (:func:`~skidnav.agents.fast_training.train_agent_fast`);
-* **linear** (:mod:`skidnav.agents.continuous.registry`): tile-coded features of a ``Box``
-  observation; trained by the plain loop (:func:`~skidnav.agents.training.train_agent`, to
-  which the compiled trainer falls back for them);
-* **deep** (:data:`DEEP_AGENTS`, the ``deep`` extra): Stable-Baselines3 owns the loop, and the
-  agent trains itself by episodes with the same greedy evaluations
-  (:meth:`skidnav.agents.deep.common.DeepAgent.train_episodes`); ``ppo`` and ``sac`` need the
-  env's ``action="continuous"`` and ``observation="features"``.
+* **tabular** (:mod:`skidnav.agents.tabular.registry`): a Q table over the env's ``Discrete``
+  observation, a :class:`~skidnav.agents.interface.StepLearningAgent` trained by the compiled
+  trainer (:func:`~skidnav.agents.fast_training.train_agent_fast`, which runs the plain loop
+  itself for envs it cannot drive);
+* **linear** (:mod:`skidnav.agents.linear.registry`): tile-coded features of a ``Box``
+  observation, a :class:`~skidnav.agents.interface.StepLearningAgent` trained by the plain loop
+  (:func:`~skidnav.agents.training.train_agent`);
+* **deep** (:data:`DEEP_AGENTS`, the ``deep`` extra, imported only when asked for):
+  Stable-Baselines3 owns the loop, and the agent, an
+  :class:`~skidnav.agents.interface.EpisodeTrainingAgent`, trains itself by episodes with the
+  same greedy evaluations (:meth:`skidnav.agents.deep.common.DeepAgent.train_episodes`);
+  ``ppo`` and ``sac`` need the env's ``action="continuous"`` and ``observation="features"``.
 
 Every family returns the same :class:`~skidnav.agents.training.TrainingLog`, and every agent
 answers ``greedy_action(observation)``, so the runner measures them alike.
@@ -21,22 +26,35 @@ from __future__ import annotations
 
 import importlib
 import inspect
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, Generic, Literal, Protocol, TypeAlias, TypeVar
 
 import gymnasium
 import numpy as np
 from gymnasium.wrappers import TimeLimit
+from numpy.random import SeedSequence
 
-from skidnav.agents.continuous.registry import (
+from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.interface import Agent, AgentConfig, EpisodeTrainingAgent, StepLearningAgent
+from skidnav.agents.linear.agent import LinearAgent
+from skidnav.agents.linear.registry import (
     CONTINUOUS_AGENT_MODULES,
     linear_agent_class,
     make_linear_agent,
 )
-from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.registry import AGENT_MODULES, agent_class, make_agent, make_config
-from skidnav.agents.training import TrainingLog
+from skidnav.agents.tabular.agent import TabularAgent
+from skidnav.agents.tabular.registry import AGENT_MODULES, agent_class, make_agent
+from skidnav.agents.training import TrainingLog, train_agent
 from skidnav.errors import UserError, first_line, shown
+
+if TYPE_CHECKING:  # each family's base class satisfies its protocol (checked by mypy)
+    from skidnav.agents.deep.common import DeepAgent
+
+    _TABULAR: type[StepLearningAgent] = TabularAgent
+    _LINEAR: type[StepLearningAgent] = LinearAgent
+    _DEEP: type[EpisodeTrainingAgent] = DeepAgent
 
 DEEP_AGENTS: dict[str, str] = {
     "dqn": "skidnav.agents.deep.dqn",
@@ -45,131 +63,302 @@ DEEP_AGENTS: dict[str, str] = {
 }
 """Registry name → module defining ``AGENT_NAME``, ``AGENT_CLASS`` and ``CONFIG_CLASS``."""
 
-
-def family(name: str) -> str:
-    """``"tabular"``, ``"linear"`` or ``"deep"``; UserError naming the known agents otherwise."""
-    if name in AGENT_MODULES:
-        return "tabular"
-    if name in CONTINUOUS_AGENT_MODULES:
-        return "linear"
-    if name in DEEP_AGENTS:
-        return "deep"
-    known = [*AGENT_MODULES, *CONTINUOUS_AGENT_MODULES, *DEEP_AGENTS]
-    raise UserError(f"unknown agent {shown(name)}; expected one of {', '.join(known)}")
-
-
-def _deep_module(name: str) -> Any:
-    """The module of deep agent ``name``; UserError when the ``deep`` extra is missing."""
-    try:
-        return importlib.import_module(DEEP_AGENTS[name])
-    except ModuleNotFoundError as error:
-        raise UserError(
-            f"agent {name!r} needs the deep extra (pip install 'skidnav[deep]'): "
-            f"no module {error.name!r}"
-        ) from None
-
-
-def check_params(name: str, params: Mapping[str, Any]) -> None:
-    """Validate agent ``name``'s hyperparameters as a new agent would; UserError naming it."""
-    kind = family(name)
-    if kind == "tabular":
-        make_config(name, params)
-        return
-    try:
-        if kind == "linear":
-            linear_agent_class(name).config_class.from_mapping(dict(params))
-        else:
-            _deep_module(name).CONFIG_CLASS.from_mapping(dict(params))
-    except (ValueError, TypeError) as error:
-        raise UserError(f"agent {name!r}: {first_line(error)}") from None
-
-
+Family = Literal["tabular", "linear", "deep"]
+Observation = Literal["discrete", "box"]
+"""What an agent learns over: the env's ``Discrete`` state, or a ``Box`` observation."""
 BOX_OBSERVATIONS = ("pose", "features")
 """The skid-steer env's ``Box`` observations (``observation=``), for the non-tabular agents."""
+DEFAULT_BOX_OBSERVATION = "features"
+"""The ``Box`` observation of a non-tabular agent whose config names none."""
+
+Env: TypeAlias = gymnasium.Env[Any, Any]
+Params: TypeAlias = Mapping[str, Any]
+Seeds: TypeAlias = Sequence[int] | None
+AgentT = TypeVar("AgentT", bound=Agent)
+AgentT_contra = TypeVar("AgentT_contra", bound=Agent, contravariant=True)
 
 
-def observation_for(name: str, requested: str | None) -> str:
-    """The skid-steer env's ``observation`` for agent ``name`` when a config asks for
-    ``requested`` (its ``[env] observation``, or None): a tabular agent always sees the discrete
-    state; the others the requested ``Box`` observation, ``"features"`` by default. UserError
-    when a non-tabular agent is asked to learn over the discrete state."""
-    if family(name) == "tabular":
-        return "discrete"
-    if requested is None:
-        return "features"
-    if requested not in BOX_OBSERVATIONS:
-        raise UserError(
-            f"agent {name!r} learns over a Box observation: expected [env] observation in "
-            f"{', '.join(BOX_OBSERVATIONS)}, got {shown(requested)}"
-        )
-    return requested
+class Trainer(Protocol[AgentT_contra]):
+    """How a family trains: ``episodes`` episodes of ``agent`` on ``env`` (the env it was built
+    for), each cut at ``max_steps`` actions, the greedy policy evaluated on ``greedy_eval_env``
+    after each (one rollout per seed of ``greedy_seeds``, each cut at ``max_steps`` too)."""
+
+    def __call__(
+        self,
+        agent: AgentT_contra,
+        env: Env,
+        episodes: int,
+        /,
+        *,
+        max_steps: int,
+        greedy_eval_env: Env | None,
+        greedy_seeds: Seeds,
+    ) -> TrainingLog: ...
 
 
-def build_agent(
-    name: str,
-    env: gymnasium.Env[Any, Any],
-    params: Mapping[str, Any],
-    seed: np.random.SeedSequence,
-    max_steps: int,
-) -> Any:
-    """A new agent ``name`` for ``env`` (unwrapped) with ``params``, drawing from ``seed``; a deep
-    agent drives ``env`` itself, cut at ``max_steps`` actions per episode."""
-    kind = family(name)
-    space: Any = env.observation_space
-    wanted = gymnasium.spaces.Discrete if kind == "tabular" else gymnasium.spaces.Box
+@dataclass(frozen=True)
+class BuiltAgent(Generic[AgentT]):
+    """A new agent with its family's training bound to it."""
+
+    agent: AgentT
+    trainer: Trainer[AgentT]
+
+    def train(
+        self,
+        env: Env,
+        episodes: int,
+        *,
+        max_steps: int,
+        greedy_eval_env: Env | None,
+        greedy_seeds: Seeds,
+    ) -> TrainingLog:
+        """Train the agent for ``episodes`` episodes on ``env`` (the env it was built for), as
+        its family trains (:class:`Trainer`)."""
+        return self.trainer(
+            self.agent, env, episodes, max_steps=max_steps, greedy_eval_env=greedy_eval_env,
+            greedy_seeds=greedy_seeds,
+        )  # fmt: skip
+
+
+@dataclass(frozen=True)
+class AgentEntry(Generic[AgentT]):
+    """One registered agent: its family, what it learns over, its config, how it is built and
+    trained. The classes are imported only when asked for (:attr:`agent_class`)."""
+
+    name: str
+    family: Family
+    observation: Observation
+    load_class: Callable[[str], type[AgentT]]
+    """The registry's class lookup (imports the agent's module)."""
+    load_config_class: Callable[[str], type[AgentConfig]]
+    make: Callable[[AgentEntry[AgentT], Env, Params, SeedSequence, int], AgentT]
+    """How the family builds the agent of an entry for an unwrapped env with parameters, drawing
+    from a seed sequence, its episodes cut at a number of actions."""
+    trainer: Trainer[AgentT]
+
+    @property
+    def agent_class(self) -> type[AgentT]:
+        """The agent's class (its module imported now)."""
+        return self.load_class(self.name)
+
+    @property
+    def config_class(self) -> type[AgentConfig]:
+        """The agent's frozen config dataclass."""
+        return self.load_config_class(self.name)
+
+    def config(self, params: Params) -> AgentConfig:
+        """The agent's config from ``params`` (e.g. an ``[[agents]]`` table's ``params``),
+        validated as a new agent would; UserError naming the agent otherwise."""
+        try:
+            return self.config_class.from_mapping(dict(params))
+        except (ValueError, TypeError) as error:
+            raise UserError(f"agent {self.name!r}: {first_line(error)}") from None
+
+    def env_observation(self, requested: object) -> str:
+        """The skid-steer env's ``observation`` for this agent when a config asks for
+        ``requested`` (its ``[env] observation`` as written, or None): a tabular agent always
+        sees the discrete state; the others the requested ``Box`` observation,
+        :data:`DEFAULT_BOX_OBSERVATION` by default. UserError when a ``Box`` agent is asked to
+        learn over anything else."""
+        if self.observation == "discrete":
+            return "discrete"
+        if requested is None:
+            return DEFAULT_BOX_OBSERVATION
+        if requested not in BOX_OBSERVATIONS:
+            raise UserError(
+                f"agent {self.name!r} learns over a Box observation: expected [env] observation "
+                f"in {', '.join(BOX_OBSERVATIONS)}, got {shown(requested)}"
+            )
+        return str(requested)
+
+    def asks_for(self, argument: str) -> bool:
+        """True if the agent's constructor takes ``argument`` (e.g. ``"task"``: it plans on
+        the navigation task's own cells)."""
+        return argument in inspect.signature(self.agent_class.__init__).parameters
+
+    def context(self, env: Env, params: Params | None = None) -> dict[str, Any]:
+        """Extra constructor arguments the agent asks for by name: the navigation ``task`` of
+        ``env``, and for one whose ``params`` ask for ``kinematic_model = "true"`` the env's
+        ``true_kinematics`` (None on an env without them: the agent refuses in one line). No
+        other agent is handed the truth."""
+        task = getattr(env, "task", None)
+        context = {"task": task} if task is not None and self.asks_for("task") else {}
+        if self.asks_for("true_kinematics") and (params or {}).get("kinematic_model") == "true":
+            context["true_kinematics"] = getattr(env.unwrapped, "true_kinematics", None)
+        return context
+
+    def build(
+        self, env: Env, params: Params, seed: SeedSequence, max_steps: int
+    ) -> BuiltAgent[AgentT]:
+        """A new agent for ``env`` (unwrapped) with ``params``, drawing from ``seed``, with its
+        training; a deep agent drives ``env`` itself, cut at ``max_steps`` actions per
+        episode. UserError when ``env``'s spaces are not the agent's or ``params`` are bad."""
+        return BuiltAgent(self.make(self, env, params, seed, max_steps), self.trainer)
+
+    def bind(self, agent: Agent) -> BuiltAgent[AgentT]:
+        """``agent`` (of this entry, e.g. loaded from a file) with its family's training;
+        TypeError for an agent of another class."""
+        cls = self.agent_class
+        if not isinstance(agent, cls):
+            raise TypeError(f"expected a {cls.__name__} agent, got {type(agent).__name__}")
+        return BuiltAgent(agent, self.trainer)
+
+
+CatalogEntry: TypeAlias = (
+    AgentEntry[TabularAgent] | AgentEntry[LinearAgent] | AgentEntry[EpisodeTrainingAgent]
+)
+"""The entry of an agent of any family."""
+CatalogAgent: TypeAlias = (
+    BuiltAgent[TabularAgent] | BuiltAgent[LinearAgent] | BuiltAgent[EpisodeTrainingAgent]
+)
+"""A new agent of any family with its training (:meth:`AgentEntry.build`)."""
+
+
+def agent_names() -> list[str]:
+    """Every registered name: tabular, linear, deep, each in registry order."""
+    return [*AGENT_MODULES, *CONTINUOUS_AGENT_MODULES, *DEEP_AGENTS]
+
+
+def entry(name: str) -> CatalogEntry:
+    """The entry of agent ``name``; UserError naming the known agents otherwise."""
+    if name in AGENT_MODULES:
+        return _tabular_entry(name)
+    if name in CONTINUOUS_AGENT_MODULES:
+        return _linear_entry(name)
+    if name in DEEP_AGENTS:
+        return _deep_entry(name)
+    raise UserError(f"unknown agent {shown(name)}; expected one of {', '.join(agent_names())}")
+
+
+# --- the families ------------------------------------------------------------------------------
+
+S = TypeVar("S", bound=gymnasium.Space[Any])
+
+
+def _space(name: str, space: gymnasium.Space[Any], wanted: type[S]) -> S:
+    """``space`` (the env's observation space) if it is a ``wanted``; UserError otherwise."""
     if not isinstance(space, wanted):
         raise UserError(
             f"agent {name!r} learns over a {wanted.__name__} observation, the env gives "
             f"{type(space).__name__} (set [env] observation)"
         )
+    return space
+
+
+def _n_actions(name: str, env: Env) -> int:
+    """The number of ``env``'s discrete actions; UserError for another action space."""
+    space = env.action_space
+    if not isinstance(space, gymnasium.spaces.Discrete):
+        raise UserError(f"agent {name!r} takes Discrete actions, the env gives {space}")
+    return int(space.n)
+
+
+def _tabular_entry(name: str) -> AgentEntry[TabularAgent]:
+    return AgentEntry(
+        name, "tabular", "discrete", agent_class, _tabular_config, _make_tabular, train_agent_fast
+    )
+
+
+def _tabular_config(name: str) -> type[AgentConfig]:
+    return agent_class(name).config_class
+
+
+def _make_tabular(
+    described: AgentEntry[TabularAgent],
+    env: Env,
+    params: Params,
+    seed: SeedSequence,
+    max_steps: int,
+) -> TabularAgent:
+    name = described.name
+    space = _space(name, env.observation_space, gymnasium.spaces.Discrete)
+    context = described.context(env, params)
     rng = np.random.default_rng(seed)
-    if kind == "tabular":
-        context = agent_context(name, env, params)
-        n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
-        return make_agent(name, int(space.n), n_actions, dict(params), rng, **context)  # type: ignore[union-attr]
-    if kind == "linear":
-        context = agent_context(name, env, params)
-        n_actions = int(env.action_space.n)  # type: ignore[attr-defined]
-        return make_linear_agent(name, space, n_actions, dict(params), rng, **context)  # type: ignore[arg-type]
-    module = _deep_module(name)
-    config = module.CONFIG_CLASS.from_mapping(dict(params))
+    return make_agent(name, int(space.n), _n_actions(name, env), dict(params), rng, **context)
+
+
+def _linear_entry(name: str) -> AgentEntry[LinearAgent]:
+    return AgentEntry(
+        name, "linear", "box", linear_agent_class, _linear_config, _make_linear, train_agent
+    )
+
+
+def _linear_config(name: str) -> type[AgentConfig]:
+    return linear_agent_class(name).config_class
+
+
+def _make_linear(
+    described: AgentEntry[LinearAgent], env: Env, params: Params, seed: SeedSequence, max_steps: int
+) -> LinearAgent:
+    name = described.name
+    space = _space(name, env.observation_space, gymnasium.spaces.Box)
+    context = described.context(env, params)
+    rng = np.random.default_rng(seed)
+    return make_linear_agent(name, space, _n_actions(name, env), dict(params), rng, **context)
+
+
+def _deep_entry(name: str) -> AgentEntry[EpisodeTrainingAgent]:
+    return AgentEntry(
+        name, "deep", "box", _deep_class, _deep_config, _make_deep, _train_by_episodes
+    )
+
+
+def _deep_extra_missing(name: str, error: ModuleNotFoundError) -> UserError:
+    return UserError(
+        f"agent {name!r} needs the deep extra (pip install 'skidnav[deep]'): "
+        f"no module {error.name!r}"
+    )
+
+
+def _deep_module(name: str) -> ModuleType:
+    """The module of deep agent ``name``; UserError when the ``deep`` extra is missing."""
+    try:
+        return importlib.import_module(DEEP_AGENTS[name])
+    except ModuleNotFoundError as error:
+        raise _deep_extra_missing(name, error) from None
+
+
+def _deep_class(name: str) -> type[EpisodeTrainingAgent]:
+    cls: type[EpisodeTrainingAgent] = _deep_module(name).AGENT_CLASS
+    return cls
+
+
+def _deep_config(name: str) -> type[AgentConfig]:
+    cls: type[AgentConfig] = _deep_module(name).CONFIG_CLASS
+    return cls
+
+
+def _make_deep(
+    described: AgentEntry[EpisodeTrainingAgent],
+    env: Env,
+    params: Params,
+    seed: SeedSequence,
+    max_steps: int,
+) -> EpisodeTrainingAgent:
+    name = described.name
+    _space(name, env.observation_space, gymnasium.spaces.Box)
+    config = described.config(params)
     deep_seed = int(seed.generate_state(1)[0])  # 32 bits: Stable-Baselines3 seeds legacy NumPy
-    return module.AGENT_CLASS(TimeLimit(env, max_steps), config, seed=deep_seed)
+    try:  # PyTorch and Stable-Baselines3 are imported by the agent's constructor
+        agent: EpisodeTrainingAgent = _deep_module(name).AGENT_CLASS(
+            TimeLimit(env, max_steps), config, seed=deep_seed
+        )
+    except ModuleNotFoundError as error:
+        raise _deep_extra_missing(name, error) from None
+    return agent
 
 
-def agent_context(
-    name: str, env: gymnasium.Env[Any, Any], params: Mapping[str, Any] | None = None
-) -> dict[str, Any]:
-    """Extra constructor arguments a tabular or linear agent asks for by name: the navigation
-    ``task``, and for one whose ``params`` ask for ``kinematic_model = "true"`` the env's
-    ``true_kinematics`` (None on an env without them: the agent refuses in one line). No other
-    agent is handed the truth."""
-    cls = linear_agent_class(name) if family(name) == "linear" else agent_class(name)
-    parameters = inspect.signature(cls.__init__).parameters
-    context = {"task": env.task} if "task" in parameters and hasattr(env, "task") else {}
-    if "true_kinematics" in parameters and (params or {}).get("kinematic_model") == "true":
-        context["true_kinematics"] = getattr(env.unwrapped, "true_kinematics", None)
-    return context
-
-
-def train(
-    agent: Any,
-    env: gymnasium.Env[Any, Any],
+def _train_by_episodes(
+    agent: EpisodeTrainingAgent,
+    env: Env,
     episodes: int,
     *,
     max_steps: int,
-    greedy_eval_env: gymnasium.Env[Any, Any] | None,
-    greedy_seeds: Sequence[int] | None,
+    greedy_eval_env: Env | None,
+    greedy_seeds: Seeds,
 ) -> TrainingLog:
-    """Train ``agent`` (from :func:`build_agent` on ``env``) for ``episodes`` episodes with a
-    greedy evaluation after each, as its family trains."""
-    if hasattr(agent, "train_episodes"):  # a deep agent: its own loop, on its own env
-        log: TrainingLog = agent.train_episodes(
-            episodes, greedy_eval_env=greedy_eval_env, greedy_seeds=greedy_seeds,
-            greedy_max_steps=max_steps,
-        )  # fmt: skip
-        return log
-    return train_agent_fast(
-        agent, env, episodes, max_steps=max_steps, greedy_eval_env=greedy_eval_env,
-        greedy_seeds=greedy_seeds,
+    """The agent's own loop, on the env it was built with (``env`` is that env)."""
+    return agent.train_episodes(
+        episodes, greedy_eval_env=greedy_eval_env, greedy_seeds=greedy_seeds,
+        greedy_max_steps=max_steps,
     )  # fmt: skip

@@ -3,17 +3,16 @@
 (:class:`skidnav.envs.mazes.GridMazeEnv`), and :func:`train_for_steps_fast`, a drop-in for
 :func:`skidnav.agents.training.train_for_steps` on the same envs.
 
-Episodes run in compiled stretches (:func:`skidnav.kernels.trainer.learn_stretch`, at most
-:data:`STRETCH` steps each): the env's compiled step (:mod:`skidnav.kernels.env_steps`),
-ε-greedy, and the agent's own learning step — the very kernel its ``observe`` calls, so there is
-one learning step per agent. Between stretches Python makes room in the agent's buffers
-(``reserve``); between episodes it does what the agent does in ``end_episode`` (ε decay,
-trajectory bookkeeping, kinematic refits by the compiled Bayesian ridge) and the greedy
-evaluation rollouts (also compiled). Same signature, same output, and the same numbers as the
-plain loop for the same seed (tested), except ``wall_time``. Other envs (the navigation env with
-``dynamics="mujoco"`` among them: its physics is not compiled), or agents that are not a
-:class:`~skidnav.agents.core.TabularAgent`, fall back to the plain loop. The navigation env's
-``trail`` (for rendering) is not recorded.
+Episodes run in compiled stretches (:func:`skidnav.agents.fused_loop.learn_stretch`, at most
+:data:`STRETCH` steps each): the env's compiled step (:mod:`skidnav.agents.env_steps`), ε-greedy,
+and the agent's own learning step — the very kernel its ``observe`` calls, so there is one learning
+step per agent. Between stretches Python makes room in the agent's buffers (``reserve``); between
+episodes it does what the agent does in ``end_episode`` (ε decay, trajectory bookkeeping, kinematic
+refits by the compiled Bayesian ridge) and the greedy evaluation rollouts (also compiled). Same
+signature, same output, and the same numbers as the plain loop for the same seed (tested), except
+``wall_time``. Other envs (the navigation env with ``dynamics="mujoco"`` among them: its physics is
+not compiled), or agents that are not a :class:`~skidnav.agents.tabular.agent.TabularAgent`, fall
+back to the plain loop. The navigation env's ``trail`` (for rendering) is not recorded.
 """
 
 from __future__ import annotations
@@ -26,7 +25,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from skidnav.agents.core import TabularAgent
+from skidnav.agents import env_steps, fused_loop
+from skidnav.agents.fused_loop import ELAPSED, ENDED, LENGTH, Limits
+from skidnav.agents.learning import NO_LOG_ROWS, NO_POSE
+from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.agents.training import (
     NOT_REACHED,
     Rollout,
@@ -36,9 +38,6 @@ from skidnav.agents.training import (
     train_agent,
     train_for_steps,
 )
-from skidnav.kernels import env_steps, trainer
-from skidnav.kernels.learning import NO_LOG_ROWS, NO_POSE
-from skidnav.kernels.trainer import ELAPSED, ENDED, LENGTH, Limits
 
 logger = logging.getLogger(__name__)
 
@@ -62,7 +61,7 @@ def _unwrapped(env: gym.Env[Any, Any]) -> tuple[Any, int]:
 class FusedEnv:
     """An unwrapped env the compiled loop drives, with the smallest step limit along its
     wrappers; subclasses convert the env's state to and from the loop's
-    (:mod:`skidnav.kernels.env_steps`)."""
+    (:mod:`skidnav.agents.env_steps`)."""
 
     def __init__(self, env: Any, limit: int) -> None:
         self.env, self.limit = env, limit
@@ -127,10 +126,10 @@ def _learn(
     stretches; leave the env where it stopped. ``rewards`` (float64, empty or (budget,))
     receives each step's reward. Returns (return, last state, tally)."""
     max_steps, budget = steps
-    tally = np.zeros(trainer.N_TALLY, dtype=np.int64)
+    tally = np.zeros(fused_loop.N_TALLY, dtype=np.int64)
     kernel, env_rng = fused.kernel_state(), fused.env.np_random
     own = type(agent.learning_arrays()).__module__.startswith("skidnav.")
-    stretch = trainer.learn_stretch if own else trainer.learn_stretch_uncached
+    stretch = fused_loop.learn_stretch if own else fused_loop.learn_stretch_uncached
     total = 0.0
     while tally[LENGTH] < budget and not tally[ENDED]:
         chunk = int(min(STRETCH, budget - tally[LENGTH], fused.limit - tally[ELAPSED]))
@@ -155,8 +154,8 @@ def _episode(
     total, _, tally = _learn(agent, fused, fused.reset(seed), steps, _NO_REWARDS)
     agent.end_episode()  # may plan too (dyna-sweep): counted with the episode, as the plain loop
     return (
-        total, int(tally[LENGTH]), bool(tally[trainer.TERMINATED]),
-        int(tally[trainer.COLLISIONS]), agent.planning_updates - planned_before,
+        total, int(tally[LENGTH]), bool(tally[fused_loop.TERMINATED]),
+        int(tally[fused_loop.COLLISIONS]), agent.planning_updates - planned_before,
     )  # fmt: skip
 
 
@@ -165,7 +164,7 @@ def _greedy(q: np.ndarray, fused: FusedEnv, max_steps: int, seed: int | None) ->
     NaN (:class:`~skidnav.agents.training.Rollout`)."""
     state = fused.reset(seed)
     kernel = fused.kernel_state()
-    length, cost, state, taken = trainer.greedy_stretch(
+    length, cost, state, taken = fused_loop.greedy_stretch(
         kernel, state, q, max_steps, fused.limit, fused.env.np_random
     )
     fused.write_back(kernel, state, taken)

@@ -21,8 +21,8 @@ from skidnav.errors import UserError
 
 
 class Learner(Protocol):
-    """What the loop needs from an agent (every :class:`~skidnav.agents.core.TabularAgent`, and
-    the agents on continuous states). A state is what :func:`as_state` makes of an observation:
+    """What the loop needs from an agent (every :class:`~skidnav.agents.tabular.agent.TabularAgent`,
+    and the agents on continuous states). A state is what :func:`as_state` makes of an observation:
     an int for a Discrete observation, a float64 array for a Box one."""
 
     planning_updates: int
@@ -73,7 +73,7 @@ class TrainingLog(NamedTuple):
     greedy_costs: np.ndarray
     """Costs of the same rollouts, float64 (n_episodes, n_rollouts): the sum of the costs the
     evaluation env reports for its actions (``info["cost"]``: on the navigation env minus the
-    reward without the goal bonus, :func:`skidnav.kernels.navigation.action_cost`); NaN where the
+    reward without the goal bonus, :func:`skidnav.sim.navigation.action_cost`); NaN where the
     length is −1, and where the env reports no cost."""
 
 
@@ -87,6 +87,8 @@ class Rollout(NamedTuple):
 
 NOT_REACHED = Rollout(-1, math.nan)
 """A rollout that did not reach the goal (or was not run)."""
+_NO_POSE = (math.nan, math.nan, math.nan)
+"""The pose :func:`greedy_run` records for an env whose ``info`` has none."""
 
 
 def _check_spaces(env: gym.Env[Any, Any]) -> None:
@@ -105,15 +107,26 @@ def as_state(observation: Any) -> Any:
 
 
 def greedy_run(
-    agent: Greedy, env: gym.Env[Any, Any], max_steps: int, *, seed: int | None = None
+    agent: Greedy,
+    env: gym.Env[Any, Any],
+    max_steps: int,
+    *,
+    seed: int | None = None,
+    poses: list[Any] | None = None,
 ) -> Rollout:
     """Run the greedy policy for at most ``max_steps`` actions (without learning) from
     ``env.reset(seed=seed)``; its :class:`Rollout` (the costs summed in step order, NaN for an
-    env whose info has no ``"cost"``)."""
-    state, _ = env.reset(seed=seed)
+    env whose info has no ``"cost"``). A list ``poses`` receives ``info["pose"]`` (x [m], y [m],
+    heading [rad]) of the reset and of every action, NaN where the env reports none
+    (:func:`greedy_path`)."""
+    state, info = env.reset(seed=seed)
+    if poses is not None:
+        poses.append(info.get("pose", _NO_POSE))
     cost = 0.0
     for step in range(1, max_steps + 1):
         state, _, terminated, truncated, info = env.step(agent.greedy_action(as_state(state)))
+        if poses is not None:
+            poses.append(info.get("pose", _NO_POSE))
         cost += float(info.get("cost", math.nan))
         if terminated:
             return Rollout(step, cost)
@@ -127,6 +140,17 @@ def greedy_rollout(
 ) -> int:
     """The length of :func:`greedy_run`: the number of actions if the env terminated, else −1."""
     return greedy_run(agent, env, max_steps, seed=seed).length
+
+
+def greedy_path(
+    agent: Greedy, env: gym.Env[Any, Any], max_steps: int, *, seed: int | None = None
+) -> tuple[np.ndarray, bool]:
+    """The poses :func:`greedy_run` passes through, float64 (T + 1, 3) (x [m], y [m], heading
+    [rad]; the reset's, then one per action; NaN rows for an env without ``info["pose"]``), and
+    whether it reached the goal."""
+    poses: list[Any] = []
+    rollout = greedy_run(agent, env, max_steps, seed=seed, poses=poses)
+    return np.asarray(poses, dtype=np.float64), rollout.length >= 0
 
 
 def greedy_evaluation(

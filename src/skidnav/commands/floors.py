@@ -1,4 +1,4 @@
-"""``skidnav floors calibrate``: fit the ICR model to the MuJoCo robot on each floor material
+"""``skidnav world floors calibrate``: fit the ICR model to the MuJoCo robot on each floor material
 (:mod:`skidnav.physics.calibration`), print the table and optionally write it as JSON."""
 
 from __future__ import annotations

@@ -1,31 +1,27 @@
-"""``skidnav generalise``: agents trained on a set of maps, run on maps never seen
-(:mod:`skidnav.experiments.generalisation`)."""
+"""``skidnav study generalise``: agents trained on a set of maps, run on maps never seen
+(:mod:`skidnav.studies.generalisation`).
+
+A shortcut: the flags become a ``kind = "generalisation"`` config
+(:mod:`skidnav.studies.generalisation.grid`), run as ``skidnav run`` runs it
+(:mod:`skidnav.commands.shortcut`) into ``--out DIR``; then the runs, the summary and the
+reference policies are printed from the results, and ``DIR/generalisation.csv`` holds one row
+per run.
+"""
 
 from __future__ import annotations
 
 import argparse
-import csv
-import io
 import json
-import math
-from dataclasses import asdict, fields
-from pathlib import Path
-from typing import TYPE_CHECKING, Any
-
-import numpy as np
+from dataclasses import fields
+from typing import Any
 
 from skidnav.atomicfile import write_user_file
+from skidnav.commands.shortcut import add_run_arguments, run_document
 from skidnav.errors import UserError, shown
-from skidnav.outputs import check_output_file
 from skidnav.robot.slip import SLIP_PRESETS
-from skidnav.stats import bootstrap_interval, difference_interval
+from skidnav.studies.generalisation.grid import KIND, LAYOUT, OBSERVATIONS, GeneralisationGrid
+from skidnav.world.grid import MAP_KINDS
 
-if TYPE_CHECKING:  # the experiment modules load numba and the agents: only when run
-    from skidnav.experiments.generalisation import GeneralisationResult
-
-MAX_SEEDS = 1000
-MAX_WORLDS = 1000
-MAX_EPISODES = 1_000_000
 MAX_PARAMS_CHARS = 10_000
 DEFAULT_AGENTS = ("dqn", "linear-q")
 DEFAULT_PARAMS: dict[str, dict[str, Any]] = {
@@ -34,54 +30,52 @@ DEFAULT_PARAMS: dict[str, dict[str, Any]] = {
 """Parameters of an agent unless ``--params`` gives its own: ``linear-q`` tiles the goal's
 distance and bearing and the front, front-left and front-right range readings of the default 8
 rays (all 15 features would need ~10^11 tiles)."""
+DEFAULTS = {field.name: field.default for field in fields(GeneralisationGrid)}
+"""The study's settings when a config leaves them out (the flags' defaults)."""
+SETTINGS = ("seeds", "training_maps", "held_out_maps", "episodes", "max_steps", "map_kind",
+            "slip", "observation", "rollouts", "eval_epsilon", "root_seed")  # fmt: skip
+"""The flags that are keys of ``[generalisation]`` (``--held-out-maps`` is ``held_out_maps``)."""
+CSV_NAME = "generalisation.csv"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Add ``generalise``."""
     parser = subparsers.add_parser(
-        "generalise", help="train agents on a set of maps, evaluate them on maps never seen"
+        "generalise",
+        help="train agents on a set of maps, evaluate them on maps never seen",
+        description="Write a generalisation config from the flags and run it as 'skidnav run' "
+        "does (resumable in --out); print the tables and write --out/generalisation.csv.",
     )
     parser.add_argument("--agent", action="append", help=f"repeatable; default {DEFAULT_AGENTS}")
-    parser.add_argument("--seeds", type=int, default=5, help="runs per agent (seeds 0 .. N−1)")
-    parser.add_argument("--training-maps", type=int, default=8)
-    parser.add_argument("--held-out-maps", type=int, default=4)
-    parser.add_argument("--episodes", type=int, default=1000, help="training episodes per run")
-    parser.add_argument("--max-steps", type=int, default=300, help="actions per episode")
-    parser.add_argument("--map-kind", choices=("free", "obstacles", "maze"), default="obstacles")
-    parser.add_argument("--slip", choices=SLIP_PRESETS, default="thesis")
-    parser.add_argument("--observation", choices=("features", "pose"), default="features")
-    parser.add_argument("--rollouts", type=int, default=5, help="greedy rollouts per map")
+    counts = {
+        "seeds": "runs per agent (seeds 0 .. N−1)", "training_maps": "training worlds",
+        "held_out_maps": "held-out worlds", "episodes": "training episodes per run",
+        "max_steps": "actions per episode", "rollouts": "greedy rollouts per map",
+        "root_seed": "the maps and every run's seeds",
+    }  # fmt: skip
+    for key, text in counts.items():
+        flag = "--" + key.replace("_", "-")
+        parser.add_argument(flag, type=int, default=DEFAULTS[key], help=f"{text} (%(default)s)")
+    parser.add_argument("--map-kind", choices=MAP_KINDS, default=DEFAULTS["map_kind"])
+    parser.add_argument("--slip", choices=SLIP_PRESETS, default=DEFAULTS["slip"])
+    parser.add_argument("--observation", choices=OBSERVATIONS, default=DEFAULTS["observation"])
     parser.add_argument(
-        "--eval-epsilon", type=float, default=0.05, help="ε of the second, ε-greedy evaluation"
-    )
+        "--eval-epsilon", type=float, default=DEFAULTS["eval_epsilon"],
+        help="ε of the second, ε-greedy evaluation (%(default)s)",
+    )  # fmt: skip
     parser.add_argument(
         "--params", action="append", default=[], metavar="AGENT=JSON",
         help="an agent's parameters as a JSON object (repeatable)",
     )  # fmt: skip
-    parser.add_argument("--root-seed", type=int, default=0, help="the maps and every run's seeds")
-    parser.add_argument("--out", type=Path, help="CSV of the per-run results")
+    add_run_arguments(parser, KIND)
     parser.set_defaults(func=_generalise)
 
 
-def _check(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
-    """Bounds of the counts; each agent's parameters, :data:`DEFAULT_PARAMS` overridden by
-    ``--params`` (UserError in one line otherwise)."""
-    bounds = {
-        "--seeds": (args.seeds, 1, MAX_SEEDS),
-        "--training-maps": (args.training_maps, 1, MAX_WORLDS),
-        "--held-out-maps": (args.held_out_maps, 1, MAX_WORLDS),
-        "--episodes": (args.episodes, 1, MAX_EPISODES),
-        "--max-steps": (args.max_steps, 1, 100_000),
-        "--rollouts": (args.rollouts, 1, 100),
-        "--root-seed": (args.root_seed, 0, 2**63 - 1),
-    }
-    for flag, (value, low, high) in bounds.items():
-        if not low <= value <= high:
-            raise UserError(f"expected {flag} in [{low}, {high}], got {value}")
-    if not 0.0 <= args.eval_epsilon <= 1.0:  # NaN fails too
-        raise UserError(f"expected --eval-epsilon in [0, 1], got {args.eval_epsilon}")
+def agent_params(texts: list[str]) -> dict[str, dict[str, Any]]:
+    """Each agent's parameters: :data:`DEFAULT_PARAMS` overridden by the ``--params AGENT=JSON``
+    ``texts``; UserError in one line naming the flag otherwise."""
     params = {name: dict(values) for name, values in DEFAULT_PARAMS.items()}
-    for text in args.params:
+    for text in texts:
         name, _, value = text.partition("=")
         if not value or len(value) > MAX_PARAMS_CHARS:
             raise UserError(
@@ -100,77 +94,32 @@ def _check(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
     return params
 
 
+def config_document(args: argparse.Namespace) -> dict[str, Any]:
+    """The generalisation config of the flags (what ``configs/generalisation.toml`` holds for
+    the defaults)."""
+    params = agent_params(args.params)
+    settings = {"name": KIND, **{key: getattr(args, key) for key in SETTINGS}}
+    agents = [
+        {"name": name, **({"params": params[name]} if params.get(name) else {})}
+        for name in args.agent or DEFAULT_AGENTS
+    ]
+    return {"kind": KIND, KIND: settings, "agents": agents}
+
+
 def _generalise(args: argparse.Namespace) -> int:
-    params = _check(args)
-    if args.out is not None:
-        check_output_file(args.out)
-    from skidnav.agents.catalog import check_params
-    from skidnav.experiments.generalisation import generalisation_run, references, split_worlds
+    grid, outcome = run_document(config_document(args), args)
+    from skidnav.studies.agent_grid import results_csv, study_results
+    from skidnav.studies.generalisation import report
+    from skidnav.studies.generalisation.evaluation import grid_split
 
-    names = args.agent or list(DEFAULT_AGENTS)
-    for name in names:
-        check_params(name, params.get(name, {}))  # an unknown name or a bad value: one line
-    options = {"map_kind": args.map_kind, "slip": args.slip, "observation": args.observation}
-    split = split_worlds(
-        args.root_seed, args.training_maps, args.held_out_maps, args.rollouts, options
-    )
-    print(f"training worlds {list(split.training)}; held-out worlds {list(split.held_out)}")
-    results: list[GeneralisationResult] = []
-    for name in names:
-        for seed in range(args.seeds):
-            result = generalisation_run(
-                name, seed, split, args.episodes, root_seed=args.root_seed, params=params.get(name),
-                env_options=options, max_steps=args.max_steps, eval_epsilon=args.eval_epsilon,
-            )  # fmt: skip
-            print(
-                f"  {name} seed {seed}: {result.steps} steps; success on training maps "
-                f"{result.success_training_maps:.2f}, held-out {result.success_held_out_maps:.2f} "
-                f"(greedy), {result.epsilon_success_training_maps:.2f}, "
-                f"{result.epsilon_success_held_out_maps:.2f} (ε-greedy)",
-                flush=True,
-            )
-            results.append(result)
-    print_summary(results)
-    for reference in references(split, args.max_steps, options):
-        print(
-            f"reference {reference.policy:12s} success, training maps "
-            f"{reference.success_training_maps:.2f}, held-out {reference.success_held_out_maps:.2f}"
-        )
-    if args.out is not None:
-        buffer = io.StringIO()
-        writer = csv.DictWriter(buffer, [field.name for field in fields(results[0])])
-        writer.writeheader()
-        writer.writerows(asdict(result) for result in results)
-        write_user_file(args.out, buffer.getvalue().encode(), "results")
-        print(f"wrote {args.out}")
+    results = report.results_of(study_results(outcome.out_dir, LAYOUT)[1])
+    print(report.split_line(grid_split(grid)))
+    for result in results:
+        print(report.run_line(result))
+    print(report.summary_text(results))
+    for reference in report.grid_references(grid):
+        print(report.reference_line(reference))
+    path = outcome.out_dir / CSV_NAME
+    write_user_file(path, results_csv(results).encode(), "results")
+    print(f"wrote {path}")
     return 0
-
-
-def _text(estimate: Any) -> str:
-    if math.isnan(estimate.estimate):
-        return "n/a"
-    return f"{estimate.estimate:.2f} [{estimate.low:.2f}, {estimate.high:.2f}]"
-
-
-def print_summary(results: list[GeneralisationResult]) -> None:
-    """Per agent, greedy and ε-greedy: success on the training and held-out maps and their
-    paired difference, means over runs with 95 % bootstrap intervals; and the greedy held-out
-    lengths."""
-    rng = np.random.default_rng(0)
-    header = ("policy", "success, training maps", "success, held-out", "held-out − training",
-              "length, held-out")  # fmt: skip
-    print(f"{'agent':18s} {header[0]:>10s} " + " ".join(f"{name:>24s}" for name in header[1:]))
-    for name in dict.fromkeys(result.agent for result in results):
-        rows = [result for result in results if result.agent == name]
-        for policy, prefix in (("greedy", ""), ("ε-greedy", "epsilon_")):
-            trained = [getattr(row, f"{prefix}success_training_maps") for row in rows]
-            held_out = [getattr(row, f"{prefix}success_held_out_maps") for row in rows]
-            cells = [
-                _text(bootstrap_interval(trained, rng)),
-                _text(bootstrap_interval(held_out, rng)),
-                _text(difference_interval(held_out, trained, rng)),
-                _text(bootstrap_interval([row.length_held_out_maps for row in rows], rng))
-                if not prefix
-                else "",
-            ]
-            print(f"{name:18s} {policy:>10s} " + " ".join(f"{cell:>24s}" for cell in cells))

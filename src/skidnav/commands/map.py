@@ -1,4 +1,4 @@
-"""``skidnav map generate|show``: make a seeded map file, or show one as text or a PNG."""
+"""``skidnav world map generate|show``: make a seeded map file, or show one as text or a PNG."""
 
 from __future__ import annotations
 
@@ -66,8 +66,8 @@ def _show(args: argparse.Namespace) -> int:
     if args.png is None:
         print(format_map(grid), end="")
         return 0
-    from skidnav.envs.rendering import rgb_frame, save_frame
     from skidnav.robot.slip import make_slip_field
+    from skidnav.world.rendering import rgb_frame, save_frame
 
     disc = Discretization(n_x=grid.shape[0], n_y=grid.shape[1])
     start = disc.cell_centre(*grid.start)

@@ -1,4 +1,6 @@
-"""``skidnav report RUN_DIR``: write the self-contained HTML report of a results directory."""
+"""``skidnav report RUN_DIR``: write the self-contained HTML report of a results directory, the
+report of its kind (``config.json``): an experiment's with the sections studies add to it, or a
+study's section in the same page (:func:`write_results_report`; ``skidnav run --report`` too)."""
 
 from __future__ import annotations
 
@@ -15,9 +17,10 @@ def add_parser(subparsers: Any) -> None:
     parser = subparsers.add_parser(
         "report",
         help="write one self-contained HTML report of a results directory",
-        description="Aggregate a results directory written by 'skidnav run' into one HTML file "
-        "(tables, embedded figures, the config), written atomically: an interrupted report "
-        "leaves the previous one or none.",
+        description="Aggregate a results directory written by 'skidnav run' (an experiment or "
+        "a study, by the kind its config.json names) into one HTML file (tables, embedded "
+        "figures, the config), written atomically: an interrupted report leaves the previous "
+        "one or none.",
     )
     parser.add_argument("run_dir", type=Path, help="results directory")
     parser.add_argument(
@@ -40,16 +43,37 @@ def report_command(args: argparse.Namespace) -> int:
         check_output_file(args.output, "--output")
     if args.study:
         return study_command(args.run_dir, args.output or args.run_dir / "study.md")
-    from skidnav.experiments.report import write_report
-
-    print(f"report: {write_report(args.run_dir, args.output)}")
+    print(f"report: {write_results_report(args.run_dir, args.output)}")
     return 0
+
+
+def write_results_report(run_dir: Path, output: Path | None = None) -> Path:
+    """Write the report of ``run_dir`` by its kind to ``output`` (default
+    ``RUN_DIR/report.html``), atomically; returns its path.
+
+    Raises:
+        UserError: the results are missing, damaged or of no known kind, or the report cannot
+            be written there.
+    """
+    from skidnav.experiments.store import results_kind
+    from skidnav.studies.kind import EXPERIMENT_KIND, experiment_sections, study_of_results
+
+    kind = results_kind(run_dir)
+    if kind == EXPERIMENT_KIND:
+        from skidnav.experiments.report.html import write_report
+
+        return write_report(run_dir, output, experiment_sections())
+    from skidnav.experiments.report.page import report_path, study_report, write_page
+
+    chosen = study_of_results(kind, run_dir)
+    text = study_report(run_dir, chosen.layout, chosen.report(run_dir))
+    return write_page(report_path(run_dir, output), text)
 
 
 def study_command(run_dir: Path, output: Path) -> int:
     """Write the study's tables of ``run_dir`` to ``output``; print its path."""
     from skidnav.atomicfile import write_user_file
-    from skidnav.realtime.experiment_study import experiment_study_report
+    from skidnav.studies.hardware.experiment_tables import experiment_study_report
 
     write_user_file(output, experiment_study_report(run_dir).encode("utf-8"), "study tables")
     print(f"study tables: {output}")

@@ -3,7 +3,9 @@
 ``skidnav robot sim-server`` runs the simulated robot server; ``skidnav robot run`` runs an agent
 (or a frozen continuous policy) in real time against a robot driver; ``skidnav robot study``
 runs agents × presets × seeds against the sim server through the experiment runner and
-tabulates success (realtime/study.py).
+tabulates success: a shortcut that writes the study's config of its flags (``kind =
+"robot-study"``, saved as ``OUT/config.toml``; ``skidnav run`` runs and resumes it alike) and
+runs it (:mod:`skidnav.studies.hardware.study`).
 """
 
 from __future__ import annotations
@@ -108,9 +110,9 @@ def _add_sim_server(commands: Any) -> None:
 
 def _run_sim_server(args: argparse.Namespace) -> int:
     from skidnav.realtime.control.records import EventLog
-    from skidnav.realtime.sim.lockstep import LockstepServer
-    from skidnav.realtime.sim.server import SimServer
-    from skidnav.realtime.sim.transport import bind_listener
+    from skidnav.realtime.robot_server.lockstep import LockstepServer
+    from skidnav.realtime.robot_server.server import SimServer
+    from skidnav.realtime.robot_server.transport import bind_listener
 
     robot, options = _sim_robot(args)
     server_class = LockstepServer if args.lockstep else SimServer
@@ -147,7 +149,7 @@ def _sim_robot(args: argparse.Namespace) -> tuple[Any, Any]:
     from skidnav.physics.backend import PhysicsUnavailable
     from skidnav.realtime.config import ServerOptions
     from skidnav.realtime.link.auth import load_secret
-    from skidnav.realtime.sim.robot import SimRobotConfig, build_robot, warm_up
+    from skidnav.realtime.robot_server.simulated_robot import SimRobotConfig, build_robot, warm_up
     from skidnav.robot.params import RobotParams
 
     try:
@@ -211,9 +213,14 @@ def _add_run(commands: Any) -> None:
 
 
 def _run_loop(args: argparse.Namespace) -> int:
-    from skidnav.realtime.control.run import run_from_args
+    from skidnav.realtime.control.run import RobotRunSettings, run_robot
 
     check_output_dir(args.out)
+    settings = RobotRunSettings(
+        out=args.out, driver=args.driver, agent=args.agent, policy=args.policy,
+        policy_file=args.policy_file, config=args.config, preset=args.preset,
+        episodes=args.episodes, time_scale=args.time_scale, reset=args.reset, resume=args.resume,
+    )  # fmt: skip
 
     def progress(line: str) -> None:
         if not args.quiet:
@@ -223,7 +230,7 @@ def _run_loop(args: argparse.Namespace) -> int:
         print(f"\n{message} — press Enter when ready", file=sys.stderr, flush=True)
         sys.stdin.readline()
 
-    code, summary = run_from_args(args, progress=progress, wait_for_operator=wait_for_operator)
+    code, summary = run_robot(settings, progress=progress, wait_for_operator=wait_for_operator)
     if not args.quiet:
         print(file=sys.stderr)
     print(summary)
@@ -232,7 +239,11 @@ def _run_loop(args: argparse.Namespace) -> int:
 
 def _add_study(commands: Any) -> None:
     study = commands.add_parser(
-        "study", help="hardware-in-the-loop study: agents × presets × seeds on the sim server"
+        "study",
+        help="hardware-in-the-loop study: agents × presets × seeds on the sim server",
+        description='Write the study config of these flags (kind = "robot-study", the '
+        "real-time config by its path) to OUT/config.toml and run it as 'skidnav run' does "
+        "(serially; resumable on the same --out); then the tables, OUT/study.md.",
     )
     study.add_argument("--config", type=Path, required=True, help="configs/realtime.toml")
     study.add_argument("--agents", help="comma-separated agent names ([study] agents)")
@@ -246,7 +257,7 @@ def _add_study(commands: Any) -> None:
 
 
 def _run_study(args: argparse.Namespace) -> int:
-    from skidnav.realtime.study import load_study, run_study
+    from skidnav.studies.hardware.study import load_study, run_study
 
     overrides = {
         "agents": args.agents,
@@ -255,7 +266,7 @@ def _run_study(args: argparse.Namespace) -> int:
         "time_scale": args.time_scale,
         "seeds": args.seeds,
     }
-    tables, settings = load_study(args.config, overrides)
+    grid, text = load_study(args.config, overrides)
     check_output_dir(args.out)
 
     def progress(line: str) -> None:
@@ -265,7 +276,7 @@ def _run_study(args: argparse.Namespace) -> int:
     def announce(line: str) -> None:
         print(f"\r{line:<79}", file=sys.stderr, flush=True)
 
-    outcome = run_study(tables, settings, args.out, progress=progress, announce=announce)
+    outcome = run_study(grid, args.out, source_text=text, progress=progress, announce=announce)
     done_before = outcome.finished - outcome.executed
     tables_line = f"tables in {args.out / 'study.md'}" if outcome.finished else "no tables yet"
     print(

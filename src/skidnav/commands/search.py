@@ -1,45 +1,56 @@
-"""``skidnav search``: a tanh wheel-speed policy found by CMA-ES (:mod:`skidnav.policysearch`).
+"""``skidnav study search``: a tanh wheel-speed policy found by CMA-ES
+(:mod:`skidnav.agents.policies.search`).
 
-Writes into ``--out DIR``: ``policy.npz`` + ``policy.json`` (the final mean policy),
-``curve.csv`` (one row per generation, :class:`~skidnav.policysearch.search.GenerationRecord`),
-``search.json`` (the config and the last row) and ``checkpoint.npz`` + ``checkpoint.json``
-(rewritten after every generation; ``--resume`` continues from it).
+A shortcut: the flags make a ``kind = "policy-search"`` config of one search
+(:mod:`skidnav.studies.policy_search`: one slip preset, one seed, the root seed ``--seed``),
+which the runner runs into ``--out`` serially (the config saved there as ``config.toml``), with
+the search's checkpoint in ``OUT/checkpoints/`` rewritten after every generation. The same
+command on the same ``--out`` resumes: a finished search is not run again, one cut short
+continues from its checkpoint. From the results it writes into ``--out``: ``policy.npz`` +
+``policy.json`` (the final mean policy), ``curve.csv`` (one row per generation,
+:class:`~skidnav.agents.policies.search.curve.GenerationRecord`) and ``search.json`` (the
+search's config and the last row).
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
-import io
-import json
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from skidnav.atomicfile import write_user_file
+from skidnav.commands.run import parse_grid, run_loaded
+from skidnav.commands.shortcut import FLAGS
 from skidnav.errors import UserError
-from skidnav.outputs import check_output_dir, make_output_dir
+from skidnav.experiments.runs import expand_runs
+from skidnav.outputs import check_output_dir
 from skidnav.robot.slip import SLIP_PRESETS
+from skidnav.studies.policy_search.export import export_search
+from skidnav.studies.policy_search.grid import PolicySearchGrid, grid_toml
+from skidnav.studies.policy_search.trial import SearchTrial
 
-if TYPE_CHECKING:  # the search loads the env and numba: only when run
-    from skidnav.policysearch.config import SearchConfig
-    from skidnav.policysearch.search import GenerationRecord
+if TYPE_CHECKING:
+    from skidnav.agents.policies.search.curve import GenerationRecord
+    from skidnav.experiments.runs import RunSpec
 
 FLAG_FIELDS = {
-    "map": "map_kind", "world_seed": "world_seed", "slip": "slip", "max_steps": "max_episode_steps",
+    "map": "map_kind", "world_seed": "world_seed", "max_steps": "max_episode_steps",
     "control_period": "control_period", "lidar_rays": "lidar_rays", "hidden": "hidden",
     "population": "population", "sigma": "sigma0", "generations": "generations",
     "episodes": "episodes_per_candidate", "progress_weight": "progress_weight",
-    "eval_episodes": "eval_episodes",
-    "eval_every": "eval_every", "seed": "seed",
+    "eval_episodes": "eval_episodes", "eval_every": "eval_every",
 }  # fmt: skip
-"""Argument → :class:`~skidnav.policysearch.config.SearchConfig` field."""
+"""Argument → :class:`~skidnav.agents.policies.search.config.SearchConfig` field (``--slip``
+and ``--seed`` are the study's preset and root seed)."""
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Add ``search``."""
     parser = subparsers.add_parser(
-        "search", help="search a tanh wheel-speed policy by CMA-ES on the feature observation"
+        "search",
+        help="search a tanh wheel-speed policy by CMA-ES on the feature observation (resumable)",
+        description="Run one CMA-ES policy search as a policy-search study into --out and write "
+        "its policy file; started again on the same --out it continues the search.",
     )
     parser.add_argument("--map", choices=("free", "obstacles", "maze"), default="obstacles")
     parser.add_argument("--world-seed", type=int, default=0, help="the env's map and slip field")
@@ -58,89 +69,49 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     )  # fmt: skip
     parser.add_argument("--eval-episodes", type=int, default=10, help="episodes of the mean")
     parser.add_argument("--eval-every", type=int, default=1, help="generations between them")
-    parser.add_argument("--seed", type=int, default=0, help="root seed of the search")
+    parser.add_argument("--seed", type=int, default=0, help="root seed of the study")
     parser.add_argument("--out", type=Path, required=True, help="folder of the results")
-    parser.add_argument("--resume", action="store_true", help="continue from DIR/checkpoint")
     parser.set_defaults(func=_search)
 
 
-def _config(args: argparse.Namespace) -> SearchConfig:
-    """The search's config from the arguments; UserError naming the flag of a bad value."""
-    from skidnav.policysearch.config import SearchConfig
+def grid_from_flags(args: argparse.Namespace) -> PolicySearchGrid:
+    """The study of the arguments; UserError naming the flag of a bad value."""
+    from skidnav.agents.policies.search.config import SearchConfig
 
     values = {field: getattr(args, flag) for flag, field in FLAG_FIELDS.items()}
     try:
-        config = SearchConfig(**values)
-        config.env_options()
+        search = SearchConfig(**values, slip=args.slip)
+        return PolicySearchGrid(search, (args.slip,), seeds=1, root_seed=args.seed)
     except ValueError as error:
         message = str(error)
-        for flag, field in FLAG_FIELDS.items():
+        for flag, field in (*FLAG_FIELDS.items(), ("seed", "root_seed")):
             message = message.replace(f" {field} ", f" --{flag.replace('_', '-')} ")
         raise UserError(message) from None
-    return config
 
 
-def _prepare(out: Path, resume: bool) -> Path:
-    """The checkpoint ``NAME`` in ``out`` (created); UserError when ``out`` holds a search and
-    ``resume`` is not set, or holds none and it is."""
-    checkpoint = out / "checkpoint"
-    exists = checkpoint.with_suffix(".json").exists()
-    if exists and not resume:
-        raise UserError(f"{out}: holds a search already (pass --resume, or another --out)")
-    if resume and not exists:
-        raise UserError(f"{out}: no checkpoint.json to resume from")
-    make_output_dir(out)
-    return checkpoint
+def print_generation(spec: RunSpec[PolicySearchGrid], record: GenerationRecord) -> None:
+    """One line per record of the search: episodes, wall time, σ, scores."""
+    success = "" if math.isnan(record.mean_success) else f", success {record.mean_success:.2f}"
+    evaluated = "" if math.isnan(record.mean_return) else f"; mean policy {record.mean_return:.1f}"
+    best = "" if math.isnan(record.best_return) else f", best {record.best_return:.1f}"
+    print(
+        f"generation {record.generation}/{spec.config.search.generations}: {record.episodes} "
+        f"episodes, {record.wall_time:.1f} s, σ {record.sigma:.3f}{best}{evaluated}{success}",
+        flush=True,
+    )
 
 
 def _search(args: argparse.Namespace) -> int:
-    config = _config(args)
-    checkpoint = _prepare(check_output_dir(args.out), args.resume)
-    from skidnav.policysearch.policyfile import save_policy
-    from skidnav.policysearch.search import record_rows, run_search
-
-    def progress(record: GenerationRecord) -> None:
-        success = "" if math.isnan(record.mean_success) else f", success {record.mean_success:.2f}"
-        evaluated = (
-            "" if math.isnan(record.mean_return) else f"; mean policy {record.mean_return:.1f}"
-        )
-        best = "" if math.isnan(record.best_return) else f", best {record.best_return:.1f}"
-        print(
-            f"generation {record.generation}/{config.generations}: {record.episodes} episodes, "
-            f"{record.wall_time:.1f} s, σ {record.sigma:.3f}{best}{evaluated}{success}",
-            flush=True,
-        )
-
-    try:
-        result = run_search(
-            config, checkpoint=checkpoint, resume=args.resume, on_generation=progress
-        )
-    except OSError as error:
-        raise UserError(
-            f"{args.out}: cannot write the checkpoint ({error.strerror or error})"
-        ) from None
-    rows = record_rows(result.records)
-    try:
-        save_policy(
-            result.policy, args.out / "policy", {"config": config.to_dict(), "last": rows[-1]}
-        )
-    except OSError as error:
-        raise UserError(
-            f"{args.out}: cannot write the policy ({error.strerror or error})"
-        ) from None
-    write_user_file(args.out / "curve.csv", _csv(rows), "learning curve")
-    summary = {"config": config.to_dict(), "last": rows[-1], "policy": "policy.npz"}
-    write_user_file(args.out / "search.json", json.dumps(summary, indent=1).encode(), "summary")
-    print(f"wrote {args.out / 'policy.npz'}, policy.json, curve.csv, search.json")
+    grid = grid_from_flags(args)
+    out = check_output_dir(args.out)
+    if (out / "checkpoint.json").exists() and not (out / "config.json").exists():
+        raise UserError(f"{out}: holds a search in an earlier format; choose another --out")
+    loaded = parse_grid(grid_toml(grid), FLAGS)
+    trial = SearchTrial(out / "checkpoints", print_generation)  # the study's, printing progress
+    outcome = run_loaded(loaded, out, backend="serial", trial=trial)
+    if outcome.executed == 0:
+        print(f"{out}: the search had finished already")
+    (run,) = expand_runs(grid)
+    paths = export_search(out, run.run_id, out)
+    print("wrote " + ", ".join(path.name for path in paths) + f" in {out}")
     return 0
-
-
-def _csv(rows: list[dict[str, Any]]) -> bytes:
-    """The learning curve as CSV bytes (null: an empty cell)."""
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, list(rows[0]))
-    writer.writeheader()
-    writer.writerows(
-        {key: "" if value is None else value for key, value in row.items()} for row in rows
-    )
-    return buffer.getvalue().encode()

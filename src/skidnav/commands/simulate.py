@@ -1,5 +1,5 @@
-"""``skidnav simulate``: drive the simulated robot with an action script or a random policy, and
-draw its trajectory (PNG) and optionally save it as CSV.
+"""``skidnav world simulate``: drive the simulated robot with an action script or a random policy,
+and draw its trajectory (PNG) and optionally save it as CSV.
 
 A script runs to its last action (the env's usual 500-action episode limit does not cut it), or
 until the robot reaches the goal, which ends the episode: the summary then says how many of the
@@ -138,7 +138,7 @@ def _write_csv(path: Path, rows: list[tuple[Any, ...]]) -> None:
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from skidnav.envs.rendering import save_frame
+    from skidnav.world.rendering import save_frame
 
     check_output_file(args.out)
     if args.csv is not None:

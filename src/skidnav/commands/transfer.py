@@ -1,109 +1,85 @@
-"""``skidnav transfer``: the sim-to-sim gap — agents trained on the kinematic simulator, their
-greedy policies run on the MuJoCo robot (:mod:`skidnav.experiments.transfer`)."""
+"""``skidnav study transfer``: the sim-to-sim gap — agents trained on the kinematic simulator, their
+greedy policies run on the MuJoCo robot (:mod:`skidnav.studies.transfer`).
+
+A shortcut: the flags become a ``kind = "transfer"`` config (:mod:`skidnav.studies.transfer.grid`),
+run as ``skidnav run`` runs it (:mod:`skidnav.commands.shortcut`) into ``--out DIR``; then the
+table is printed from the results, and ``DIR/transfer.csv`` holds one row per run.
+"""
 
 from __future__ import annotations
 
 import argparse
-import csv
-import io
-import math
-from dataclasses import asdict, fields
-from pathlib import Path
-from typing import TYPE_CHECKING
+from dataclasses import fields
+from typing import Any
 
-import numpy as np
-
-from skidnav.agents.registry import available_agents
+from skidnav.agents.tabular.registry import available_agents
 from skidnav.atomicfile import write_user_file
-from skidnav.errors import UserError
-from skidnav.outputs import check_output_file
-from skidnav.physics.backend import PhysicsUnavailable
-from skidnav.physics.materials import MATERIALS
+from skidnav.commands.shortcut import add_run_arguments, run_document
 from skidnav.robot.slip import SLIP_PRESETS
-from skidnav.stats import bootstrap_interval
+from skidnav.studies.transfer.grid import FLOORS, KIND, LAYOUT, TransferGrid
+from skidnav.world.grid import MAP_KINDS
 
-if TYPE_CHECKING:  # the experiment modules load numba and the agents: only when run
-    from skidnav.experiments.transfer import TransferResult
-
-MAX_SEEDS = 1000
-MAX_EPISODES = 100_000
+DEFAULT_AGENTS = ("q-learning", "dyna-full")
+DEFAULTS = {field.name: field.default for field in fields(TransferGrid)}
+"""The study's settings when a config leaves them out (the flags' defaults)."""
+SETTINGS = ("seeds", "episodes", "max_steps", "map_kind", "slip", "floor", "rollouts")
+"""The flags that are keys of ``[transfer]`` (``--max-steps`` is ``max_steps``)."""
+CSV_NAME = "transfer.csv"
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     """Add ``transfer``."""
     parser = subparsers.add_parser(
-        "transfer", help="run policies learned on the kinematic simulator on the MuJoCo robot"
+        "transfer",
+        help="run policies learned on the kinematic simulator on the MuJoCo robot",
+        description="Write a transfer config from the flags and run it as 'skidnav run' does "
+        "(resumable in --out); print the table and write --out/transfer.csv.",
     )
-    parser.add_argument("--agent", action="append", choices=available_agents(), help="repeatable")
-    parser.add_argument("--seeds", type=int, default=10, help="seeds 0 .. N−1 (world, agent)")
-    parser.add_argument("--episodes", type=int, default=300, help="training episodes")
-    parser.add_argument("--planning-steps", type=int, default=100, help="model-based agents")
-    parser.add_argument("--slip", choices=SLIP_PRESETS, default="slippery")
-    parser.add_argument("--floor", choices=sorted(MATERIALS), help="one material everywhere")
-    parser.add_argument("--rollouts", type=int, default=5, help="greedy rollouts per dynamics")
-    parser.add_argument("--out", type=Path, help="CSV of the per-seed results")
+    parser.add_argument(
+        "--agent", action="append", choices=available_agents(),
+        help=f"repeatable; default {DEFAULT_AGENTS}",
+    )  # fmt: skip
+    counts = {
+        "seeds": "seeds 0 .. N−1 (world, agent)", "episodes": "training episodes",
+        "max_steps": "actions per episode", "rollouts": "greedy rollouts per dynamics",
+    }  # fmt: skip
+    for key, text in counts.items():
+        flag = "--" + key.replace("_", "-")
+        parser.add_argument(flag, type=int, default=DEFAULTS[key], help=f"{text} (%(default)s)")
+    parser.add_argument(
+        "--planning-steps", type=int, default=100,
+        help="planning_steps of every agent but q-learning (%(default)s)",
+    )  # fmt: skip
+    parser.add_argument("--map-kind", choices=MAP_KINDS, default=DEFAULTS["map_kind"])
+    parser.add_argument("--slip", choices=SLIP_PRESETS, default=DEFAULTS["slip"])
+    parser.add_argument(
+        "--floor", choices=FLOORS[1:], default=DEFAULTS["floor"], help="one material everywhere"
+    )
+    add_run_arguments(parser, KIND)
     parser.set_defaults(func=_transfer)
 
 
-def _check(args: argparse.Namespace) -> None:
-    bounds = {
-        "--seeds": (args.seeds, 1, MAX_SEEDS),
-        "--episodes": (args.episodes, 1, MAX_EPISODES),
-        "--planning-steps": (args.planning_steps, 0, 10_000_000),
-        "--rollouts": (args.rollouts, 1, 100),
-    }
-    for flag, (value, low, high) in bounds.items():
-        if not low <= value <= high:
-            raise UserError(f"expected {flag} in [{low}, {high}], got {value}")
+def config_document(args: argparse.Namespace) -> dict[str, Any]:
+    """The transfer config of the flags (what ``configs/transfer.toml`` holds for the
+    defaults): every agent but ``q-learning`` with ``planning_steps`` = ``--planning-steps``."""
+    settings = {"name": KIND, **{key: getattr(args, key) for key in SETTINGS}}
+    agents = [
+        {"name": name}
+        if name == "q-learning"
+        else {"name": name, "params": {"planning_steps": args.planning_steps}}
+        for name in args.agent or DEFAULT_AGENTS
+    ]
+    return {"kind": KIND, KIND: settings, "agents": agents}
 
 
 def _transfer(args: argparse.Namespace) -> int:
-    _check(args)
-    if args.out is not None:
-        check_output_file(args.out)
-    from skidnav.experiments.transfer import TransferResult, transfer_run
+    _, outcome = run_document(config_document(args), args)
+    from skidnav.studies.agent_grid import results_csv, study_results
+    from skidnav.studies.transfer import report
 
-    results: list[TransferResult] = []
-    for name in args.agent or ["q-learning", "dyna-full"]:
-        params = {} if name == "q-learning" else {"planning_steps": args.planning_steps}
-        for seed in range(args.seeds):
-            try:
-                results.append(
-                    transfer_run(
-                        name, seed, args.episodes, params=params, rollouts=args.rollouts,
-                        env_options={"slip": args.slip, "floor": args.floor},
-                    )
-                )  # fmt: skip
-            except PhysicsUnavailable as error:
-                raise UserError(str(error)) from None
-    _print_summary(results)
-    if args.out is not None:
-        buffer = io.StringIO()
-        writer = csv.DictWriter(buffer, [field.name for field in fields(TransferResult)])
-        writer.writeheader()
-        writer.writerows(asdict(result) for result in results)
-        write_user_file(args.out, buffer.getvalue().encode(), "results")
-        print(f"wrote {args.out}")
+    results = report.results_of(study_results(outcome.out_dir, LAYOUT)[1])
+    print(report.summary_text(results))
+    path = outcome.out_dir / CSV_NAME
+    write_user_file(path, results_csv(results).encode(), "results")
+    print(f"wrote {path}")
     return 0
-
-
-def _print_summary(results: list[TransferResult]) -> None:
-    """Per agent: mean success and length on each dynamics with 95 % bootstrap intervals."""
-    rng = np.random.default_rng(0)
-    print(f"{'agent':24s} {'success, kinematic':>22s} {'success, physics':>22s} "
-          f"{'length, kinematic':>22s} {'length, physics':>22s}")  # fmt: skip
-    for name in dict.fromkeys(result.agent for result in results):
-        rows = [result for result in results if result.agent == name]
-        cells = []
-        for column in (
-            "success_kinematic",
-            "success_physics",
-            "length_kinematic",
-            "length_physics",
-        ):
-            estimate = bootstrap_interval([getattr(row, column) for row in rows], rng)
-            cells.append(
-                "n/a" if math.isnan(estimate.estimate)
-                else f"{estimate.estimate:.2f} [{estimate.low:.2f}, {estimate.high:.2f}]"
-            )  # fmt: skip
-        print(f"{name:24s} " + " ".join(f"{cell:>22s}" for cell in cells))

@@ -13,9 +13,9 @@ import optuna
 from skidnav.commands.run import add_backend_arguments, add_env_module_argument
 from skidnav.envs.registration import allow_env_modules
 from skidnav.errors import UserError
-from skidnav.experiments.tuneconfig import load_tune_config_and_text
-from skidnav.experiments.tuning import tune_experiment
 from skidnav.outputs import check_output_dir
+from skidnav.studies.tuning.config import load_tune_config_and_text
+from skidnav.studies.tuning.search import tune_experiment
 
 
 def add_parser(subparsers: Any) -> None:

@@ -1,1 +1,1 @@
-"""Gymnasium environments: thin shells over robot/, world/ and kernels/."""
+"""Gymnasium environments: thin shells over robot/, world/ and sim/."""

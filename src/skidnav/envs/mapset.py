@@ -1,9 +1,8 @@
 """A set of worlds as one Gymnasium env: each episode on a world drawn from the set.
 
-Training on several maps and evaluating on maps never seen (:mod:`skidnav.experiments.
-generalisation`) needs an env whose episodes change world. :class:`MapSetEnv` holds one
-``SkidSteerNav-v0`` per world seed, built with the same options, and at every ``reset``:
-
+Training on several maps and evaluating on maps never seen (:mod:`skidnav.studies.generalisation`)
+needs an env whose episodes change world. :class:`MapSetEnv` holds one ``SkidSteerNav-v0`` per world
+seed, built with the same options, and at every ``reset``:
 1. draws the world uniformly from the set with its own generator (``self.np_random``, seeded by
    the first ``reset(seed=...)`` as Gymnasium's rules say);
 2. resets that world with a seed drawn from the same generator, so the whole sequence of worlds,

@@ -21,7 +21,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from skidnav.kernels.maze_trainer import MOVE_COST, MazeArrays
+from skidnav.sim.maze import MOVE_COST, MazeArrays
 
 Cell = tuple[int, int]
 MOVES = ((-1, 0), (1, 0), (0, -1), (0, 1))
@@ -45,7 +45,7 @@ class GridMazeEnv(gym.Env[int, int]):
 
     ## Rewards
     +1 on reaching the goal, 0 for every other step. ``info["cost"]`` is 1 for every move
-    (:data:`~skidnav.kernels.maze_trainer.MOVE_COST`): the discounted goal reward is earned
+    (:data:`~skidnav.sim.maze.MOVE_COST`): the discounted goal reward is earned
     soonest on the shortest path.
 
     ## Starting State
@@ -145,7 +145,7 @@ class GridMazeEnv(gym.Env[int, int]):
         return self.state_of(self._cell), reward, terminated, truncated, {"cost": MOVE_COST}
 
     def maze_arrays(self) -> MazeArrays:
-        """The maze for the compiled loop of :mod:`skidnav.kernels.maze_trainer` (walls arrays
+        """The maze for the compiled loop of :mod:`skidnav.sim.maze` (walls arrays
         shared, not copied)."""
         never = np.iinfo(np.int64).max
         after = self._walls_after if self._walls_after is not None else self._walls_before

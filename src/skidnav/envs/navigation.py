@@ -11,17 +11,17 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
-from skidnav.envs import rendering
-from skidnav.envs.features import PoseFeatures
 from skidnav.envs.step_info import step_info
-from skidnav.kernels.navigation import NavigationTask, RewardScheme
-from skidnav.kernels.navigation_api import build_task, step_arrays, task_arrays
 from skidnav.physics.mdp import floor_materials, physics_transition
-from skidnav.physics.robot import PhysicsRobot
+from skidnav.physics.mujoco_robot import PhysicsRobot
 from skidnav.robot.kinematics import commanded_wheel_speeds, wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
 from skidnav.seeding import ARENA_ROLES, streams
+from skidnav.sim.features import PoseFeatures
+from skidnav.sim.navigation import NavigationTask, RewardScheme
+from skidnav.sim.task import build_task, step_arrays, task_arrays
+from skidnav.world import rendering
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 from skidnav.world.maps import build_map
@@ -36,8 +36,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     """Drive a skid-steer robot to a goal through an arena with walls and a slippery floor.
 
     ## Description
-    A small four-wheel skid-steer robot (SPEC §1, the thesis robot: r = 2.25 cm, c = 6 cm,
-    x_ICR = 5 cm) moves in a 0.62 m × 0.505 m arena. Each action commands both wheels for
+    A small four-wheel skid-steer robot (the thesis robot, Alhawary (2020), App. A.1.1: r = 2.25 cm,
+    c = 6 cm, x_ICR = 5 cm) moves in a 0.62 m × 0.505 m arena. Each action commands both wheels for
     10 × 0.1 s; the floor slows the wheels by a random, region-dependent amount (the slip field),
     and the skid makes turns slide the body sideways. The robot must reach the goal cell in as few
     actions as possible while bumping into walls as little as possible.
@@ -58,7 +58,7 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     (7 + k,) of x [m], y [m], cos ψ, sin ψ, the distance [m] to the goal cell's centre, cos and
     sin of the goal's bearing from the heading, and k = ``lidar_rays`` range readings [m] to the
     nearest wall or border, ray 0 ahead and the others counter-clockwise, clipped at
-    ``lidar_range`` (layout and bounds: :mod:`skidnav.envs.features`).
+    ``lidar_range`` (layout and bounds: :mod:`skidnav.sim.features`).
 
     ## Rewards
     +10 on ending an action in the goal cell; −10 for an action that ran into a wall; otherwise
@@ -67,7 +67,7 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     forward actions with ``variance="observed"``, as the thesis). The same with either dynamics.
     ``info["cost"]`` is the action's cost, minus its reward without the goal bonus: 1 + 10·var,
     10 for a collision, and the action that reaches the goal costs what a free step ending there
-    would (:func:`skidnav.kernels.navigation.action_cost`); summed over an episode that reaches
+    would (:func:`skidnav.sim.navigation.action_cost`); summed over an episode that reaches
     the goal it ranks paths as the return does.
 
     ## Starting State
@@ -82,36 +82,34 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     termination.
 
     ## Info
-    Built by :func:`skidnav.envs.step_info.step_info`, as the real-time loop's: ``pose``
-    (x [m], y [m], heading [rad]), ``cell`` (i, j, heading_bin), ``collision`` (bool),
-    ``wheel_speeds`` (ω_L, ω_R of the last sub-step after slip [rad/s]), ``region`` (flat slip
-    region at the end of the action), ``kinematic_log`` float64 (n_free_substeps, 6), columns
-    [region, omega_left_cmd, omega_right_cmd, v_x, v_y, yaw_rate] (what the Bayesian ridge
-    kinematic model learns from), ``cost`` (see Rewards; 0 at a reset), and ``step_info``: the
-    same as a typed
+    Built by :func:`skidnav.envs.step_info.step_info`, as the real-time loop's: ``pose`` (x [m],
+    y [m], heading [rad]), ``cell`` (i, j, heading_bin), ``collision`` (bool), ``wheel_speeds``
+    (ω_L, ω_R of the last sub-step after slip [rad/s]), ``region`` (flat slip region at the end of
+    the action), ``kinematic_log`` float64 (n_free_substeps, 6), columns [region, omega_left_cmd,
+    omega_right_cmd, v_x, v_y, yaw_rate] (what the Bayesian ridge kinematic model learns from),
+    ``cost`` (see Rewards; 0 at a reset), and ``step_info``: the same as a typed
     :class:`~skidnav.envs.step_info.StepInfo`.
 
     ## Arguments
     ``map_kind`` ("free", "obstacles", "maze") or ``map_file`` (plain-text map) or ``grid_map``;
     ``world_seed`` (draws the map and the slip field; the map does not change between episodes);
     ``slip`` preset ("thesis", "slippery", "rough", "rough-physics", "slippery-physics") or
-    ``slip_field``; ``drift_amplitude`` and
-    ``drift_period`` [s] (non-stationary slip; the clock runs across episodes and restarts when
-    ``reset`` is given a seed); ``robot`` (:class:`RobotParams`, e.g. ``integrator="exact"``);
-    ``discretization``; ``observation`` ("discrete", "pose", "features"); ``lidar_rays`` (k ≥ 0,
-    default 8) and ``lidar_range`` [m] (> 0, default 0.3) of the features; ``variance``;
-    ``render_mode`` ("rgb_array" or "ansi"); ``action`` ("discrete", the default, or
-    "continuous"); ``control_period`` [s]: the duration of one action, a whole number of the
-    robot's sub-steps of ``robot.dt`` (default ``robot.action_duration``, 1 s: the robot's
-    ``substeps`` are replaced by ``control_period / dt``);
-    ``dynamics``: "kinematic" (the ICR model of SPEC §1, the default) or "mujoco" (the MuJoCo
-    robot of :mod:`skidnav.physics`, the ``physics`` extra: the same spaces, rewards, walls and
-    episode rules, the slip field's wheel-speed loss applied to the servo set points, the motion
-    that of the physics — :mod:`skidnav.physics.mdp` — and the kinematic log filled from the
-    measured body twist; ``wheel_speeds`` are the measured ones; the MuJoCo state restarts at
-    every ``reset``); ``floor``: with "mujoco", one material of
-    :data:`skidnav.physics.materials.MATERIALS` for the whole floor, or None (default) for the
-    slip preset's materials (:func:`skidnav.physics.materials.region_materials`).
+    ``slip_field``; ``drift_amplitude`` and ``drift_period`` [s] (non-stationary slip; the clock
+    runs across episodes and restarts when ``reset`` is given a seed); ``robot``
+    (:class:`RobotParams`, e.g. ``integrator="exact"``); ``discretization``; ``observation``
+    ("discrete", "pose", "features"); ``lidar_rays`` (k ≥ 0, default 8) and ``lidar_range`` [m]
+    (> 0, default 0.3) of the features; ``variance``; ``render_mode`` ("rgb_array" or "ansi");
+    ``action`` ("discrete", the default, or "continuous"); ``control_period`` [s]: the duration of
+    one action, a whole number of the robot's sub-steps of ``robot.dt`` (default
+    ``robot.action_duration``, 1 s: the robot's ``substeps`` are replaced by
+    ``control_period / dt``); ``dynamics``: "kinematic" (the ICR model of Kozłowski & Pazderski
+    (2004), the default) or "mujoco" (the MuJoCo robot of :mod:`skidnav.physics`, the ``physics``
+    extra: the same spaces, rewards, walls and episode rules, the slip field's wheel-speed loss
+    applied to the servo set points, the motion that of the physics — :mod:`skidnav.physics.mdp` —
+    and the kinematic log filled from the measured body twist; ``wheel_speeds`` are the measured
+    ones; the MuJoCo state restarts at every ``reset``); ``floor``: with "mujoco", one material of
+    :data:`skidnav.physics.materials.MATERIALS` for the whole floor, or None (default) for the slip
+    preset's materials (:func:`skidnav.physics.materials.region_materials`).
 
     >>> import gymnasium, skidnav
     >>> env = gymnasium.make("skidnav/SkidSteerNav-v0", map_kind="free", world_seed=1)

@@ -13,10 +13,10 @@ attributes:
   on a real robot, whose wheel speeds the loop does not measure;
 * ``region``: flat slip region of the end pose;
 * ``kinematic_log``: float64 (n, 6), one row per free sub-step (control period),
-  columns ``kernels.navigation.LOG_COLUMNS`` [region, ω_L_cmd, ω_R_cmd, v_x, v_y, yaw_rate]:
+  columns ``sim.navigation.LOG_COLUMNS`` [region, ω_L_cmd, ω_R_cmd, v_x, v_y, yaw_rate]:
   what the kinematic models learn from (n = 0 when nothing moved freely);
 * ``cost``: the action's cost, minus its reward without the goal bonus
-  (:func:`skidnav.kernels.navigation.action_cost`; 0 at a reset). NaN where nothing scored it:
+  (:func:`skidnav.sim.navigation.action_cost`; 0 at a reset). NaN where nothing scored it:
   the real-time loop ranks nothing by it.
 
 >>> import numpy as np

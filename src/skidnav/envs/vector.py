@@ -4,7 +4,7 @@ step.
 The vector env of Gymnasium's API (``gymnasium.vector.VectorEnv``) whose sub-envs are N copies of
 :class:`~skidnav.envs.navigation.SkidSteerNavEnv` built from the same arguments — one arena, one
 slip field — each with its own pose, slip clock, wheel-speed statistics, random stream and
-episode counter. A step moves all of them through :func:`skidnav.kernels.vector_env.vector_step`
+episode counter. A step moves all of them through :func:`skidnav.sim.vector_step.vector_step`
 (one crossing into compiled code), and gives the numbers N single envs of ``gymnasium.make`` give
 in a ``SyncVectorEnv`` under the same seeds, step for step (tested):
 
@@ -49,14 +49,14 @@ from skidnav.checks import check_integer
 from skidnav.envs.navigation import SkidSteerNavEnv, real_values
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import shown
-from skidnav.kernels.vector_env import (
+from skidnav.robot.kinematics import commanded_wheel_speeds
+from skidnav.sim.vector_step import (
     DISCRETE_OBSERVATION,
     FEATURE_OBSERVATION,
     POSE_OBSERVATION,
     observe_poses,
     vector_step,
 )
-from skidnav.robot.kinematics import commanded_wheel_speeds
 
 VECTOR_INFO_KEYS = ("pose", "collision", "wheel_speeds", "region")
 """The step-info keys a vector env gathers (the others vary in shape or are objects)."""

@@ -1,6 +1,7 @@
 """Experiment configs: frozen, validated dataclasses loaded from TOML.
 
-An experiment is the grid agents × maps × slip presets × seeds (SPEC §5). The TOML layout is::
+An experiment is the grid agents × maps × slip presets × seeds (docs/experiments.md). The TOML
+layout is::
 
     [experiment]
     name = "quick"
@@ -212,16 +213,17 @@ class ExperimentConfig:
         eval_rollouts: greedy rollouts per evaluation, R, each from its own fixed evaluation
             seed, in [1, 100] (default 5).
         oracle_samples: sampled poses per state (each tries every action) of the oracle's
-            transition model, in [1, 1,000] (default 64; :mod:`skidnav.experiments.oracle`).
+            transition model, in [1, 1,000] (default 64;
+            :mod:`skidnav.experiments.reference.oracle`).
         baseline: label of the agent every other agent is compared to (default: the first
             agent named ``q-learning``, else the first agent).
         bootstrap_samples: bootstrap resamples for every interval, ≥ 100.
         confidence: confidence level of every interval, in [0.5, 0.999].
         greedy_eval: evaluate the greedy policy after each episode (needed for the primary
             convergence definition).
-        optimum_grids: state grids (n_x, n_y, n_headings), coarse to fine, at which the
-            continuous optimum of every world is computed (:mod:`skidnav.experiments.optimum`;
-            the last is the reference, the one before it checks its convergence); () for none.
+        optimum_grids: state grids (n_x, n_y, n_headings), coarse to fine, at which the continuous
+            optimum of every world is computed (:mod:`skidnav.experiments.reference.optimum`; the
+            last is the reference, the one before it checks its convergence); () for none.
         optimum_samples: sampled poses per state and action of the optimum's model, in [1, 1000]
             (default 8).
         optimum_rollouts: rollouts of the optimum's policy that measure its path length [m],

@@ -27,7 +27,9 @@ from skidnav.savedfile import MAX_CONFIG_BYTES, parse_toml, read_config_text
 
 MAX_CONFIG_CHARS = MAX_CONFIG_BYTES // 4
 """Longest config text accepted [characters] (a config is a few kilobytes)."""
-TOP_KEYS = ("experiment", "env", "maps", "agents", "tune")  # [tune]: experiments/tuneconfig.py
+TOP_KEYS = ("kind", "experiment", "env", "maps", "agents", "tune")
+"""Top-level keys of an experiment config: ``kind`` (``"experiment"``, or a study's:
+:mod:`skidnav.studies.kind`), ``[tune]`` (:mod:`skidnav.studies.tuning.config`)."""
 EXPERIMENT_KEYS = (
     "name",
     "description",

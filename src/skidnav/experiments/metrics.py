@@ -6,9 +6,9 @@ Episodes are numbered from 1. Definitions (also in docs/experiments.md and in ev
   start, each rollout from a reset with one of R fixed evaluation seeds (the same seeds after
   every episode and for every agent of a world: common random numbers), so one slip-noise
   outlier does not decide.
-* **Pass**: the evaluation after episode e passes when every one of its R rollouts reached the
-  goal and their mean length [actions] is at most (1 + tol) · L*, L* being the oracle's expected
-  number of actions from the start under the true simulator (:mod:`skidnav.experiments.oracle`);
+* **Pass**: the evaluation after episode e passes when every one of its R rollouts reached the goal
+  and their mean length [actions] is at most (1 + tol) · L*, L* being the oracle's expected number
+  of actions from the start under the true simulator (:mod:`skidnav.experiments.reference.oracle`);
   with ``measure = "greedy_cost"``, their mean cost (minus the reward without the goal bonus) at
   most (1 + tol) · C*, the oracle's least expected cost from the start.
 * **Convergence episode** (*converged means it stays converged*): the first passing episode e

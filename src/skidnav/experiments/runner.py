@@ -28,8 +28,8 @@ one line and the others go on; the sweep then ends in
 The grid is an :class:`~skidnav.experiments.config.ExperimentConfig` trained by
 :func:`skidnav.experiments.trial.run_trial`, or any other :class:`~skidnav.experiments.runs.Grid`
 with its own trial function and :class:`~skidnav.experiments.store.RunLayout` (the
-hardware-in-the-loop study, :mod:`skidnav.realtime.study`): the same expansion, seeds, store,
-lock, resume and metadata for both.
+hardware-in-the-loop study, :mod:`skidnav.studies.hardware.study`): the same expansion, seeds,
+store, lock, resume and metadata for both.
 """
 
 from __future__ import annotations

@@ -13,9 +13,10 @@ Both depend only on positions in the grid, so a run has the same streams on ever
 any order, and after a resume.
 
 A grid is anything with the attributes of :class:`Grid`: an
-:class:`~skidnav.experiments.config.ExperimentConfig` (``skidnav run``), or the
-hardware-in-the-loop study's grid (:class:`skidnav.realtime.study.StudyGrid`), whose runs the
-same runner executes with a trial function of its own.
+:class:`~skidnav.experiments.config.ExperimentConfig` (``skidnav run``), or a study's grid (e.g.
+the hardware-in-the-loop study's :class:`skidnav.studies.hardware.grid.StudyGrid`,
+:mod:`skidnav.studies.kind`), whose runs the same runner executes with a trial function of its
+own.
 """
 
 from __future__ import annotations

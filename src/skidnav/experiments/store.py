@@ -25,9 +25,10 @@ directory (:func:`directory_lock`). The tidy tables are read back as saved files
 pickled.
 
 What a run file holds depends on the kind of grid, described by a :class:`RunLayout`: an
-experiment's (:data:`EXPERIMENT_LAYOUT`, the default) or the hardware-in-the-loop study's
-(:data:`skidnav.realtime.study.STUDY_LAYOUT`: real-time episodes, no maps). ``config.json`` names
-the kind, so a directory of one kind is never read as the other.
+experiment's (:data:`EXPERIMENT_LAYOUT`, the default) or a study's (e.g. the
+hardware-in-the-loop study's :data:`skidnav.studies.hardware.study.STUDY_LAYOUT`: real-time
+episodes, no maps). ``config.json`` names the kind (:func:`results_kind`), so a directory of one
+kind is never read as another.
 """
 
 from __future__ import annotations
@@ -405,6 +406,25 @@ class ResultStore:
         """``metadata.json`` (empty when missing)."""
         path = self.root / "metadata.json"
         return self._read_json(path) if path.exists() else {}
+
+
+def results_kind(root: Path | str) -> str:
+    """The kind of the results in ``root``, as its ``config.json`` names it (a
+    :attr:`RunLayout.kind`: ``"experiment"``, or a study's); ``"experiment"`` when the directory
+    has no ``config.json`` (reading it then names what is missing) or one written before kinds
+    were recorded.
+
+    Raises:
+        UserError: ``config.json`` cannot be read.
+        CorruptFileError: ``config.json`` is damaged, or its kind is not a string.
+    """
+    path = Path(root) / "config.json"
+    if not path.exists():
+        return EXPERIMENT_LAYOUT.kind
+    kind = read_json(path, allow_nonfinite=True).get("kind", EXPERIMENT_LAYOUT.kind)
+    if not isinstance(kind, str):
+        raise CorruptFileError(f"{path}: kind: expected a string, got {shown(kind)}")
+    return kind
 
 
 def read_table(path: Path) -> pd.DataFrame:

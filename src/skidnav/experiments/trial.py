@@ -12,12 +12,12 @@ starts. The warm-up draws from its own generators, never from the run's streams,
 number.
 
 Agents of every family (:mod:`skidnav.agents.catalog`: tabular, linear on continuous
-observations, deep) are built and trained through one door. Tabular agents train in the
-compiled trainer ``skidnav.agents.fast_training.train_agent_fast`` for the skid-steer
-environment when it is installed and supports the agent, else in
+observations, deep) are built and trained through one door, the catalog entry of their name.
+Tabular agents train in the compiled trainer ``skidnav.agents.fast_training.train_agent_fast``
+for the skid-steer environment when it supports the agent, else in
 ``skidnav.agents.training.train_agent`` (which it falls back to on its own, e.g. for
-``[env] dynamics = "mujoco"``, the physical robot, whose runs have no oracle, and for the linear
-agents); a deep agent trains in its own loop with the same evaluations.
+``[env] dynamics = "mujoco"``, the physical robot, whose runs have no oracle); linear agents
+train in ``train_agent``; a deep agent trains in its own loop with the same evaluations.
 """
 
 from __future__ import annotations
@@ -33,27 +33,32 @@ from typing import Any
 import gymnasium
 import numpy as np
 
-from skidnav.agents.catalog import build_agent, check_params, observation_for, train
-from skidnav.agents.core import TabularAgent
+from skidnav.agents.catalog import CatalogAgent, CatalogEntry, entry
+from skidnav.agents.interface import Agent
+from skidnav.agents.tabular.agent import TabularAgent
+from skidnav.agents.training import TrainingLog, greedy_path
 from skidnav.envs.registration import allowed_env_modules, registered_env_id, with_env_modules
 from skidnav.errors import UserError
 from skidnav.experiments.config import CONVERGENCE_OBJECTIVES, ExperimentConfig, MapSpec
-from skidnav.experiments.finegrid import FineStates, check_grids, refines_positions, state_grid
 from skidnav.experiments.metrics import (
     ConvergenceRule,
     evaluation_summary,
     run_metrics,
-    within_tolerance,
 )
-from skidnav.experiments.oracle import Oracle, compute_oracle, load_or_compute_oracle
+from skidnav.experiments.reference.finegrid import (
+    FineStates,
+    check_grids,
+    refines_positions,
+    state_grid,
+)
+from skidnav.experiments.reference.world import warm_up_references, world_reference
 from skidnav.experiments.runs import RunSpec, expand_runs
-from skidnav.experiments.start_plan import StartPlan, start_plan
 from skidnav.experiments.store import EPISODE_COLUMNS, TrialResult
 from skidnav.seeding import RUN_ROLES, WORLD_ROLES, child_sequences, seed_int
 from skidnav.world.discretization import Discretization, heading_bin
 from skidnav.world.grid import GridMap, border_walls, refine_map
 from skidnav.world.mapfile import load_map
-from skidnav.world.maps import build_map as build_world_map
+from skidnav.world.maps import build_map
 
 logger = logging.getLogger(__name__)
 
@@ -70,10 +75,10 @@ _warmed_up: set[tuple[Any, ...]] = set()
 up."""
 
 
-def build_map(spec: MapSpec, rng: np.random.Generator) -> GridMap:
-    """The map of a run (:func:`skidnav.world.maps.build_map` of its ``[[maps]]`` entry): read
-    from its file or generated with ``rng`` and its options."""
-    return build_world_map(rng, kind=spec.kind, file=spec.file or None, options=dict(spec.options))
+def config_map(entry: MapSpec, rng: np.random.Generator) -> GridMap:
+    """The map of one ``[[maps]]`` entry of a config (:func:`skidnav.world.maps.build_map`):
+    read from its file, or generated with ``rng`` and its options."""
+    return build_map(rng, kind=entry.kind, file=entry.file or None, options=dict(entry.options))
 
 
 def make_env(
@@ -85,18 +90,17 @@ def make_env(
     only for a module the user allowed, :func:`~skidnav.envs.registration.registered_env_id`),
     made with the ``[env]`` options: nothing named in a config is imported or called. Only the
     skid-steer env receives the map, slip preset and drift of the run, and the observation its
-    agent learns over (:func:`skidnav.agents.catalog.observation_for`: the discrete state for a
-    tabular agent, else ``[env] observation``, "features" by default; ``observation`` overrides
-    both).
+    agent learns over (:meth:`skidnav.agents.catalog.AgentEntry.env_observation`: the discrete
+    state for a tabular agent, else ``[env] observation``, "features" by default;
+    ``observation`` overrides both).
     Gymnasium's ``TimeLimit`` truncates after the config's ``max_steps`` actions, else its
     ``[env] max_episode_steps``, else the registered limit (:func:`action_limit` reads it
     back). Runs train and evaluate on ``env.unwrapped``: the trainer enforces that limit itself.
 
-    An agent's ``discretization`` (n_x, n_y, n_headings) with the map's cells becomes the env's
-    own discretization (finer heading bins, the compiled trainer); one with finer cells than
-    the map's leaves the env on poses, which :func:`agent_view` turns into the states of the
-    finer grid (:class:`~skidnav.experiments.finegrid.FineStates`). ``observation`` overrides
-    both.
+    An agent's ``discretization`` (n_x, n_y, n_headings) with the map's cells becomes the env's own
+    discretization (finer heading bins, the compiled trainer); one with finer cells than the map's
+    leaves the env on poses, which :func:`agent_view` turns into the states of the finer grid
+    (:class:`~skidnav.experiments.reference.finegrid.FineStates`). ``observation`` overrides both.
     """
     config = spec.config
     options: dict[str, Any] = dict(config.env_options)
@@ -113,8 +117,9 @@ def make_env(
                 observation = "pose"
             else:
                 options["discretization"] = Discretization(*levels)
+        requested = options.get("observation")
         options.update(
-            observation=observation or observation_for(spec.agent.name, options.get("observation")),
+            observation=observation or entry(spec.agent.name).env_observation(requested),
             grid_map=grid_map,
             world_seed=slip_seed,
             slip=spec.preset,
@@ -139,20 +144,6 @@ def action_limit(env: gymnasium.Env[Any, Any]) -> int:
     (``env.spec.max_episode_steps``), or 10,000 for an env registered without one."""
     limit = env.spec.max_episode_steps if env.spec is not None else None
     return int(limit or 10_000)
-
-
-def greedy_rollout(
-    agent: TabularAgent, env: gymnasium.Env[Any, Any], seed: int, max_steps: int
-) -> tuple[np.ndarray, bool]:
-    """Follow the greedy policy from the start; returns (poses (T+1, 3) [m, m, rad], reached)."""
-    state, info = env.reset(seed=seed)
-    poses = [info.get("pose", (np.nan, np.nan, np.nan))]
-    for _ in range(max_steps):
-        state, _, terminated, truncated, info = env.step(agent.greedy_action(state))
-        poses.append(info.get("pose", (np.nan, np.nan, np.nan)))
-        if terminated or truncated:
-            return np.asarray(poses, dtype=np.float64), bool(terminated)
-    return np.asarray(poses, dtype=np.float64), False
 
 
 def value_maps(q: np.ndarray, grid_map: GridMap) -> tuple[np.ndarray, np.ndarray]:
@@ -197,11 +188,11 @@ def policy_map(q: np.ndarray, grid_map: GridMap, heading_index: int) -> np.ndarr
 
 
 def _world_arrays(
-    agent: Any, grid_map: GridMap, env: gymnasium.Env[Any, Any]
+    agent: Agent, grid_map: GridMap, env: gymnasium.Env[Any, Any]
 ) -> dict[str, np.ndarray]:
     """Walls, start, goal and slip η of a skid-steer run, and of a tabular agent its value,
     heading and policy maps (on the agent's finer grid, and the map refined to it, for an agent
-    seeing :class:`~skidnav.experiments.finegrid.FineStates`)."""
+    seeing :class:`~skidnav.experiments.reference.finegrid.FineStates`)."""
     grid = getattr(env, "discretization", None)
     nav: Any = env
     if isinstance(env, FineStates):
@@ -226,7 +217,7 @@ def _world_arrays(
     return arrays
 
 
-def _episode_arrays(log: Any) -> dict[str, np.ndarray]:
+def _episode_arrays(log: TrainingLog) -> dict[str, np.ndarray]:
     """The TrainingLog as record columns: each evaluation's R rollouts become their mean length
     and their mean cost over those that reached the goal (NaN if none) and the share that did."""
     greedy, reached = evaluation_summary(log.greedy_lengths)
@@ -252,7 +243,7 @@ def _world(
     """(map or None, training env, evaluation env, action limit) of a run, the map drawn with
     ``map_rng``; the envs unwrapped (:func:`make_env`)."""
     skid = spec.config.env_id == SKID_ENV_ID
-    grid_map = build_map(spec.map, map_rng) if skid else None
+    grid_map = config_map(spec.map, map_rng) if skid else None
     env = make_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
     eval_env = make_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
     return grid_map, agent_view(spec, env), agent_view(spec, eval_env), action_limit(env)
@@ -271,10 +262,10 @@ def _oracle_env(
 
 def _agent(
     spec: ExperimentRun, env: gymnasium.Env[Any, Any], seed: np.random.SeedSequence, max_steps: int
-) -> Any:
-    """A new agent of the run's variant for ``env``, of whichever family
-    (:func:`skidnav.agents.catalog.build_agent`)."""
-    return build_agent(spec.agent.name, env, spec.agent.params_dict(), seed, max_steps)
+) -> CatalogAgent:
+    """A new agent of the run's variant for ``env``, of whichever family, with its family's
+    training (:meth:`skidnav.agents.catalog.AgentEntry.build`)."""
+    return entry(spec.agent.name).build(env, spec.agent.params_dict(), seed, max_steps)
 
 
 def warm_up(spec: ExperimentRun) -> None:
@@ -284,7 +275,7 @@ def warm_up(spec: ExperimentRun) -> None:
     key: tuple[Any, ...] = (spec.config.env_id, spec.agent.name, repr(spec.agent.params))
     levels = spec.agent.discretization
     if levels:  # the same kernels, or the plain loop over finer states (docs/discretization-gap.md)
-        fine = refines_positions(levels, build_map(spec.map, np.random.default_rng(0)))
+        fine = refines_positions(levels, config_map(spec.map, np.random.default_rng(0)))
         key += (fine,)
     if key in _warmed_up:
         return
@@ -303,22 +294,21 @@ def warm_up(spec: ExperimentRun) -> None:
     env, eval_env = (agent_view(spec, each) for each in made)
     env.reset(seed=1)
     eval_env.reset(seed=2)
-    agent = _agent(spec, env, np.random.SeedSequence(3), max(WARM_UP_LIMITS))
+    built = _agent(spec, env, np.random.SeedSequence(3), max(WARM_UP_LIMITS))
     for limit in WARM_UP_LIMITS:
-        train(
-            agent,
+        built.train(
             env,
             1,
             max_steps=limit,
             greedy_eval_env=eval_env if spec.config.greedy_eval else None,
             greedy_seeds=[2, 3],
         )
-    greedy_rollout(agent, eval_env, 2, max(WARM_UP_LIMITS))
+    greedy_path(built.agent, eval_env, max(WARM_UP_LIMITS), seed=2)
     if grid_map is not None:
-        _world_arrays(agent, grid_map, env)
-    if grid_map is not None and _has_oracle(eval_env):
-        compute_oracle(_oracle_env(spec, grid_map, 0, eval_env), 1, 0, [2], max(WARM_UP_LIMITS))
-        start_plan(eval_env, [2], max(WARM_UP_LIMITS))
+        _world_arrays(built.agent, grid_map, env)
+    if grid_map is not None:
+        oracle_env = functools.partial(_oracle_env, spec, grid_map, 0, eval_env)
+        warm_up_references(eval_env, oracle_env, 2, max(WARM_UP_LIMITS))
     _warmed_up.add(key)
 
 
@@ -351,23 +341,14 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     evaluation = world_streams["evaluation"].spawn(config.eval_rollouts)
     eval_seeds = [seed_int(s) for s in evaluation]
     env.reset(seed=seed_int(run_streams["episodes"]))
-    agent = _agent(spec, env, run_streams["agent"], max_steps)
-    oracle = None
-    if grid_map is not None and _has_oracle(eval_env):
-        oracle_seed = seed_int(world_streams["oracle"])
-        oracle_env = _oracle_env(spec, grid_map, slip_seed, eval_env)
-        oracle = load_or_compute_oracle(
-            oracle_env, config.oracle_samples, oracle_seed, eval_seeds, max_steps
-        )
-    reference = _reference_length(oracle, eval_env)
-    plan = start_plan(eval_env, eval_seeds, max_steps) if oracle is not None else None
-    optima = {}
-    if grid_map is not None and config.optimum_grids and _has_oracle(eval_env):
-        from skidnav.experiments.optimum import world_optima  # it builds on this module
-
-        optima = world_optima(spec, grid_map, slip_seed, world_streams["oracle"], max_steps)
-    log = train(
-        agent,
+    built = _agent(spec, env, run_streams["agent"], max_steps)
+    envs = None
+    if grid_map is not None:
+        oracle_env = functools.partial(_oracle_env, spec, grid_map, slip_seed, eval_env)
+        pose_env = functools.partial(make_env, spec, grid_map, slip_seed, observation="pose")
+        envs = (oracle_env, pose_env)
+    world = world_reference(config, eval_env, envs, world_streams["oracle"], eval_seeds, max_steps)
+    log = built.train(
         env,
         config.episodes,
         max_steps=max_steps,
@@ -375,12 +356,12 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
         greedy_seeds=eval_seeds,
     )
     episodes = _episode_arrays(log)
-    poses, reached = greedy_rollout(agent, eval_env, eval_seeds[0], max_steps)
+    poses, reached = greedy_path(built.agent, eval_env, max_steps, seed=eval_seeds[0])
     arrays = {"greedy_poses": poses}
     if grid_map is not None:
-        arrays.update(_world_arrays(agent, grid_map, env))
+        arrays.update(_world_arrays(built.agent, grid_map, env))
     rule = None
-    optimum = _optimum(reference, oracle, config.convergence_objective)
+    optimum = world.optimum(config.convergence_objective)
     if math.isfinite(optimum) and config.greedy_eval:
         rule = ConvergenceRule(
             optimum, config.convergence_tolerance, config.convergence_window,
@@ -388,78 +369,8 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
         )  # fmt: skip
     summary = run_metrics(episodes, poses, reached, rule)
     summary["action_limit"] = float(max_steps)
-    summary.update(_oracle_columns(reference, oracle))
-    summary.update(_plan_columns(plan, rule))
-    summary.update(optima)
+    summary.update(world.summary_columns(rule))
     return TrialResult(spec.run_id, spec.coordinates, episodes, summary, arrays)
-
-
-def _oracle_columns(reference: float, oracle: Oracle | None) -> dict[str, float]:
-    """The summary columns of the run's references: L* and C* (:mod:`~skidnav.experiments.oracle`;
-    without an oracle, C* = L*: a grid maze's moves cost one each, and elsewhere both are NaN);
-    the means of the oracle's own rollouts (the action-optimal policy's lengths, NaN when any of
-    them failed, and the cost-optimal policy's costs), the share of the action-optimal rollouts
-    that reached the goal and the mean length of those that did: from one exact pose a greedy
-    policy over cells can loop (an action that works on average over the cell hits a wall from
-    that point, and is chosen again), so the oracle's expected length is a reference, not a
-    policy every agent could follow."""
-    nan = float("nan")
-    if oracle is None:
-        return {
-            "oracle_length": reference, "oracle_rollout_length": nan,
-            "oracle_cost": reference, "oracle_rollout_cost": nan,
-            "oracle_rollout_success": nan, "oracle_reached_length": nan,
-        }  # fmt: skip
-    lengths = oracle.rollout_lengths
-    reached = lengths[lengths > 0]
-    return {
-        "oracle_length": reference, "oracle_rollout_length": oracle.rollout_mean,
-        "oracle_cost": oracle.start_cost, "oracle_rollout_cost": oracle.rollout_cost,
-        "oracle_rollout_success": float(reached.size / lengths.size),
-        "oracle_reached_length": float(reached.mean()) if reached.size else nan,
-    }  # fmt: skip
-
-
-def _optimum(reference: float, oracle: Oracle | None, objective: str) -> float:
-    """What convergence is measured against: L* (``reference``), or with the "cost" objective
-    the oracle's C* (L* where there is no oracle: a grid maze's moves cost one each)."""
-    return oracle.start_cost if objective == "cost" and oracle is not None else reference
-
-
-def _plan_columns(plan: StartPlan | None, rule: ConvergenceRule | None) -> dict[str, float]:
-    """The summary columns of the world's start plan (:mod:`skidnav.experiments.start_plan`):
-    its length [actions] (NaN when none was found), the share of its replays that reached the
-    goal, and whether its replays pass the run's convergence test (1.0 / 0.0; NaN when the test
-    is measured in cost, which the replays do not record)."""
-    nan = float("nan")
-    if plan is None or not len(plan.actions):
-        return {"start_plan_length": nan, "start_plan_success": nan, "start_plan_passes": nan}
-    lengths = plan.rollout_lengths
-    mean, share = evaluation_summary(lengths[None, :])
-    passes = nan
-    if rule is not None and rule.measure == "greedy_length":
-        passes = float(within_tolerance(mean, share, rule)[0])
-    return {
-        "start_plan_length": float(len(plan.actions)),
-        "start_plan_success": float(share[0]),
-        "start_plan_passes": passes,
-    }
-
-
-def _has_oracle(env: gymnasium.Env[Any, Any]) -> bool:
-    """True unless the skid-steer env runs on physics (``[env] dynamics = "mujoco"``): the
-    oracle solves the kinematic MDP, so a physics run's L* and optimality gap are NaN."""
-    return getattr(env.unwrapped, "dynamics", "kinematic") == "kinematic"
-
-
-def _reference_length(oracle: Oracle | None, env: gymnasium.Env[Any, Any]) -> float:
-    """L* of a run: the oracle's V*(start) on the skid-steer env; on a deterministic grid maze
-    its breadth-first shortest path (``shortest_path_length``, exact there); else NaN."""
-    if oracle is not None:
-        return oracle.start_value
-    shortest = getattr(env.unwrapped, "shortest_path_length", None)
-    length = int(shortest()) if callable(shortest) else -1
-    return float(length) if length > 0 else float("nan")
 
 
 def check_config(config: ExperimentConfig, path: Path | str | None = None) -> None:
@@ -476,21 +387,30 @@ def check_config(config: ExperimentConfig, path: Path | str | None = None) -> No
 
 def _check_config(config: ExperimentConfig) -> None:
     registered_env_id(config.env_id)
-    for agent in config.agents:
-        check_params(agent.name, agent.params_dict())
-        if config.env_id == SKID_ENV_ID:
-            requested = dict(config.env_options).get("observation")
-            observation_for(agent.name, None if requested is None else str(requested))
+    entries = _check_agents(config)
     for map_spec in config.maps:
         if map_spec.file:
             load_map(map_spec.file)
     first = expand_runs(config)[0]
     try:
         for map_spec in config.maps:
-            grid_map = build_map(map_spec, np.random.default_rng(0))
-            check_grids(config, grid_map, map_spec.label)
+            grid_map = config_map(map_spec, np.random.default_rng(0))
+            check_grids(config, grid_map, map_spec.label, entries)
         make_env(first, grid_map, 0).close()
     except gymnasium.error.Error as error:
         raise UserError(f"environment {config.env_id!r}: {error}") from None
     except (TypeError, ValueError) as error:
         raise UserError(f"environment or map options: {error}") from None
+
+
+def _check_agents(config: ExperimentConfig) -> dict[str, CatalogEntry]:
+    """The catalog entry of each agent name of ``config``, asked once, its parameters and (on
+    the skid-steer env) the observation it would learn over checked; UserError otherwise."""
+    entries: dict[str, CatalogEntry] = {}
+    requested = dict(config.env_options).get("observation")
+    for agent in config.agents:
+        described = entries.setdefault(agent.name, entry(agent.name))
+        described.config(agent.params_dict())
+        if config.env_id == SKID_ENV_ID:
+            described.env_observation(requested)
+    return entries

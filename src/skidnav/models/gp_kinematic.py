@@ -1,11 +1,11 @@
 """Learned skid-steer kinematics by Gaussian-process regression, one set of GPs per slip region.
 
-The alternative to the Bayesian-ridge model (:mod:`skidnav.models.kinematic`, SPEC §4 item 3)
-named by the thesis's future work: per coarse slip region, three independent GP regressions
+The alternative to the Bayesian-ridge model (:mod:`skidnav.models.kinematic`) named by the thesis's
+future work (Alhawary (2020), §7.1): per coarse slip region, three independent GP regressions
 (Rasmussen & Williams 2006, ch. 2, Algorithm 2.1) map the *commanded* wheel speeds
 (ω_L, ω_R) [rad/s] to each output of the body twist v_x [m/s], v_y [m/s] and yaw_rate [rad/s],
 learned from the free sub-steps of the kinematic log (columns
-:data:`~skidnav.kernels.navigation.LOG_COLUMNS`).
+:data:`~skidnav.sim.navigation.LOG_COLUMNS`).
 
 Kernel (per output, hyperparameters by maximizing the log marginal likelihood, R&W §5.4.1):
 
@@ -23,7 +23,7 @@ widens to the prior's), and v_y is learned from the commands directly rather tha
 yaw rate (x_ICR is not identified).
 
 Window (ours): as the ridge model, a ring buffer of the last ``window`` samples per region
-(:func:`~skidnav.kernels.kinematic_prediction.feed_rows`), so an exact GP fit costs
+(:func:`~skidnav.models.kinematic_prediction.feed_rows`), so an exact GP fit costs
 O(window³) time and O(window²) memory per output and optimizer step; ``window`` is at most
 :data:`MAX_WINDOW`. Regions with fewer than ``min_samples`` samples use a pooled GP fitted on
 the newest ``window / n_active_regions`` samples of every active region (so the pooled fit is
@@ -43,8 +43,8 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, Kernel, WhiteKernel
 
-from skidnav.kernels.kinematic_prediction import feed_rows
 from skidnav.models.kinematic import window_slots
+from skidnav.models.kinematic_prediction import feed_rows
 
 logger = logging.getLogger(__name__)
 

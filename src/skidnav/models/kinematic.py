@@ -1,10 +1,10 @@
 """Learned skid-steer kinematics: one Bayesian ridge regression per coarse slip region.
 
-The thesis (SPEC §4 item 3) learns the ICR model of Kozłowski & Pazderski (2004) online by
+The thesis (Alhawary (2020), ch. 7) learns the ICR model of Kozłowski & Pazderski (2004) online by
 Bayesian ridge regression (MacKay 1992; Tipping 2001; :mod:`skidnav.models.bayesian_ridge`, with
-scikit-learn ``BayesianRidge``'s conventions), one model per coarse region, and uses it to
-predict the outcome of actions at states never visited. Per region three regressions are fitted
-on the free sub-steps of the kinematic log:
+scikit-learn ``BayesianRidge``'s conventions), one model per coarse region, and uses it to predict
+the outcome of actions at states never visited. Per region three regressions are fitted on the free
+sub-steps of the kinematic log:
 
     v_x      ≈ vx_wl·ω_L + vx_wr·ω_R (+ vx_b)       (truth: r/2, r/2)
     yaw_rate ≈ yaw_wl·ω_L + yaw_wr·ω_R (+ yaw_b)    (truth: −r/2c, r/2c)
@@ -48,13 +48,13 @@ import numpy as np
 
 from skidnav.atomicfile import write_atomic, write_npz_atomic
 from skidnav.errors import CorruptFileError, first_line
-from skidnav.kernels.kinematic_prediction import (
+from skidnav.models.bayesian_ridge import RidgePosterior, fit_bayesian_ridge
+from skidnav.models.kinematic_prediction import (
     action_velocities,
     feed_rows,
     predict_action,
     prediction_table,
 )
-from skidnav.models.bayesian_ridge import RidgePosterior, fit_bayesian_ridge
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
 from skidnav.savedfile import MAX_ARCHIVE_BYTES, READ_ERRORS, ArraySpec, SavedArchive, read_json
@@ -346,7 +346,7 @@ class KinematicModel:
         """Predicted pose after ``action`` from ``pose`` (x [m], y [m], heading [rad]).
 
         Returns ((x, y, heading), outcome) with the outcome codes of
-        :mod:`skidnav.kernels.kinematic_prediction`.
+        :mod:`skidnav.models.kinematic_prediction`.
         """
         walls_, goals_ = self._masks(walls, goals)
         x, y, heading, outcome = predict_action(

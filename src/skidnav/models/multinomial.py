@@ -1,4 +1,4 @@
-"""Sparse multinomial transition model learned from counts (the thesis's model; SPEC §4.2).
+"""Sparse multinomial transition model learned from counts (Alhawary (2020), ch. 7).
 
 From real transitions the model keeps N(s, a, s′), and estimates
 
@@ -8,8 +8,8 @@ From real transitions the model keeps N(s, a, s′), and estimates
 
 It is exact on a deterministic MDP after one visit per pair. Memory grows with the number of
 distinct observed pairs and outcomes (growable arrays and open-addressing hash tables, see
-:mod:`skidnav.kernels.multinomial`), never with S²·A. The predecessor relation ("which (s, a) have
-led to s′") is kept too, for prioritized sweeping (Sutton & Barto (2018) §8.4).
+:mod:`skidnav.models.multinomial_kernels`), never with S²·A. The predecessor relation ("which (s, a)
+have led to s′") is kept too, for prioritized sweeping (Sutton & Barto (2018) §8.4).
 
 The arrays live in :attr:`MultinomialModel.arrays` (a :class:`MultinomialArrays` named tuple) so
 compiled planners can read and update them directly; call :meth:`MultinomialModel.reserve` with the
@@ -37,7 +37,7 @@ from typing import NamedTuple
 import numpy as np
 
 from skidnav.errors import CorruptFileError
-from skidnav.kernels.multinomial import (
+from skidnav.models.multinomial_kernels import (
     MultinomialArrays,
     find_pair,
     first_predecessor,
@@ -185,7 +185,7 @@ class MultinomialModel:
 
     def prepare(self, state: int, action: int, next_state: int) -> None:
         """Check a transition and make room for it, before a compiled kernel counts it
-        (:func:`skidnav.kernels.multinomial.model_observe`); ValueError if it is invalid."""
+        (:func:`skidnav.models.multinomial_kernels.model_observe`); ValueError if it is invalid."""
         if not 0 <= action < self.n_actions or state < 0 or next_state < 0:
             raise ValueError(f"expected a valid transition, got ({state}, {action}, {next_state})")
         self.reserve(1)
@@ -341,7 +341,7 @@ def _distinct(values: np.ndarray) -> bool:
 
 
 def _rebuild_cache(arrays: MultinomialArrays, n_pairs: int, n_entries: int) -> None:
-    """Recompute the most-probable cache (see :mod:`skidnav.kernels.multinomial`) of checked
+    """Recompute the most-probable cache (see :mod:`skidnav.models.multinomial_kernels`) of checked
     arrays, with the same operations as ``model_observe``."""
     owner, count = arrays.entry_pair[:n_entries], arrays.entry_count[:n_entries]
     largest = np.zeros(n_pairs, dtype=np.int64)

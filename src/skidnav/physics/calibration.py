@@ -1,10 +1,10 @@
 """Floors from physics: the ICR model fitted to the MuJoCo robot on each floor material.
 
 The robot drives over one material (the whole floor) under a seeded excitation: 1-s segments
-alternating the four discrete actions and uniform random wheel-speed pairs in ±``wheel_speed``,
-each logged per 0.1-s sub-step as the kinematic log is (commanded ω_L, ω_R; the measured body
-twist). The thesis's regressions (SPEC §4 item 3) are then fitted by Bayesian ridge without
-intercepts (MacKay 1992; :mod:`skidnav.models.bayesian_ridge`):
+alternating the four discrete actions and uniform random wheel-speed pairs in ±``wheel_speed``, each
+logged per 0.1-s sub-step as the kinematic log is (commanded ω_L, ω_R; the measured body twist). The
+thesis's regressions (Alhawary (2020), ch. 7; docs/agents/dyna-kinematic.md) are then fitted by
+Bayesian ridge without intercepts (MacKay 1992; :mod:`skidnav.models.bayesian_ridge`):
 
     v_x ≈ β_L ω_L + β_R ω_R,   yaw_rate ≈ γ_L ω_L + γ_R ω_R,   v_y ≈ s · yaw_rate
 
@@ -30,7 +30,7 @@ import numpy as np
 from skidnav.models.bayesian_ridge import fit_bayesian_ridge
 from skidnav.models.kinematic import icr_parameters
 from skidnav.physics.mjcf import PhysicsParams, uniform_floor
-from skidnav.physics.robot import PhysicsRobot
+from skidnav.physics.mujoco_robot import PhysicsRobot
 from skidnav.robot.kinematics import N_ACTIONS, commanded_wheel_speeds
 from skidnav.robot.params import RobotParams
 

@@ -1,13 +1,13 @@
 """The navigation MDP on the physical robot: one action of the MuJoCo robot, scored by the
-kinematic MDP's own rules (SPEC §3, §7).
+kinematic MDP's own rules (docs/simulator.md, docs/physics.md).
 
 :func:`physics_transition` is the physics twin of
-:func:`skidnav.kernels.navigation.command_transition` (and :func:`simulate_physics_action` of
+:func:`skidnav.sim.navigation.command_transition` (and :func:`simulate_physics_action` of
 ``simulate_action``): one action holds the wheel speeds (ω_L, ω_R) [rad/s] of a discrete action
 or of a continuous one for ``substeps`` sub-steps of ``dt`` seconds; in each, with the robot in
 slip region ρ at simulated time t:
 
-1. η of ρ at the sub-step's start (:func:`~skidnav.kernels.navigation.slip_scale`: the slip
+1. η of ρ at the sub-step's start (:func:`~skidnav.sim.navigation.slip_scale`: the slip
    field, drifting or not);
 2. :meth:`PhysicsRobot.substep`: each commanded wheel speed loses u·η in magnitude, u from
    ``noise`` (laid out as the kinematic kernel's: two uniforms per sub-step, left then right),
@@ -17,11 +17,11 @@ slip region ρ at simulated time t:
    there); if it lies in a wall cell the motion stops: the position stays at the last free
    sub-step, the heading of the colliding sub-step is kept, the robot is put there at rest
    (:meth:`PhysicsRobot.place`) and the action is a collision; otherwise the sub-step is logged
-   as a row of :data:`~skidnav.kernels.navigation.LOG_COLUMNS` whose v_x, v_y and yaw rate are
+   as a row of :data:`~skidnav.sim.navigation.LOG_COLUMNS` whose v_x, v_y and yaw rate are
    the sub-step's measured mean body twist, so the kinematic models learn the physics' slip.
 
 With the observed variance (``RewardScheme.observed_variance``) the wheel set points of forward
-actions (:func:`~skidnav.kernels.navigation.records_variance`) feed the region's running
+actions (:func:`~skidnav.sim.navigation.records_variance`) feed the region's running
 statistics, as in the kinematic kernel. Reward, termination, state and region come from the
 kernels' ``score_action`` (and ``cell_of``, ``region_of``): the rules exist once.
 
@@ -34,7 +34,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from skidnav.kernels.navigation import (
+from skidnav.physics.materials import MATERIALS, region_materials
+from skidnav.physics.mjcf import uniform_floor
+from skidnav.physics.mujoco_robot import PhysicsRobot
+from skidnav.robot.kinematics import wrap_angle
+from skidnav.robot.params import RobotParams
+from skidnav.robot.slip import SlipField
+from skidnav.sim.navigation import (
     NavigationTask,
     Outcome,
     _log_row,
@@ -43,12 +49,6 @@ from skidnav.kernels.navigation import (
     score_action,
     slip_scale,
 )
-from skidnav.physics.materials import MATERIALS, region_materials
-from skidnav.physics.mjcf import uniform_floor
-from skidnav.physics.robot import PhysicsRobot
-from skidnav.robot.kinematics import wrap_angle
-from skidnav.robot.params import RobotParams
-from skidnav.robot.slip import SlipField
 from skidnav.world.discretization import cell_of, region_of
 
 POSE_TOLERANCE = 1e-9
@@ -149,7 +149,7 @@ def physics_transition(
     log: np.ndarray,
 ) -> Outcome:
     """One step of the MDP on the physical robot: :func:`simulate_physics_action`, then scored
-    by :func:`skidnav.kernels.navigation.score_action`, as the kinematic transition is
+    by :func:`skidnav.sim.navigation.score_action`, as the kinematic transition is
     (arguments as there)."""
     collided, n_logged, omega_left, omega_right = simulate_physics_action(
         task, body, pose, commands, time, noise, log

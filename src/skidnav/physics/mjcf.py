@@ -11,7 +11,7 @@ A sphere touches the floor at one point: the cheapest wheel contact MuJoCo has, 
 
 The floor: one collision plane, and one flat box per slip region drawn in its material's
 colour (drawn only). Each wheel's contact takes the wheel geom's friction (its ``priority`` is
-higher than the plane's), which :class:`~skidnav.physics.robot.PhysicsRobot` sets to the
+higher than the plane's), which :class:`~skidnav.physics.mujoco_robot.PhysicsRobot` sets to the
 material of the region under the wheel; walls are boxes over the occupancy map's wall cells,
 drawn only: the navigation MDP's own collision rule (the centre entering a wall cell) decides
 collisions, as in the kinematic simulator.

@@ -5,13 +5,13 @@
 the heading along the shorter arc; a long trajectory keeps every k-th pose first). The picture:
 
 - ``"mujoco"``, where :func:`~skidnav.physics.backend.offscreen_rendering` says MuJoCo can render
-  offscreen: the robot of :class:`~skidnav.physics.robot.PhysicsRobot` placed at each pose
+  offscreen: the robot of :class:`~skidnav.physics.mujoco_robot.PhysicsRobot` placed at each pose
   (no physics step), seen straight down by an orthographic camera, floor tiles coloured by
   material, walls as boxes; the trail and the goal cell are drawn over it. The floor tiles and
   walls are moved onto the navigation grid (cells W/(n_x − 1) wide,
   :class:`~skidnav.world.discretization.Discretization`) so the picture matches the MDP's cells.
 - ``"2-d"`` otherwise (or when asked): the frames of the env's ``rgb_array`` renderer
-  (:func:`skidnav.envs.rendering.rgb_frame`); the same inputs give the same bytes.
+  (:func:`skidnav.world.rendering.rgb_frame`); the same inputs give the same bytes.
 
 Every frame is mapped onto one palette taken from the first and last frames (no dithering), so
 the GIF is small and, for the 2-D renderer, deterministic.
@@ -27,7 +27,6 @@ from typing import Any, NamedTuple
 import numpy as np
 from PIL import Image, ImageDraw
 
-from skidnav.envs.rendering import rgb_frame
 from skidnav.physics.backend import offscreen_rendering
 from skidnav.physics.materials import PATCH_MATERIAL
 from skidnav.robot.kinematics import wrap_angle
@@ -35,6 +34,7 @@ from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
+from skidnav.world.rendering import rgb_frame
 
 logger = logging.getLogger(__name__)
 
@@ -231,7 +231,7 @@ def _overlay(
 
 def _frames_mujoco(arena: Arena, poses: np.ndarray, size: tuple[int, int]) -> list[Image.Image]:
     """MuJoCo's offscreen frames of the robot placed at each pose."""
-    from skidnav.physics.robot import PhysicsRobot  # imports MuJoCo
+    from skidnav.physics.mujoco_robot import PhysicsRobot  # imports MuJoCo
 
     robot = PhysicsRobot(arena.robot, arena.floor(), occupancy=arena.occupancy)
     mujoco, model = robot.mujoco, robot.model

@@ -16,7 +16,7 @@ from skidnav.errors import UserError
 from skidnav.seeding import ARENA_ROLES, streams
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import MAP_KINDS, GridMap
-from skidnav.world.maps import build_map as build_world_map
+from skidnav.world.maps import build_map
 
 
 def seed_streams(seed: int) -> dict[str, np.random.Generator]:
@@ -25,9 +25,10 @@ def seed_streams(seed: int) -> dict[str, np.random.Generator]:
     return streams(seed, ARENA_ROLES)
 
 
-def build_map(spec: str, seed: int, grid: Discretization) -> GridMap:
-    """A map kind (``free``, ``obstacles``, ``maze``, generated from the map stream of ``seed``)
-    or the path of a map file.
+def arena_map(spec: str, seed: int, grid: Discretization) -> GridMap:
+    """The map of an arena ``[run] map`` (or ``--map``) names: a map kind (``free``,
+    ``obstacles``, ``maze``, generated from the map stream of ``seed``) or the path of a map
+    file, of ``grid``'s cells (:func:`skidnav.world.maps.build_map`).
 
     Raises:
         UserError: unknown kind, unreadable file or a map of another size than ``grid``.
@@ -36,12 +37,12 @@ def build_map(spec: str, seed: int, grid: Discretization) -> GridMap:
     rng = seed_streams(seed)["map"]
     if spec in MAP_KINDS:
         try:
-            return build_world_map(rng, kind=spec, shape=shape)
+            return build_map(rng, kind=spec, shape=shape)
         except ValueError as error:
             raise UserError(str(error)) from None
     if not Path(spec).is_file():
         raise UserError(f"map {spec!r} is neither one of {', '.join(MAP_KINDS)} nor a file")
-    return build_world_map(rng, file=spec, shape=shape)
+    return build_map(rng, file=spec, shape=shape)
 
 
 def start_pose(grid_map: GridMap, grid: Discretization) -> tuple[float, float, float]:

@@ -28,9 +28,10 @@ from skidnav.world.grid import MAP_KINDS
 DRIVER_TABLES = ("tcp", "serial", "ros2")
 """The tables of driver options."""
 TOP_TABLES = ("run", "sim", *DRIVER_TABLES, "agents", "policies", "study")
-"""The tables of a config besides ``[presets]`` (``[study]``: :mod:`skidnav.realtime.study`)."""
+"""The tables of a config besides ``[presets]`` (``[study]``:
+:mod:`skidnav.studies.hardware.study`)."""
 FAULTS = ("silence", "garbage", "oversized", "escape", "hangup")
-"""Faults the sim server can inject for tests (realtime/sim/server.py)."""
+"""Faults the sim server can inject for tests (realtime/robot_server/server.py)."""
 MAX_LEASE_LIMIT = 5.0
 """Largest lease a robot can be configured to grant [s wall]: however it is set, no command
 keeps the wheels turning longer than this after it arrived."""
@@ -286,10 +287,15 @@ def read_tables(path: Path) -> dict[str, Any]:
     """The TOML tables of a config file (read by :func:`~skidnav.savedfile.read_config_text`:
     at most :data:`~skidnav.savedfile.MAX_CONFIG_BYTES`, a device or a pipe ends at that limit;
     nested at most :data:`~skidnav.savedfile.MAX_JSON_DEPTH` levels), with every map file path
-    (``[run] map`` and ``[presets.NAME.run] map``, when not a map kind) made absolute, a relative
-    one against the file's folder (:func:`~skidnav.configtables.resolve_path`); UserError (one
-    line naming the file) if unreadable or malformed."""
-    data = parse_toml(read_config_text(path), path)
+    made absolute (:func:`resolve_map_paths`); UserError (one line naming the file) if unreadable
+    or malformed."""
+    return resolve_map_paths(parse_toml(read_config_text(path), path), path.parent)
+
+
+def resolve_map_paths(data: dict[str, Any], folder: Path) -> dict[str, Any]:
+    """``data`` (parsed TOML tables, changed in place) with every map file path (``[run] map``
+    and ``[presets.NAME.run] map``, when not a map kind) made absolute, a relative one against
+    ``folder``, the config file's (:func:`~skidnav.configtables.resolve_path`)."""
     presets = data.get("presets", {})
     runs = [data.get("run")]
     if isinstance(presets, dict):
@@ -299,7 +305,7 @@ def read_tables(path: Path) -> dict[str, Any]:
             continue
         spec = run.get("map")
         if isinstance(spec, str) and spec not in MAP_KINDS:
-            run["map"] = str(resolve_path(spec, path.parent))
+            run["map"] = str(resolve_path(spec, folder))
     return data
 
 

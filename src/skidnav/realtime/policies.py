@@ -1,7 +1,7 @@
 """The continuous policies ``skidnav robot run`` can drive (docs/realtime.md, "Continuous
 policies"): a named one (``--policy NAME``, its settings from the config's ``[policies.NAME]``
 table) or a saved one (``--policy-file PATH``, by the loader of its format:
-:mod:`skidnav.agents.policy_files`).
+:mod:`skidnav.agents.policies.loading`).
 """
 
 from __future__ import annotations
@@ -12,16 +12,16 @@ from typing import Any
 
 import numpy as np
 
-from skidnav.agents.goal_tracker import GoalTracker, GoalTrackerConfig
-from skidnav.agents.policy_files import load_policy, policy_json
-from skidnav.agents.wheel_policy import WheelSpeedPolicy
+from skidnav.agents.policies.goal_tracker import GoalTracker, GoalTrackerConfig
+from skidnav.agents.policies.loading import load_policy, policy_json
+from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
 from skidnav.configtables import build_dataclass
-from skidnav.envs.features import PoseFeatures
 from skidnav.envs.navigation import clipped_wheel_speeds
 from skidnav.errors import UserError, first_line, shown
-from skidnav.kernels.navigation import is_forward_drive
 from skidnav.realtime.config import RealtimeConfig
 from skidnav.robot.params import RobotParams
+from skidnav.sim.features import PoseFeatures
+from skidnav.sim.navigation import is_forward_drive
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 

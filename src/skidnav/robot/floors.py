@@ -1,6 +1,6 @@
 """Floors calibrated on the physical robot: the ICR model fitted per material.
 
-``skidnav floors calibrate --out src/skidnav/data/floors.json`` drives the MuJoCo robot
+``skidnav world floors calibrate --out src/skidnav/data/floors.json`` drives the MuJoCo robot
 (:mod:`skidnav.physics.calibration`, docs/physics.md) over each floor material and writes, per
 material, the effective wheel radius r, half track c and x_ICR of the ICR model that fits it, and
 the η of the U(0, η) wheel-speed loss with the same residual v_x variance. The package ships that
@@ -70,8 +70,8 @@ class CalibratedFloor(NamedTuple):
 
 
 def parse_floors(text: str) -> dict[str, CalibratedFloor]:
-    """The floors of a ``skidnav floors calibrate --out`` document; ValueError naming the first
-    problem (not JSON, a missing or non-finite field, r or c not > 0, a material twice)."""
+    """The floors of a ``skidnav world floors calibrate --out`` document; ValueError naming the
+    first problem (not JSON, a missing or non-finite field, r or c not > 0, a material twice)."""
     try:
         document = json.loads(text)
         fits = document["fits"]

@@ -1,7 +1,8 @@
 """Physical parameters of the skid-steer robot and its arena.
 
-Defaults are the thesis robot (SPEC §1): a small four-wheel skid-steer platform in a
-0.62 m × 0.505 m arena, driven by four discrete wheel-speed actions of ±1.7 rad/s.
+Defaults are the thesis robot (Alhawary (2020), App. A.1.1; docs/simulator.md): a small
+four-wheel skid-steer platform in a 0.62 m × 0.505 m arena, driven by four discrete wheel-speed
+actions of ±1.7 rad/s.
 """
 
 from __future__ import annotations

@@ -1,15 +1,15 @@
 """Slip fields: how much each coarse floor region slows the wheels, and where its ICR lies.
 
-The thesis (SPEC §2) slows each wheel by U(0, η) rad/s towards zero, where η depends on the
-robot's coarse region (a 7 × 7 partition of the arena). A :class:`SlipField` holds, per region,
-η [rad/s] and x_ICR [m], and may drift over time (non-stationary slip):
+The thesis (Alhawary (2020), App. A.1.1) slows each wheel by U(0, η) rad/s towards zero, where η
+depends on the robot's coarse region (a 7 × 7 partition of the arena). A :class:`SlipField` holds,
+per region, η [rad/s] and x_ICR [m], and may drift over time (non-stationary slip):
 
     η(region, t) = η₀(region) · max(0, 1 + A · sin(2π t / P + φ(region)))
 
-with relative amplitude A, period P [s] and a seeded phase φ per region. x_ICR does not drift,
-so once within [−a, b] (SPEC §1, :meth:`SlipField.check_x_icr`) it stays there at every time.
-The true variance of a wheel's speed in a region is η²/12 (variance of U(0, η)), and the true
-expected body velocities of an action there follow from the expected wheel speeds
+with relative amplitude A, period P [s] and a seeded phase φ per region. x_ICR does not drift, so
+once within [−a, b] (Kozłowski & Pazderski (2004); :meth:`SlipField.check_x_icr`) it stays there at
+every time. The true variance of a wheel's speed in a region is η²/12 (variance of U(0, η)), and the
+true expected body velocities of an action there follow from the expected wheel speeds
 (:meth:`SlipField.expected_velocities`).
 
 A field may also scale the robot's wheel radius and half track per region (the effective ICR

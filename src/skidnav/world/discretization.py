@@ -1,10 +1,10 @@
 """Discretization of continuous poses into tabular states and coarse slip regions.
 
-Thesis convention (SPEC §3): with arena width W [m] and ``n_x`` levels, the cell index is
-``i = floor(x / W · (n_x − 1))``, so the default 25 levels give cells of W/24 and the boundary
-x = W falls in the last cell (a border wall in every shipped map). y likewise with H and ``n_y``.
-The heading bin is ``floor((atan2(sin ψ, cos ψ) + π) / 2π · n_headings) mod n_headings``; for 20
-bins it equals the thesis's k + 10 with k = floor(atan2(sin ψ, cos ψ)/2π · 20) ∈ −10..9.
+Thesis convention (Alhawary (2020), App. A.1.1): with arena width W [m] and ``n_x`` levels, the cell
+index is ``i = floor(x / W · (n_x − 1))``, so the default 25 levels give cells of W/24 and the
+boundary x = W falls in the last cell (a border wall in every shipped map). y likewise with H and
+``n_y``. The heading bin is ``floor((atan2(sin ψ, cos ψ) + π) / 2π · n_headings) mod n_headings``;
+for 20 bins it equals the thesis's k + 10 with k = floor(atan2(sin ψ, cos ψ)/2π · 20) ∈ −10..9.
 
 Flat state index: ``state = (i · n_y + j) · n_headings + heading_bin``.
 Flat region index: ``region = region_i · regions_y + region_j`` with region_i computed like i

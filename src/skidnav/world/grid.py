@@ -1,11 +1,12 @@
 """Occupancy-grid maps of the arena: walls, a start cell and a goal cell, and their generators.
 
 A map's cells match the state grid (25 × 25 by default): ``occupancy[i, j]`` is True where cell
-(i, j) is a wall, i along x and j along y. Map kinds (SPEC §3): ``free`` (a wall border only),
-``obstacles`` (the border plus 3–6 random rectangles, redrawn until start and goal are connected),
-``maze`` (corridors three cells wide carved by a randomized depth-first search, so that the robot,
-which moves ≈1.5 cells per action and slides ≈1.2 cells sideways per turn, can pass).
-Connectivity is 4-neighbour over free cells. Every draw comes from the Generator passed in.
+(i, j) is a wall, i along x and j along y. Map kinds (docs/simulator.md, "Maps"; ``free`` is the
+thesis's default grid, Alhawary (2020), App. A.1.2): ``free`` (a wall border only), ``obstacles``
+(the border plus 3–6 random rectangles, redrawn until start and goal are connected), ``maze``
+(corridors three cells wide carved by a randomized depth-first search, so that the robot, which
+moves ≈1.5 cells per action and slides ≈1.2 cells sideways per turn, can pass). Connectivity is
+4-neighbour over free cells. Every draw comes from the Generator passed in.
 
 Start and goal never lie on the far edge, the last column (i = n_x − 1) or the top row
 (j = n_y − 1): with the cell index i = ⌊x/W·(n_x − 1)⌋ of :mod:`skidnav.world.discretization`
@@ -281,12 +282,12 @@ def refine_map(grid_map: GridMap, shape: tuple[int, int]) -> GridMap:
     f of the map's (:func:`refinement_factor`).
 
     Fine cell (i′, j′) covers part of coarse cell (i′ // f_x, j′ // f_y) and inherits its wall, so
-    the walls occupy the same metres (the zero-width last level maps to the last level). Start
-    and goal become the fine cells holding the centres of the coarse ones (for an even f the
-    centre lies on that cell's lower edge). The goal of the refined map is one fine cell, 1/(f_x ·
-    f_y) of the coarse goal's area, as the MDP defines a goal
-    (:mod:`skidnav.kernels.navigation`): users that keep the world's task take the coarse goal
-    cell instead (:func:`skidnav.experiments.finegrid.goal_states`).
+    the walls occupy the same metres (the zero-width last level maps to the last level). Start and
+    goal become the fine cells holding the centres of the coarse ones (for an even f the centre lies
+    on that cell's lower edge). The goal of the refined map is one fine cell, 1/(f_x · f_y) of the
+    coarse goal's area, as the MDP defines a goal (:mod:`skidnav.sim.navigation`): users that keep
+    the world's task take the coarse goal cell instead
+    (:func:`skidnav.experiments.reference.finegrid.goal_states`).
 
     >>> walls = border_walls((5, 5))
     >>> fine = refine_map(GridMap(walls, start=(1, 1), goal=(2, 3)), (13, 13))

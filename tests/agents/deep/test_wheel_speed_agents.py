@@ -19,7 +19,7 @@ from skidnav.agents.deep.common import DeepConfig
 from skidnav.agents.deep.ppo import PPOAgent, PPOConfig, load_ppo
 from skidnav.agents.deep.sac import SACAgent, SACConfig, load_sac
 from skidnav.agents.deep.wheel_speeds import WheelSpeedAgent
-from skidnav.agents.wheel_policy import WheelSpeedPolicy
+from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
@@ -209,11 +209,11 @@ def test_a_saved_policy_loads_without_its_world(
     trained: tuple[str, WheelSpeedAgent[Any], Any, Any], tmp_path: Path
 ) -> None:
     """Through the policy-file registry: the real-time loop's way to run a policy."""
-    from skidnav.agents import policy_files
+    from skidnav.agents.policies import loading
 
     name, agent, _, _ = trained
     _, json_path = agent.save(tmp_path / name)
-    policy = policy_files.load_policy(json_path)
+    policy = loading.load_policy(json_path)
     assert (policy.lidar_rays, policy.lidar_range) == (8, 0.3)
     space = tiny_env().observation_space
     space.seed(1)
@@ -243,5 +243,5 @@ def test_a_saved_policy_loads_without_its_world(
     for key, value, match in edits:
         json_path.write_text(json.dumps({**meta, key: value}))
         with pytest.raises(CorruptFileError, match=match) as error:
-            policy_files.load_policy(json_path)
+            loading.load_policy(json_path)
         assert "\n" not in str(error.value)

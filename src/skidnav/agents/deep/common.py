@@ -28,7 +28,7 @@ import json
 import math
 import random
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Generic, NamedTuple, Self, TypeVar
@@ -38,7 +38,7 @@ import numpy as np
 from gymnasium.wrappers import RescaleObservation
 from gymnasium.wrappers.utils import rescale_box
 
-from skidnav.agents.core import save_paths
+from skidnav.agents.tabular.agent import save_paths
 from skidnav.agents.training import (
     NOT_REACHED,
     Rollout,
@@ -120,7 +120,7 @@ class DeepConfig:
                 raise ValueError(f"{self.agent_name}: {name} = {shown(value)} is out of range")
 
     @classmethod
-    def from_mapping(cls, values: dict[str, Any]) -> Self:
+    def from_mapping(cls, values: Mapping[str, Any]) -> Self:
         """A config from a mapping (e.g. a TOML table); unknown keys are refused in one line."""
         known = {f.name for f in fields(cls)}  # type: ignore[arg-type]
         unknown = sorted(set(values) - known)

@@ -1,14 +1,14 @@
 """Image files read within limits: the size a header announces is checked before OpenCV decodes.
 
 A decoder allocates the image its header announces, so a file of a few bytes claiming
-60000 × 60000 px would ask for 10 GB. :func:`read_image` reads the file (a regular file of at
-most :data:`MAX_IMAGE_BYTES`, :func:`skidnav.userfile.read_limited`), reads its size with
-:func:`image_size` — PNG: the ``IHDR`` chunk; JPEG: the first frame header (``SOF0``–``SOF15``
-but for the ``DHT``, ``JPG`` and ``DAC`` markers); BMP: the DIB header; TIFF: the first image
-directory's ``ImageWidth`` and ``ImageLength`` — refuses more than :data:`MAX_IMAGE_PIXELS`,
-and only then decodes the bytes (``cv2.imdecode``, as ``cv2.imread`` would; what the decoders
-print themselves is silenced). Formats are
-recognised by their first bytes, not by the file's name; any other format is refused.
+60000 × 60000 px would ask for 10 GB. :func:`read_image` reads the file (a regular file of at most
+:data:`MAX_IMAGE_BYTES`, :func:`skidnav.userfile.read_limited`), reads its size with
+:func:`image_size` — PNG: the ``IHDR`` chunk; JPEG: the first frame header (``SOF0``–``SOF15`` but
+for the ``DHT``, ``JPG`` and ``DAC`` markers); BMP: the DIB header; TIFF: the first image
+directory's ``ImageWidth`` and ``ImageLength`` — refuses more than :data:`MAX_IMAGE_PIXELS`, and
+only then decodes the bytes (``cv2.imdecode``, as ``cv2.imread`` would; what the decoders print
+themselves is silenced). Formats are recognised by their first bytes, not by the file's name; any
+other format is refused.
 """
 
 from __future__ import annotations

@@ -53,7 +53,7 @@ class CameraPoseSource:
 
     A pose is *current* while the newest processed frame showed the robot marker and it was
     measured less than ``max_age`` seconds ago; otherwise :meth:`latest_pose` returns None, which
-    the real-time loop treats as a lost pose (SPEC §6: stop the wheels).
+    the real-time loop treats as a lost pose (docs/realtime.md, "Safety": stop the wheels).
 
     Args:
         frames: the frames to read (a :class:`FrameSource` is closed by :meth:`close`).

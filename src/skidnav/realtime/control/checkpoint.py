@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from skidnav.agents.core import TabularAgent
+from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.atomicfile import remove_stale_temporaries, write_atomic
 from skidnav.errors import CorruptFileError, first_line, shown
 from skidnav.realtime.control.records import EpisodeResult

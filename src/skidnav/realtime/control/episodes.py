@@ -1,4 +1,4 @@
-"""Episodes of a real-time run, whoever chooses the wheel speeds (SPEC §6, docs/realtime.md).
+"""Episodes of a real-time run, whoever chooses the wheel speeds (docs/realtime.md).
 
 :class:`EpisodeLoop` runs the episodes, the homing between them (realtime/control/homing.py) or
 the operator's reset, the checkpoints and the recovery after a safety trip; what happens inside

@@ -1,5 +1,5 @@
-"""The real-time loop of a tabular agent: it acts on a robot and learns online (SPEC §6,
-docs/realtime.md).
+"""The real-time loop of a tabular agent: it acts on a robot and learns online
+(docs/realtime.md).
 
 One action = ``substeps`` control periods of ``period`` seconds of robot time (``period /
 time_scale`` wall seconds) of the discrete action's wheel speeds
@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skidnav.agents.core import TabularAgent
+from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.envs.step_info import step_info
 from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.control.episodes import EXIT_DONE, EXIT_INTERRUPTED, EXIT_SAFETY, EpisodeLoop

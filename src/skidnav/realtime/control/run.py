@@ -1,20 +1,21 @@
-"""Assembling a real-time run from the command line: config, map, agent or continuous policy,
-driver, loop, signals.
+"""Assembling a real-time run from its settings (:class:`RobotRunSettings`, what ``skidnav robot
+run`` asks for): config, map, agent or continuous policy, driver, loop, signals.
 
-Files written under ``--out`` (docs/realtime.md): ``run.jsonl`` (every command, pose, transition,
-safety event), ``checkpoints/`` (per episode), ``summary.json``, and for the ``sim`` driver the
-server's own command log ``sim-server.jsonl``. :func:`new_agent` and :func:`drive` are shared
-with the hardware-in-the-loop study (realtime/study.py), whose runs are real-time runs too.
+Files written in the output directory (docs/realtime.md): ``run.jsonl`` (every command, pose,
+transition, safety event), ``checkpoints/`` (per episode), ``summary.json``, and for the ``sim``
+driver the server's own command log ``sim-server.jsonl``. :func:`new_agent` and :func:`drive` are
+shared with the hardware-in-the-loop study (studies/hardware/study.py), whose runs are real-time
+runs too.
 """
 
 from __future__ import annotations
 
-import argparse
 import inspect
 import json
 import signal
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
 from typing import Any
@@ -25,14 +26,14 @@ from skidnav.atomicfile import write_user_file
 from skidnav.envs.step_info import step_info
 from skidnav.errors import UserError, first_line, shown
 from skidnav.outputs import make_output_dir
-from skidnav.realtime.arena import build_map, seed_streams
+from skidnav.realtime.arena import arena_map, seed_streams
 from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
 from skidnav.realtime.control.checkpoint import Checkpoints
 from skidnav.realtime.control.episodes import EpisodeLoop
 from skidnav.realtime.control.loop import RealtimeLoop
 from skidnav.realtime.control.policy_loop import PolicyLoop
 from skidnav.realtime.control.transition import compile_scoring
-from skidnav.realtime.link.drivers import make_driver
+from skidnav.realtime.drivers import DRIVERS, make_driver
 from skidnav.realtime.policies import check_policy, select_policy
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
@@ -40,10 +41,54 @@ from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 
 
+@dataclass(frozen=True)
+class RobotRunSettings:
+    """What a real-time run is asked for (``skidnav robot run``, docs/realtime.md), validated on
+    construction: exactly one pilot (``agent``, ``policy`` or ``policy_file``).
+
+    Attributes:
+        out: the output directory (run log, checkpoints, summary).
+        driver: the robot link, one of :data:`~skidnav.realtime.drivers.DRIVERS`.
+        agent: a tabular agent that learns online, by registry name; None with a policy.
+        policy: a named continuous policy (frozen: it does not learn), or None.
+        policy_file: a saved continuous policy (its JSON file), or None.
+        config: the real-time TOML config (None: the defaults).
+        preset: a ``[presets.NAME]`` table of the config to apply, or None.
+        episodes: episodes to run, overriding ``[run] episodes`` (None: the config's).
+        time_scale: robot seconds per wall second, overriding ``[run] time_scale`` (None: the
+            config's).
+        reset: ``"auto"`` or ``"manual"``, overriding ``[run] reset`` (None: the config's).
+        resume: continue from the newest checkpoint in ``out``.
+    """
+
+    out: Path
+    driver: str = "sim"
+    agent: str | None = None
+    policy: str | None = None
+    policy_file: Path | None = None
+    config: Path | None = None
+    preset: str | None = None
+    episodes: int | None = None
+    time_scale: float | None = None
+    reset: str | None = None
+    resume: bool = False
+
+    def __post_init__(self) -> None:
+        pilots = [p for p in (self.agent, self.policy, self.policy_file) if p is not None]
+        if len(pilots) != 1:
+            raise ValueError(
+                f"expected exactly one of agent, policy and policy_file, got {len(pilots)}"
+            )
+        if self.driver not in DRIVERS:
+            raise ValueError(
+                f"expected driver one of {', '.join(DRIVERS)}, got {shown(self.driver)}"
+            )
+
+
 def agent_context(name: str, robot: RobotParams, grid: Discretization) -> dict[str, Any]:
     """Extra constructor arguments of agent ``name``: the model-based agents take the robot
     geometry and discretization (``robot``, ``discretization``) for their kinematic model."""
-    from skidnav.agents.registry import agent_class
+    from skidnav.agents.tabular.registry import agent_class
 
     parameters = inspect.signature(agent_class(name).__init__).parameters
     context: dict[str, Any] = {}
@@ -55,28 +100,29 @@ def agent_context(name: str, robot: RobotParams, grid: Discretization) -> dict[s
 
 
 def _make_or_resume_agent(
-    args: argparse.Namespace, config: RealtimeConfig, context: dict[str, Any], grid: Discretization
+    name: str,
+    settings: RobotRunSettings,
+    config: RealtimeConfig,
+    context: dict[str, Any],
+    grid: Discretization,
 ) -> tuple[Any, int, dict[str, Any] | None]:
-    """(agent, first episode, loop state to restore or None)."""
-    from skidnav.agents.registry import load_agent
+    """(agent ``name``, first episode, loop state to restore or None)."""
+    from skidnav.agents.tabular.registry import load_agent
 
-    if args.resume:
-        latest = Checkpoints(args.out / "checkpoints").latest()
+    if settings.resume:
+        latest = Checkpoints(settings.out / "checkpoints").latest()
         if latest is None:
-            raise UserError(f"{args.out}: no checkpoint to resume from")
+            raise UserError(f"{settings.out}: no checkpoint to resume from")
         episode, directory, state = latest
         if "policy" in state:
             raise UserError(
-                f"{directory}: checkpoint holds policy {shown(state['policy'])}, "
-                f"not agent {args.agent!r}"
+                f"{directory}: checkpoint holds policy {shown(state['policy'])}, not agent {name!r}"
             )
         agent = load_agent(directory / "agent", **context)
-        if agent.name != args.agent:
-            raise UserError(
-                f"{directory}: checkpoint holds agent {agent.name!r}, not {args.agent!r}"
-            )
+        if agent.name != name:
+            raise UserError(f"{directory}: checkpoint holds agent {agent.name!r}, not {name!r}")
         return agent, episode + 1, state
-    agent = new_agent(args.agent, config, context, grid, seed_streams(config.run.seed)["agent"])
+    agent = new_agent(name, config, context, grid, seed_streams(config.run.seed)["agent"])
     return agent, 0, None
 
 
@@ -91,7 +137,7 @@ def new_agent(
     generator ``rng``, over ``grid``'s states and the robot's actions; UserError (one line) for
     hyperparameters this robot cannot serve, such as ``kinematic_model = "true"`` (a real or
     served robot has no true kinematic model)."""
-    from skidnav.agents.registry import make_agent
+    from skidnav.agents.tabular.registry import make_agent
 
     table = config.agents.get(name)
     try:
@@ -106,7 +152,7 @@ def warm_up_agent(
     """Compile (numba) every kernel of agent ``name`` before the robot moves: a throwaway agent
     acts, learns from one dummy step and ends an episode. Compilation holds the GIL, which would
     starve the driver's reader thread and trip the pose watchdog mid-episode."""
-    from skidnav.agents.registry import make_agent
+    from skidnav.agents.tabular.registry import make_agent
 
     agent = make_agent(
         name, n_states, N_ACTIONS, config.agents.get(name), np.random.default_rng(0), **context
@@ -136,34 +182,34 @@ def interrupt_handlers(loop: EpisodeLoop) -> Iterator[None]:
             signal.signal(signum, old)
 
 
-def run_from_args(
-    args: argparse.Namespace,
+def run_robot(
+    settings: RobotRunSettings,
     *,
     progress: Callable[[str], None],
     wait_for_operator: Callable[[str], None],
 ) -> tuple[int, str]:
-    """Run ``skidnav robot run`` with ``--agent NAME``, or with a continuous policy
-    (``--policy NAME`` or ``--policy-file PATH``); returns (exit code, one-line summary)."""
-    config = load_config(args.config, args.preset)
+    """Run an agent that learns online, or a frozen continuous policy (by name or file), in real
+    time as ``settings`` ask; returns (exit code, one-line summary)."""
+    config = load_config(settings.config, settings.preset)
     config = with_overrides(
-        config, episodes=args.episodes, time_scale=args.time_scale, reset=args.reset
+        config, episodes=settings.episodes, time_scale=settings.time_scale, reset=settings.reset
     )
     robot, grid = RobotParams(), Discretization()
-    grid_map = build_map(config.run.map, config.run.seed, grid)
+    grid_map = arena_map(config.run.map, config.run.seed, grid)
     policy_name: str | None = None
-    if getattr(args, "agent", None) is None:
-        pilot, policy_name = select_policy(
-            getattr(args, "policy", None), getattr(args, "policy_file", None), config, robot
-        )
+    if settings.agent is None:
+        pilot, policy_name = select_policy(settings.policy, settings.policy_file, config, robot)
         check_policy(pilot, policy_name, grid_map, grid)
-        first_episode, state = _resume_policy(args, policy_name)
+        first_episode, state = _resume_policy(settings, policy_name)
     else:
-        context = agent_context(args.agent, robot, grid)
-        pilot, first_episode, state = _make_or_resume_agent(args, config, context, grid)
-        warm_up_agent(args.agent, config, context, grid.n_states)
-    out = make_output_dir(args.out)  # a refused --resume has written nothing
+        context = agent_context(settings.agent, robot, grid)
+        pilot, first_episode, state = _make_or_resume_agent(
+            settings.agent, settings, config, context, grid
+        )
+        warm_up_agent(settings.agent, config, context, grid.n_states)
+    out = make_output_dir(settings.out)  # a refused resume has written nothing
     code, loop = drive(
-        args.driver,
+        settings.driver,
         pilot,
         grid_map,
         config,
@@ -178,14 +224,14 @@ def run_from_args(
     return code, _summarize(loop, out, code)
 
 
-def _resume_policy(args: argparse.Namespace, label: str) -> tuple[int, dict[str, Any] | None]:
-    """(first episode, loop state to restore or None) of a policy's run; with ``--resume``
-    the newest checkpoint, which must be one of the same policy (UserError otherwise)."""
-    if not args.resume:
+def _resume_policy(settings: RobotRunSettings, label: str) -> tuple[int, dict[str, Any] | None]:
+    """(first episode, loop state to restore or None) of a policy's run; when resuming, the
+    newest checkpoint, which must be one of the same policy (UserError otherwise)."""
+    if not settings.resume:
         return 0, None
-    latest = Checkpoints(args.out / "checkpoints").latest()
+    latest = Checkpoints(settings.out / "checkpoints").latest()
     if latest is None:
-        raise UserError(f"{args.out}: no checkpoint to resume from")
+        raise UserError(f"{settings.out}: no checkpoint to resume from")
     episode, directory, state = latest
     if state.get("policy") != label:
         holder = "an agent" if "policy" not in state else f"policy {shown(state['policy'])}"
@@ -207,14 +253,13 @@ def drive(
     resume: tuple[int, dict[str, Any] | None] = (0, None),
     policy_name: str | None = None,
 ) -> tuple[int, EpisodeLoop]:
-    """Connect driver ``driver_name`` (a sim server logs to ``out/sim-server.jsonl``), run the
-    loop of ``agent`` with its files in ``out`` from episode ``resume[0]`` (loop state
-    ``resume[1]`` restored first, if any), SIGINT and SIGTERM tripping its safety monitor, and
-    shut the driver down, the loop's scoring kernels compiled before connecting; returns (exit
-    code of :meth:`EpisodeLoop.run`, the loop). With a ``policy_name``, ``agent`` is a frozen
-    continuous policy
-    (:class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`) run by :class:`PolicyLoop`;
-    else a tabular agent run by :class:`RealtimeLoop`.
+    """Connect driver ``driver_name`` (a sim server logs to ``out/sim-server.jsonl``), run the loop
+    of ``agent`` with its files in ``out`` from episode ``resume[0]`` (loop state ``resume[1]``
+    restored first, if any), SIGINT and SIGTERM tripping its safety monitor, and shut the driver
+    down, the loop's scoring kernels compiled before connecting; returns (exit code of
+    :meth:`EpisodeLoop.run`, the loop). With a ``policy_name``, ``agent`` is a frozen continuous
+    policy (:class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`) run by
+    :class:`PolicyLoop`; else a tabular agent run by :class:`RealtimeLoop`.
 
     Raises:
         UserError: the robot cannot be reached.

@@ -1,14 +1,14 @@
 """The safety monitor: a watchdog thread that stops the wheels when anything goes wrong.
 
-Trip conditions (SPEC §6): the pose goes stale (no new pose for ``pose_timeout`` wall seconds
-while armed), the link drops or a malformed message arrives (the driver's fault callback), the
-robot leaves the arena (by more than ``arena_margin``), or SIGINT/SIGTERM (the loop's signal
-handler calls :meth:`SafetyMonitor.trip`). On a trip the watchdog, within one check interval (at
-most a quarter control period), lets any command in flight finish, then calls the driver's
+Trip conditions (docs/realtime.md, "Safety"): the pose goes stale (no new pose for ``pose_timeout``
+wall seconds while armed), the link drops or a malformed message arrives (the driver's fault
+callback), the robot leaves the arena (by more than ``arena_margin``), or SIGINT/SIGTERM (the loop's
+signal handler calls :meth:`SafetyMonitor.trip`). On a trip the watchdog, within one check interval
+(at most a quarter control period), lets any command in flight finish, then calls the driver's
 ``stop``, which re-sends it until the robot confirms or the link is declared dead (at most
-:data:`STOP_WAIT`); from the trip on no further command passes :meth:`SafetyMonitor.command`
-until :meth:`SafetyMonitor.reset`. :meth:`trip` takes no lock, so it is safe from a signal handler
-and from the driver's reader thread.
+:data:`STOP_WAIT`); from the trip on no further command passes :meth:`SafetyMonitor.command` until
+:meth:`SafetyMonitor.reset`. :meth:`trip` takes no lock, so it is safe from a signal handler and
+from the driver's reader thread.
 """
 
 from __future__ import annotations

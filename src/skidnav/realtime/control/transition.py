@@ -1,6 +1,6 @@
 """Turning measured poses into what the agents learn from: kinematic log rows and rewards.
 
-Kinematic log (same columns as the env, kernels/navigation.py ``LOG_COLUMNS``): between two
+Kinematic log (same columns as the env, sim/navigation.py ``LOG_COLUMNS``): between two
 consecutive measured poses p₀ = (x₀, y₀, ψ₀) at t₀ and p₁ at t₁ (robot time, Δt = t₁ − t₀ > 0),
 the body-frame finite differences consistent with the explicit-Euler model are
 
@@ -9,7 +9,7 @@ the body-frame finite differences consistent with the explicit-Euler model are
 
 keyed by the coarse region of p₀, with the commanded wheel speeds of the action.
 
-Reward: the env's rule, :func:`skidnav.kernels.navigation.action_reward` (SPEC §3: +10 and
+Reward: the env's rule, :func:`skidnav.sim.navigation.action_reward` (docs/simulator.md: +10 and
 termination when the action ends in the goal cell; −10 after a collision; otherwise −1 − 10·var),
 var being the observed (thesis) variance of the wheel speeds measured during forward actions in
 the region where the action ends, corrected for pose noise (:class:`WheelSpeedStats`). A real
@@ -26,10 +26,10 @@ import math
 
 import numpy as np
 
-from skidnav.kernels.navigation import LOG_COLUMNS, RewardScheme, action_reward
 from skidnav.realtime.link.interface import Pose
 from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.params import RobotParams
+from skidnav.sim.navigation import LOG_COLUMNS, RewardScheme, action_reward
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 

@@ -1,0 +1,189 @@
+"""The page pieces of every report (``skidnav report``): the self-contained HTML shell and its
+style, tables, embedded images, the closing config and provenance sections, the atomic write.
+
+An experiment report (:mod:`skidnav.experiments.report.html`) and a study's report
+(:func:`study_report`: the study's section, :meth:`skidnav.studies.kind.Study.report`, then the
+resolved grid and the provenance) are built from these, so every report looks and is written
+alike: one HTML file, figures embedded as base64, no scripts, no external links.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from skidnav.atomicfile import remove_stale_temporaries, write_atomic
+from skidnav.errors import UserError
+from skidnav.experiments.provenance import CODE_KEYS, describe_code
+from skidnav.experiments.store import ResultStore, RunLayout
+
+STYLE = """
+body{font-family:system-ui,sans-serif;max-width:1250px;margin:2em auto;padding:0 1em;color:#222}
+table{border-collapse:collapse;font-size:13px;margin:0.6em 0}
+td,th{border:1px solid #ccc;padding:3px 7px;text-align:right}
+th{background:#f0f0f0} td:first-child,th:first-child{text-align:left}
+img{max-width:100%} pre{background:#f6f6f6;padding:0.8em;overflow-x:auto;font-size:12px}
+.yes{color:#17631b;font-weight:600} .no{color:#9b1c1c;font-weight:600}
+.note{color:#555;font-size:13px}
+"""
+
+
+def interval_text(mean: float, low: float, high: float, digits: int = 2) -> str:
+    """``"12.30 [10.10, 14.20]"``; the estimate alone when the interval is undefined (one seed);
+    ``"–"`` when the estimate is.
+
+    >>> interval_text(12.3, 10.1, 14.2), interval_text(12.0, float("nan"), float("nan"))
+    ('12.30 [10.10, 14.20]', '12.00')
+    """
+    if mean != mean:  # NaN
+        return "–"
+    if low != low or high != high:
+        return f"{mean:.{digits}f}"
+    return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
+
+
+def image(png: bytes, alt: str) -> str:
+    """An <img> tag embedding ``png`` as base64."""
+    encoded = base64.b64encode(png).decode("ascii")
+    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{encoded}">'
+
+
+def gif_image(gif: bytes, alt: str) -> str:
+    """An <img> tag embedding an animated GIF as base64."""
+    encoded = base64.b64encode(gif).decode("ascii")
+    return f'<img alt="{html.escape(alt)}" src="data:image/gif;base64,{encoded}">'
+
+
+def table(frame: pd.DataFrame) -> str:
+    """An HTML table of preformatted string cells."""
+    return frame.to_html(index=False, escape=True, border=0)
+
+
+def sessions_table(metadata: dict[str, object]) -> str:
+    """The sessions that wrote the results (start, code, runs done), and a warning when the runs
+    come from more than one code version."""
+    sessions = metadata.get("sessions")
+    if not isinstance(sessions, list) or not sessions:
+        return ""
+    rows = [
+        {
+            "session started (UTC)": str(entry.get("started", "?")),
+            "code": describe_code({key: entry.get(key) for key in CODE_KEYS}),
+            "runs done": str(entry.get("runs_done", "?")),
+            "completed": "yes" if entry.get("completed") else "no (killed or interrupted)",
+        }
+        for entry in sessions
+    ]
+    codes = {row["code"] for row in rows if row["runs done"] not in ("0", "?")}
+    warning = (
+        f"<p class='no'>These results were produced by {len(codes)} different code versions.</p>"
+        if len(codes) > 1
+        else ""
+    )
+    return warning + table(pd.DataFrame.from_records(rows))
+
+
+def page(title: str, body: Iterable[str]) -> str:
+    """One self-contained HTML page: ``title`` and the ``body`` fragments, in the report's
+    style."""
+    return (
+        "<!DOCTYPE html><html><head><meta charset='utf-8'>"
+        f"<title>{html.escape(title)}</title><style>{STYLE}</style></head>"
+        f"<body>{''.join(body)}</body></html>"
+    )
+
+
+def config_and_provenance(config: dict[str, Any], metadata: dict[str, Any]) -> list[str]:
+    """The closing sections of a report: the resolved ``config`` (as saved in ``config.json``)
+    and the provenance of ``metadata.json`` (sessions, package versions)."""
+    return [
+        "<h2>Config (resolved)</h2>",
+        f"<pre>{html.escape(json.dumps(config, indent=2))}</pre>",
+        "<h2>Provenance</h2>",
+        sessions_table(metadata),
+        f"<pre>{html.escape(json.dumps(metadata.get('versions', {}), indent=2))}</pre>",
+    ]
+
+
+def study_report(run_dir: Path | str, layout: RunLayout, fragment: str) -> str:
+    """The report page of a study's results directory (of the kind ``layout``): a title, the
+    study's section ``fragment`` (:meth:`skidnav.studies.kind.Study.report`), then the resolved
+    grid and the provenance, as in an experiment report."""
+    store = ResultStore(run_dir, layout)
+    grid = store.config()
+    name = str(getattr(grid, "name", Path(run_dir).name))
+    body = [
+        f"<h1>skidnav {html.escape(layout.kind)}: {html.escape(name)}</h1>",
+        fragment,
+        *config_and_provenance(layout.to_dict(grid), store.metadata()),
+    ]
+    return page(f"skidnav: {name}", body)
+
+
+def markdown_html(text: str) -> str:
+    """The HTML of the markdown a study writes (``#`` headings, pipe tables, paragraphs), its
+    text escaped; a heading one level lower than written (a report's sections are ``<h2>``).
+
+    >>> text = markdown_html("Means <n>.\\n## Rates\\n| agent | rate |\\n|---|---:|\\n| q | 0.5 |")
+    >>> text.split("<table>")[0]
+    "<p class='note'>Means &lt;n&gt;.</p><h3>Rates</h3>"
+    >>> "<th>rate</th>" in text and "<td>0.5</td>" in text and "---" not in text
+    True
+    """
+    parts: list[str] = []
+    rows: list[list[str]] = []
+    for line in [*text.splitlines(), ""]:
+        stripped = line.strip()
+        if stripped.startswith("|"):
+            cells = [cell.strip() for cell in stripped.strip("|").split("|")]
+            if not all(set(cell) <= set("-: ") for cell in cells):  # not the separator row
+                rows.append(cells)
+            continue
+        if rows:
+            parts.append(_html_table(rows))
+            rows = []
+        if stripped.startswith("#"):
+            level = min(len(stripped) - len(stripped.lstrip("#")) + 1, 6)
+            heading = html.escape(stripped.lstrip("#").strip())
+            parts.append(f"<h{level}>{heading}</h{level}>")
+        elif stripped:
+            parts.append(f"<p class='note'>{html.escape(stripped)}</p>")
+    return "".join(parts)
+
+
+def _html_table(rows: list[list[str]]) -> str:
+    """An HTML table of escaped text cells, the first row the header."""
+    header = "".join(f"<th>{html.escape(cell)}</th>" for cell in rows[0])
+    body = "".join(
+        "<tr>" + "".join(f"<td>{html.escape(cell)}</td>" for cell in row) + "</tr>"
+        for row in rows[1:]
+    )
+    return f"<table><thead><tr>{header}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def report_path(run_dir: Path | str, output: Path | str | None = None) -> Path:
+    """Where the report of ``run_dir`` goes: ``output``, else ``RUN_DIR/report.html``."""
+    return Path(output) if output is not None else Path(run_dir) / "report.html"
+
+
+def write_page(path: Path | str, text: str) -> Path:
+    """Write the page ``text`` to ``path`` atomically, so a kill leaves the previous report or
+    none, never part of one; returns its path. Temporaries left beside it by report writers
+    that died are removed first.
+
+    Raises:
+        UserError: the report cannot be written there.
+    """
+    path = Path(path)
+    remove_stale_temporaries(path.parent, path.name)
+    try:
+        write_atomic(path, text.encode("utf-8"))
+    except OSError as error:
+        raise UserError(f"{path}: cannot write the report ({error.strerror or error})") from None
+    return path

@@ -1,0 +1,155 @@
+"""Robot drivers by name, ``sim``, ``tcp``, ``serial`` and ``ros2`` (docs/realtime.md), configured
+from a run's :class:`~skidnav.realtime.config.RealtimeConfig`; the links they speak over are in
+:mod:`skidnav.realtime.link`.
+
+``sim`` starts ``skidnav robot sim-server`` as a child process on a free loopback port (with the
+run's map, seed, time scale and ``[sim]`` settings, and a lease as long as the run's command
+``ttl``; without the current directory on its ``sys.path``, :mod:`skidnav.childprocess`) and
+talks to it over TCP; reconnecting after a fault restarts the server if it died. The child's
+standard input is a pipe from this process and the server exits at its end of stream
+(``--exit-with-stdin``): when this process ends in any way, SIGKILL included, the kernel closes
+the pipe and the server follows. ``ros2`` is built by ``skidnav.realtime.link.ros2`` when that
+module is installed.
+
+The line drivers authenticate the link (docs/protocol.md, "Authentication") with the secret in
+the file ``secret_file`` of their table, else in the environment variable
+``SKIDNAV_LINK_SECRET`` (which a ``sim`` server inherits); without either, they do not.
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+import subprocess
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from skidnav.childprocess import child_environment, python_module_command
+from skidnav.errors import UserError
+from skidnav.realtime.config import MAX_LEASE_LIMIT, RealtimeConfig
+from skidnav.realtime.link.auth import load_secret
+from skidnav.realtime.link.interface import RobotDriver
+from skidnav.realtime.link.line_client import LineClient, SerialLink, TcpLink
+
+log = logging.getLogger(__name__)
+
+DRIVERS = ("sim", "tcp", "serial", "ros2")
+
+
+class SimServerProcess:
+    """A ``skidnav robot sim-server`` child process on 127.0.0.1 with a free port."""
+
+    def __init__(self, arguments: list[str], log_path: Path | None = None) -> None:
+        self.arguments = arguments
+        self.log_path = log_path
+        self.process: subprocess.Popen[str] | None = None
+        self.port = 0
+
+    def start(self) -> int:
+        """Start the server (if not running) and return its port; ConnectionError on failure."""
+        if self.process is not None and self.process.poll() is None:
+            return self.port
+        command = python_module_command("skidnav.cli", "robot", "sim-server", "--port", "0")
+        command += ["--exit-with-stdin", *self.arguments]
+        if self.log_path is not None:
+            command += ["--log", str(self.log_path)]
+        self.process = subprocess.Popen(
+            command,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            env=child_environment(),
+        )
+        assert self.process.stdout is not None
+        line = self.process.stdout.readline()
+        if not line.startswith("listening on "):
+            self.stop()
+            raise ConnectionError("the sim server did not start")
+        self.port = int(line.rsplit(":", 1)[1])
+        return self.port
+
+    def stop(self) -> None:
+        """Terminate the server and wait for it."""
+        if self.process is None:
+            return
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=5.0)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        for stream in (self.process.stdin, self.process.stdout):
+            if stream is not None:
+                stream.close()
+        self.process = None
+
+
+class SimDriver(LineClient):
+    """The line client connected to a sim server child process it owns."""
+
+    def __init__(self, server: SimServerProcess, **client_options: Any) -> None:
+        super().__init__(TcpLink("127.0.0.1", 0), **client_options)
+        self.server = server
+
+    def connect(self) -> None:
+        """(Re)start the server if needed, then connect and shake hands."""
+        self.close()
+        port = self.server.start()
+        self.link = TcpLink("127.0.0.1", port)
+        super().connect()
+
+    def shutdown(self) -> None:
+        """Close the link and end the server process."""
+        self.close()
+        self.server.stop()
+
+
+def make_driver(name: str, config: RealtimeConfig, server_log: Path | None = None) -> RobotDriver:
+    """The driver ``name`` configured from ``config`` (``[tcp]``, ``[serial]``, ``[ros2]``,
+    ``[sim]`` and ``[run]``); ``server_log`` is the sim server's command log (sim only)."""
+    options = config.drivers.get(name, {})
+    lockstep = config.sim.lockstep if name == "sim" else bool(options.get("lockstep", False))
+    if name == "ros2":
+        return _make_ros2_driver(options)
+    secret_file = options.get("secret_file")
+    client: dict[str, Any] = {
+        "stop_timeout": max(0.05, 2 * config.run.period_wall),
+        "command_ttl": config.run.pose_timeout,  # a command lives as long as a pose may lag
+        "lockstep": lockstep,
+        "secret": load_secret(None if secret_file is None else str(secret_file)),
+    }
+    if name == "sim":
+        run = config.run
+        arguments = [
+            "--max-lease",
+            str(min(run.pose_timeout, MAX_LEASE_LIMIT)),
+            "--time-scale",
+            str(run.time_scale),
+            "--map",
+            run.map,
+            "--seed",
+            str(run.seed),
+            *config.sim.server_arguments(),
+        ]
+        return SimDriver(SimServerProcess(arguments, server_log), **client)
+    if name == "tcp":
+        host = str(options.get("host", "127.0.0.1"))
+        return LineClient(TcpLink(host, int(options.get("port", 5757))), **client)
+    if name == "serial":
+        url = str(options.get("url", "/dev/ttyUSB0"))
+        return LineClient(SerialLink(url, int(options.get("baudrate", 115200))), **client)
+    raise UserError(f"unknown driver {name!r}; expected one of {', '.join(DRIVERS)}")
+
+
+def _make_ros2_driver(options: Mapping[str, Any]) -> RobotDriver:
+    """The rosbridge driver of ``skidnav.realtime.link.ros2`` built from the ``[ros2]`` table."""
+    module = importlib.import_module("skidnav.realtime.link.ros2")  # lazily: it imports roslibpy
+    values = {key: tuple(v) if isinstance(v, list) else v for key, v in options.items()}
+    try:
+        config = module.Ros2Config(**values)
+    except (TypeError, ValueError) as error:
+        raise UserError(f"[ros2]: {error}") from None
+    driver: RobotDriver = module.Ros2Driver(config)
+    return driver

@@ -1,0 +1,2 @@
+"""What continuous wheel speeds buy: episode traces, their metrics and the wheel-speed
+comparison."""

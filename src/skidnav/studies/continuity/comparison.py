@@ -1,0 +1,313 @@
+"""What continuity buys, measured: discrete agents against wheel-speed learners on one world
+(``skidnav study continuity``, or a ``kind = "continuity"`` config run by ``skidnav run``:
+:mod:`skidnav.studies.continuity.study`; docs/continuity.md).
+
+Every learner of :data:`LEARNERS` trains on the same world (map, slip field) from the same seeds,
+and its final deterministic policy is rolled out from the start on the same evaluation seeds
+(common random numbers: every policy meets the same slip noise); each rollout is a
+:class:`~skidnav.studies.continuity.traces.Trace` and gives the metrics of
+:mod:`skidnav.studies.continuity.traces`. The learners:
+
+* ``q-learning`` and ``dyna-full`` (the thesis's agents, discrete actions; the fused trainer),
+* ``cmaes`` (policy search, :mod:`skidnav.agents.policies.search`), ``ppo`` and ``sac``
+  (Stable-Baselines3, :mod:`skidnav.agents.deep`) on ``action="continuous"``,
+* ``goal-tracker``, the reference controller that ignores walls (nothing learned).
+
+**Real episodes to learn** [episodes]: the training episodes consumed until the learner's
+deterministic policy first reached the goal in every evaluation rollout of a check (discrete and
+deep agents: a check after every episode on the evaluation seeds; CMA-ES: its mean policy,
+checked every ``eval_every`` generations on its own evaluation seeds); NaN if never within the
+budget. Both kinds of action use the same control period, so times and energies compare.
+
+A :class:`ComparisonConfig` is the runner's grid (:class:`~skidnav.experiments.runs.Grid`): the
+learners are its agents, the world its one map and preset, and seed index k of every learner is
+one world of the runner, whose stream (:func:`run_seed`) every learner's run k trains from.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
+from typing import Any, NamedTuple
+
+import gymnasium
+import numpy as np
+
+from skidnav.agents.policies.goal_tracker import GoalTracker
+from skidnav.checks import check_integer
+from skidnav.envs.registration import ENV_ID
+from skidnav.errors import first_line, shown
+from skidnav.experiments.config import AgentSpec, MapSpec
+from skidnav.seeding import RUN_ROLES, child, seed_int, streams
+from skidnav.studies.continuity.traces import (
+    Policy,
+    Trace,
+    record_rollout,
+    tabular_policy,
+    wheel_speed_policy,
+)
+
+DISCRETE_PARAMS = {
+    "q-learning": {"alpha": 0.5, "gamma": 0.95, "epsilon": 0.1},
+    "dyna-full": {"alpha": 0.5, "gamma": 0.95, "epsilon": 0.1, "planning_steps": 100},
+}
+"""The discrete learners and their settings (the thesis's, with 100 planning updates)."""
+WHEEL_LEARNERS = ("cmaes", "ppo", "sac")
+REFERENCE = "goal-tracker"
+"""The reference controller: it learns nothing, so its runs are alike (one is enough)."""
+LEARNERS = (*DISCRETE_PARAMS, *WHEEL_LEARNERS, REFERENCE)
+MAX_COUNTS = {
+    "seeds": 1000, "episodes": 10**6, "generations": 10**6, "population": 10**4,
+    "rollouts": 10**4, "max_steps": 10**5,
+}  # fmt: skip
+"""Upper bounds of the comparison's counts."""
+COMPARISON_ROLES = ("run", "evaluation")
+"""Children of the root seed: one per seed index (every learner's run of that index), the
+evaluation seeds (shared by every learner and run)."""
+
+
+@dataclass(frozen=True)
+class ComparisonConfig:
+    """One comparison, and the runner's grid of its runs (learner × seed index).
+
+    Attributes:
+        name: names its results (``skidnav run``'s default ``--out`` is ``runs/NAME``).
+        map_kind, world_seed, slip: the world (the env's arguments). max_steps: actions per
+            episode, training and rollouts. control_period: one action [s], both kinds.
+        learners: names from :data:`LEARNERS`. seeds: runs per learner, ≥ 1. root_seed: of
+            everything. episodes: training episodes of the discrete and deep learners.
+        generations, population: CMA-ES's budget (λ · 2 · generations real episodes).
+        rollouts: evaluation rollouts of each final policy (and of each check).
+    """
+
+    name: str = "continuity"
+    map_kind: str = "obstacles"
+    world_seed: int = 3
+    slip: str = "slippery"
+    max_steps: int = 200
+    control_period: float = 1.0
+    learners: tuple[str, ...] = LEARNERS
+    seeds: int = 3
+    root_seed: int = 0
+    episodes: int = 300
+    generations: int = 100
+    population: int = 32
+    rollouts: int = 5
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.name, str) and self.name):
+            raise ValueError(f"expected a non-empty name, got {shown(self.name)}")
+        if not isinstance(self.learners, tuple):
+            raise ValueError(f"expected a list of learners, got {shown(self.learners)}")
+        unknown = [name for name in self.learners if name not in LEARNERS]
+        if unknown or not self.learners:
+            raise ValueError(f"expected learners from {', '.join(LEARNERS)}, got {unknown}")
+        if len(set(self.learners)) != len(self.learners):
+            raise ValueError(f"expected distinct learners, got {shown(self.learners)}")
+        for name in ("seeds", "episodes", "generations", "population", "rollouts", "max_steps"):
+            check_integer(name, getattr(self, name), 1, MAX_COUNTS[name])
+        check_integer("world_seed", self.world_seed, 0)
+        check_integer("root_seed", self.root_seed, 0)
+        # everything a learner will build, built once now: a bad setting ends the command before
+        # any learner has trained, not after the first ones
+        for continuous in {learner not in DISCRETE_PARAMS for learner in self.learners}:
+            try:
+                gymnasium.make(ENV_ID, **self.env_kwargs(continuous)).close()
+            except (TypeError, ValueError) as error:
+                raise ValueError(f"the env refuses these settings: {first_line(error)}") from None
+        if "cmaes" in self.learners:
+            search_config(self, seed=0)
+
+    def env_kwargs(self, continuous: bool) -> dict[str, Any]:
+        """The env's arguments for a learner of either kind of action."""
+        kind = {"action": "continuous", "observation": "features"} if continuous else {}
+        return {
+            "map_kind": self.map_kind, "world_seed": self.world_seed, "slip": self.slip,
+            "max_episode_steps": self.max_steps, "control_period": self.control_period, **kind,
+        }  # fmt: skip
+
+    @property
+    def agents(self) -> tuple[AgentSpec, ...]:
+        """The learners as the grid's agents (label = name)."""
+        return tuple(AgentSpec(learner, learner) for learner in self.learners)
+
+    @property
+    def maps(self) -> tuple[MapSpec, ...]:
+        """The one map of the grid (the env builds it from ``world_seed``)."""
+        return (MapSpec(self.map_kind, kind=self.map_kind),)
+
+    @property
+    def presets(self) -> tuple[str, ...]:
+        """The one slip preset of the grid."""
+        return (self.slip,)
+
+    @property
+    def n_runs(self) -> int:
+        """Runs of the grid: every learner × seed index (the goal tracker's are alike)."""
+        return len(self.learners) * self.seeds
+
+    def fingerprint(self) -> str:
+        """SHA-256 of the canonical JSON of :func:`comparison_to_dict` (names a results
+        directory)."""
+        text = json.dumps(comparison_to_dict(self), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+def comparison_to_dict(config: ComparisonConfig) -> dict[str, Any]:
+    """The config as a JSON-ready dict (inverse of :func:`comparison_from_dict`)."""
+    data = dataclasses.asdict(config)
+    data["learners"] = list(config.learners)
+    return data
+
+
+def comparison_from_dict(data: dict[str, Any]) -> ComparisonConfig:
+    """The config saved by :func:`comparison_to_dict` (ValueError, TypeError or KeyError if
+    invalid)."""
+    values = {**data, "learners": tuple(data["learners"])}
+    return ComparisonConfig(**values)
+
+
+class LearnerRun(NamedTuple):
+    """One learner's run: its final policy's rollouts and what learning it cost."""
+
+    learner: str
+    seed: int
+    traces: tuple[Trace, ...]
+    episodes_used: int
+    episodes_to_learn: float
+    wall_time: float
+
+
+def search_config(config: ComparisonConfig, seed: int) -> Any:
+    """The CMA-ES search of ``config`` with run seed ``seed`` (a ``SearchConfig``: ValueError
+    for settings it refuses)."""
+    from skidnav.agents.policies.search.config import SearchConfig
+
+    return SearchConfig(
+        map_kind=config.map_kind, world_seed=config.world_seed, slip=config.slip,
+        max_episode_steps=config.max_steps, control_period=config.control_period,
+        population=config.population, generations=config.generations,
+        eval_episodes=config.rollouts, eval_every=5, seed=seed,
+    )  # fmt: skip
+
+
+def evaluation_seeds(config: ComparisonConfig) -> list[int]:
+    """The rollout seeds every learner's policy meets (:data:`COMPARISON_ROLES`)."""
+    rng = np.random.default_rng(child(config.root_seed, 1))
+    return [int(seed) for seed in rng.integers(0, 2**31, config.rollouts)]
+
+
+def run_seed(config: ComparisonConfig, index: int) -> int:
+    """The integer seed of every learner's run ``index`` (31 bits: PyTorch and the legacy NumPy
+    seeding that Stable-Baselines3 calls take no more): drawn from child ``index`` of the root's
+    child 0, the stream the runner names world ``index`` of the grid (:mod:`skidnav.experiments.
+    runs`; its one map and preset), shared by every learner (common random numbers)."""
+    return seed_int(child(child(config.root_seed, 0), index)) % 2**31
+
+
+def first_learned(greedy_lengths: np.ndarray) -> float:
+    """1-based episode after which every greedy rollout reached the goal (NaN if none):
+    ``greedy_lengths`` int64 (episodes, rollouts), −1 where a rollout did not."""
+    learned = np.flatnonzero((greedy_lengths >= 0).all(axis=1))
+    return float(learned[0] + 1) if learned.size else math.nan
+
+
+def train_learner(config: ComparisonConfig, learner: str, seed: int) -> LearnerRun:
+    """Train ``learner`` with run seed ``seed`` and roll its final policy out."""
+    start = time.perf_counter()
+    env = gymnasium.make(ENV_ID, **config.env_kwargs(learner not in DISCRETE_PARAMS))
+    policy, used, learned = _TRAINERS[_kind(learner)](config, learner, seed, env)
+    wall = time.perf_counter() - start
+    traces = tuple(record_rollout(env, policy, seed=s) for s in evaluation_seeds(config))
+    env.close()
+    return LearnerRun(learner, seed, traces, used, learned, wall)
+
+
+def _kind(learner: str) -> str:
+    if learner in DISCRETE_PARAMS:
+        return "discrete"
+    return learner if learner in ("cmaes", REFERENCE) else "deep"
+
+
+def _train_discrete(
+    config: ComparisonConfig, learner: str, seed: int, env: Any
+) -> tuple[Policy, int, float]:
+    from skidnav.agents.fast_training import train_agent_fast
+    from skidnav.agents.tabular.registry import make_agent
+
+    nav = env.unwrapped
+    context = {} if learner == "q-learning" else {"task": nav.task}
+    agent = make_agent(learner, nav.discretization.n_states, 4, DISCRETE_PARAMS[learner],
+                       streams(seed, RUN_ROLES)["agent"], **context)  # fmt: skip
+    # (the env's episodes are reset from ``seed`` itself: an agent on default_rng(seed) drew the
+    # very numbers of the env's slip noise)
+    checks = gymnasium.make(ENV_ID, **config.env_kwargs(False))
+    log = train_agent_fast(agent, env, config.episodes, greedy_eval_env=checks,
+                           greedy_max_steps=config.max_steps,
+                           greedy_seeds=evaluation_seeds(config), seed=seed)  # fmt: skip
+    return tabular_policy(agent), config.episodes, first_learned(log.greedy_lengths)
+
+
+def _train_deep(
+    config: ComparisonConfig, learner: str, seed: int, env: Any
+) -> tuple[Policy, int, float]:
+    from skidnav.agents.deep.ppo import PPOAgent
+    from skidnav.agents.deep.sac import SACAgent
+
+    agent = (PPOAgent if learner == "ppo" else SACAgent)(env, seed=seed)
+    checks = gymnasium.make(ENV_ID, **config.env_kwargs(True))
+    log = agent.train_episodes(config.episodes, greedy_eval_env=checks,
+                               greedy_seeds=evaluation_seeds(config),
+                               greedy_max_steps=config.max_steps)  # fmt: skip
+    return (
+        wheel_speed_policy(agent.policy(), env),
+        config.episodes,
+        first_learned(log.greedy_lengths),
+    )
+
+
+def _train_cmaes(
+    config: ComparisonConfig, learner: str, seed: int, env: Any
+) -> tuple[Policy, int, float]:
+    from skidnav.agents.policies.search.cmaes import run_search
+
+    result = run_search(search_config(config, seed))
+    learned = [r.episodes for r in result.records if r.mean_success == 1.0]
+    first = float(learned[0]) if learned else math.nan
+    return wheel_speed_policy(result.policy, env), result.records[-1].episodes, first
+
+
+def _reference(
+    config: ComparisonConfig, learner: str, seed: int, env: Any
+) -> tuple[Policy, int, float]:
+    return wheel_speed_policy(GoalTracker(robot=env.unwrapped.robot), env), 0, math.nan
+
+
+_TRAINERS = {
+    "discrete": _train_discrete,
+    "deep": _train_deep,
+    "cmaes": _train_cmaes,
+    "goal-tracker": _reference,
+}
+
+
+def run_comparison(config: ComparisonConfig, progress: Any = None) -> list[LearnerRun]:
+    """Every learner × seed of ``config`` (the reference once: it does not learn)."""
+    runs = []
+    for learner in config.learners:
+        for index in range(1 if learner == REFERENCE else config.seeds):
+            run = train_learner(config, learner, run_seed(config, index))
+            runs.append(run)
+            if progress is not None:
+                progress(run)
+    return runs
+
+
+def config_fields() -> Sequence[str]:
+    """The names of :class:`ComparisonConfig`'s fields (for the command line)."""
+    return [field.name for field in fields(ComparisonConfig)]

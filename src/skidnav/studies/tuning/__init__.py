@@ -1,0 +1,1 @@
+"""Hyperparameter search over experiment configs (Optuna)."""
