@@ -81,11 +81,11 @@ def header_comment(text: str) -> str:
 
 def configs_reference() -> str:
     """The table of every shipped config."""
-    rows = ["| config | kind | what it is |", "|---|---|---|"]
+    rows = ["| `configs/…` | kind | what it is |", "|---|---|---|"]
     for path in sorted((ROOT / "configs").glob("*.toml")):
         text = path.read_text(encoding="utf-8")
         kind = config_kind(tomllib.loads(text))
-        rows.append(f"| `configs/{path.name}` | {kind} | {header_comment(text)} |")
+        rows.append(f"| `{path.name}` | {kind} | {header_comment(text)} |")
     return "\n".join(rows) + "\n"
 
 

@@ -78,9 +78,11 @@ def test_configs_reference_has_one_row_per_shipped_config() -> None:
     assert len(table.splitlines()) == 2 + len(configs)
     for path in configs:
         document = tomllib.loads(path.read_text(encoding="utf-8"))
-        row = next(line for line in table.splitlines() if f"`configs/{path.name}`" in line)
+        row = next(line for line in table.splitlines() if f"| `{path.name}` |" in line)
         if isinstance(document.get("kind"), str):
-            assert f"study `{document['kind']}`" in row
+            assert f"| study `{document['kind']}` |" in row
+        elif "experiment" in document:
+            assert "| experiment |" in row
 
 
 @pytest.mark.parametrize(
