@@ -9,7 +9,7 @@ three readers:
 * the speed guard of ``make test`` (``tests/test_speed_guard.py``): the quick sizes, each ratio
   against its :attr:`KeyFigure.floor`;
 * the history (``benchmarks/tracked``, recorded per commit by airspeed velocity);
-* the speed table of ``docs/speed.md`` and the README, written by ``make bench`` from that record.
+* the speed table of ``docs/speed.md``, written by ``make bench`` from that record.
 """
 
 from __future__ import annotations
