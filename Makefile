@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet $(TORCH)
-	$(PY) -m pip install --quiet -e ".[dev,physics,deep]" $(TORCH)
+	$(PY) -m pip install --quiet -e ".[dev,physics,deep,logging,video,notebook]" $(TORCH)
 	touch $(STAMP)
 
 venv: $(STAMP)
@@ -35,8 +35,11 @@ demo: $(STAMP) gl
 	$(VENV)/bin/skidnav run configs/quick.toml --out runs/quick
 	$(VENV)/bin/skidnav report runs/quick
 
+# make test also executes the notebooks top to bottom (nbmake), once the suite has compiled the
+# kernels.
 test: lint gl
 	$(PY) -m pytest
+	$(PY) -m pytest --nbmake notebooks
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks
