@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet $(TORCH)
-	$(PY) -m pip install --quiet -e ".[dev,docs,physics,deep]" $(TORCH)
+	$(PY) -m pip install --quiet -e ".[dev,docs,physics,deep,logging,video,notebook]" $(TORCH)
 	touch $(STAMP)
 
 venv: $(STAMP)
@@ -49,9 +49,11 @@ demo: $(STAMP) gl
 	$(VENV)/bin/skidnav report runs/quick
 
 # SKIDNAV_MAKE_TEST=1: everything optional is installed, so a test that needs it fails rather
-# than skips.
+# than skips. The notebooks are executed top to bottom (nbmake) once the suite has compiled the
+# kernels.
 test: lint gl browser
 	SKIDNAV_MAKE_TEST=1 $(PY) -m pytest
+	SKIDNAV_MAKE_TEST=1 $(PY) -m pytest --nbmake notebooks
 
 # The documentation site, into site/ (mkdocs.yml): every warning, a broken link, anchor or image
 # among them, is an error. (Not --quiet: it would silence the warnings that --strict counts.)

@@ -74,6 +74,8 @@ BACKENDS = ("serial", "process", "dask")
 TrialFunction = Callable[[RunSpec[Any]], TrialResult]
 """One run of the grid: its spec in, its results out (a pure function of the spec for an
 experiment)."""
+RunObserver = Callable[[TrialResult], None]
+"""Told of each finished run in the runner's process (:func:`run_experiment`'s ``on_run``)."""
 DASK_CONNECT_TIMEOUT = "15s"
 """How long the Dask client tries to reach ``scheduler``."""
 
@@ -254,6 +256,7 @@ def run_experiment(
     config_path: Path | str | None = None,
     progress: bool = False,
     layout: RunLayout = EXPERIMENT_LAYOUT,
+    on_run: RunObserver | None = None,
 ) -> RunOutcome:
     """Run (or resume) every run of ``config`` into ``out_dir``.
 
@@ -270,6 +273,9 @@ def run_experiment(
         config_path: the config file, named in the errors of its agents, maps and env options.
         progress: show a progress bar with ETA on stderr.
         layout: what the run files hold and how the grid is saved (:class:`RunLayout`).
+        on_run: called in this process with every finished run of the grid: those already in
+            ``out_dir`` (a resume) first, then each new one once it is written (e.g. the
+            TensorBoard log, :mod:`skidnav.experiments.tensorboard_log`).
 
     Raises:
         UserError: bad backend options, or ``out_dir`` holds other results or is in use.
@@ -294,8 +300,13 @@ def run_experiment(
             session = _session(started, backend, jobs, scheduler)
             records = _resume_records(store, session)
             pending = [spec for spec in runs if spec.run_id not in records]
+            if on_run is not None:
+                for finished in store.iter_runs(records):
+                    on_run(finished)
             execution = (trial, backend, jobs, client)
-            failures = _run_pending(store, config, pending, records, session, execution, progress)
+            failures = _run_pending(
+                store, config, pending, records, session, execution, progress, on_run
+            )
         if failures:
             raise RunsFailedError(failed_runs_message(failures, len(runs), store.root))
         store.consolidate()
@@ -325,10 +336,11 @@ def _run_pending(
     session: dict[str, Any],
     execution: tuple[TrialFunction, str, int, Any],
     progress: bool,
+    on_run: RunObserver | None = None,
 ) -> list[RunFailure]:
     """Run ``pending`` on ``execution`` (trial, backend, jobs, Dask client), writing each result
-    as it arrives and noting its code record in ``records``; returns the runs that failed
-    (each logged as it failed)."""
+    as it arrives (then handing it to ``on_run``) and noting its code record in ``records``;
+    returns the runs that failed (each logged as it failed)."""
     total = len(pending) + len(records)
     logger.info("%d runs, %d already done, %d to run", total, len(records), len(pending))
     stamp = {key: session[key] for key in CODE_KEYS} | {"session": session["started"]}
@@ -341,6 +353,8 @@ def _run_pending(
             else:
                 store.write_run(outcome, stamp)
                 records[outcome.run_id] = stamp
+                if on_run is not None:
+                    on_run(outcome)
             bar.update(1)
     return failures
 
