@@ -2,6 +2,10 @@
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
+# Two installs in the one .venv: the core package alone (what `make demo` needs), and everything
+# (every extra and the dev tools: `make test`, `make lint`, `make bench`). Each has its stamp, so
+# `make demo` then `make test` adds the rest, and `make test` then `make demo` installs nothing.
+CORE_STAMP := $(VENV)/.core-stamp
 STAMP := $(VENV)/.installed-stamp
 # The CPU build of PyTorch, pinned and installed before the extras so that pip never resolves
 # a newer (CUDA, several-GB) torch for Stable-Baselines3.
@@ -9,12 +13,18 @@ TORCH := torch==2.13.0
 
 .PHONY: venv gl browser demo test docs lint bench clean clean-cache
 
-$(STAMP): pyproject.toml
+$(PY):
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet $(TORCH)
-	$(PY) -m pip install --quiet -e ".[dev,docs,physics,deep,logging,video,notebook]" $(TORCH)
-	touch $(STAMP)
+	$(PY) -m pip install --upgrade pip
+
+$(CORE_STAMP): pyproject.toml | $(PY)
+	$(PY) -m pip install -e .
+	touch $(CORE_STAMP)
+
+$(STAMP): pyproject.toml | $(PY)
+	$(PY) -m pip install $(TORCH)
+	$(PY) -m pip install -e ".[all,dev]" $(TORCH)
+	touch $(STAMP) $(CORE_STAMP)
 
 venv: $(STAMP)
 
@@ -44,7 +54,7 @@ browser:
 	  else echo "no chromium: install chromium and chromium-driver for the browser tests"; fi; \
 	fi
 
-demo: $(STAMP) gl
+demo: $(CORE_STAMP)
 	$(VENV)/bin/skidnav run configs/quick.toml --out runs/quick
 	$(VENV)/bin/skidnav report runs/quick
 

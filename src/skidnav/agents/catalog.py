@@ -48,6 +48,7 @@ from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.agents.tabular.registry import AGENT_MODULES, agent_class, make_agent
 from skidnav.agents.training import TrainingLog, train_agent
 from skidnav.errors import UserError, first_line, shown
+from skidnav.extras import MissingExtraError, missing_message, require
 
 if TYPE_CHECKING:  # each family's base class satisfies its protocol (checked by mypy)
     from skidnav.agents.deep.common import DeepAgent
@@ -294,7 +295,21 @@ def _make_linear(
     space = _space(name, env.observation_space, gymnasium.spaces.Box)
     context = described.context(env, params)
     rng = np.random.default_rng(seed)
-    return make_linear_agent(name, space, _n_actions(name, env), dict(params), rng, **context)
+    chosen = _tiled_by_default(env, params)
+    return make_linear_agent(name, space, _n_actions(name, env), chosen, rng, **context)
+
+
+def _tiled_by_default(env: Env, params: Params) -> dict[str, Any]:
+    """``params``, with the features a tile coder takes by default on the skid-steer env's
+    feature observation when they name no ``dimensions``
+    (:meth:`~skidnav.sim.features.PoseFeatures.steering_dimensions`: all 15 default features
+    would need ~10^11 tiles); unchanged on any other observation."""
+    nav = env.unwrapped
+    features: Any = getattr(nav, "features", None)
+    tiled = "dimensions" in params or getattr(nav, "observation_kind", None) != "features"
+    if tiled or features is None:
+        return dict(params)
+    return {**params, "dimensions": list(features.steering_dimensions())}
 
 
 def _deep_entry(name: str) -> AgentEntry[EpisodeTrainingAgent]:
@@ -304,14 +319,13 @@ def _deep_entry(name: str) -> AgentEntry[EpisodeTrainingAgent]:
 
 
 def _deep_extra_missing(name: str, error: ModuleNotFoundError) -> UserError:
-    return UserError(
-        f"agent {name!r} needs the deep extra (pip install 'skidnav[deep]'): "
-        f"no module {error.name!r}"
-    )
+    return MissingExtraError(missing_message("deep", f"agent {name!r}", str(error.name)))
 
 
 def _deep_module(name: str) -> ModuleType:
-    """The module of deep agent ``name``; UserError when the ``deep`` extra is missing."""
+    """The module of deep agent ``name``; UserError when the ``deep`` extra is missing (checked
+    before anything is imported, so a config naming the agent is refused up front)."""
+    require("deep", f"agent {name!r}")
     try:
         return importlib.import_module(DEEP_AGENTS[name])
     except ModuleNotFoundError as error:

@@ -38,7 +38,10 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--max-steps", type=int, default=200, help="actions per episode")
     parser.add_argument("--control-period", type=float, default=1.0, help="seconds per action")
     parser.add_argument(
-        "--learners", default=",".join(LEARNERS), help=f"comma-separated, of {', '.join(LEARNERS)}"
+        "--learners",
+        default=",".join(LEARNERS),
+        help=f"comma-separated, of {', '.join(LEARNERS)} (default: all; cmaes needs the search "
+        "extra, ppo and sac the deep extra)",
     )
     parser.add_argument("--seeds", type=int, default=3, help="runs per learner")
     parser.add_argument("--root-seed", type=int, default=0)

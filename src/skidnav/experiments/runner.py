@@ -9,6 +9,7 @@ Backends (all give identical numbers, since a run is a pure function of its spec
 * ``dask``: a ``dask.distributed`` Client on the scheduler at ``scheduler``; without an address,
   a local cluster of ``jobs`` worker processes on 127.0.0.1. The client connects before the
   results directory is created, so a scheduler that cannot be reached leaves nothing behind.
+  Dask is the ``distributed`` extra: without it the backend is refused in one line.
 
 Local worker processes import nothing from the current directory
 (:func:`skidnav.childprocess.safe_path_children`).
@@ -67,6 +68,7 @@ from skidnav.experiments.store import (
     directory_lock,
 )
 from skidnav.experiments.workers import init_worker
+from skidnav.extras import require
 
 logger = logging.getLogger(__name__)
 
@@ -234,6 +236,8 @@ def _check_backend(backend: str, jobs: int, scheduler: str | None) -> None:
         raise UserError(f"--jobs must be >= 1, got {jobs}")
     if scheduler is not None and backend != "dask":
         raise UserError("--scheduler needs --backend dask")
+    if backend == "dask":
+        require("distributed", "--backend dask")
 
 
 def default_jobs() -> int:

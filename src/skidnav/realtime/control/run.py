@@ -33,7 +33,7 @@ from skidnav.realtime.control.episodes import EpisodeLoop
 from skidnav.realtime.control.loop import RealtimeLoop
 from skidnav.realtime.control.policy_loop import PolicyLoop
 from skidnav.realtime.control.transition import compile_scoring
-from skidnav.realtime.drivers import DRIVERS, make_driver
+from skidnav.realtime.drivers import DRIVERS, make_driver, require_driver_extras
 from skidnav.realtime.policies import check_policy, select_policy
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
@@ -194,6 +194,7 @@ def run_robot(
     config = with_overrides(
         config, episodes=settings.episodes, time_scale=settings.time_scale, reset=settings.reset
     )
+    require_driver_extras(settings.driver, config)
     robot, grid = RobotParams(), Discretization()
     grid_map = arena_map(config.run.map, config.run.seed, grid)
     policy_name: str | None = None

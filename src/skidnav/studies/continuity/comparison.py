@@ -43,6 +43,7 @@ from skidnav.checks import check_integer
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import first_line, shown
 from skidnav.experiments.config import AgentSpec, MapSpec
+from skidnav.extras import require
 from skidnav.seeding import RUN_ROLES, child, seed_int, streams
 from skidnav.studies.continuity.traces import (
     Policy,
@@ -61,6 +62,8 @@ WHEEL_LEARNERS = ("cmaes", "ppo", "sac")
 REFERENCE = "goal-tracker"
 """The reference controller: it learns nothing, so its runs are alike (one is enough)."""
 LEARNERS = (*DISCRETE_PARAMS, *WHEEL_LEARNERS, REFERENCE)
+LEARNER_EXTRAS = {"cmaes": "search", "ppo": "deep", "sac": "deep"}
+"""The learners that need an extra (:mod:`skidnav.extras`) → that extra."""
 MAX_COUNTS = {
     "seeds": 1000, "episodes": 10**6, "generations": 10**6, "population": 10**4,
     "rollouts": 10**4, "max_steps": 10**5,
@@ -156,6 +159,18 @@ class ComparisonConfig:
         directory)."""
         text = json.dumps(comparison_to_dict(self), sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()
+
+
+def require_learner_extras(config: ComparisonConfig) -> None:
+    """Refuse ``config`` before anything runs when a learner's extra is missing (the default
+    learners include ``ppo`` and ``sac``: ``--learners`` without them runs on the core).
+
+    Raises:
+        MissingExtraError: one line naming the learner and the ``pip install`` that brings it.
+    """
+    for learner in config.learners:
+        if learner in LEARNER_EXTRAS:
+            require(LEARNER_EXTRAS[learner], f"learner {learner!r}")
 
 
 def comparison_to_dict(config: ComparisonConfig) -> dict[str, Any]:
