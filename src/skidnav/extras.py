@@ -29,6 +29,10 @@ EXTRAS: dict[str, tuple[str, ...]] = {
     "tuning": ("optuna",),
     "search": ("cmaes", "threadpoolctl"),
     "gp": ("sklearn",),
+    "docs": ("mkdocs", "material", "mkdocstrings"),
+    "logging": ("tensorboard",),
+    "video": ("moviepy",),
+    "notebook": ("nbmake",),
 }
 """Extra (``pyproject.toml``'s ``[project.optional-dependencies]``) → the top-level modules it
 provides, the ones skidnav imports."""

@@ -23,7 +23,8 @@ from skidnav.experiments.runner import (
 )
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import EXPERIMENT_LAYOUT, RunLayout
-from skidnav.experiments.tensorboard_log import TensorBoardLog, require_tensorboard
+from skidnav.experiments.tensorboard_log import TensorBoardLog
+from skidnav.extras import require
 from skidnav.outputs import check_output_dir
 from skidnav.savedfile import read_config_text
 from skidnav.studies.kind import EXPERIMENT_KIND, Study, study, study_kind
@@ -205,7 +206,7 @@ def tensorboard_log(directory: Path | None) -> TensorBoardLog | None:
     UserError (one line) without the ``logging`` extra or when ``DIR`` cannot be written."""
     if directory is None:
         return None
-    require_tensorboard()
+    require("logging", "--tensorboard")
     return TensorBoardLog(check_output_dir(directory, "--tensorboard"))
 
 

@@ -18,7 +18,7 @@ the same directory again without duplicating a point. TensorBoard stores scalars
 the values read back equal the episodes table's after rounding to float32.
 
 The ``tensorboard`` package (the ``logging`` extra) writes the records; without it
-:func:`require_tensorboard` refuses in one line.
+``skidnav.extras.require("logging", …)`` refuses in one line.
 """
 
 from __future__ import annotations
@@ -36,25 +36,13 @@ import numpy as np
 from skidnav.atomicfile import write_user_file
 from skidnav.errors import UserError
 from skidnav.experiments.store import TrialResult
+from skidnav.extras import require
 
 EVENT_FILE = "events.out.tfevents.skidnav"
 """The event file of a run's directory (TensorBoard reads every file named ``*tfevents*``)."""
-INSTALL_HINT = 'pip install "skidnav[logging]"'
 """The command that installs the ``logging`` extra."""
 _SAFE = "[]=,+-_.@"
 """Characters of a label kept as they are in a directory name (letters and digits always)."""
-
-
-def require_tensorboard(what: str = "--tensorboard") -> None:
-    """Return when the ``tensorboard`` package can be imported; UserError otherwise, one line:
-    ``--tensorboard needs the logging extra (no module 'tensorboard'): pip install
-    "skidnav[logging]"``. Nothing is imported."""
-    try:
-        found = importlib.util.find_spec("tensorboard")
-    except (ImportError, ValueError):  # a blocked or broken entry in sys.modules
-        found = None
-    if found is None:
-        raise UserError(f"{what} needs the logging extra (no module 'tensorboard'): {INSTALL_HINT}")
 
 
 def path_label(label: object) -> str:
@@ -132,7 +120,7 @@ class TensorBoardLog:
     """
 
     def __init__(self, root: Path) -> None:
-        require_tensorboard()
+        require("logging", "--tensorboard")
         self.root = Path(root)
 
     def __call__(self, result: TrialResult) -> None:
