@@ -140,7 +140,7 @@ def test_a_gap_study_runs_and_tabulates(tmp_path):
     assert rows["gap to optimum [%]"].tolist() == shown
     assert "<h2>Discretization gap</h2>" in gap_section(summaries, config)
     # the report draws it as a section the commands pass (the report imports no study)
-    page = write_results_report(tmp_path).read_text()
+    page = write_results_report(tmp_path).path.read_text()
     assert page.count("<h2>Discretization gap</h2>") == 1
     assert "<h2>Discretization gap</h2>" not in build_report(tmp_path)
 

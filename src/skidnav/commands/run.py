@@ -189,7 +189,8 @@ def outcome_line(outcome: RunOutcome) -> str:
 
 
 def run_command(args: argparse.Namespace) -> int:
-    """Run the experiment or study; print where the results are."""
+    """Run the experiment or study; print where the results are and, for an experiment, its
+    verdict line (:mod:`skidnav.experiments.report.verdict`), with the report when asked."""
     allow_env_modules(args.env_module)
     loaded = load_grid(args.config)
     out = check_output_dir(args.out if args.out is not None else Path("runs") / loaded.grid.name)
@@ -203,7 +204,11 @@ def run_command(args: argparse.Namespace) -> int:
     )
     print(outcome_line(outcome))
     if args.report:
-        from skidnav.commands.report import write_results_report
+        from skidnav.commands.report import print_report, write_results_report
 
-        print(f"report: {write_results_report(outcome.out_dir)}")
+        print_report(write_results_report(outcome.out_dir, progress=not args.no_progress))
+    elif loaded.study is None:
+        from skidnav.experiments.report.verdict import experiment_verdict
+
+        print(experiment_verdict(outcome.out_dir))
     return 0

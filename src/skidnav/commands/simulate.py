@@ -138,7 +138,7 @@ def _write_csv(path: Path, rows: list[tuple[Any, ...]]) -> None:
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from skidnav.world.rendering import save_frame
+    from skidnav.world.rendering import save_frame, with_legend
 
     check_output_file(args.out)
     if args.csv is not None:
@@ -157,7 +157,7 @@ def _simulate(args: argparse.Namespace) -> int:
         total += float(reward)
         rows.append((step, action, *info["pose"], reward, info["collision"]))
         done = terminated or truncated or (script is not None and step >= len(script))
-    save_frame(np.asarray(env.render()), args.out)
+    save_frame(with_legend(np.asarray(env.render())), args.out)
     if args.csv is not None:
         _write_csv(args.csv, rows)
     collisions = sum(1 for row in rows if row[-1])
