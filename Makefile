@@ -31,9 +31,9 @@ gl:
 	  else echo "no GL library: MuJoCo pictures fall back to the 2-D renderer"; fi; \
 	fi
 
+# Runs the demo, writes its report and prints the report's one-line verdict and path.
 demo: $(STAMP) gl
-	$(VENV)/bin/skidnav run configs/quick.toml --out runs/quick
-	$(VENV)/bin/skidnav report runs/quick
+	$(VENV)/bin/skidnav run configs/quick.toml --out runs/quick --report
 
 test: lint gl
 	$(PY) -m pytest

@@ -136,7 +136,7 @@ def test_a_gap_study_runs_and_tabulates(tmp_path):
     optimum = optimum_rows(summaries, config)
     assert optimum["best grid (worlds)"].iloc[0] in ("13 × 13 × 20 (1)", "25 × 25 × 20 (1)")
     gap = summaries["final_length_m"] / summaries["optimum_length_m"] - 1  # NaN if not reached
-    shown = [f"{100 * g:.1f}" if g == g else "–" for g in gap]
+    shown = [f"{100 * g:.1f}" if g == g else "n/a" for g in gap]
     assert rows["gap to optimum [%]"].tolist() == shown
     assert "<h2>Discretization gap</h2>" in gap_section(summaries, config)
     # the report draws it as a section the commands pass (the report imports no study)

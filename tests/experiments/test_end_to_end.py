@@ -103,6 +103,7 @@ def test_report_cli_writes_one_self_contained_file(serial_results: Path, tmp_pat
         timeout=120,
     )
     assert result.returncode == 0, result.stderr
+    assert "report: " in result.stderr and "step" in result.stderr  # its progress bar
     text = output.read_text()
     images = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', text)
     # Per map x preset cell (2 here): performance profiles, greedy lengths, learning curves,

@@ -17,6 +17,7 @@ from skidnav.experiments.configfile import config_from_tables, parse_tables
 from skidnav.experiments.runner import BACKENDS, RunOutcome, TrialFunction, run_experiment
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import EXPERIMENT_LAYOUT, RunLayout
+from skidnav.formatting import plural
 from skidnav.outputs import check_output_dir
 from skidnav.savedfile import read_config_text
 from skidnav.studies.kind import (
@@ -183,7 +184,7 @@ def run_loaded(
 def outcome_line(outcome: RunOutcome) -> str:
     """What a run of a config did, in one line: runs, where, how many now and before, time."""
     return (
-        f"{outcome.n_runs} runs in {outcome.out_dir} ({outcome.executed} run now, "
+        f"{plural(outcome.n_runs, 'run')} in {outcome.out_dir} ({outcome.executed} run now, "
         f"{outcome.skipped} already done) in {outcome.wall_time:.1f} s"
     )
 

@@ -70,9 +70,7 @@ def gif_image(gif: bytes, alt: str) -> str:
     return f'<img alt="{html.escape(alt)}" src="data:image/gif;base64,{encoded}">'
 
 
-def table(
-    frame: pd.DataFrame, *, labels: int = 1, prose: bool = False, escape: bool = True
-) -> str:
+def table(frame: pd.DataFrame, *, labels: int = 1, prose: bool = False, escape: bool = True) -> str:
     """An HTML table of preformatted string cells (``escape=False``: cells already HTML); its
     first ``labels`` columns (1–3) are text, left-aligned, the others numbers, right-aligned;
     ``prose``: every column left-aligned (cells of sentences)."""
