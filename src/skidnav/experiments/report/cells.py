@@ -19,6 +19,7 @@ from skidnav.experiments.report import maps, plots
 from skidnav.experiments.report.analysis import METRICS
 from skidnav.experiments.report.page import gif_image, image, interval_text, table
 from skidnav.experiments.store import ResultStore, TrialResult
+from skidnav.formatting import plural
 from skidnav.physics.materials import region_materials
 from skidnav.physics.render import Arena, animate, describe
 from skidnav.robot.floors import PRESET_FLOORS
@@ -83,7 +84,7 @@ def animation_figure(run: TrialResult, preset: str, why: str) -> str:
     movie = animate(arena, poses, frames_per_action=3, max_frames=ANIMATION_FRAMES)
     caption = (
         f"Final greedy trajectory of {run.coordinates['agent']} (seed "
-        f"{run.coordinates['seed']}, {len(poses) - 1} actions; {why}), animated by the "
+        f"{run.coordinates['seed']}, {plural(len(poses) - 1, 'action')}; {why}), animated by the "
         f"{describe(movie)}. Start: green cell, goal: red cell, path so far: blue."
     )
     return (

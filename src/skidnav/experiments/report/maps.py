@@ -25,6 +25,7 @@ from matplotlib.patches import Patch, Rectangle
 
 from skidnav.experiments.report.plots import to_png
 from skidnav.experiments.store import TrialResult
+from skidnav.formatting import plural
 from skidnav.world.colours import LANDMARKS, TRAIL, unit_rgb
 
 ARENA = (0.62, 0.505)
@@ -110,7 +111,7 @@ def trajectories(runs: list[TrialResult], title: str) -> bytes:
         )
         ax.set_title(
             f"{run.coordinates['agent']} (seed {run.coordinates['seed']})\n"
-            f"{len(poses) - 1} actions, {reached}",
+            f"{plural(len(poses) - 1, 'action')}, {reached}",
             fontsize=9,
         )
     path = Line2D([], [], color=unit_rgb(TRAIL), marker="o", markevery=[-1], label="greedy path")

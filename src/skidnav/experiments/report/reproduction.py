@@ -15,7 +15,7 @@ import pandas as pd
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.report.analysis import speedup_of
 from skidnav.experiments.report.page import table
-from skidnav.formatting import NOT_AVAILABLE, interval
+from skidnav.formatting import NOT_AVAILABLE, interval, plural
 
 MIN_PAIRS = 10
 """Fewer paired seeds than this make a "no difference" verdict inconclusive."""
@@ -198,8 +198,8 @@ def reproduction_section(
     parts = [
         "<h2>Thesis reproduction</h2>",
         f"<p class='note'>Baseline: <b>{html.escape(config.baseline)}</b>. Intervals: "
-        f"{config.confidence:.0%} bootstrap, paired by seed. {config.seeds} seeds per cell "
-        f"(the thesis's claims need ≥ 30). Convergence: within "
+        f"{config.confidence:.0%} bootstrap, paired by seed. {plural(config.seeds, 'seed')} per "
+        f"cell (the thesis's claims need ≥ 30). Convergence: within "
         f"{config.convergence_tolerance:.0%} of the oracle, staying there in at least "
         f"{config.convergence_level:.0%} of the evaluations to the end of the run "
         "(definitions above).</p>",

@@ -23,6 +23,7 @@ import matplotlib.pyplot as plt
 from skidnav.atomicfile import write_user_file
 from skidnav.experiments.report.maps import draw_cells
 from skidnav.experiments.report.plots import DPI, to_png
+from skidnav.formatting import plural
 from skidnav.studies.continuity.traces import Trace
 from skidnav.world.grid import GridMap
 
@@ -37,7 +38,7 @@ FIGURE_SIZE = (6.4, 6.0)
 def _label(name: str, trace: Trace) -> str:
     if trace.terminated:
         return f"{name}: goal in {trace.n_actions * trace.control_period:g} s"
-    return f"{name}: no goal ({trace.n_actions} actions)"
+    return f"{name}: no goal ({plural(trace.n_actions, 'action')})"
 
 
 def trajectory_picture(
