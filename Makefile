@@ -54,9 +54,9 @@ browser:
 	  else echo "no chromium: install chromium and chromium-driver for the browser tests"; fi; \
 	fi
 
+# Runs the demo, writes its report and prints the report's one-line verdict and path.
 demo: $(CORE_STAMP)
-	$(VENV)/bin/skidnav run configs/quick.toml --out runs/quick
-	$(VENV)/bin/skidnav report runs/quick
+	$(VENV)/bin/skidnav run configs/quick.toml --out runs/quick --report
 
 # SKIDNAV_MAKE_TEST=1: everything optional is installed, so a test that needs it fails rather
 # than skips. The notebooks are executed top to bottom (nbmake) once the suite has compiled the

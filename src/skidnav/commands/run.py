@@ -25,6 +25,7 @@ from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import EXPERIMENT_LAYOUT, RunLayout
 from skidnav.experiments.tensorboard_log import TensorBoardLog
 from skidnav.extras import require
+from skidnav.formatting import plural
 from skidnav.outputs import check_output_dir
 from skidnav.savedfile import read_config_text
 from skidnav.studies.kind import EXPERIMENT_KIND, Study, study, study_kind
@@ -196,7 +197,7 @@ def run_loaded(
 def outcome_line(outcome: RunOutcome) -> str:
     """What a run of a config did, in one line: runs, where, how many now and before, time."""
     return (
-        f"{outcome.n_runs} runs in {outcome.out_dir} ({outcome.executed} run now, "
+        f"{plural(outcome.n_runs, 'run')} in {outcome.out_dir} ({outcome.executed} run now, "
         f"{outcome.skipped} already done) in {outcome.wall_time:.1f} s"
     )
 
@@ -211,7 +212,8 @@ def tensorboard_log(directory: Path | None) -> TensorBoardLog | None:
 
 
 def run_command(args: argparse.Namespace) -> int:
-    """Run the experiment or study; print where the results are."""
+    """Run the experiment or study; print where the results are and, for an experiment, its
+    verdict line (:mod:`skidnav.experiments.report.verdict`), with the report when asked."""
     allow_env_modules(args.env_module)
     log = tensorboard_log(args.tensorboard)
     loaded = load_grid(args.config)
@@ -229,7 +231,11 @@ def run_command(args: argparse.Namespace) -> int:
     if log is not None:
         print(f"TensorBoard logs: {log.root} (tensorboard --logdir {log.root})")
     if args.report:
-        from skidnav.commands.report import write_results_report
+        from skidnav.commands.report import print_report, write_results_report
 
-        print(f"report: {write_results_report(outcome.out_dir)}")
+        print_report(write_results_report(outcome.out_dir, progress=not args.no_progress))
+    elif loaded.study is None:
+        from skidnav.experiments.report.verdict import experiment_verdict
+
+        print(experiment_verdict(outcome.out_dir))
     return 0

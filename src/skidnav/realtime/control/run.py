@@ -25,6 +25,7 @@ import numpy as np
 from skidnav.atomicfile import write_user_file
 from skidnav.envs.step_info import step_info
 from skidnav.errors import UserError, first_line, shown
+from skidnav.formatting import plural
 from skidnav.outputs import make_output_dir
 from skidnav.realtime.arena import arena_map, seed_streams
 from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
@@ -309,6 +310,6 @@ def _summarize(loop: EpisodeLoop, out: Path, code: int) -> str:
     }
     write_user_file(out / "summary.json", json.dumps(summary, indent=1).encode(), "run summary")
     return (
-        f"{summary['episodes']} episodes, {summary['goals']} reached the goal, "
+        f"{plural(len(results), 'episode')}, {summary['goals']} reached the goal, "
         f"{summary['aborted']} aborted; results in {out}"
     )
