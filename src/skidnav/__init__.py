@@ -24,6 +24,7 @@ if TYPE_CHECKING:  # what type checkers see; at run time the module is imported 
     from skidnav.api import load_agent as load_agent
     from skidnav.api import make_agent as make_agent
     from skidnav.api import make_env as make_env
+    from skidnav.api import reference_length as reference_length
     from skidnav.api import run_config as run_config
     from skidnav.api import save_agent as save_agent
     from skidnav.api import train as train
@@ -36,6 +37,7 @@ API = (
     "load_agent",
     "make_agent",
     "make_env",
+    "reference_length",
     "run_config",
     "save_agent",
     "train",

@@ -53,6 +53,7 @@ __all__ = [
     "load_agent",
     "make_agent",
     "make_env",
+    "reference_length",
     "run_config",
     "save_agent",
     "train",
@@ -228,16 +229,21 @@ def convergence_episode(
     Raises:
         UserError: ``env`` is not the skid-steer env on kinematic dynamics (no oracle).
     """
-    rule = ConvergenceRule(_reference_length(env), tolerance, window, level)
+    rule = ConvergenceRule(reference_length(env), tolerance, window, level)
     mean, share = evaluation_summary(log.greedy_lengths)
     episodes = {"greedy_length": mean, "greedy_success": share, "length": log.lengths}
     metrics = convergence_metrics(episodes, rule)
     return int(metrics["convergence_episode"]) if metrics["converged"] else None
 
 
-def _reference_length(env: Env) -> float:
-    """L* of ``env``'s world: the oracle's expected actions from the start
-    (:mod:`skidnav.experiments.reference.oracle`, :data:`DEFAULTS`' sample count, seed 0)."""
+def reference_length(env: Env) -> float:
+    """L* of ``env``'s world [actions]: the oracle's expected number of actions from the start
+    (:mod:`skidnav.experiments.reference.oracle`, :data:`DEFAULTS`' sample count, seed 0), what
+    :func:`convergence_episode` judges a training log against.
+
+    Raises:
+        UserError: ``env`` is not the skid-steer env on kinematic dynamics (no oracle).
+    """
     from skidnav.experiments.reference.oracle import load_or_compute_oracle
 
     nav = env.unwrapped
