@@ -5,7 +5,7 @@
 >>> MPPIConfig(temperature=0.0)
 Traceback (most recent call last):
 ...
-ValueError: expected temperature to be a finite number > 0, got 0.0
+ValueError: expected temperature to be a finite number in (0, 1e+12], got 0.0
 """
 
 from __future__ import annotations
@@ -56,8 +56,9 @@ class MPPIConfig(KinematicModelFields):
     """γ [cost units] of MPPI's control-cost term γ Σ_t U_tᵀ Σ⁻¹ ε_t, ≥ 0. Williams et al.
     (2017) use γ = λ; it amounts to a quadratic cost ½ γ uᵀ Σ⁻¹ u on the wheel speeds, at
     λ = 1 and σ = 0.6 rad/s about 8 per control step at top speed, eight times the time cost
-    of a step: the robot then stood still (measured: docs/agents/mppi-kinematic.md). 0 (the
-    default) leaves time and collisions the only costs."""
+    of a step: the robot then crawled, 1210 actions to the free map's goal against 100
+    (docs/agents/mppi-kinematic.md). 0 (the default) leaves time and collisions the only
+    costs."""
     noise_std: float = 0.6
     """σ [rad/s], the standard deviation of each wheel's sampled perturbation, > 0."""
     noise_correlation: float = 0.5

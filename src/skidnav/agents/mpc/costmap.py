@@ -25,11 +25,11 @@ from its cell to the first cell w at least ``lookahead`` metres along the route 
 the goal); then D(w) + |(x, y) − centre(w)| / step, plus ``heading_weight`` × the time to turn,
 at the nominal top yaw rate, from ψ to face the centre of w — or to back towards it, whichever
 is the smaller turn (the robot drives backwards as fast as forwards). In the goal cell: 0. The
-look-ahead (ours, as the look-ahead point of pure pursuit, Coulter 1992) keeps the aim steady:
-aimed at the next cell, the bearing swings by a radian as the robot crosses its own cell, and
-the heading term's noise drowned the progress of a 2-s horizon. Measured along the route, not
-in a straight line, so that the aim turns with the route around a wall found in front of the
-robot instead of pointing through it.
+look-ahead (ours, as the look-ahead point of pure pursuit, Coulter 1992) steadies the aim, whose
+bearing to the next cell swings by a radian as the robot crosses its own cell; measured along the
+route, not in a straight line, so that it turns with the route around a wall found in front of
+the robot instead of pointing through it. (Its benefit is not shown: on the free map the next
+cell as the aim reaches the goal as fast, docs/agents/mppi-kinematic.md.)
 """
 
 from __future__ import annotations
