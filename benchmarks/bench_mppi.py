@@ -25,7 +25,7 @@ import skidnav  # noqa: F401  (registers the env)
 from skidnav.agents.mpc.agent import MPPIKinematicAgent
 from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.rollouts import RolloutDraws, rollout_costs
-from skidnav.agents.mpc.training import run_episode
+from skidnav.agents.training import run_episode
 
 CONTROL_PERIOD = 0.1
 SETTINGS = ((256, 20), (256, 40), (1024, 40))  # (K, H)
@@ -235,6 +235,30 @@ def map_change_seconds(agent: MPPIKinematicAgent) -> dict[str, float]:
             lambda: evidence.reweigh(mean, model_changed=True), 3
         ),
     }
+
+
+def rollout_rates(quick: bool) -> tuple[float, float]:
+    """Sequences/s of the compiled K × H batch and of its NumPy twin on the same sequences and
+    draws (K = 256, H = 40; their costs checked equal): a key figure of ``make bench``
+    (:mod:`key_figures`) and of the speed guard."""
+    agent, pose = driven_agent(256, 40)
+    controls, draws = batch(agent)
+    compiled = kernel_costs(agent, pose, controls, draws)
+    assert np.allclose(compiled, numpy_rollout_costs(agent, pose, controls, draws), atol=1e-9)
+    kernel = median_seconds(lambda: kernel_costs(agent, pose, controls, draws), 7 if quick else 21)
+    twin = median_seconds(
+        lambda: numpy_rollout_costs(agent, pose, controls, draws), 3 if quick else 7
+    )
+    return controls.shape[0] / kernel, controls.shape[0] / twin
+
+
+def real_time_rates(quick: bool) -> tuple[float, float]:
+    """Control steps planned per second (one whole :meth:`MPPIKinematicAgent.act`, K = 256,
+    H = 40) and the 10 per second of the 0.1-s control period: a key figure of ``make bench``,
+    against a fixed period, so not one the speed guard checks."""
+    agent, pose = driven_agent(256, 40)
+    step = median_seconds(lambda: agent.act(pose), 7 if quick else REPEATS)
+    return 1.0 / step, 1.0 / CONTROL_PERIOD
 
 
 def report(samples: int, horizon: int) -> None:

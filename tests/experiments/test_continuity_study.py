@@ -26,7 +26,8 @@ from skidnav.studies.continuity.traces import comparison_table
 from tests.experiments.exp_support import cli_command, cli_env
 
 TINY = Path(__file__).with_name("continuity-tiny.toml")
-"""q-learning, dyna-full, cmaes and the goal tracker × 2 seeds on the free map: 8 runs."""
+"""q-learning, dyna-full, cmaes, mppi-kinematic and the goal tracker × 2 seeds on the free map:
+10 runs."""
 
 
 def rollouts(out: Path) -> pd.DataFrame:
@@ -74,26 +75,26 @@ def test_the_shortcut_saves_the_config_it_runs_and_resumes_it(
     out = tmp_path / "cmp"
     argv = [
         "study", "continuity", "--map", "free", "--max-steps", "40", "--seeds", "2",
-        "--learners", "q-learning,dyna-full,cmaes,goal-tracker", "--episodes", "8",
+        "--learners", "q-learning,dyna-full,cmaes,mppi-kinematic,goal-tracker", "--episodes", "8",
         "--generations", "3", "--population", "6", "--rollouts", "2", "--backend", "serial",
         "--no-progress", "--out", str(out),
     ]  # fmt: skip
     assert main(argv) == 0
-    assert "8 runs in" in capsys.readouterr().out
+    assert "10 runs in" in capsys.readouterr().out
     assert 'kind = "continuity"' in (out / "config.toml").read_text()
     # the tiny config's study under another name: the same runs, numbers and table
     pd.testing.assert_frame_equal(rollouts(out), rollouts(serial_run))
     expected = read_results(serial_run).table.to_csv(index=False)
     assert (out / "table.csv").read_text() == expected
     assert list(pd.read_csv(out / "runs.csv")["learner"]).count("cmaes") == 2
-    assert (out / "table.md").read_text().count("\n| ") == 5
+    assert (out / "table.md").read_text().count("\n| ") == 6
     assert (out / "trajectories.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # again, or through skidnav run on its saved config: nothing to run
     assert main(argv) == 0
-    assert "(0 run now, 8 already done)" in capsys.readouterr().out
+    assert "(0 run now, 10 already done)" in capsys.readouterr().out
     saved = ["run", str(out / "config.toml"), "--out", str(out), "--no-progress"]
     assert main(saved) == 0
-    assert "(0 run now, 8 already done)" in capsys.readouterr().out
+    assert "(0 run now, 10 already done)" in capsys.readouterr().out
 
 
 def test_the_report_is_the_study_s_in_the_report_page(serial_run: Path, tmp_path: Path) -> None:
@@ -130,7 +131,7 @@ def test_a_bad_study_config_is_one_line(
 
 
 KILLED = {
-    'learners = ["q-learning", "dyna-full", "cmaes", "goal-tracker"]': (
+    'learners = ["q-learning", "dyna-full", "cmaes", "mppi-kinematic", "goal-tracker"]': (
         'learners = ["q-learning", "cmaes"]'
     ),
     "seeds = 2": "seeds = 3",

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from skidnav.agents.mpc.agent import MPPIKinematicAgent, make_mppi_agent
-from skidnav.agents.mpc.training import policy_run, train_mppi
+from skidnav.agents.mpc.training import train_mppi
 from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
+from skidnav.agents.training import greedy_run
 from skidnav.errors import UserError
 from skidnav.world.discretization import Discretization
 from tests.agents.mpc.support import (
@@ -136,7 +137,7 @@ def test_the_frozen_policy_is_a_wheel_speed_policy_on_features_and_poses() -> No
     agent.evidence.hits[6, 5] = 5  # later learning does not reach a frozen policy
     agent.evidence.reweigh(agent.dynamics.mean)
     assert not policy.cost_map.blocked[6, 5]
-    rollout = policy_run(agent.policy(seed=0), SealedEnv(env), 5, seed=0)
+    rollout = greedy_run(agent, SealedEnv(env), 5, seed=0)
     assert rollout.length == -1  # five actions do not reach the goal
 
 

@@ -54,6 +54,9 @@ AGENT_NAME = "mppi-kinematic"
 SAVE_FORMAT = "skidnav-mppi-agent"
 """The ``"format"`` of a saved agent's JSON (also a policy file: the frozen planner)."""
 SAVE_VERSION = 1
+GREEDY_SEED = 0
+"""The seed of the frozen planner :meth:`MPPIKinematicAgent.greedy_action` rolls out: every
+greedy rollout draws the same numbers, none of the agent's."""
 
 
 def pose_of(observation: Any, lidar_rays: int) -> np.ndarray:
@@ -130,6 +133,7 @@ class MPPIKinematicAgent:
         """Episodes ended (:meth:`end_episode`)."""
         self.rollouts = 0
         """Sequences rolled out through the model while acting (K per action)."""
+        self._greedy: MPPIPolicy | None = None  # the frozen planner of the greedy rollout
 
     def _initial_dynamics(self, true_coefficients: np.ndarray | None) -> SampledDynamics:
         """The dynamics the agent starts with, the model held as ``kinematic_model`` asks."""
@@ -178,6 +182,21 @@ class MPPIKinematicAgent:
         self.rollouts += self.config.samples
         return np.array([left, right])
 
+    def greedy_action(self, observation: Any) -> np.ndarray:
+        """The wheel speeds (ω_L, ω_R) [rad/s], float64 (2,), that the agent's planner frozen as
+        it is now commands at ``observation``: the greedy evaluation, which learns nothing and
+        draws none of the agent's numbers. The frozen planner (:meth:`policy` seeded
+        :data:`GREEDY_SEED`) is made at the first call after the agent last learned or a greedy
+        rollout started (:meth:`start_greedy_rollout`), and keeps its plan between calls."""
+        if self._greedy is None:
+            self._greedy = self.policy(GREEDY_SEED)
+        return np.array(self._greedy.wheel_speeds(observation))
+
+    def start_greedy_rollout(self) -> None:
+        """A greedy rollout starts: the next :meth:`greedy_action` freezes the planner afresh
+        (:class:`~skidnav.agents.training.RolloutState`)."""
+        self._greedy = None
+
     def observe(
         self,
         observation: Any,
@@ -197,6 +216,7 @@ class MPPIKinematicAgent:
         log = np.asarray(info.get("kinematic_log", np.zeros((0, 6))), dtype=np.float64)
         log = log.reshape(-1, 6)
         self.steps += 1
+        self._greedy = None  # the frozen planner no longer is the agent's
         self.model.feed(log)
         if self.model.maybe_refit():
             update_dynamics(self.dynamics, self.model)
@@ -208,6 +228,7 @@ class MPPIKinematicAgent:
         """Forget the plan (the next episode starts from rest)."""
         self.planner.reset()
         self.episodes += 1
+        self._greedy = None
 
     def policy(self, seed: int = 0) -> MPPIPolicy:
         """The agent's planner frozen as it is now (its model and map copied), drawing from a
@@ -266,6 +287,10 @@ class MPPIPolicy:
 
     def __init__(self, agent: MPPIKinematicAgent, seed: int) -> None:
         self.lidar_rays, self.lidar_range = agent.lidar_rays, agent.lidar_range
+        self.goal = agent.goal
+        """The goal cell (i, j) it drives to."""
+        self.control_period = agent.robot.action_duration
+        """The duration [s] of one action it plans with: a run must hold each command as long."""
         self.dynamics = SampledDynamics(*(np.copy(array) for array in agent.dynamics))
         self.cost_map = CostMap(*(np.copy(array) for array in agent.evidence.cost_map))
         self.costs = agent.costs
@@ -280,6 +305,11 @@ class MPPIPolicy:
 
     def reset(self) -> None:
         """Forget the plan."""
+        self.planner.reset()
+
+    def start_greedy_rollout(self) -> None:
+        """A rollout (an episode) starts: forget the plan
+        (:class:`~skidnav.agents.training.RolloutState`)."""
         self.planner.reset()
 
 
