@@ -23,6 +23,8 @@ from skidnav.studies.continuity.comparison import run_comparison, run_seed
 from skidnav.studies.continuity.results import read_results
 from skidnav.studies.continuity.runfile import CONTINUITY_LAYOUT
 from skidnav.studies.continuity.traces import comparison_table
+from skidnav.studies.continuity.worlds import markdown as markdown_of_worlds
+from skidnav.studies.continuity.worlds import pooled, world_rows
 from tests.experiments.exp_support import cli_command, cli_env
 
 TINY = Path(__file__).with_name("continuity-tiny.toml")
@@ -189,3 +191,21 @@ def test_a_sigkilled_study_resumes_without_running_a_finished_run_again(tmp_path
     assert main(["run", str(config), "--out", str(reference), "--backend", "serial"]) == 0
     pd.testing.assert_frame_equal(rollouts(out), rollouts(reference))
     pd.testing.assert_frame_equal(read_results(out).table, read_results(reference).table)
+
+
+def test_studies_of_several_worlds_pool_learner_by_learner(serial_run: Path) -> None:
+    rows = world_rows([serial_run, serial_run])  # the same world twice: two alike worlds
+    serial = read_results(serial_run)
+    assert len(rows) == 2 * len(serial.config.learners)
+    successes = serial.table[serial.table["metric"] == "success"].set_index("policy")["mean"]
+    for row in rows.to_dict("records"):
+        assert row["success"] == pytest.approx(successes[row["learner"]])
+        runs = serial.runs[serial.runs["learner"] == row["learner"]]
+        assert row["learned"] == runs["episodes_to_learn"].notna().sum()
+    table = pooled(rows, np.random.default_rng(0)).set_index("learner")
+    assert (table["worlds"] == 2).all() and table.loc["goal-tracker", "runs"] == 2
+    tracker = table.loc["goal-tracker"]
+    assert tracker["success"] == 1.0 and tracker["worlds_good"] == 2
+    assert table.loc["cmaes", "episodes_used"] == 36
+    text = markdown_of_worlds(rows, pooled(rows, np.random.default_rng(0)))
+    assert text.count("\n| ") == len(rows) + 1 + len(table)  # the rows, the second header
