@@ -2,7 +2,7 @@
 
 :func:`entry` gives the :class:`AgentEntry` of a registered name — its family, the observation
 it learns over, its config class, how it is built and how it is trained — and callers ask it
-once and use the entry. Three families, each with its own registry and protocol
+once and use the entry. Four families, each with its own registry and protocol
 (:mod:`skidnav.agents.interface`):
 
 * **tabular** (:mod:`skidnav.agents.tabular.registry`): a Q table over the env's ``Discrete``
