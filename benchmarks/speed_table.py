@@ -42,9 +42,10 @@ def key_table(figures: Figures) -> list[str]:
         compiled = 1e6 / figures[KEY.format("time_per_million"), name]
         twin = compiled * figures[KEY.format("relative_time"), name]
         ratio = time_to_learn.describe(compiled / twin, "×")
+        floor = f"{figure.floor:g}×" if figure.guarded else "not guarded"
         rows.append(
             f"| {figure.compiled} | {rate(compiled)} {figure.unit}/s | {figure.twin} "
-            f"| {rate(twin)}/s | **{ratio}** | {figure.floor:g}× |"
+            f"| {rate(twin)}/s | **{ratio}** | {floor} |"
         )
     return rows
 

@@ -45,7 +45,9 @@ def add_parser(subparsers: Any) -> None:
     )
     parser.add_argument("--seeds", type=int, default=3, help="runs per learner")
     parser.add_argument("--root-seed", type=int, default=0)
-    parser.add_argument("--episodes", type=int, default=300, help="discrete and deep learners")
+    parser.add_argument(
+        "--episodes", type=int, default=300, help="discrete, deep and model-predictive learners"
+    )
     parser.add_argument("--generations", type=int, default=100, help="CMA-ES generations")
     parser.add_argument("--population", type=int, default=32, help="CMA-ES candidates")
     parser.add_argument("--rollouts", type=int, default=5, help="evaluation rollouts per run")

@@ -201,7 +201,8 @@ def run_robot(
     policy_name: str | None = None
     if settings.agent is None:
         pilot, policy_name = select_policy(settings.policy, settings.policy_file, config, robot)
-        check_policy(pilot, policy_name, grid_map, grid)
+        action_duration = config.run.period * config.run.substeps
+        check_policy(pilot, policy_name, grid_map, grid, action_duration)
         first_episode, state = _resume_policy(settings, policy_name)
     else:
         context = agent_context(settings.agent, robot, grid)
