@@ -29,9 +29,9 @@ from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.dynamics import SampledDynamics
 from skidnav.agents.tabular.agent import generator_from_state, save_paths
 from skidnav.agents.tabular.model_based import geometry_from_json
-from skidnav.errors import CorruptFileError, UserError, first_line, shown
+from skidnav.errors import UserError, shown
 from skidnav.models.kinematic import N_COEFFICIENTS, KinematicModel
-from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, read_json
+from skidnav.savedfile import ArraySpec, SavedArchive, loading, read_json
 
 MAX_AGENT_JSON_BYTES = 2**20
 """Largest ``.json`` of a saved agent [bytes]."""
@@ -45,30 +45,16 @@ def load_mppi_agent(path: str | Path) -> MPPIKinematicAgent:
     line naming the file when either file is missing, damaged or inconsistent (module doc)."""
     npz_path, json_path = save_paths(path)
     meta = read_json(json_path, max_bytes=MAX_AGENT_JSON_BYTES, what="agent file")
-    try:
+    with loading(json_path, "agent", (ValueError, TypeError, OverflowError, UserError)):
         agent = _fresh_agent(meta)
-    except KeyError as error:
-        raise CorruptFileError(
-            f"{json_path}: cannot load agent: missing {error.args[0]!r}"
-        ) from None
-    except (ValueError, TypeError, OverflowError, UserError) as error:
-        raise CorruptFileError(f"{json_path}: cannot load agent: {first_line(error)}") from None
     specs = {
         name: ArraySpec(tuple(array.shape), array.dtype.str)
         for name, array in agent.state_arrays().items()
     }
-    try:
+    with loading(npz_path, "agent"):
         with SavedArchive(npz_path) as archive:
             arrays = archive.read_all(specs)
         restore_arrays(agent, arrays)
-    except KeyError as error:
-        raise CorruptFileError(
-            f"{npz_path}: cannot load agent: missing {error.args[0]!r}"
-        ) from None
-    except (*READ_ERRORS, UserError) as error:
-        if isinstance(error, CorruptFileError) and str(error).startswith(f"{npz_path}: "):
-            raise
-        raise CorruptFileError(f"{npz_path}: cannot load agent: {first_line(error)}") from None
     return agent
 
 
