@@ -1,6 +1,6 @@
 """`make bench`: run every benchmarks/bench_*.py in turn (each prints its own figures), then
 record the key figures and the time to learn for the current commit (:mod:`history`, airspeed
-velocity) and write them as the speed table of docs/speed.md and the README
+velocity) and write them as the speed table of docs/speed.md
 (:mod:`speed_table`)."""
 
 from __future__ import annotations

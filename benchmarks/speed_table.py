@@ -1,6 +1,7 @@
 """The speed table of the docs, generated: ``make bench`` writes it from the figures it has just
-recorded (:mod:`history`) into ``docs/speed.md`` and the README, between :data:`BEGIN` and
-:data:`END`; nothing there is kept by hand."""
+recorded (:mod:`history`) into ``docs/speed.md`` (the site's Speed page), between :data:`BEGIN`
+and :data:`END`; nothing there is kept by hand, and each run replaces the table with that
+machine's figures, its commit and the date."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import time_to_learn
 from history import MACHINE, RESULTS, Figures, Record
 
 ROOT = Path(__file__).resolve().parents[1]
-TARGETS = (ROOT / "docs" / "speed.md", ROOT / "README.md")
+TARGETS = (ROOT / "docs" / "speed.md",)
 BEGIN = "<!-- speed table: written by `make bench` (benchmarks/speed_table.py) -->"
 END = "<!-- end of the speed table -->"
 KEY = "figures.KeyFigures.track_{}"
@@ -41,9 +42,10 @@ def key_table(figures: Figures) -> list[str]:
         compiled = 1e6 / figures[KEY.format("time_per_million"), name]
         twin = compiled * figures[KEY.format("relative_time"), name]
         ratio = time_to_learn.describe(compiled / twin, "×")
+        floor = f"{figure.floor:g}×" if figure.guarded else "not guarded"
         rows.append(
             f"| {figure.compiled} | {rate(compiled)} {figure.unit}/s | {figure.twin} "
-            f"| {rate(twin)}/s | **{ratio}** | {figure.floor:g}× |"
+            f"| {rate(twin)}/s | **{ratio}** | {floor} |"
         )
     return rows
 

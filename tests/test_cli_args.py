@@ -40,7 +40,9 @@ def test_a_config_that_is_not_text_is_one_line(
 def test_a_report_into_a_missing_folder_is_one_line(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setattr(html, "build_report", lambda run_dir, sections=(): "<p>report</p>")
+    monkeypatch.setattr(
+        html, "render_report", lambda run_dir, sections=(), progress=False: ("<p>report</p>", "")
+    )
     target = tmp_path / "missing" / "r.html"
     assert main(["report", str(tmp_path), "-o", str(target)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()

@@ -14,7 +14,6 @@ from skidnav.cli import COMMANDS, main, requested_modules
 @pytest.mark.parametrize(
     ("argv", "line"),
     [
-        ([], "skidnav: error: the following arguments are required: command"),
         (["nosuch"], "skidnav: error: argument command: invalid choice: 'nosuch'"),
         (["run"], "skidnav: error: run: the following arguments are required: config"),
         (["run", "c.toml", "--jobs", "two"], "skidnav: error: run: argument --jobs"),
@@ -23,7 +22,7 @@ from skidnav.cli import COMMANDS, main, requested_modules
             "skidnav: error: world map generate: argument --kind",
         ),
         (["robot", "run", "--bogus"], "skidnav: error: robot run: "),
-        (["camera"], "skidnav: error: camera: the following arguments are required"),
+        (["robot", "sim-server"], "skidnav: error: robot sim-server: the following arguments"),
     ],
 )
 def test_an_argument_error_is_one_line(
@@ -36,6 +35,31 @@ def test_an_argument_error_is_one_line(
     lines = captured.err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(line), captured.err
     assert captured.out == ""
+
+
+@pytest.mark.parametrize(
+    ("argv", "usage", "line"),
+    [
+        (
+            [],
+            "usage: skidnav [-h]",
+            "skidnav: error: the following arguments are required: command",
+        ),
+        (["camera"], "usage: skidnav camera [-h]", "skidnav: error: camera: the following"),
+        (["study"], "usage: skidnav study [-h]", "skidnav: error: study: the following"),
+    ],
+)
+def test_a_command_group_without_its_verb_shows_its_usage_then_the_error(
+    argv: list[str], usage: str, line: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with pytest.raises(SystemExit) as leave:
+        main(argv)
+    assert leave.value.code == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines[0].startswith(usage) and lines[-1].startswith(line)
+    verbs = {"": "run,report,tune,study", "camera": "calibrate", "study": "continuity"}
+    assert verbs[" ".join(argv)] in " ".join(lines[:-1])  # the usage lists the verbs
+    assert len(lines) <= 4
 
 
 def test_only_the_named_subcommand_is_imported() -> None:

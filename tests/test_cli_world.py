@@ -33,6 +33,22 @@ def test_map_generate_then_show_as_text_and_png(tmp_path, capsys):
     png = tmp_path / "maze.png"
     assert main(["world", "map", "show", str(path), "--png", str(png)]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    _assert_start_green_goal_red_with_a_legend(png)
+
+
+def _assert_start_green_goal_red_with_a_legend(png) -> None:
+    """The picture's start cell is green and its goal cell red (skidnav.world.colours), and the
+    strip below the arena shows both colours beside their names."""
+    from PIL import Image
+
+    from skidnav.world.colours import GOAL, START
+    from skidnav.world.rendering import LEGEND_HEIGHT
+
+    pixels = np.asarray(Image.open(png).convert("RGB"))
+    arena, legend = pixels[:-LEGEND_HEIGHT], pixels[-LEGEND_HEIGHT:]
+    for colour in (START, GOAL):
+        assert (arena == colour).all(axis=2).sum() > 50  # a whole cell
+        assert (legend == colour).all(axis=2).sum() > 50  # its swatch
 
 
 def test_simulate_writes_a_picture_and_csv(tmp_path, capsys):
@@ -54,6 +70,7 @@ def test_simulate_writes_a_picture_and_csv(tmp_path, capsys):
     assert code == 0
     assert "6 actions" in capsys.readouterr().out
     assert png.read_bytes()[:4] == b"\x89PNG"
+    _assert_start_green_goal_red_with_a_legend(png)
     lines = table.read_text().splitlines()
     assert lines[0] == "step,action,x,y,heading,reward,collision" and len(lines) == 8
     assert b"\r" not in table.read_bytes()  # plain "\n" line endings on every platform

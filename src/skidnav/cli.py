@@ -15,6 +15,7 @@ from collections.abc import Sequence
 
 from skidnav.commands.parsing import OneLineParser
 from skidnav.errors import EXIT_RUNS_FAILED, RunsFailedError, UserError
+from skidnav.experiments.provenance import skidnav_version
 
 COMMANDS: dict[str, str | dict[str, str]] = {
     "run": "skidnav.commands.run",
@@ -67,6 +68,10 @@ def build_parser(commands: dict[str, str | dict[str, str]] = COMMANDS) -> OneLin
         prog="skidnav", description="Model-based RL navigation for skid-steer robots."
     )
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    parser.add_argument(
+        "--version", action="version", version=f"skidnav {skidnav_version()}",
+        help="print the installed version and exit",
+    )  # fmt: skip
     subparsers = parser.add_subparsers(dest="command", required=True)
     for name, entry in commands.items():
         if isinstance(entry, str):

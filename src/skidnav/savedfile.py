@@ -29,6 +29,7 @@ Writing is :mod:`skidnav.atomicfile`.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import math
@@ -38,7 +39,7 @@ import tokenize
 import tomllib
 import zipfile
 import zlib
-from collections.abc import Collection, Mapping
+from collections.abc import Collection, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, BinaryIO, NamedTuple
@@ -75,6 +76,24 @@ READ_ERRORS = (
 compression-method field; NumPy parses a ``.npy`` header as a Python literal, and one that is
 not raises SyntaxError, or TokenError from its second try); readers turn them into one
 CorruptFileError line."""
+
+
+@contextlib.contextmanager
+def loading(
+    path: Path, what: str, errors: tuple[type[Exception], ...] = (*READ_ERRORS, UserError)
+) -> Iterator[None]:
+    """Read and check a part of a saved ``what`` (an agent…) from ``path`` inside the block; what
+    it raises becomes one CorruptFileError line naming ``path``: ``"PATH: cannot load WHAT:
+    missing 'KEY'"`` for a missing key, ``"PATH: cannot load WHAT: PROBLEM"`` for ``errors``. A
+    CorruptFileError already naming ``path`` passes unchanged."""
+    try:
+        yield
+    except KeyError as error:
+        raise CorruptFileError(f"{path}: cannot load {what}: missing {error.args[0]!r}") from None
+    except errors as error:
+        if isinstance(error, CorruptFileError) and str(error).startswith(f"{path}: "):
+            raise
+        raise CorruptFileError(f"{path}: cannot load {what}: {first_line(error)}") from None
 
 
 def _refuse_constant(name: str) -> Any:

@@ -17,6 +17,9 @@ Two consumers never share a stream (architecture.md, "Randomness").
   dropped poses; the env's ``reset`` seed in ``skidnav world simulate``), the agent or random
   policy. The env's ``world_seed`` uses the first two, so the env and the sim server given one
   seed build the same map and floor.
+* :data:`TRAINING_ROLES` — the integer seed of one agent trained from Python (:mod:`skidnav.api`):
+  the agent and the training episodes (as :data:`RUN_ROLES`), and the evaluation rollouts' seeds
+  (spawned once per rollout).
 * :data:`GENERALISATION_ROLES` — the root seed of ``skidnav study generalise``: the training
   worlds and the held-out worlds (each spawned once per world), the runs (spawned once per seed,
   each with :data:`RUN_ROLES`) and the evaluation rollouts' seeds (the same for every agent and
@@ -40,6 +43,8 @@ ARENA_ROLES = ("map", "slip", "robot", "agent")
 """Children of the integer seed of one world outside an experiment."""
 GENERALISATION_ROLES = ("training", "held-out", "run", "evaluation")
 """Children of the root seed of a generalisation study."""
+TRAINING_ROLES = ("agent", "episodes", "evaluation")
+"""Children of the integer seed of one agent trained from Python (:mod:`skidnav.api`)."""
 
 Seed = int | np.random.SeedSequence
 

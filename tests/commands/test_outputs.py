@@ -24,7 +24,7 @@ REALTIME = REPOSITORY / "configs" / "realtime.toml"
 COMMANDS: dict[str, tuple[list[str], str]] = {
     # name: (arguments, {out} the output, the function that starts the work)
     "run": (["run", "{config}", "--out", "{dir}"], "skidnav.commands.run.run_experiment"),
-    "tune": (["tune", "{tune}", "--out", "{dir}"], "skidnav.commands.tune.tune_experiment"),
+    "tune": (["tune", "{tune}", "--out", "{dir}"], "skidnav.studies.tuning.search.tune_experiment"),
     "generalise": (
         ["study", "generalise", "--out", "{dir}"],
         "skidnav.commands.run.run_experiment",
@@ -69,11 +69,11 @@ COMMANDS: dict[str, tuple[list[str], str]] = {
     ),
     "camera calibrate": (
         ["camera", "calibrate", "--source", "0", "--out", "{file}"],
-        "skidnav.commands.camera.open_frames",
+        "skidnav.commands.camera_actions.open_frames",
     ),
     "camera intrinsics": (
         ["camera", "intrinsics", "--images", "{tmp}", "--out", "{file}"],
-        "skidnav.commands.camera.read_images",
+        "skidnav.commands.camera_actions.read_images",
     ),
     "camera board": (
         ["camera", "board", "--out", "{file}"],

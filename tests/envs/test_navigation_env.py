@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 import skidnav  # noqa: F401  (registers the env)
 from skidnav.envs.navigation import SkidSteerNavEnv
 from skidnav.robot.slip import SlipField, make_slip_field
+from skidnav.world.colours import GOAL, START
 from skidnav.world.discretization import Discretization
 from skidnav.world.mapfile import parse_map
 
@@ -176,7 +177,7 @@ def test_pose_observation_and_rendering():
     env.step(0)
     frame = env.render()
     assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
-    assert (frame == [40, 170, 70]).all(axis=2).any()  # the goal is drawn
+    assert (frame == GOAL).all(axis=2).any() and (frame == START).all(axis=2).any()
     text = make_env(render_mode="ansi")
     text.reset(seed=0)
     rows = text.render().splitlines()

@@ -8,6 +8,7 @@ import pytest
 
 from skidnav.experiments.configfile import parse_config
 from skidnav.experiments.runner import run_experiment
+from tests.browser_support import browser  # noqa: F401  (a fixture, found by name)
 from tests.experiments.exp_support import TINY_TOML
 
 

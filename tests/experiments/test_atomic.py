@@ -81,7 +81,11 @@ def test_a_report_failing_mid_write_keeps_the_previous_one(
     stale = run_dir / f".report.html.{_dead_pid()}-00000000.tmp"
     stale.write_text("<html>half")
     # The writing is under test, not the (slow) analysis: a large report built instantly.
-    monkeypatch.setattr(html, "build_report", lambda run_dir, sections=(): "<p>new</p>" * 10**6)
+    monkeypatch.setattr(
+        html,
+        "render_report",
+        lambda run_dir, sections=(), progress=False: ("<p>new</p>" * 10**6, ""),
+    )
     monkeypatch.setattr(os, "fsync", _fail)
     assert main(["report", str(run_dir)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
@@ -89,7 +93,9 @@ def test_a_report_failing_mid_write_keeps_the_previous_one(
     assert report.read_text() == "<html>previous report</html>"
     assert sorted(p.name for p in run_dir.iterdir()) == ["report.html"]  # the stale one went too
     monkeypatch.undo()
-    monkeypatch.setattr(html, "build_report", lambda run_dir, sections=(): "<p>new</p>")
+    monkeypatch.setattr(
+        html, "render_report", lambda run_dir, sections=(), progress=False: ("<p>new</p>", "")
+    )
     assert main(["report", str(run_dir)]) == 0
     assert report.read_text() == "<p>new</p>" and len(list(run_dir.iterdir())) == 1
 

@@ -23,10 +23,13 @@ from skidnav.studies.continuity.comparison import run_comparison, run_seed
 from skidnav.studies.continuity.results import read_results
 from skidnav.studies.continuity.runfile import CONTINUITY_LAYOUT
 from skidnav.studies.continuity.traces import comparison_table
+from skidnav.studies.continuity.worlds import markdown as markdown_of_worlds
+from skidnav.studies.continuity.worlds import pooled, world_rows
 from tests.experiments.exp_support import cli_command, cli_env
 
 TINY = Path(__file__).with_name("continuity-tiny.toml")
-"""q-learning, dyna-full, cmaes and the goal tracker × 2 seeds on the free map: 8 runs."""
+"""q-learning, dyna-full, cmaes, mppi-kinematic and the goal tracker × 2 seeds on the free map:
+10 runs."""
 
 
 def rollouts(out: Path) -> pd.DataFrame:
@@ -74,26 +77,26 @@ def test_the_shortcut_saves_the_config_it_runs_and_resumes_it(
     out = tmp_path / "cmp"
     argv = [
         "study", "continuity", "--map", "free", "--max-steps", "40", "--seeds", "2",
-        "--learners", "q-learning,dyna-full,cmaes,goal-tracker", "--episodes", "8",
+        "--learners", "q-learning,dyna-full,cmaes,mppi-kinematic,goal-tracker", "--episodes", "8",
         "--generations", "3", "--population", "6", "--rollouts", "2", "--backend", "serial",
         "--no-progress", "--out", str(out),
     ]  # fmt: skip
     assert main(argv) == 0
-    assert "8 runs in" in capsys.readouterr().out
+    assert "10 runs in" in capsys.readouterr().out
     assert 'kind = "continuity"' in (out / "config.toml").read_text()
     # the tiny config's study under another name: the same runs, numbers and table
     pd.testing.assert_frame_equal(rollouts(out), rollouts(serial_run))
     expected = read_results(serial_run).table.to_csv(index=False)
     assert (out / "table.csv").read_text() == expected
     assert list(pd.read_csv(out / "runs.csv")["learner"]).count("cmaes") == 2
-    assert (out / "table.md").read_text().count("\n| ") == 5
+    assert (out / "table.md").read_text().count("\n| ") == 6
     assert (out / "trajectories.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # again, or through skidnav run on its saved config: nothing to run
     assert main(argv) == 0
-    assert "(0 run now, 8 already done)" in capsys.readouterr().out
+    assert "(0 run now, 10 already done)" in capsys.readouterr().out
     saved = ["run", str(out / "config.toml"), "--out", str(out), "--no-progress"]
     assert main(saved) == 0
-    assert "(0 run now, 8 already done)" in capsys.readouterr().out
+    assert "(0 run now, 10 already done)" in capsys.readouterr().out
 
 
 def test_the_report_is_the_study_s_in_the_report_page(serial_run: Path, tmp_path: Path) -> None:
@@ -130,7 +133,7 @@ def test_a_bad_study_config_is_one_line(
 
 
 KILLED = {
-    'learners = ["q-learning", "dyna-full", "cmaes", "goal-tracker"]': (
+    'learners = ["q-learning", "dyna-full", "cmaes", "mppi-kinematic", "goal-tracker"]': (
         'learners = ["q-learning", "cmaes"]'
     ),
     "seeds = 2": "seeds = 3",
@@ -188,3 +191,21 @@ def test_a_sigkilled_study_resumes_without_running_a_finished_run_again(tmp_path
     assert main(["run", str(config), "--out", str(reference), "--backend", "serial"]) == 0
     pd.testing.assert_frame_equal(rollouts(out), rollouts(reference))
     pd.testing.assert_frame_equal(read_results(out).table, read_results(reference).table)
+
+
+def test_studies_of_several_worlds_pool_learner_by_learner(serial_run: Path) -> None:
+    rows = world_rows([serial_run, serial_run])  # the same world twice: two alike worlds
+    serial = read_results(serial_run)
+    assert len(rows) == 2 * len(serial.config.learners)
+    successes = serial.table[serial.table["metric"] == "success"].set_index("policy")["mean"]
+    for row in rows.to_dict("records"):
+        assert row["success"] == pytest.approx(successes[row["learner"]])
+        runs = serial.runs[serial.runs["learner"] == row["learner"]]
+        assert row["learned"] == runs["episodes_to_learn"].notna().sum()
+    table = pooled(rows, np.random.default_rng(0)).set_index("learner")
+    assert (table["worlds"] == 2).all() and table.loc["goal-tracker", "runs"] == 2
+    tracker = table.loc["goal-tracker"]
+    assert tracker["success"] == 1.0 and tracker["worlds_good"] == 2
+    assert table.loc["cmaes", "episodes_used"] == 36
+    text = markdown_of_worlds(rows, pooled(rows, np.random.default_rng(0)))
+    assert text.count("\n| ") == len(rows) + 1 + len(table)  # the rows, the second header

@@ -136,11 +136,11 @@ def test_a_gap_study_runs_and_tabulates(tmp_path):
     optimum = optimum_rows(summaries, config)
     assert optimum["best grid (worlds)"].iloc[0] in ("13 × 13 × 20 (1)", "25 × 25 × 20 (1)")
     gap = summaries["final_length_m"] / summaries["optimum_length_m"] - 1  # NaN if not reached
-    shown = [f"{100 * g:.1f}" if g == g else "–" for g in gap]
+    shown = [f"{100 * g:.1f}" if g == g else "n/a" for g in gap]
     assert rows["gap to optimum [%]"].tolist() == shown
     assert "<h2>Discretization gap</h2>" in gap_section(summaries, config)
     # the report draws it as a section the commands pass (the report imports no study)
-    page = write_results_report(tmp_path).read_text()
+    page = write_results_report(tmp_path).path.read_text()
     assert page.count("<h2>Discretization gap</h2>") == 1
     assert "<h2>Discretization gap</h2>" not in build_report(tmp_path)
 

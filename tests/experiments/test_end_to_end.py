@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import html
 import io
 import json
 import re
@@ -102,11 +103,12 @@ def test_report_cli_writes_one_self_contained_file(serial_results: Path, tmp_pat
         timeout=120,
     )
     assert result.returncode == 0, result.stderr
+    assert "report: " in result.stderr and "step" in result.stderr  # its progress bar
     text = output.read_text()
     images = re.findall(r'src="data:image/png;base64,([A-Za-z0-9+/=]+)"', text)
-    # Per map x preset cell (2 here): performance profiles, learning curves, metric strips,
-    # trajectories, value maps, policy maps; plus the rough / slippery success ratio.
-    assert len(images) == 2 * 6 + 1
+    # Per map x preset cell (2 here): performance profiles, greedy lengths, learning curves,
+    # metric strips, trajectories, value maps, policy maps; plus the rough / slippery ratio.
+    assert len(images) == 2 * 7 + 1
     assert all(base64.b64decode(image)[:8] == b"\x89PNG\r\n\x1a\n" for image in images)
     assert 'src="http' not in text and "<script" not in text
     for needle in (
@@ -120,6 +122,16 @@ def test_report_cli_writes_one_self_contained_file(serial_results: Path, tmp_pat
         "session started (UTC)",
     ):
         assert needle in text, needle
+    # The page leads with the verdict the command printed; 2 seeds: a caveat, no interval.
+    body = text.split("<body>", 1)[1]
+    assert body.startswith("<h1>") and body.split("</h1>", 1)[1].startswith('<p id="verdict">')
+    printed = result.stdout.splitlines()
+    assert printed[0].startswith("Verdict: ") and printed[1] == f"report: {output}"
+    assert "interval [" not in printed[0] and "Only 2 seeds per cell" in body
+    verdict = re.search(r'<p id="verdict"><b>Verdict:</b> ([^<]*)</p>', text)
+    assert verdict is not None and html.unescape(verdict.group(1)) == printed[0][9:]
+    assert body.index("<details>") > body.index("<h2>Convergence</h2>")
+    assert not re.search(r"\bnan\b", re.sub(r'src="data:[^"]*"', "", text))
     missing = subprocess.run(
         cli_command("report", str(tmp_path / "nothing")),
         capture_output=True,

@@ -16,6 +16,7 @@ from skidnav.studies.continuity.comparison import (
     ComparisonConfig,
     evaluation_seeds,
     first_learned,
+    mppi_params,
     run_comparison,
 )
 
@@ -37,6 +38,19 @@ def test_every_learner_meets_the_same_evaluation_seeds_and_budgets() -> None:
     again = run_comparison(config)
     assert [t.poses.tobytes() for r in runs for t in r.traces] == [
         t.poses.tobytes() for r in again for t in r.traces
+    ]
+
+
+def test_mppi_kinematic_plans_as_far_ahead_at_every_control_period_and_learns_in_a_few() -> None:
+    assert mppi_params(TINY) == {"horizon": 4}  # 4 s at 1 s per action
+    assert mppi_params(dataclasses.replace(TINY, control_period=0.1)) == {"horizon": 40}
+    config = dataclasses.replace(TINY, learners=("mppi-kinematic",), seeds=1)
+    run, again = (run_comparison(config)[0] for _ in range(2))
+    assert run.episodes_used == 8 and 1 <= run.episodes_to_learn <= 8
+    assert all(trace.terminated for trace in run.traces)  # 0.25 m away: its planner gets there
+    # each rollout from the same seeded planner, its plan forgotten: the same on every run
+    assert [t.commands.tobytes() for t in run.traces] == [
+        t.commands.tobytes() for t in again.traces
     ]
 
 

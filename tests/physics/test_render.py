@@ -130,5 +130,5 @@ def test_without_mujoco_the_animation_falls_back_to_two_d() -> None:
     arena, poses = _arena(), _poses(5)
     movie = animate(arena, poses)
     assert movie.renderer == "2-d"
-    assert "MuJoCo is not installed" in movie.reason
+    assert "needs the physics extra" in movie.reason
     assert movie.gif == animate(arena, poses, renderer="2-d").gif

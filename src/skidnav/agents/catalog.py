@@ -2,7 +2,7 @@
 
 :func:`entry` gives the :class:`AgentEntry` of a registered name — its family, the observation
 it learns over, its config class, how it is built and how it is trained — and callers ask it
-once and use the entry. Three families, each with its own registry and protocol
+once and use the entry. Four families, each with its own registry and protocol
 (:mod:`skidnav.agents.interface`):
 
 * **tabular** (:mod:`skidnav.agents.tabular.registry`): a Q table over the env's ``Discrete``
@@ -16,7 +16,12 @@ once and use the entry. Three families, each with its own registry and protocol
   Stable-Baselines3 owns the loop, and the agent, an
   :class:`~skidnav.agents.interface.EpisodeTrainingAgent`, trains itself by episodes with the
   same greedy evaluations (:meth:`skidnav.agents.deep.common.DeepAgent.train_episodes`);
-  ``ppo`` and ``sac`` need the env's ``action="continuous"`` and ``observation="features"``.
+  ``ppo`` and ``sac`` need the env's ``action="continuous"`` and ``observation="features"``;
+* **mpc** (:data:`MPC_AGENTS`): model predictive control of the two wheel speeds through a
+  learned model (``mppi-kinematic``, :mod:`skidnav.agents.mpc`), on ``action="continuous"`` and
+  a ``Box`` observation (the pose by default), a
+  :class:`~skidnav.agents.interface.StepLearningAgent` trained by the plain loop
+  (:func:`~skidnav.agents.mpc.training.train_mppi`); its greedy action is its frozen planner's.
 
 Every family returns the same :class:`~skidnav.agents.training.TrainingLog`, and every agent
 answers ``greedy_action(observation)``, so the runner measures them alike.
@@ -44,10 +49,15 @@ from skidnav.agents.linear.registry import (
     linear_agent_class,
     make_linear_agent,
 )
+from skidnav.agents.mpc.agent import AGENT_NAME as MPPI_AGENT_NAME
+from skidnav.agents.mpc.agent import MPPIKinematicAgent, make_mppi_agent
+from skidnav.agents.mpc.config import MPPIConfig
+from skidnav.agents.mpc.training import check_wheel_speed_env, train_mppi
 from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.agents.tabular.registry import AGENT_MODULES, agent_class, make_agent
 from skidnav.agents.training import TrainingLog, train_agent
 from skidnav.errors import UserError, first_line, shown
+from skidnav.extras import MissingExtraError, missing_message, require
 
 if TYPE_CHECKING:  # each family's base class satisfies its protocol (checked by mypy)
     from skidnav.agents.deep.common import DeepAgent
@@ -55,6 +65,8 @@ if TYPE_CHECKING:  # each family's base class satisfies its protocol (checked by
     _TABULAR: type[StepLearningAgent] = TabularAgent
     _LINEAR: type[StepLearningAgent] = LinearAgent
     _DEEP: type[EpisodeTrainingAgent] = DeepAgent
+    _MPC: type[StepLearningAgent] = MPPIKinematicAgent
+    _MPC_CONFIG: type[AgentConfig] = MPPIConfig
 
 DEEP_AGENTS: dict[str, str] = {
     "dqn": "skidnav.agents.deep.dqn",
@@ -62,8 +74,10 @@ DEEP_AGENTS: dict[str, str] = {
     "sac": "skidnav.agents.deep.sac",
 }
 """Registry name → module defining ``AGENT_NAME``, ``AGENT_CLASS`` and ``CONFIG_CLASS``."""
+MPC_AGENTS: tuple[str, ...] = (MPPI_AGENT_NAME,)
+"""The model predictive controllers (:mod:`skidnav.agents.mpc`)."""
 
-Family = Literal["tabular", "linear", "deep"]
+Family = Literal["tabular", "linear", "deep", "mpc"]
 Observation = Literal["discrete", "box"]
 """What an agent learns over: the env's ``Discrete`` state, or a ``Box`` observation."""
 BOX_OBSERVATIONS = ("pose", "features")
@@ -135,6 +149,8 @@ class AgentEntry(Generic[AgentT]):
     """How the family builds the agent of an entry for an unwrapped env with parameters, drawing
     from a seed sequence, its episodes cut at a number of actions."""
     trainer: Trainer[AgentT]
+    box_observation: str = DEFAULT_BOX_OBSERVATION
+    """The ``Box`` observation of this agent when a config names none (:meth:`env_observation`)."""
 
     @property
     def agent_class(self) -> type[AgentT]:
@@ -157,13 +173,13 @@ class AgentEntry(Generic[AgentT]):
     def env_observation(self, requested: object) -> str:
         """The skid-steer env's ``observation`` for this agent when a config asks for
         ``requested`` (its ``[env] observation`` as written, or None): a tabular agent always
-        sees the discrete state; the others the requested ``Box`` observation,
-        :data:`DEFAULT_BOX_OBSERVATION` by default. UserError when a ``Box`` agent is asked to
-        learn over anything else."""
+        sees the discrete state; the others the requested ``Box`` observation, their
+        :attr:`box_observation` by default. UserError when a ``Box`` agent is asked to learn over
+        anything else."""
         if self.observation == "discrete":
             return "discrete"
         if requested is None:
-            return DEFAULT_BOX_OBSERVATION
+            return self.box_observation
         if requested not in BOX_OBSERVATIONS:
             raise UserError(
                 f"agent {self.name!r} learns over a Box observation: expected [env] observation "
@@ -205,18 +221,24 @@ class AgentEntry(Generic[AgentT]):
 
 
 CatalogEntry: TypeAlias = (
-    AgentEntry[TabularAgent] | AgentEntry[LinearAgent] | AgentEntry[EpisodeTrainingAgent]
+    AgentEntry[TabularAgent]
+    | AgentEntry[LinearAgent]
+    | AgentEntry[EpisodeTrainingAgent]
+    | AgentEntry[MPPIKinematicAgent]
 )
 """The entry of an agent of any family."""
 CatalogAgent: TypeAlias = (
-    BuiltAgent[TabularAgent] | BuiltAgent[LinearAgent] | BuiltAgent[EpisodeTrainingAgent]
+    BuiltAgent[TabularAgent]
+    | BuiltAgent[LinearAgent]
+    | BuiltAgent[EpisodeTrainingAgent]
+    | BuiltAgent[MPPIKinematicAgent]
 )
 """A new agent of any family with its training (:meth:`AgentEntry.build`)."""
 
 
 def agent_names() -> list[str]:
-    """Every registered name: tabular, linear, deep, each in registry order."""
-    return [*AGENT_MODULES, *CONTINUOUS_AGENT_MODULES, *DEEP_AGENTS]
+    """Every registered name: tabular, linear, deep, mpc, each in registry order."""
+    return [*AGENT_MODULES, *CONTINUOUS_AGENT_MODULES, *DEEP_AGENTS, *MPC_AGENTS]
 
 
 def entry(name: str) -> CatalogEntry:
@@ -227,6 +249,8 @@ def entry(name: str) -> CatalogEntry:
         return _linear_entry(name)
     if name in DEEP_AGENTS:
         return _deep_entry(name)
+    if name in MPC_AGENTS:
+        return _mpc_entry(name)
     raise UserError(f"unknown agent {shown(name)}; expected one of {', '.join(agent_names())}")
 
 
@@ -294,7 +318,21 @@ def _make_linear(
     space = _space(name, env.observation_space, gymnasium.spaces.Box)
     context = described.context(env, params)
     rng = np.random.default_rng(seed)
-    return make_linear_agent(name, space, _n_actions(name, env), dict(params), rng, **context)
+    chosen = _tiled_by_default(env, params)
+    return make_linear_agent(name, space, _n_actions(name, env), chosen, rng, **context)
+
+
+def _tiled_by_default(env: Env, params: Params) -> dict[str, Any]:
+    """``params``, with the features a tile coder takes by default on the skid-steer env's
+    feature observation when they name no ``dimensions``
+    (:meth:`~skidnav.sim.features.PoseFeatures.steering_dimensions`: all 15 default features
+    would need ~10^11 tiles); unchanged on any other observation."""
+    nav = env.unwrapped
+    features: Any = getattr(nav, "features", None)
+    tiled = "dimensions" in params or getattr(nav, "observation_kind", None) != "features"
+    if tiled or features is None:
+        return dict(params)
+    return {**params, "dimensions": list(features.steering_dimensions())}
 
 
 def _deep_entry(name: str) -> AgentEntry[EpisodeTrainingAgent]:
@@ -304,14 +342,13 @@ def _deep_entry(name: str) -> AgentEntry[EpisodeTrainingAgent]:
 
 
 def _deep_extra_missing(name: str, error: ModuleNotFoundError) -> UserError:
-    return UserError(
-        f"agent {name!r} needs the deep extra (pip install 'skidnav[deep]'): "
-        f"no module {error.name!r}"
-    )
+    return MissingExtraError(missing_message("deep", f"agent {name!r}", str(error.name)))
 
 
 def _deep_module(name: str) -> ModuleType:
-    """The module of deep agent ``name``; UserError when the ``deep`` extra is missing."""
+    """The module of deep agent ``name``; UserError when the ``deep`` extra is missing (checked
+    before anything is imported, so a config naming the agent is refused up front)."""
+    require("deep", f"agent {name!r}")
     try:
         return importlib.import_module(DEEP_AGENTS[name])
     except ModuleNotFoundError as error:
@@ -362,3 +399,36 @@ def _train_by_episodes(
         episodes, greedy_eval_env=greedy_eval_env, greedy_seeds=greedy_seeds,
         greedy_max_steps=max_steps,
     )  # fmt: skip
+
+
+def _mpc_entry(name: str) -> AgentEntry[MPPIKinematicAgent]:
+    return AgentEntry(
+        name, "mpc", "box", _mpc_class, _mpc_config, _make_mpc, train_mppi, box_observation="pose"
+    )
+
+
+def _mpc_class(name: str) -> type[MPPIKinematicAgent]:
+    return MPPIKinematicAgent
+
+
+def _mpc_config(name: str) -> type[AgentConfig]:
+    return MPPIConfig
+
+
+def _make_mpc(
+    described: AgentEntry[MPPIKinematicAgent],
+    env: Env,
+    params: Params,
+    seed: SeedSequence,
+    max_steps: int,
+) -> MPPIKinematicAgent:
+    """The controller for the navigation env ``env``: it reads the env's robot, discretization,
+    goal cell and lidar layout (never its walls or floor), draws from ``seed``. UserError for an
+    env of other spaces or bad ``params`` (``kinematic_model = "true"`` among them: the
+    simulator offers no coefficients of the model to plan with)."""
+    name = described.name
+    try:
+        check_wheel_speed_env(env)
+    except ValueError as error:
+        raise UserError(f"agent {name!r}: {error} (set [env] action and observation)") from None
+    return make_mppi_agent(env, dict(params), np.random.default_rng(seed))

@@ -3,10 +3,11 @@
 * :class:`Agent` — every agent: its registry ``name``, ``greedy_action(observation)`` (the
   greedy evaluation, :func:`skidnav.agents.training.greedy_evaluation`) and ``save(path)``
   (``.npz`` + ``.json``, never pickle);
-* :class:`StepLearningAgent` — the tabular and linear agents, which a loop drives one real step
-  at a time: ``act``, ``observe``, ``end_episode`` and the ``planning_updates`` counter, as
-  :func:`skidnav.agents.training.train_agent` (and, for the tabular ones, the compiled
-  :func:`skidnav.agents.fast_training.train_agent_fast`) calls them;
+* :class:`StepLearningAgent` — the tabular, linear and model-predictive (``mppi-kinematic``)
+  agents, which a loop drives one real step at a time: ``act``, ``observe``, ``end_episode``
+  and the ``planning_updates`` counter, as :func:`skidnav.agents.training.train_agent` (and,
+  for the tabular ones, the compiled :func:`skidnav.agents.fast_training.train_agent_fast`)
+  calls them;
 * :class:`EpisodeTrainingAgent` — the deep agents, which own their loop and train by episodes
   (``train_episodes``) with the same greedy evaluations and the same
   :class:`~skidnav.agents.training.TrainingLog`;
@@ -16,7 +17,8 @@
 The protocols are structural: the families' base classes
 (:class:`~skidnav.agents.tabular.agent.TabularAgent`,
 :class:`~skidnav.agents.linear.agent.LinearAgent`,
-:class:`~skidnav.agents.deep.common.DeepAgent`) satisfy them without naming them, which mypy
+:class:`~skidnav.agents.deep.common.DeepAgent`,
+:class:`~skidnav.agents.mpc.agent.MPPIKinematicAgent`) satisfy them without naming them, which mypy
 checks in :mod:`skidnav.agents.catalog`; ``isinstance`` works too (runtime-checkable, by the
 presence of the members only).
 """

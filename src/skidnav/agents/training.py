@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from typing import Any, NamedTuple, Protocol
+from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 import gymnasium as gym
 import numpy as np
@@ -22,14 +22,19 @@ from skidnav.errors import UserError
 
 class Learner(Protocol):
     """What the loop needs from an agent (every :class:`~skidnav.agents.tabular.agent.TabularAgent`,
-    and the agents on continuous states). A state is what :func:`as_state` makes of an observation:
-    an int for a Discrete observation, a float64 array for a Box one."""
+    the agents on continuous states, ``mppi-kinematic``). A state is what :func:`as_state` makes of
+    an observation: an int for a Discrete observation, a float64 array for a Box one; an action
+    is an int for Discrete actions, the wheel speeds float64 (2,) [rad/s] for the Box actions of
+    ``action="continuous"``."""
 
-    planning_updates: int
+    @property
+    def planning_updates(self) -> int:
+        """Model-based updates (or model rollouts) made so far."""
+        ...
 
-    def act(self, state: Any) -> int: ...
+    def act(self, state: Any) -> Any: ...
 
-    def greedy_action(self, state: Any) -> int: ...
+    def greedy_action(self, state: Any) -> Any: ...
 
     def observe(
         self,
@@ -46,9 +51,28 @@ class Learner(Protocol):
 
 
 class Greedy(Protocol):
-    """What a greedy evaluation needs from an agent: its greedy action in a state."""
+    """What a greedy evaluation needs from an agent: its greedy action in a state (an int, or
+    wheel speeds for Box actions)."""
 
-    def greedy_action(self, state: Any) -> int: ...
+    def greedy_action(self, state: Any) -> Any: ...
+
+
+@runtime_checkable
+class RolloutState(Protocol):
+    """A greedy policy with a state of its own within a rollout: a model predictive controller's
+    plan, warm-started from action to action (``mppi-kinematic``). Every rollout starts by
+    forgetting it, so a rollout's actions do not depend on the rollouts before it."""
+
+    def start_greedy_rollout(self) -> None:
+        """Forget what the previous rollout left (called after each ``env.reset``)."""
+        ...
+
+
+def start_rollout(policy: object) -> None:
+    """Tell ``policy`` that a greedy rollout starts, if it keeps a state (:class:`RolloutState`);
+    nothing for any other policy."""
+    if isinstance(policy, RolloutState):
+        policy.start_greedy_rollout()
 
 
 class TrainingLog(NamedTuple):
@@ -115,11 +139,13 @@ def greedy_run(
     poses: list[Any] | None = None,
 ) -> Rollout:
     """Run the greedy policy for at most ``max_steps`` actions (without learning) from
-    ``env.reset(seed=seed)``; its :class:`Rollout` (the costs summed in step order, NaN for an
+    ``env.reset(seed=seed)`` (a policy with a state of its own forgets it first:
+    :func:`start_rollout`); its :class:`Rollout` (the costs summed in step order, NaN for an
     env whose info has no ``"cost"``). A list ``poses`` receives ``info["pose"]`` (x [m], y [m],
     heading [rad]) of the reset and of every action, NaN where the env reports none
     (:func:`greedy_path`)."""
     state, info = env.reset(seed=seed)
+    start_rollout(agent)
     if poses is not None:
         poses.append(info.get("pose", _NO_POSE))
     cost = 0.0
@@ -220,11 +246,31 @@ def train_agent(
     one rollout per seed of ``greedy_seeds``), each rollout stopped after ``greedy_max_steps``
     actions (default: ``max_steps``, else 10,000).
     """
+    _check_spaces(env)
+    return train_loop(
+        agent, env, n_episodes, max_steps=max_steps, greedy_eval_env=greedy_eval_env,
+        greedy_max_steps=greedy_max_steps, greedy_seeds=greedy_seeds, seed=seed,
+    )  # fmt: skip
+
+
+def train_loop(
+    agent: Learner,
+    env: gym.Env[Any, Any],
+    n_episodes: int,
+    *,
+    max_steps: int | None = None,
+    greedy_eval_env: gym.Env[Any, Any] | None = None,
+    greedy_max_steps: int | None = None,
+    greedy_seeds: Sequence[int] | None = None,
+    seed: int | None = None,
+) -> TrainingLog:
+    """The episodes of :func:`train_agent` (same arguments and log) on an env whose spaces the
+    caller has checked: a family of other actions (``mppi-kinematic``'s wheel speeds) trains
+    through the same loop and evaluations."""
     if n_episodes < 0 or (max_steps is not None and max_steps < 1):
         raise ValueError(
             f"expected n_episodes >= 0 and max_steps >= 1, got {n_episodes}, {max_steps}"
         )
-    _check_spaces(env)
     limit = greedy_max_steps or max_steps or 10_000
     columns: dict[str, list[Any]] = {name: [] for name in TrainingLog._fields}
     for episode in range(n_episodes):

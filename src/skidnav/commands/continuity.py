@@ -38,11 +38,16 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--max-steps", type=int, default=200, help="actions per episode")
     parser.add_argument("--control-period", type=float, default=1.0, help="seconds per action")
     parser.add_argument(
-        "--learners", default=",".join(LEARNERS), help=f"comma-separated, of {', '.join(LEARNERS)}"
+        "--learners",
+        default=",".join(LEARNERS),
+        help=f"comma-separated, of {', '.join(LEARNERS)} (default: all; cmaes needs the search "
+        "extra, ppo and sac the deep extra)",
     )
     parser.add_argument("--seeds", type=int, default=3, help="runs per learner")
     parser.add_argument("--root-seed", type=int, default=0)
-    parser.add_argument("--episodes", type=int, default=300, help="discrete and deep learners")
+    parser.add_argument(
+        "--episodes", type=int, default=300, help="discrete, deep and model-predictive learners"
+    )
     parser.add_argument("--generations", type=int, default=100, help="CMA-ES generations")
     parser.add_argument("--population", type=int, default=32, help="CMA-ES candidates")
     parser.add_argument("--rollouts", type=int, default=5, help="evaluation rollouts per run")

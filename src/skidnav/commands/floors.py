@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from skidnav import formatting
 from skidnav.atomicfile import write_user_file
 from skidnav.errors import UserError
 from skidnav.outputs import check_output_file
@@ -69,4 +70,4 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 def _mm(value: float, interval: tuple[float, float]) -> str:
     """``value [low, high]`` in millimetres."""
-    return f"{value * 1000:.2f} [{interval[0] * 1000:.2f}, {interval[1] * 1000:.2f}]"
+    return formatting.interval(value * 1000, interval[0] * 1000, interval[1] * 1000, 2)

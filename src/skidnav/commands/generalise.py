@@ -46,7 +46,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         description="Write a generalisation config from the flags and run it as 'skidnav run' "
         "does (resumable in --out); print the tables and write --out/generalisation.csv.",
     )
-    parser.add_argument("--agent", action="append", help=f"repeatable; default {DEFAULT_AGENTS}")
+    parser.add_argument(
+        "--agent",
+        action="append",
+        help=f"repeatable; default: {' and '.join(DEFAULT_AGENTS)} (dqn needs the deep extra)",
+    )
     counts = {
         "seeds": "runs per agent (seeds 0 .. N−1)", "training_maps": "training worlds",
         "held_out_maps": "held-out worlds", "episodes": "training episodes per run",

@@ -15,11 +15,11 @@ from skidnav.commands.shortcut import add_run_arguments, run_text
 from skidnav.errors import UserError
 from skidnav.experiments.store import ResultStore
 from skidnav.robot.slip import SLIP_PRESETS
-from skidnav.studies.kinematic_models.grid import ModelComparison, comparison_toml
+from skidnav.studies.kinematic_models.grid import MODELS, ModelComparison, comparison_toml
 from skidnav.studies.kinematic_models.table import describe, table_rows, text_table
 
 FLAGS = ("seeds", "samples", "slip", "drift", "drift_period", "train_fraction", "window")
-"""The flags, each a :class:`ModelComparison` field of the same name."""
+"""The flags, each a :class:`ModelComparison` field of the same name (and ``--models``)."""
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -43,17 +43,23 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "--train-fraction", type=float, default=0.5, help="first part of the log fitted on"
     )
     compare.add_argument("--window", type=int, default=500, help="samples kept per region")
+    compare.add_argument(
+        "--models",
+        default=",".join(MODELS),
+        help=f"comma-separated, of {', '.join(MODELS)} (default: both; gp needs the gp extra)",
+    )
     add_run_arguments(compare, "kinematic-models")
     compare.set_defaults(func=_compare)
 
 
 def comparison_from_flags(args: argparse.Namespace) -> ModelComparison:
     """The config of the flags; UserError naming the flag of a bad value."""
+    models = tuple(name.strip() for name in args.models.split(",") if name.strip())
     try:
-        return ModelComparison(**{key: getattr(args, key) for key in FLAGS})
+        return ModelComparison(models=models, **{key: getattr(args, key) for key in FLAGS})
     except ValueError as error:
         message = str(error)
-        for key in FLAGS:
+        for key in (*FLAGS, "models"):
             message = message.replace(f" {key} ", f" --{key.replace('_', '-')} ")
         raise UserError(message) from None
 

@@ -67,12 +67,12 @@ def _show(args: argparse.Namespace) -> int:
         print(format_map(grid), end="")
         return 0
     from skidnav.robot.slip import make_slip_field
-    from skidnav.world.rendering import rgb_frame, save_frame
+    from skidnav.world.rendering import rgb_frame, save_frame, with_legend
 
     disc = Discretization(n_x=grid.shape[0], n_y=grid.shape[1])
     start = disc.cell_centre(*grid.start)
     slip = make_slip_field("thesis", np.random.default_rng(0))
     frame = rgb_frame(grid, disc, slip, np.array([*start, 0.0]), [])
-    save_frame(frame, args.png)
+    save_frame(with_legend(frame), args.png)
     print(f"wrote {args.png}")
     return 0

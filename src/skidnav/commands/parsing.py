@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from typing import NoReturn
 
 
@@ -16,13 +17,20 @@ class OneLineParser(argparse.ArgumentParser):
     """An argument parser whose errors are the one line ``skidnav: error: …`` (exit code 2).
 
     The subcommand's path is named in the line (``skidnav: error: robot run: …``), except for the
-    top-level parser.
+    top-level parser. A command group called without its verb (bare ``skidnav``, ``skidnav
+    study``) prints its usage, which lists the verbs, before that line.
     """
 
     def error(self, message: str) -> NoReturn:
+        if self._subparsers is not None and message.startswith(MISSING_ARGUMENTS):
+            self.print_usage(sys.stderr)
         command = self.prog.removeprefix("skidnav").strip()
         where = f"{command}: " if command else ""
         self.exit(2, f"skidnav: error: {where}{message}\n")
+
+
+MISSING_ARGUMENTS = "the following arguments are required"
+"""How argparse's message for a missing required argument (a group's verb among them) starts."""
 
 
 def positive_number(text: str) -> float:

@@ -1,12 +1,14 @@
 """``skidnav report RUN_DIR``: write the self-contained HTML report of a results directory, the
 report of its kind (``config.json``): an experiment's with the sections studies add to it, or a
-study's section in the same page (:func:`write_results_report`; ``skidnav run --report`` too)."""
+study's section in the same page (:func:`write_results_report`; ``skidnav run --report`` too).
+For an experiment it then prints the report's one-line verdict
+(:mod:`skidnav.experiments.report.verdict`), as ``skidnav run`` does."""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 from skidnav.errors import UserError
 from skidnav.outputs import check_output_file
@@ -32,24 +34,43 @@ def add_parser(subparsers: Any) -> None:
         help="instead: RUN_DIR/study.md, the real-robot study's tables (success per agent and "
         "floor, rough vs slippery, minus the baseline), e.g. of configs/physics-study.toml",
     )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.set_defaults(func=report_command)
 
 
+class ResultsReport(NamedTuple):
+    """A results directory's report written: where, and (for an experiment) its verdict
+    line."""
+
+    path: Path
+    verdict: str | None
+
+
+def print_report(written: ResultsReport) -> None:
+    """Print the verdict line (an experiment's) and where the report is."""
+    if written.verdict is not None:
+        print(written.verdict)
+    print(f"report: {written.path}")
+
+
 def report_command(args: argparse.Namespace) -> int:
-    """Write the report; print its path."""
+    """Write the report; print its verdict (an experiment's) and its path."""
     if not args.run_dir.is_dir():
         raise UserError(f"{args.run_dir}: no such results directory")
     if args.output is not None:
         check_output_file(args.output, "--output")
     if args.study:
         return study_command(args.run_dir, args.output or args.run_dir / "study.md")
-    print(f"report: {write_results_report(args.run_dir, args.output)}")
+    print_report(write_results_report(args.run_dir, args.output, progress=not args.no_progress))
     return 0
 
 
-def write_results_report(run_dir: Path, output: Path | None = None) -> Path:
+def write_results_report(
+    run_dir: Path, output: Path | None = None, *, progress: bool = False
+) -> ResultsReport:
     """Write the report of ``run_dir`` by its kind to ``output`` (default
-    ``RUN_DIR/report.html``), atomically; returns its path.
+    ``RUN_DIR/report.html``), atomically, an experiment's with a progress bar on stderr when
+    ``progress``; returns its path and verdict line (None for a study).
 
     Raises:
         UserError: the results are missing, damaged or of no known kind, or the report cannot
@@ -62,12 +83,13 @@ def write_results_report(run_dir: Path, output: Path | None = None) -> Path:
     if kind == EXPERIMENT_KIND:
         from skidnav.experiments.report.html import write_report
 
-        return write_report(run_dir, output, experiment_sections())
+        written = write_report(run_dir, output, experiment_sections(), progress=progress)
+        return ResultsReport(written.path, written.verdict)
     from skidnav.experiments.report.page import report_path, study_report, write_page
 
     chosen = study_of_results(kind, run_dir)
     text = study_report(run_dir, chosen.layout, chosen.report(run_dir))
-    return write_page(report_path(run_dir, output), text)
+    return ResultsReport(write_page(report_path(run_dir, output), text), None)
 
 
 def study_command(run_dir: Path, output: Path) -> int:

@@ -30,16 +30,29 @@ COMMENT = "the config of `skidnav study reproduce sutton-barto`: skidnav run it 
 
 
 def add_parser(subparsers: Any) -> None:
-    """Register ``skidnav study reproduce``."""
-    defaults = TextbookChecks()
+    """Register ``skidnav study reproduce`` and its targets (``sutton-barto``), each with its
+    own help."""
     parser = subparsers.add_parser(
         "reproduce",
         help="reproduce reference results (resumable)",
-        description="Run the Sutton & Barto (2018) ch. 8 checks as a study config written from "
-        "these flags (resumable on the same --out), print their tables and write their CSV and "
-        "PNG files to --out.",
+        description="Reproduce reference results as a study config written from the flags "
+        "(resumable on the same --out). Targets: sutton-barto.",
     )
-    parser.add_argument("target", choices=["sutton-barto"], help="which results")
+    targets = parser.add_subparsers(dest="target", required=True, metavar="TARGET")
+    _add_sutton_barto(targets)
+
+
+def _add_sutton_barto(targets: Any) -> None:
+    """``skidnav study reproduce sutton-barto``."""
+    defaults = TextbookChecks()
+    parser = targets.add_parser(
+        "sutton-barto",
+        help="the Dyna-Q checks of Sutton & Barto (2018) ch. 8, Examples 8.1–8.4",
+        description="Run the Sutton & Barto (2018) ch. 8 checks (Examples 8.1 Dyna Maze, 8.2 "
+        "Blocking Maze, 8.3 Shortcut Maze, 8.4 prioritized sweeping) as a study config written "
+        "from these flags (resumable on the same --out), print their tables and write their CSV "
+        "and PNG files to --out.",
+    )
     parser.add_argument(
         "--runs", type=int, default=defaults.runs, help="independent runs of every check"
     )

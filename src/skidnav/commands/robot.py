@@ -45,13 +45,21 @@ def add_parser(subparsers: Any) -> None:
 
 
 def _add_sim_server(commands: Any) -> None:
+    from skidnav.robot.slip import SLIP_PRESETS
+
     server = commands.add_parser("sim-server", help="simulated robot speaking the line protocol")
     server.add_argument(
         "--port", type=port_number, required=True, help="TCP port (0: pick a free one)"
     )
     server.add_argument("--host", default="127.0.0.1", help="bind address (default 127.0.0.1)")
     server.add_argument("--time-scale", type=float, default=1.0, help="robot s per wall s")
-    server.add_argument("--slip", default="rough", help="slip preset: thesis, slippery, rough")
+    server.add_argument(
+        "--slip",
+        choices=SLIP_PRESETS,
+        default="rough",
+        metavar="PRESET",
+        help=f"slip preset: {', '.join(SLIP_PRESETS)} (default %(default)s)",
+    )
     server.add_argument("--drift", type=float, default=0.0, help="relative slip drift amplitude")
     server.add_argument(
         "--drift-period", type=positive_number, default=600.0, help="drift period [s]"

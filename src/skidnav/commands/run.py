@@ -14,9 +14,18 @@ from typing import Any, NamedTuple
 from skidnav.envs.registration import allow_env_modules
 from skidnav.errors import UserError
 from skidnav.experiments.configfile import config_from_tables, parse_tables
-from skidnav.experiments.runner import BACKENDS, RunOutcome, TrialFunction, run_experiment
+from skidnav.experiments.runner import (
+    BACKENDS,
+    RunObserver,
+    RunOutcome,
+    TrialFunction,
+    run_experiment,
+)
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import EXPERIMENT_LAYOUT, RunLayout
+from skidnav.experiments.tensorboard_log import TensorBoardLog
+from skidnav.extras import require
+from skidnav.formatting import plural
 from skidnav.outputs import check_output_dir
 from skidnav.savedfile import read_config_text
 from skidnav.studies.kind import EXPERIMENT_KIND, Study, study, study_kind
@@ -39,6 +48,13 @@ def add_parser(subparsers: Any) -> None:
     add_env_module_argument(parser)
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--report", action="store_true", help="write report.html when done")
+    parser.add_argument(
+        "--tensorboard",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="also log every run's episodes to TensorBoard in DIR (the logging extra)",
+    )
     parser.set_defaults(func=run_command)
 
 
@@ -148,11 +164,13 @@ def run_loaded(
     scheduler: str | None = None,
     progress: bool = False,
     trial: TrialFunction | None = None,
+    on_run: RunObserver | None = None,
 ) -> RunOutcome:
     """Run (or resume) every run of ``loaded`` into ``out`` on the runner
     (:func:`~skidnav.experiments.runner.run_experiment`), with the study's run function
     (:meth:`~skidnav.studies.kind.Study.trial`) unless ``trial`` is given (the same function with
-    other progress callbacks: ``skidnav robot study``).
+    other progress callbacks: ``skidnav robot study``); ``on_run`` is told of every finished run
+    (the TensorBoard log).
 
     Raises:
         UserError: bad backend options, ``out`` holds other results or is in use.
@@ -172,20 +190,32 @@ def run_loaded(
         config_path=loaded.path,
         progress=progress,
         layout=loaded.layout,
+        on_run=on_run,
     )
 
 
 def outcome_line(outcome: RunOutcome) -> str:
     """What a run of a config did, in one line: runs, where, how many now and before, time."""
     return (
-        f"{outcome.n_runs} runs in {outcome.out_dir} ({outcome.executed} run now, "
+        f"{plural(outcome.n_runs, 'run')} in {outcome.out_dir} ({outcome.executed} run now, "
         f"{outcome.skipped} already done) in {outcome.wall_time:.1f} s"
     )
 
 
+def tensorboard_log(directory: Path | None) -> TensorBoardLog | None:
+    """The TensorBoard log of ``--tensorboard DIR`` (None without it), checked before any work:
+    UserError (one line) without the ``logging`` extra or when ``DIR`` cannot be written."""
+    if directory is None:
+        return None
+    require("logging", "--tensorboard")
+    return TensorBoardLog(check_output_dir(directory, "--tensorboard"))
+
+
 def run_command(args: argparse.Namespace) -> int:
-    """Run the experiment or study; print where the results are."""
+    """Run the experiment or study; print where the results are and, for an experiment, its
+    verdict line (:mod:`skidnav.experiments.report.verdict`), with the report when asked."""
     allow_env_modules(args.env_module)
+    log = tensorboard_log(args.tensorboard)
     loaded = load_grid(args.config)
     out = check_output_dir(args.out if args.out is not None else Path("runs") / loaded.grid.name)
     outcome = run_loaded(
@@ -195,10 +225,17 @@ def run_command(args: argparse.Namespace) -> int:
         jobs=args.jobs,
         scheduler=args.scheduler,
         progress=not args.no_progress,
+        on_run=log,
     )
     print(outcome_line(outcome))
+    if log is not None:
+        print(f"TensorBoard logs: {log.root} (tensorboard --logdir {log.root})")
     if args.report:
-        from skidnav.commands.report import write_results_report
+        from skidnav.commands.report import print_report, write_results_report
 
-        print(f"report: {write_results_report(outcome.out_dir)}")
+        print_report(write_results_report(outcome.out_dir, progress=not args.no_progress))
+    elif loaded.study is None:
+        from skidnav.experiments.report.verdict import experiment_verdict
+
+        print(experiment_verdict(outcome.out_dir))
     return 0

@@ -19,6 +19,7 @@ import numpy as np
 
 from skidnav.atomicfile import write_atomic
 from skidnav.errors import UserError, excerpt
+from skidnav.formatting import plural
 from skidnav.outputs import check_output_file
 from skidnav.robot.kinematics import ACTION_NAMES
 from skidnav.robot.params import RobotParams
@@ -138,7 +139,7 @@ def _write_csv(path: Path, rows: list[tuple[Any, ...]]) -> None:
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from skidnav.world.rendering import save_frame
+    from skidnav.world.rendering import save_frame, with_legend
 
     check_output_file(args.out)
     if args.csv is not None:
@@ -157,14 +158,16 @@ def _simulate(args: argparse.Namespace) -> int:
         total += float(reward)
         rows.append((step, action, *info["pose"], reward, info["collision"]))
         done = terminated or truncated or (script is not None and step >= len(script))
-    save_frame(np.asarray(env.render()), args.out)
+    save_frame(with_legend(np.asarray(env.render())), args.out)
     if args.csv is not None:
         _write_csv(args.csv, rows)
     collisions = sum(1 for row in rows if row[-1])
     outcome = "reached the goal" if terminated else "did not reach the goal"
     if terminated and script is not None and step < len(script):
-        outcome += f" (the episode ended there: {len(script) - step} actions of the script not run)"
+        unrun = plural(len(script) - step, "action")
+        outcome += f" (the episode ended there: {unrun} of the script not run)"
     print(
-        f"{step} actions, return {total:.2f}, {collisions} collisions, {outcome}; wrote {args.out}"
+        f"{plural(step, 'action')}, return {total:.2f}, {plural(collisions, 'collision')}, "
+        f"{outcome}; wrote {args.out}"
     )
     return 0

@@ -8,14 +8,12 @@ import logging
 from pathlib import Path
 from typing import Any
 
-import optuna
-
 from skidnav.commands.run import add_backend_arguments, add_env_module_argument
 from skidnav.envs.registration import allow_env_modules
 from skidnav.errors import UserError
+from skidnav.extras import require
 from skidnav.outputs import check_output_dir
 from skidnav.studies.tuning.config import load_tune_config_and_text
-from skidnav.studies.tuning.search import tune_experiment
 
 
 def add_parser(subparsers: Any) -> None:
@@ -56,6 +54,11 @@ def _print_trial(label: str, trial: Any, finished: int, target: int) -> None:
 
 def tune_command(args: argparse.Namespace) -> int:
     """Run the search; print each trial and where tuned.toml is."""
+    require("tuning", "skidnav tune")
+    import optuna
+
+    from skidnav.studies.tuning.search import tune_experiment
+
     if not args.verbose:
         optuna.logging.set_verbosity(logging.WARNING)
     allow_env_modules(args.env_module)

@@ -9,6 +9,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from skidnav.version import __version__
+
 PACKAGE_DIR = Path(__file__).resolve().parents[1]
 """The installed (or source-tree) ``skidnav`` package folder."""
 CODE_KEYS = ("version", "commit", "dirty", "source_sha256")
@@ -39,9 +41,7 @@ def package_versions() -> dict[str, str]:
         except metadata.PackageNotFoundError:
             versions[name] = "absent"
     if versions["skidnav"] == "absent":
-        import skidnav
-
-        versions["skidnav"] = f"{skidnav.__version__} (source tree)"
+        versions["skidnav"] = f"{__version__} (source tree)"
     return versions
 
 
@@ -118,9 +118,7 @@ def skidnav_version() -> str:
     try:
         return metadata.version("skidnav")
     except metadata.PackageNotFoundError:
-        import skidnav
-
-        return skidnav.__version__
+        return __version__
 
 
 def code_version() -> dict[str, Any]:

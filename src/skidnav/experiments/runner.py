@@ -9,6 +9,7 @@ Backends (all give identical numbers, since a run is a pure function of its spec
 * ``dask``: a ``dask.distributed`` Client on the scheduler at ``scheduler``; without an address,
   a local cluster of ``jobs`` worker processes on 127.0.0.1. The client connects before the
   results directory is created, so a scheduler that cannot be reached leaves nothing behind.
+  Dask is the ``distributed`` extra: without it the backend is refused in one line.
 
 Local worker processes import nothing from the current directory
 (:func:`skidnav.childprocess.safe_path_children`).
@@ -67,6 +68,7 @@ from skidnav.experiments.store import (
     directory_lock,
 )
 from skidnav.experiments.workers import init_worker
+from skidnav.extras import require
 
 logger = logging.getLogger(__name__)
 
@@ -74,6 +76,8 @@ BACKENDS = ("serial", "process", "dask")
 TrialFunction = Callable[[RunSpec[Any]], TrialResult]
 """One run of the grid: its spec in, its results out (a pure function of the spec for an
 experiment)."""
+RunObserver = Callable[[TrialResult], None]
+"""Told of each finished run in the runner's process (:func:`run_experiment`'s ``on_run``)."""
 DASK_CONNECT_TIMEOUT = "15s"
 """How long the Dask client tries to reach ``scheduler``."""
 
@@ -232,6 +236,8 @@ def _check_backend(backend: str, jobs: int, scheduler: str | None) -> None:
         raise UserError(f"--jobs must be >= 1, got {jobs}")
     if scheduler is not None and backend != "dask":
         raise UserError("--scheduler needs --backend dask")
+    if backend == "dask":
+        require("distributed", "--backend dask")
 
 
 def default_jobs() -> int:
@@ -254,6 +260,7 @@ def run_experiment(
     config_path: Path | str | None = None,
     progress: bool = False,
     layout: RunLayout = EXPERIMENT_LAYOUT,
+    on_run: RunObserver | None = None,
 ) -> RunOutcome:
     """Run (or resume) every run of ``config`` into ``out_dir``.
 
@@ -270,6 +277,9 @@ def run_experiment(
         config_path: the config file, named in the errors of its agents, maps and env options.
         progress: show a progress bar with ETA on stderr.
         layout: what the run files hold and how the grid is saved (:class:`RunLayout`).
+        on_run: called in this process with every finished run of the grid: those already in
+            ``out_dir`` (a resume) first, then each new one once it is written (e.g. the
+            TensorBoard log, :mod:`skidnav.experiments.tensorboard_log`).
 
     Raises:
         UserError: bad backend options, or ``out_dir`` holds other results or is in use.
@@ -294,8 +304,13 @@ def run_experiment(
             session = _session(started, backend, jobs, scheduler)
             records = _resume_records(store, session)
             pending = [spec for spec in runs if spec.run_id not in records]
+            if on_run is not None:
+                for finished in store.iter_runs(records):
+                    on_run(finished)
             execution = (trial, backend, jobs, client)
-            failures = _run_pending(store, config, pending, records, session, execution, progress)
+            failures = _run_pending(
+                store, config, pending, records, session, execution, progress, on_run
+            )
         if failures:
             raise RunsFailedError(failed_runs_message(failures, len(runs), store.root))
         store.consolidate()
@@ -325,10 +340,11 @@ def _run_pending(
     session: dict[str, Any],
     execution: tuple[TrialFunction, str, int, Any],
     progress: bool,
+    on_run: RunObserver | None = None,
 ) -> list[RunFailure]:
     """Run ``pending`` on ``execution`` (trial, backend, jobs, Dask client), writing each result
-    as it arrives and noting its code record in ``records``; returns the runs that failed
-    (each logged as it failed)."""
+    as it arrives (then handing it to ``on_run``) and noting its code record in ``records``;
+    returns the runs that failed (each logged as it failed)."""
     total = len(pending) + len(records)
     logger.info("%d runs, %d already done, %d to run", total, len(records), len(pending))
     stamp = {key: session[key] for key in CODE_KEYS} | {"session": session["started"]}
@@ -341,6 +357,8 @@ def _run_pending(
             else:
                 store.write_run(outcome, stamp)
                 records[outcome.run_id] = stamp
+                if on_run is not None:
+                    on_run(outcome)
             bar.update(1)
     return failures
 

@@ -327,6 +327,12 @@ class KinematicModel:
                 std[rows] = _twist_std(posterior, wheels[rows], yaw[rows], c[rows, 6])
         return mean, std
 
+    def posterior(self, region: int) -> Posterior | None:
+        """The fitted regressions of ``region`` (v_x, yaw_rate, v_y; None for an output fitted
+        exactly), or None before the region's first refit since construction or load: where
+        :meth:`predict_twist`'s spread comes from, for a caller that samples the model."""
+        return self._posteriors[region]
+
     def estimates(self, region: int) -> tuple[float, float, float]:
         """Physical reading of a region's fit: (r [m], c [m], x_ICR [m]).
 

@@ -16,11 +16,16 @@ import os
 import sys
 from types import ModuleType
 
-INSTALL_HINT = "pip install 'skidnav[physics]'"
+from skidnav.errors import UserError
+from skidnav.extras import install_hint, missing_message, missing_module
+
+INSTALL_HINT = install_hint("physics")
+"""How MuJoCo is installed: ``pip install "skidnav[physics]"``."""
 
 
-class PhysicsUnavailable(RuntimeError):
-    """MuJoCo is not installed (or does not import); the message is one line."""
+class PhysicsUnavailable(UserError):
+    """MuJoCo is not installed (or does not import); the message is one line (a user error:
+    the command line prints it and exits with code 2)."""
 
 
 def gl_backend() -> str:
@@ -59,11 +64,15 @@ def load_mujoco() -> ModuleType:
     Raises:
         PhysicsUnavailable: MuJoCo is not installed or fails to import.
     """
+    absent = missing_module("physics")
+    if absent is not None:
+        raise PhysicsUnavailable(missing_message("physics", "the MuJoCo robot", absent))
     choose_gl_backend()
     try:
         mujoco = importlib.import_module("mujoco")
     except ImportError as error:
-        raise PhysicsUnavailable(f"MuJoCo is not installed ({error}); {INSTALL_HINT}") from None
+        module = error.name or "mujoco"
+        raise PhysicsUnavailable(missing_message("physics", "the MuJoCo robot", module)) from None
     except Exception as error:  # a broken GL backend makes the import itself fail
         raise PhysicsUnavailable(
             f"MuJoCo failed to import with MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r}: {error}"

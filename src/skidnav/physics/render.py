@@ -7,7 +7,8 @@ the heading along the shorter arc; a long trajectory keeps every k-th pose first
 - ``"mujoco"``, where :func:`~skidnav.physics.backend.offscreen_rendering` says MuJoCo can render
   offscreen: the robot of :class:`~skidnav.physics.mujoco_robot.PhysicsRobot` placed at each pose
   (no physics step), seen straight down by an orthographic camera, floor tiles coloured by
-  material, walls as boxes; the trail and the goal cell are drawn over it. The floor tiles and
+  material, walls as boxes; the trail and the outlines of the start (green) and goal (red) cells
+  are drawn over it (:mod:`skidnav.world.colours`). The floor tiles and
   walls are moved onto the navigation grid (cells W/(n_x − 1) wide,
   :class:`~skidnav.world.discretization.Discretization`) so the picture matches the MDP's cells.
 - ``"2-d"`` otherwise (or when asked): the frames of the env's ``rgb_array`` renderer
@@ -32,6 +33,7 @@ from skidnav.physics.materials import PATCH_MATERIAL
 from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField
+from skidnav.world.colours import GOAL, START, TRAIL
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 from skidnav.world.rendering import rgb_frame
@@ -43,8 +45,8 @@ ACTION_MILLISECONDS = 300
 """Playback time of one action [ms] (an action lasts 1 s: the GIF plays about 3× faster)."""
 HOLD_MILLISECONDS = 1500
 """How long the last frame stays before the GIF loops [ms]."""
-TRAIL = (30, 90, 220)
-GOAL = (40, 170, 70)
+SWATCH_ROWS = 16
+"""Rows of landmark colours added to the sample a GIF's palette is drawn from [pixels]."""
 
 
 class Animation(NamedTuple):
@@ -213,20 +215,30 @@ class TopCamera:
         return camera
 
 
+Box = tuple[float, float, float, float]
+"""A cell's corners (x0, y0, x1, y1) [m]."""
+
+
 def _overlay(
-    image: Image.Image,
-    camera: TopCamera,
-    goal: tuple[float, float, float, float],
-    trail: np.ndarray,
+    image: Image.Image, camera: TopCamera, landmarks: tuple[Box, Box], trail: np.ndarray
 ) -> None:
-    """Draw the goal cell's outline (x0, y0, x1, y1 [m]) and the trail (the poses so far,
-    (k, 3)) over a MuJoCo frame."""
+    """Draw the outlines of the start and goal cells (``landmarks``, in the colours of
+    :mod:`skidnav.world.colours`) and the trail (the poses so far, (k, 3)) over a MuJoCo
+    frame."""
     draw = ImageDraw.Draw(image)
-    left, top = camera.pixel(goal[0], goal[3])
-    right, bottom = camera.pixel(goal[2], goal[1])
-    draw.rectangle((left, top, right, bottom), outline=GOAL, width=2)
+    for box, colour in zip(landmarks, (START, GOAL), strict=True):
+        left, top = camera.pixel(box[0], box[3])
+        right, bottom = camera.pixel(box[2], box[1])
+        draw.rectangle((left, top, right, bottom), outline=colour, width=2)
     if len(trail) > 1:
         draw.line([camera.pixel(float(x), float(y)) for x, y, _ in trail], fill=TRAIL, width=2)
+
+
+def _cell_box(disc: Discretization, cell: tuple[int, int]) -> Box:
+    """The corners of ``cell`` (i, j) on the navigation grid [m]."""
+    i, j = cell
+    w, h = disc.cell_width, disc.cell_height
+    return (i * w, j * h, (i + 1) * w, (j + 1) * h)
 
 
 def _frames_mujoco(arena: Arena, poses: np.ndarray, size: tuple[int, int]) -> list[Image.Image]:
@@ -241,9 +253,8 @@ def _frames_mujoco(arena: Arena, poses: np.ndarray, size: tuple[int, int]) -> li
     model.vis.headlight.diffuse[:] = 0.45
     model.light_specular[:] = 0.05
     view = camera.mjv_camera(mujoco)
-    i, j = arena.grid_map(poses).goal
-    w, h = disc.cell_width, disc.cell_height
-    goal = (i * w, j * h, (i + 1) * w, (j + 1) * h)
+    grid_map = arena.grid_map(poses)
+    landmarks = (_cell_box(disc, grid_map.start), _cell_box(disc, grid_map.goal))
     frames = []
     with mujoco.Renderer(model, size[1], size[0]) as renderer:
         for flag in ("mjRND_SHADOW", "mjRND_REFLECTION", "mjRND_SKYBOX"):  # slow on CPU GL
@@ -252,18 +263,23 @@ def _frames_mujoco(arena: Arena, poses: np.ndarray, size: tuple[int, int]) -> li
             robot.place(float(x), float(y), float(heading))
             renderer.update_scene(robot.data, camera=view)
             image = Image.fromarray(renderer.render())
-            _overlay(image, camera, goal, poses[: k + 1])
+            _overlay(image, camera, landmarks, poses[: k + 1])
             frames.append(image)
     return frames
 
 
 def encode_gif(frames: list[Image.Image], durations: list[int]) -> bytes:
     """A looping GIF of RGB ``frames`` shown ``durations`` [ms] each, on one 64-colour palette
-    from the first and last frames, without dithering (same frames, same bytes)."""
+    from the first and last frames and the start, goal and trail colours (so their thin
+    outlines keep their colour), without dithering (same frames, same bytes)."""
     first, last = frames[0], frames[-1]
-    sample = Image.new("RGB", (first.width * 2, first.height))
+    sample = Image.new("RGB", (first.width * 2, first.height + SWATCH_ROWS))
     sample.paste(first, (0, 0))
     sample.paste(last, (first.width, 0))
+    draw = ImageDraw.Draw(sample)
+    step = sample.width // 3
+    for k, colour in enumerate((START, GOAL, TRAIL)):
+        draw.rectangle((k * step, first.height, (k + 1) * step, sample.height), fill=colour)
     palette = sample.quantize(colors=64, dither=Image.Dither.NONE)
     indexed = [frame.quantize(palette=palette, dither=Image.Dither.NONE) for frame in frames]
     buffer = io.BytesIO()

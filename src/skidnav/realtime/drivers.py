@@ -27,6 +27,7 @@ from typing import Any
 
 from skidnav.childprocess import child_environment, python_module_command
 from skidnav.errors import UserError
+from skidnav.extras import require
 from skidnav.realtime.config import MAX_LEASE_LIMIT, RealtimeConfig
 from skidnav.realtime.link.auth import load_secret
 from skidnav.realtime.link.interface import RobotDriver
@@ -35,6 +36,22 @@ from skidnav.realtime.link.line_client import LineClient, SerialLink, TcpLink
 log = logging.getLogger(__name__)
 
 DRIVERS = ("sim", "tcp", "serial", "ros2")
+DRIVER_EXTRAS = {"serial": "serial", "ros2": "ros2"}
+"""The drivers that need an extra (:mod:`skidnav.extras`) → that extra."""
+
+
+def require_driver_extras(name: str, config: RealtimeConfig) -> None:
+    """Refuse, before anything runs, driver ``name`` on ``config`` when an extra it needs is
+    missing: ``serial`` and ``ros2`` (:data:`DRIVER_EXTRAS`), and a ``sim`` server moved by the
+    MuJoCo robot (``[sim] physics = "mujoco"``).
+
+    Raises:
+        MissingExtraError: one line naming the ``pip install`` that brings it.
+    """
+    if name in DRIVER_EXTRAS:
+        require(DRIVER_EXTRAS[name], f"--driver {name}")
+    if name == "sim" and config.sim.physics == "mujoco":
+        require("physics", '[sim] physics = "mujoco"')
 
 
 class SimServerProcess:

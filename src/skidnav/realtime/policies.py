@@ -6,6 +6,7 @@ table) or a saved one (``--policy-file PATH``, by the loader of its format:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -57,13 +58,21 @@ def select_policy(
 
 
 def check_policy(
-    policy: WheelSpeedPolicy, label: str, grid_map: GridMap, grid: Discretization
+    policy: WheelSpeedPolicy,
+    label: str,
+    grid_map: GridMap,
+    grid: Discretization,
+    action_duration: float,
 ) -> None:
     """Ask ``policy`` once for the wheel speeds at the map's start (centre of the start cell,
     heading 0) before the robot is contacted: this compiles the feature kernels and the
     forward-drive rule the loop scores each action with, whose compilation would hold the GIL
     and starve the driver's reader mid-episode, and refuses a policy that fails there
-    (UserError) before anything moves."""
+    (UserError) before anything moves. A policy that plans for one goal and one action
+    duration (``goal`` (i, j) and ``control_period`` [s] attributes: ``mppi-kinematic``'s
+    frozen planner) is refused on a run whose map has another goal cell or whose actions
+    (``action_duration`` = ``[run] period × substeps`` [s]) last otherwise."""
+    _check_plan(policy, label, grid_map, action_duration)
     try:
         features = PoseFeatures(grid_map, grid, policy.lidar_rays, policy.lidar_range)
         x, y = grid.cell_centre(*grid_map.start)
@@ -72,3 +81,22 @@ def check_policy(
         is_forward_drive(command)
     except Exception as error:  # a policy's own failure, whatever it is, ends here in one line
         raise UserError(f"policy {label}: fails at the start pose ({first_line(error)})") from None
+
+
+def _check_plan(
+    policy: WheelSpeedPolicy, label: str, grid_map: GridMap, action_duration: float
+) -> None:
+    """UserError when ``policy`` says it drives to another goal cell than the map's, or plans
+    actions of another duration than the run's (:func:`check_policy`)."""
+    goal = getattr(policy, "goal", None)
+    if goal is not None and tuple(goal) != tuple(grid_map.goal):
+        raise UserError(
+            f"policy {label}: it drives to the goal cell {tuple(goal)}, the run's map has its goal "
+            f"at {tuple(grid_map.goal)} (set [run] map and seed to the policy's world)"
+        )
+    period = getattr(policy, "control_period", None)
+    if period is not None and not math.isclose(period, action_duration, rel_tol=1e-9):
+        raise UserError(
+            f"policy {label}: it plans actions of {period:g} s, the run's last "
+            f"{action_duration:g} s (set [run] period × substeps to {period:g} s)"
+        )

@@ -149,6 +149,23 @@ class PoseFeatures:
         """The features' names in order (:data:`POSE_GOAL_NAMES`, then ``range_0`` …)."""
         return POSE_GOAL_NAMES + tuple(f"range_{r}" for r in range(self.lidar_rays))
 
+    def steering_dimensions(self) -> tuple[int, ...]:
+        """The features a tile coder takes when its config names none: the goal's distance and
+        bearing (4, 5, 6) and the front ray, with at least 3 rays the front-left and front-right
+        ones too (7, 8, 7 + k − 1). Tiling all 7 + k features jointly needs (tiles + 1)^(7 + k)
+        tiles per tiling, beyond any memory for the default 8 rays.
+
+        >>> from skidnav.world.maps import build_map
+        >>> grid_map = build_map(np.random.default_rng(0), kind="free", shape=(25, 25))
+        >>> PoseFeatures(grid_map, Discretization()).steering_dimensions()
+        (4, 5, 6, 7, 8, 14)
+        >>> PoseFeatures(grid_map, Discretization(), lidar_rays=0).steering_dimensions()
+        (4, 5, 6)
+        """
+        rays = self.lidar_rays
+        sides = (8, 7 + rays - 1) if rays >= 3 else ()
+        return (4, 5, 6, *((7,) if rays else ()), *sides)
+
     def space(self) -> spaces.Box:
         """The ``Box`` float64 (7 + k,) of the observations, with the bounds of the module doc."""
         width, height = self.arena

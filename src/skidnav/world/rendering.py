@@ -2,8 +2,10 @@
 
 The frame spans the whole cell grid (n_x · cell_width by n_y · cell_height metres, a little more
 than the arena since the last cell starts at the arena's edge), y pointing up. It shows slip
-regions tinted by their loss scale η (white: none, orange: η at the wheel speed), walls, the goal,
-the start, the trail and the robot with its heading.
+regions tinted by their loss scale η (white: none, orange: η at the wheel speed), walls, the start
+(green) and goal (red) cells, the trail (blue) and the robot with its heading, in the colours of
+:mod:`skidnav.world.colours`. :func:`with_legend` adds a strip naming them below a frame (the
+pictures ``skidnav world map show --png`` and ``world simulate`` write).
 """
 
 from __future__ import annotations
@@ -14,21 +16,21 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, ImageDraw
+from PIL import Image, ImageDraw, ImageFont
 
 from skidnav.atomicfile import write_user_file
 from skidnav.errors import UserError
 from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.slip import SlipField
+from skidnav.world.colours import GOAL, LANDMARKS, START, TRAIL
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 
 PIXELS_PER_METRE = 1000.0
 WALL = (60, 60, 70)
-GOAL = (40, 170, 70)
-START = (70, 110, 220)
-TRAIL = (200, 30, 30)
 ROBOT = (20, 20, 20)
+LEGEND_HEIGHT = 28
+"""Height of the legend strip of :func:`with_legend` [pixels]."""
 HEADING_ARROWS = "→↗↑↖←↙↓↘"
 
 
@@ -103,12 +105,42 @@ def rgb_frame(
     _draw_slip(draw, canvas, slip, wheel_speed)
     for i, j in np.argwhere(grid_map.occupancy):
         draw.rectangle(canvas.cell_box(int(i), int(j)), fill=WALL)
-    draw.rectangle(canvas.cell_box(*grid_map.start), outline=START, width=3)
+    draw.rectangle(canvas.cell_box(*grid_map.start), fill=START)
     draw.rectangle(canvas.cell_box(*grid_map.goal), fill=GOAL)
     if len(trail) > 1:
         draw.line([canvas.point(x, y) for x, y in trail], fill=TRAIL, width=2)
     _draw_robot(draw, canvas, pose, body_length)
     return np.asarray(image, dtype=np.uint8).copy()
+
+
+def with_legend(frame: np.ndarray) -> np.ndarray:
+    """``frame`` (H, W, 3) uint8 with a white strip of :data:`LEGEND_HEIGHT` pixels below it
+    naming the start, the goal, the walls, the trail and the robot by their colours; shape
+    (H + LEGEND_HEIGHT, W, 3)."""
+    height, width = frame.shape[:2]
+    image = Image.new("RGB", (width, height + LEGEND_HEIGHT), (255, 255, 255))
+    image.paste(Image.fromarray(np.asarray(frame, dtype=np.uint8)), (0, 0))
+    draw = ImageDraw.Draw(image)
+    font = _legend_font()
+    top, x = height + 7, 8
+    for label, colour in (*LANDMARKS, ("wall", WALL)):
+        draw.rectangle((x, top, x + 14, top + 14), fill=colour)
+        draw.text((x + 19, top), label, fill=ROBOT, font=font)
+        x += 26 + round(draw.textlength(label, font=font)) + 12
+    draw.line((x, top + 7, x + 18, top + 7), fill=TRAIL, width=3)
+    draw.text((x + 23, top), "trail", fill=ROBOT, font=font)
+    x += 30 + round(draw.textlength("trail", font=font)) + 12
+    draw.polygon([(x + 16, top + 7), (x, top), (x, top + 14)], outline=ROBOT, width=2)
+    draw.text((x + 21, top), "robot (pointing along its heading)", fill=ROBOT, font=font)
+    return np.asarray(image, dtype=np.uint8).copy()
+
+
+def _legend_font() -> ImageFont.ImageFont | ImageFont.FreeTypeFont:
+    """Pillow's own font at 13 pixels (its small bitmap font where FreeType is missing)."""
+    try:
+        return ImageFont.load_default(size=13)
+    except (TypeError, ImportError, OSError):  # Pillow < 10.1, or no FreeType
+        return ImageFont.load_default()
 
 
 def save_frame(frame: np.ndarray, path: Path | str) -> None:

@@ -145,6 +145,15 @@ def deterministic_action(
     return action
 
 
+def silent_logger() -> Any:
+    """A Stable-Baselines3 logger that writes nothing and creates no folder. Left to itself,
+    ``learn`` configures one in a new ``$TMPDIR/SB3-<date>`` folder, empty at verbosity 0, on
+    every call."""
+    from stable_baselines3.common.logger import Logger
+
+    return Logger(folder=None, output_formats=[])
+
+
 class DeepAgent(Generic[ConfigT]):
     """A Stable-Baselines3 algorithm on ``env`` (a ``Box`` observation), trained by episodes.
 
@@ -174,6 +183,7 @@ class DeepAgent(Generic[ConfigT]):
         self.seed = seed
         outside = global_random_state()
         self.model: BaseAlgorithm = self._build(self.scaled)
+        self.model.set_logger(silent_logger())
         self._random_state = global_random_state()
         set_global_random_state(outside)
         self.episodes = 0

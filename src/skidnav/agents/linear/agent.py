@@ -53,8 +53,8 @@ class LinearAgent:
     """Base of the linear agents: tile coder, weights, ε-greedy behaviour, counters, save/load.
 
     Args:
-        low, high: the observation's bounds (a ``Box``'s ``low`` and ``high``), float (k,),
-            finite with ``high > low``.
+        low: the observation's lower bounds (a ``Box``'s ``low``), float (k,), finite.
+        high: its upper bounds (the ``Box``'s ``high``), float (k,), finite, ``high > low``.
         n_actions: size of the discrete action space.
         config: the agent's config (defaults if None).
         rng: the generator of every random draw (a fresh unseeded one if None).

@@ -25,7 +25,7 @@ from skidnav.agents.linear.agent import SAVE_FORMAT, SAVE_VERSION, LinearAgent
 from skidnav.agents.linear.config import LinearConfig
 from skidnav.agents.tabular.agent import save_paths
 from skidnav.errors import CorruptFileError, UserError, first_line, shown
-from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, read_json
+from skidnav.savedfile import ArraySpec, SavedArchive, loading, read_json
 
 CONTINUOUS_AGENT_MODULES: dict[str, str] = {
     "linear-q": "skidnav.agents.linear.q_learning",
@@ -88,33 +88,19 @@ def load_linear_agent(path: str | Path) -> LinearAgent:
         raise CorruptFileError(
             f"{json_path}: not a skidnav linear agent file of version {SAVE_VERSION}"
         )
-    try:
+    with loading(json_path, "agent", (ValueError, TypeError, UserError)):
         agent = _fresh_agent(meta)
         counters, rng_state = meta["counters"], meta["rng"]
         if not isinstance(counters, Mapping) or not isinstance(rng_state, Mapping):
             raise ValueError("expected counters and rng to be JSON objects")
-    except KeyError as error:
-        raise CorruptFileError(
-            f"{json_path}: cannot load agent: missing {error.args[0]!r}"
-        ) from None
-    except (ValueError, TypeError, UserError) as error:
-        raise CorruptFileError(f"{json_path}: cannot load agent: {first_line(error)}") from None
     specs = {
         name: ArraySpec(tuple(array.shape), array.dtype.str)
         for name, array in agent.state_arrays().items()
     }
-    try:
+    with loading(npz_path, "agent"):
         with SavedArchive(npz_path) as archive:
             arrays = archive.read_all(specs)
         agent.restore(counters, rng_state, arrays)
-    except KeyError as error:
-        raise CorruptFileError(
-            f"{npz_path}: cannot load agent: missing {error.args[0]!r}"
-        ) from None
-    except (*READ_ERRORS, UserError) as error:
-        if isinstance(error, CorruptFileError) and str(error).startswith(f"{npz_path}: "):
-            raise
-        raise CorruptFileError(f"{npz_path}: cannot load agent: {first_line(error)}") from None
     return agent
 
 

@@ -18,8 +18,10 @@ naming the file for anything it cannot use.
 >>> try:
 ...     load_policy(folder / "policy")  # the stem works too
 ... except UserError as error:
-...     print(str(error).split(": ", 1)[1])
-unknown policy format 'some-learner'; expected one of skidnav-tanh-policy, skidnav-ppo, skidnav-sac
+...     for part in str(error).split(": ", 1)[1].split("; "):
+...         print(part)
+unknown policy format 'some-learner'
+expected one of skidnav-tanh-policy, skidnav-ppo, skidnav-sac, skidnav-mppi-agent
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ POLICY_LOADERS: dict[str, str] = {
     "skidnav-tanh-policy": "skidnav.agents.policies.search.policy_file:policy_from_file",
     "skidnav-ppo": "skidnav.agents.deep.ppo:policy_from_file",
     "skidnav-sac": "skidnav.agents.deep.sac:policy_from_file",
+    "skidnav-mppi-agent": "skidnav.agents.mpc.loading:policy_from_file",
 }
 """A saved policy's ``"format"`` → ``"package.module:function"`` loading it (module doc)."""
 

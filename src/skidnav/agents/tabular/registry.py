@@ -22,8 +22,8 @@ import numpy as np
 
 from skidnav.agents.tabular.agent import SAVE_FORMAT, SAVE_VERSION, TabularAgent, save_paths
 from skidnav.agents.tabular.config import KinematicModelFields, QLearningConfig
-from skidnav.errors import CorruptFileError, UserError, first_line, shown
-from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, read_json, up_to
+from skidnav.errors import CorruptFileError, UserError, shown
+from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, loading, read_json, up_to
 
 AGENT_MODULES: dict[str, str] = {
     "q-learning": "skidnav.agents.tabular.q_learning",
@@ -114,21 +114,13 @@ def load_agent(path: str | Path, **context: Any) -> TabularAgent:
     """
     npz_path, json_path = save_paths(path)
     saved = _read_meta(json_path)
-    try:
+    with loading(npz_path, "agent", _LOAD_ERRORS):
         with SavedArchive(npz_path) as archive:
             agent = _fresh_agent(saved, archive, context)
             arrays = archive.read_all(_expected_arrays(agent, saved.steps))
         if not np.isfinite(arrays["q"]).all():
             raise CorruptFileError("the Q table holds NaN or infinite values")
         agent._restore(saved.meta, arrays)
-    except KeyError as error:
-        raise CorruptFileError(
-            f"{npz_path}: cannot load agent: missing {error.args[0]!r}"
-        ) from None
-    except _LOAD_ERRORS as error:
-        if isinstance(error, CorruptFileError) and str(error).startswith(f"{npz_path}: "):
-            raise
-        raise CorruptFileError(f"{npz_path}: cannot load agent: {first_line(error)}") from None
     return agent
 
 
@@ -151,7 +143,7 @@ def _read_meta(json_path: Path) -> _SavedMeta:
     meta = read_json(json_path, max_bytes=MAX_AGENT_JSON_BYTES, what="agent file")
     if meta.get("format") != SAVE_FORMAT or meta.get("version") != SAVE_VERSION:
         raise CorruptFileError(f"{json_path}: not a skidnav agent file of version {SAVE_VERSION}")
-    try:
+    with loading(json_path, "agent", (ValueError, TypeError, UserError)):
         cls = agent_class(_string(meta, "agent"))
         n_states = _integer(meta, "n_states", 1, MAX_TABLE_ENTRIES)
         n_actions = _integer(meta, "n_actions", 1, MAX_TABLE_ENTRIES // n_states)
@@ -162,12 +154,6 @@ def _read_meta(json_path: Path) -> _SavedMeta:
             _integer(counters, name, 0, MAX_COUNTER, "counter ")
         _mapping(meta, "rng")
         geometry = _saved_geometry(cls, n_states, config, meta)
-    except KeyError as error:
-        raise CorruptFileError(
-            f"{json_path}: cannot load agent: missing {error.args[0]!r}"
-        ) from None
-    except (ValueError, TypeError, UserError) as error:
-        raise CorruptFileError(f"{json_path}: cannot load agent: {first_line(error)}") from None
     return _SavedMeta(meta, cls, n_states, n_actions, config, steps, geometry)
 
 

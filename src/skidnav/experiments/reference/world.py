@@ -5,8 +5,9 @@ where a run's agent is evaluated, and the summary columns a run records of them.
 
 1. the **oracle** (:mod:`~skidnav.experiments.reference.oracle`): value iteration on the
    simulator's transition model estimated by sampling, its V*(start) = L* and C*, and its own
-   rollouts from the evaluation seeds — on the skid-steer env with kinematic dynamics only (a
-   physics run has none: its L* is NaN);
+   rollouts from the evaluation seeds — on the skid-steer env with kinematic dynamics and the
+   discrete actions only (a physics run, or one of wheel-speed actions, has none: its L* is
+   NaN);
 2. L* without an oracle: a grid maze's breadth-first shortest path, exact there; else NaN;
 3. the **start plan** (:mod:`~skidnav.experiments.reference.start_plan`): the fewest actions from
    the exact start pose, replayed from every evaluation seed;
@@ -67,9 +68,12 @@ class WorldReference(NamedTuple):
 
 
 def has_oracle(env: gymnasium.Env[Any, Any]) -> bool:
-    """True unless the skid-steer env runs on physics (``[env] dynamics = "mujoco"``): the
-    oracle solves the kinematic MDP, so a physics run's L* and optimality gap are NaN."""
-    return getattr(env.unwrapped, "dynamics", "kinematic") == "kinematic"
+    """True unless the skid-steer env runs on physics (``[env] dynamics = "mujoco"``) or takes
+    wheel speeds (``[env] action = "continuous"``): the oracle solves the kinematic MDP of the
+    thesis's four actions, so the L* and optimality gap of such a run are NaN."""
+    nav = env.unwrapped
+    kinematic = getattr(nav, "dynamics", "kinematic") == "kinematic"
+    return kinematic and getattr(nav, "action_kind", "discrete") == "discrete"
 
 
 def world_reference(

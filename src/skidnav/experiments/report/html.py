@@ -1,11 +1,16 @@
 """The experiment report: ONE self-contained HTML file (tables, base64 PNG figures, the config).
 
-Sections: setup, metric definitions (with the convergence tolerance), thesis reproduction
-(speed-up, success-rate gain, final-length difference, rough vs slippery floor), aggregate
-tables, per-cell figures (learning curves, per-seed metrics, final greedy trajectories and one of
-them animated (:mod:`skidnav.physics.render`), value maps with preferred headings, greedy-policy
-maps), provenance (config, versions, sessions with their code versions). The numbers are what
-was measured.
+It leads with its point: the one-line verdict (``id="verdict"``, the headline speed-up with its
+interval, :mod:`skidnav.experiments.report.verdict`), a caveat when the seeds are too few for
+intervals, the convergence table with every agent's speed-up, the setup, then the metric
+definitions folded (:mod:`skidnav.experiments.report.definitions`). Then performance profiles,
+the planning budget, thesis reproduction (speed-up, success-rate gain, final-length difference,
+rough vs slippery floor), aggregate tables, per-cell figures (greedy path lengths against the
+oracle, learning curves, per-seed metrics, final greedy trajectories and one of them animated
+(:mod:`skidnav.physics.render`), value maps with preferred headings, greedy-policy maps),
+provenance (config, versions, sessions with their code versions). The numbers are what was
+measured, rounded for people (:mod:`skidnav.formatting`). Building it shows a progress bar on
+stderr when asked (``skidnav report``).
 
 The page shell is shared with the studies' reports (:mod:`skidnav.experiments.report.page`). An
 experiment report takes extra sections from its caller (:data:`ExperimentSection`: the commands
@@ -17,16 +22,19 @@ from __future__ import annotations
 
 import html
 import logging
+import sys
 from collections.abc import Callable, Sequence
+from functools import partial
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
+from tqdm import tqdm
 
 from skidnav.experiments.config import ExperimentConfig, config_to_dict
 from skidnav.experiments.report import plots
 from skidnav.experiments.report.analysis import (
-    METRICS,
     aggregate,
     budget_rows,
     cells,
@@ -37,9 +45,10 @@ from skidnav.experiments.report.analysis import (
     stats_rng,
     survival_columns,
 )
+from skidnav.experiments.report.cells import Part, cell_parts, figure
+from skidnav.experiments.report.definitions import definitions
 from skidnav.experiments.report.page import (
     config_and_provenance,
-    gif_image,
     image,
     interval_text,
     page,
@@ -48,12 +57,9 @@ from skidnav.experiments.report.page import (
     write_page,
 )
 from skidnav.experiments.report.reproduction import reproduction_section
-from skidnav.experiments.store import ResultStore, TrialResult
-from skidnav.physics.materials import region_materials
-from skidnav.physics.render import Arena, animate, describe
-from skidnav.robot.floors import PRESET_FLOORS
-from skidnav.robot.params import RobotParams
-from skidnav.robot.slip import SlipField
+from skidnav.experiments.report.verdict import verdict_html, verdict_text
+from skidnav.experiments.store import ResultStore
+from skidnav.formatting import MIN_INTERVAL_SEEDS, plural
 from skidnav.survival import performance_profile, profile_band
 
 logger = logging.getLogger(__name__)
@@ -61,79 +67,6 @@ logger = logging.getLogger(__name__)
 ExperimentSection = Callable[[pd.DataFrame, ExperimentConfig], str]
 """An extra section of an experiment report: the summaries (one row per run) and the config in,
 an HTML fragment out (empty when it has nothing to show)."""
-
-
-ANIMATION_FRAMES = 90
-"""Frames of the report's animations (about 16 ms each for MuJoCo on a CPU renderer)."""
-
-
-def aggregate_table(aggregates: pd.DataFrame, map_label: str, preset: str) -> str:
-    """Mean [CI] and IQM [CI] of every metric per agent for one cell."""
-    rows = aggregates[(aggregates["map"] == map_label) & (aggregates["preset"] == preset)]
-    records = []
-    for metric, title in METRICS.items():
-        record = {"metric": title}
-        for _, r in rows[rows["metric"] == metric].iterrows():
-            for kind, label in (("mean", "mean"), ("iqm", "IQM")):
-                record[f"{r['agent']} {label}"] = interval_text(
-                    float(r[kind]), float(r[f"{kind}_low"]), float(r[f"{kind}_high"])
-                )
-        records.append(record)
-    return table(pd.DataFrame.from_records(records))
-
-
-def definitions(config: ExperimentConfig) -> str:
-    """The metric definitions, with this experiment's tolerance, window and interval settings."""
-    tol, window, rollouts, level = (
-        config.convergence_tolerance, config.convergence_window, config.eval_rollouts,
-        config.convergence_level,
-    )  # fmt: skip
-    measured, optimum = (
-        ("length", "L*") if config.convergence_objective == "actions"
-        else ("cost (minus the reward without the goal bonus: the objective of the agents' "
-              "reward)", "the oracle's C*, the least expected cost from the start")
-    )  # fmt: skip
-    return f"""<ul class="note">
-<li><b>Oracle</b> L*: the expected number of actions from the start under the best policy of the
-true transition model of the discretized MDP, estimated from the simulator itself
-({config.oracle_samples} sampled poses per state and action) and solved by value iteration.</li>
-<li><b>Evaluation</b>: after every training episode the greedy policy is rolled out
-<b>{rollouts}</b> times from the start, each from a reset with one of {rollouts} fixed evaluation
-seeds (the same after every episode and for every agent of a world).</li>
-<li><b>Pass</b>: an evaluation passes when every rollout reaches the goal with a mean
-{measured} within <b>{tol:.0%}</b> above {optimum}. (The oracle's own greedy policy over cells
-can loop from the exact start pose; the share of its rollouts that reached the goal is the column
-<code>oracle_rollout_success</code>: L* is a reference, not a policy every world lets a cell
-policy follow.)</li>
-<li><b>Convergence episode</b> (converged means it stays converged): the first passing episode e
-from which the share of passing evaluations stays at least <b>{level:.0%}</b> to the end of the
-run (over e … k for every k from e + {window - 1} on: at least <b>{window}</b> evaluations of
-evidence). A run that passed for a while and then fell apart is not converged at its first good
-stretch; a run with no such episode is <b>censored</b> at episode {config.episodes} − {window} + 1.
-A longer run can only reveal that a policy did not stay (its convergence episode is the same or
-later). Medians are Kaplan–Meier estimates; ∞ means more than half of the runs never converged.
-<b>Pass share after convergence</b>: share of passing evaluations from the convergence episode
-to the end; <b>after the first good window</b>: the same from the first {window} passes in a row
-(the drift a first-window rule would hide); <b>last 10 %</b>: share of passing evaluations in
-the last 10 % of episodes. Speed-up: KM median of the baseline / KM median of the agent; where
-more than half of one side's runs are censored, its largest censoring time stands in for its
-median and the speed-up is a bound: <b>≥</b> (baseline censored; no upper end), <b>≤</b> (agent
-censored), or <b>unknown</b> (both). Probability of improvement (Agarwal et al. 2021):
-the chance that a run of the agent converges before a run of the baseline, censored pairs scored
-by Gehan's rule. The mean and IQM of the convergence episode below count censored runs at their
-censoring time (biased low); use the medians for claims.</li>
-<li><b>Optimality gap</b>: mean greedy length over the last {window} evaluations (rollouts that
-reached the goal) / L* − 1.</li>
-<li><b>Final greedy length</b>: actions (and metres travelled) of one greedy rollout from the start
-after the last episode (the trajectory drawn below); only runs where it reached the goal, and
-comparisons only over seeds where both agents' rollouts did.</li>
-<li><b>Success rate</b>: share of training episodes that reached the goal within
-{config.max_steps or "the environment's"} actions (all episodes, and the last 10 %).</li>
-<li>Intervals: {config.confidence:.0%} percentile bootstrap over seeds,
-{config.bootstrap_samples} resamples, seeded. IQM: mean of the middle 50 % of seeds.
-Comparisons with the baseline <b>{html.escape(config.baseline)}</b> are paired by seed (every agent
-meets the same maps and floors). "No significant difference" means the interval of the difference
-contains 0; its width tells how large a difference could have gone unnoticed.</li></ul>"""
 
 
 def convergence_section(
@@ -168,7 +101,7 @@ def convergence_section(
         })  # fmt: skip
     frame = pd.DataFrame.from_records(records)
     return (
-        "<h2>Convergence</h2>" + frame.to_html(index=False, escape=False, border=0)
+        "<h2>Convergence</h2>" + table(frame, labels=2, escape=False)
         + calibration_text(summaries)
     )  # fmt: skip
 
@@ -251,161 +184,147 @@ def setup(config: ExperimentConfig, metadata: dict[str, object], n_runs: int) ->
     return (
         f"<p>{html.escape(config.description)}</p><ul><li>agents: {agents}</li>"
         f"<li>maps: {maps}; slip presets: {', '.join(config.presets)}; drift amplitude "
-        f"{config.drift_amplitude}</li><li>{config.seeds} seeds per cell, {config.episodes} "
-        f"episodes per run, action limit {config.max_steps or 'env default'}; root seed "
-        f"{config.root_seed}; {n_runs} runs finished of {config.n_runs}</li>"
+        f"{config.drift_amplitude}</li><li>{plural(config.seeds, 'seed')} per cell, "
+        f"{plural(config.episodes, 'episode')} per run, action limit "
+        f"{config.max_steps or 'env default'}; root seed {config.root_seed}; {n_runs} of "
+        f"{plural(config.n_runs, 'run')} finished</li>"
         f"<li>environment {html.escape(config.env_id)}; git commit "
-        f"{html.escape(str(metadata.get('git_commit')))}"
+        f"{html.escape(str(metadata.get('git_commit') or 'unknown (not run from a checkout)'))}"
         f"{' (dirty)' if metadata.get('git_dirty') else ''}</li></ul>"
     )
 
 
-def animated_run(runs: list[TrialResult], baseline: str) -> tuple[TrialResult, str]:
-    """The run to animate, and why: the non-baseline agent whose final greedy rollout reached
-    the goal in the fewest actions, else the first run."""
-    reached = [
-        run
-        for run in runs
-        if run.coordinates["agent"] != baseline
-        and run.summary["final_length_m"] == run.summary["final_length_m"]  # not NaN
-    ]
-    if not reached:
-        return runs[0], "the first agent; no other agent's greedy rollout reached the goal"
-    best = min(reached, key=lambda run: len(run.arrays["greedy_poses"]))
-    return best, "the shortest final greedy path of the agents other than the baseline"
+class Tables(NamedTuple):
+    """What an experiment report is computed from: the results' tables and their statistics."""
+
+    config: ExperimentConfig
+    episodes: pd.DataFrame
+    summaries: pd.DataFrame
+    aggregates: pd.DataFrame
+    comparisons: pd.DataFrame
+    surfaces: pd.DataFrame
+    metadata: dict[str, object]
 
 
-def animation_figure(run: TrialResult, preset: str, why: str) -> str:
-    """The animated final greedy trajectory of ``run`` with its caption."""
-    robot = RobotParams()
-    eta = np.asarray(run.arrays["slip_eta"], dtype=np.float64)
-    start, goal = run.arrays["start"], run.arrays["goal"]
-    materials = None
-    if preset in PRESET_FLOORS:
-        field = SlipField(eta, np.zeros_like(eta), drift_phase=np.zeros_like(eta))
-        materials = region_materials(preset, field, robot)
-    arena = Arena(
-        run.arrays["occupancy"],
-        (int(start[0]), int(start[1])),
-        (int(goal[0]), int(goal[1])),
-        slip_eta=eta,
-        materials=materials,
-        robot=robot,
-    )
-    poses = np.asarray(run.arrays["greedy_poses"], dtype=np.float64)
-    movie = animate(arena, poses, frames_per_action=3, max_frames=ANIMATION_FRAMES)
-    caption = (
-        f"Final greedy trajectory of {run.coordinates['agent']} (seed "
-        f"{run.coordinates['seed']}, {len(poses) - 1} actions; {why}), animated by the "
-        f"{describe(movie)}."
-    )
+def load_tables(store: ResultStore) -> Tables:
+    """The tables of ``store`` and the statistics every section reads."""
+    config = store.config()
+    episodes, summaries = store.load_tables()
+    return Tables(
+        config, episodes, summaries, aggregate(summaries, config),
+        compare_to_baseline(summaries, config), compare_surfaces(summaries, config),
+        store.metadata(),
+    )  # fmt: skip
+
+
+def seeds_caveat_html(summaries: pd.DataFrame, config: ExperimentConfig) -> str:
+    """A warning when a cell has fewer seeds than an interval needs; else nothing."""
+    seeds = int(summaries.groupby(["map", "preset", "agent"])["seed"].nunique().min())
+    if seeds >= MIN_INTERVAL_SEEDS:
+        return ""
     return (
-        f"<figure>{gif_image(movie.gif, 'animated greedy trajectory')}"
-        f"<figcaption class='note'>{html.escape(caption)}</figcaption></figure>"
+        f"<p class='no'>Only {plural(seeds, 'seed')} per cell: the {config.confidence:.0%} "
+        "intervals in this report are not meaningful (a bootstrap over so few seeds only "
+        f"returns their own values); run at least {MIN_INTERVAL_SEEDS} seeds (the thesis's "
+        "claims need ≥ 30).</p>"
     )
 
 
-def figures_for_cell(
-    store: ResultStore,
-    config: ExperimentConfig,
-    episodes: pd.DataFrame,
-    summaries: pd.DataFrame,
-    aggregates: pd.DataFrame,
-    map_label: str,
-    preset: str,
-) -> str:
-    """Learning curves, per-seed metrics, trajectories, value and policy maps of one cell."""
-    parts = [
-        image(
-            plots.learning_curves(
-                episodes, config, map_label, preset, float(summaries["action_limit"].max())
-            ),
-            "learning curves",
+def headline(tables: Tables) -> str:
+    """The top of the report: title, verdict, seeds caveat, convergence table, setup, the
+    definitions folded."""
+    config, summaries = tables.config, tables.summaries
+    return "".join((
+        f"<h1>skidnav experiment: {html.escape(config.name)}</h1>",
+        verdict_html(verdict_text(tables.comparisons, summaries, config)),
+        seeds_caveat_html(summaries, config),
+        convergence_section(summaries, tables.comparisons, config),
+        setup(config, tables.metadata, len(summaries)),
+        definitions(config),
+    ))  # fmt: skip
+
+
+def report_parts(
+    store: ResultStore, tables: Tables, sections: Sequence[ExperimentSection]
+) -> list[Part]:
+    """Every step of the report after the statistics, in page order."""
+    config, summaries, comparisons = tables.config, tables.summaries, tables.comparisons
+    parts: list[Part] = [
+        ("headline", partial(headline, tables)),
+        ("performance profiles", partial(performance_profiles, summaries, config)),
+        ("planning budget", partial(budget_section, comparisons, tables.aggregates, config)),
+        (
+            "thesis reproduction",
+            partial(reproduction_section, comparisons, tables.surfaces, summaries, config),
         ),
-        image(plots.metric_strips(summaries, aggregates, config, map_label, preset), "metrics"),
     ]
-    cell = summaries[(summaries["map"] == map_label) & (summaries["preset"] == preset)]
-    first_seed = int(cell["seed"].min())
-    run_ids = [
-        str(rows.iloc[0]["run_id"])
-        for agent in config.agent_labels
-        if not (rows := cell[(cell["agent"] == agent) & (cell["seed"] == first_seed)]).empty
+    parts += [
+        (f"study section {number}", partial(section, summaries, config))
+        for number, section in enumerate(sections, start=1)
     ]
-    runs = [run for run in store.iter_runs(run_ids) if "occupancy" in run.arrays]
-    if not runs:  # not the skid-steer env: no arena to draw
-        return "\n".join(parts)
-    title = f"{map_label} · {preset}, seed {first_seed}"
-    parts.append(
-        image(
-            plots.trajectories(runs, f"final greedy trajectories, {title} (shading: slip η)"),
-            "trajectories",
-        )
-    )
-    animated, why = animated_run(runs, config.baseline)
-    parts.append(animation_figure(animated, preset, why))
-    tabular = [run for run in runs if "value_map" in run.arrays]  # agents with a Q table
-    if tabular:
-        parts.append(
-            image(
-                plots.value_maps(tabular, f"state values and preferred headings, {title}"),
-                "value maps",
-            )
-        )
-    with_policy = [run for run in runs if "policy_map" in run.arrays]
-    if with_policy:  # older run files have no policy map
-        parts.append(
-            image(
-                plots.policy_maps(with_policy, f"greedy action at the start heading, {title}"),
-                "policy maps",
-            )
-        )
-    return "\n".join(parts)
+    if not tables.surfaces.empty:
+        floors = partial(plots.surface_bars, tables.surfaces)
+        parts.append(("rough vs slippery", partial(figure, floors, "rough vs slippery")))
+    for map_label, preset, _ in cells(summaries):
+        cell_tables = (tables.episodes, summaries, tables.aggregates)
+        parts += cell_parts(store, config, cell_tables, (map_label, preset))
+    provenance = partial(config_and_provenance, config_to_dict(config), tables.metadata)
+    parts.append(("provenance", lambda: "".join(provenance())))
+    return parts
+
+
+class WrittenReport(NamedTuple):
+    """A report written: where, and its verdict line (:func:`verdict_text`)."""
+
+    path: Path
+    verdict: str
+
+
+def render_report(
+    run_dir: Path | str, sections: Sequence[ExperimentSection] = (), *, progress: bool = False
+) -> tuple[str, str]:
+    """(the report of a results directory as one HTML string, its verdict line); ``sections``
+    are drawn after the thesis reproduction, in order (the commands pass the studies'
+    sections); ``progress``: a progress bar of its steps on stderr."""
+    store = ResultStore(run_dir)
+    with tqdm(
+        total=1, desc="report", unit="step", file=sys.stderr, disable=not progress,
+        dynamic_ncols=True, leave=False,
+    ) as bar:  # fmt: skip
+        bar.set_postfix_str("statistics")
+        tables = load_tables(store)
+        parts = report_parts(store, tables, sections)
+        bar.total = len(parts) + 1
+        bar.update(1)
+        body = []
+        for name, draw in parts:
+            bar.set_postfix_str(name)
+            logger.info("report: %s", name)
+            body.append(draw())
+            bar.update(1)
+    verdict = verdict_text(tables.comparisons, tables.summaries, tables.config)
+    return page(f"skidnav: {tables.config.name}", body), verdict
 
 
 def build_report(run_dir: Path | str, sections: Sequence[ExperimentSection] = ()) -> str:
-    """The report of a results directory as one HTML string; ``sections`` are drawn after the
-    thesis reproduction, in order (the commands pass the studies' sections)."""
-    store = ResultStore(run_dir)
-    config = store.config()
-    episodes, summaries = store.load_tables()
-    aggregates = aggregate(summaries, config)
-    comparisons = compare_to_baseline(summaries, config)
-    surfaces = compare_surfaces(summaries, config)
-    metadata = store.metadata()
-    body = [
-        f"<h1>skidnav experiment: {html.escape(config.name)}</h1>",
-        setup(config, metadata, len(summaries)),
-        "<h2>Definitions</h2>",
-        definitions(config),
-        convergence_section(summaries, comparisons, config),
-        performance_profiles(summaries, config),
-        budget_section(comparisons, aggregates, config),
-        reproduction_section(comparisons, surfaces, summaries, config),
-        *(section(summaries, config) for section in sections),
-    ]
-    if not surfaces.empty:
-        body.append(image(plots.surface_bars(surfaces), "rough vs slippery"))
-    for map_label, preset, _ in cells(summaries):
-        logger.info("report: cell %s / %s", map_label, preset)
-        body += [
-            f"<h2>Map {html.escape(map_label)} · preset {html.escape(preset)}</h2>",
-            aggregate_table(aggregates, map_label, preset),
-            figures_for_cell(store, config, episodes, summaries, aggregates, map_label, preset),
-        ]
-    body += config_and_provenance(config_to_dict(config), metadata)
-    return page(f"skidnav: {config.name}", body)
+    """The report of a results directory as one HTML string (:func:`render_report`)."""
+    return render_report(run_dir, sections)[0]
 
 
 def write_report(
     run_dir: Path | str,
     output: Path | str | None = None,
     sections: Sequence[ExperimentSection] = (),
-) -> Path:
-    """Write the report of the experiment in ``run_dir`` (:func:`build_report` with its extra
-    ``sections``) to :func:`report_path`, atomically (:func:`write_page`); returns its path.
+    *,
+    progress: bool = False,
+) -> WrittenReport:
+    """Write the report of the experiment in ``run_dir`` (:func:`render_report` with its extra
+    ``sections`` and ``progress``) to :func:`report_path`, atomically (:func:`write_page`);
+    returns its path and verdict line.
 
     Raises:
         UserError: the results are missing or damaged, or the report cannot be written there.
     """
     path = report_path(run_dir, output)
-    return write_page(path, build_report(run_dir, sections))
+    text, verdict = render_report(run_dir, sections, progress=progress)
+    return WrittenReport(write_page(path, text), verdict)

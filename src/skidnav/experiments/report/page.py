@@ -12,6 +12,7 @@ from __future__ import annotations
 import base64
 import html
 import json
+import re
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -22,30 +23,47 @@ from skidnav.atomicfile import remove_stale_temporaries, write_atomic
 from skidnav.errors import UserError
 from skidnav.experiments.provenance import CODE_KEYS, describe_code
 from skidnav.experiments.store import ResultStore, RunLayout
+from skidnav.formatting import interval
 
 STYLE = """
-body{font-family:system-ui,sans-serif;max-width:1250px;margin:2em auto;padding:0 1em;color:#222}
-table{border-collapse:collapse;font-size:13px;margin:0.6em 0}
-td,th{border:1px solid #ccc;padding:3px 7px;text-align:right}
+body{font-family:system-ui,sans-serif;max-width:1250px;margin:1.2em auto;padding:0 1em;color:#222}
+h1{font-size:26px;margin:0.2em 0 0.4em}
+#verdict{font-size:17px;line-height:1.4;margin:0 0 0.8em;padding:0.5em 0.8em;
+ background:#eef6ee;border-left:5px solid #17631b}
+table{border-collapse:collapse;font-size:13px;margin:0.6em 0;font-variant-numeric:tabular-nums;
+ display:block;max-width:100%;overflow-x:auto}
+td,th{border:1px solid #ccc;padding:3px 7px;text-align:right;vertical-align:top}
+td:first-child{min-width:9em}
 th{background:#f0f0f0} td:first-child,th:first-child{text-align:left}
+table.prose td,table.prose th{text-align:left;max-width:42em}
+table.labels-2 td:nth-child(-n+2),table.labels-2 th:nth-child(-n+2),
+table.labels-3 td:nth-child(-n+3),table.labels-3 th:nth-child(-n+3){text-align:left}
+table.labels-2 td:nth-child(-n+2),table.labels-3 td:nth-child(-n+3){white-space:nowrap}
+details{margin:0.6em 0} summary{cursor:pointer;font-weight:600}
 img{max-width:100%} pre{background:#f6f6f6;padding:0.8em;overflow-x:auto;font-size:12px}
 .yes{color:#17631b;font-weight:600} .no{color:#9b1c1c;font-weight:600}
 .note{color:#555;font-size:13px}
 """
+"""The report's style: numbers right-aligned in their columns (a table wider than the page
+scrolls), text left-aligned: the first column, the first two or three of a table of class
+``labels-2`` or ``labels-3``, every column of one of class ``prose``."""
 
 
-def interval_text(mean: float, low: float, high: float, digits: int = 2) -> str:
-    """``"12.30 [10.10, 14.20]"``; the estimate alone when the interval is undefined (one seed);
-    ``"–"`` when the estimate is.
+INTERVAL = re.compile(r"([\[(][^\[\]()<>\s]{1,40}), ([^\[\]()<>\s]{1,40}[\])])")
+"""An interval's brackets (``[`` or ``(`` … ``]`` or ``)``) around two bounds and a comma."""
+
+
+def interval_text(mean: float, low: float, high: float, digits: int | None = None) -> str:
+    """``"12.3 [10.1, 14.2]"`` (:func:`skidnav.formatting.interval`: rounded for people, or to
+    ``digits`` decimals); the estimate alone when the interval is undefined (one seed); "n/a"
+    when the estimate is.
 
     >>> interval_text(12.3, 10.1, 14.2), interval_text(12.0, float("nan"), float("nan"))
-    ('12.30 [10.10, 14.20]', '12.00')
+    ('12.3 [10.1, 14.2]', '12')
+    >>> interval_text(6819378.33, 6.1e6, 7.5e6), interval_text(float("nan"), 1.0, 2.0)
+    ('6,820,000 [6,100,000, 7,500,000]', 'n/a')
     """
-    if mean != mean:  # NaN
-        return "–"
-    if low != low or high != high:
-        return f"{mean:.{digits}f}"
-    return f"{mean:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
+    return interval(mean, low, high, digits)
 
 
 def image(png: bytes, alt: str) -> str:
@@ -60,9 +78,24 @@ def gif_image(gif: bytes, alt: str) -> str:
     return f'<img alt="{html.escape(alt)}" src="data:image/gif;base64,{encoded}">'
 
 
-def table(frame: pd.DataFrame) -> str:
-    """An HTML table of preformatted string cells."""
-    return frame.to_html(index=False, escape=True, border=0)
+def table(frame: pd.DataFrame, *, labels: int = 1, prose: bool = False, escape: bool = True) -> str:
+    """An HTML table of preformatted string cells (``escape=False``: cells already HTML); its
+    first ``labels`` columns (1–3) are text, left-aligned, the others numbers, right-aligned;
+    ``prose``: every column left-aligned (cells of sentences)."""
+    classes = "prose" if prose else (f"labels-{labels}" if labels in (2, 3) else None)
+    if not prose:
+        frame = frame.map(lambda cell: whole_intervals(cell) if isinstance(cell, str) else cell)
+    return frame.to_html(index=False, escape=escape, border=0, classes=classes)
+
+
+def whole_intervals(text: str) -> str:
+    """``text`` with the space inside each interval ("[1.2, 3.4]", "[2.5, ∞)", "(0, 0.9]")
+    made non-breaking, so a narrow column breaks a cell only before its interval.
+
+    >>> whole_intervals("12.3 [10.1, 14.2]") == "12.3 [10.1,\u00a014.2]"
+    True
+    """
+    return INTERVAL.sub("\\1,\u00a0\\2", text)
 
 
 def sessions_table(metadata: dict[str, object]) -> str:
@@ -93,7 +126,7 @@ def page(title: str, body: Iterable[str]) -> str:
     """One self-contained HTML page: ``title`` and the ``body`` fragments, in the report's
     style."""
     return (
-        "<!DOCTYPE html><html><head><meta charset='utf-8'>"
+        "<!DOCTYPE html><html><head><meta charset='utf-8'><link rel='icon' href='data:,'>"
         f"<title>{html.escape(title)}</title><style>{STYLE}</style></head>"
         f"<body>{''.join(body)}</body></html>"
     )

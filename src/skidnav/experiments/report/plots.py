@@ -1,8 +1,10 @@
-"""Figures of an experiment, as PNG bytes (with :mod:`skidnav.studies.continuity.trajectory_plot`,
-the only modules of skidnav that import matplotlib).
+"""Figures of an experiment, as PNG bytes (with :mod:`skidnav.experiments.report.maps` and
+:mod:`skidnav.studies.continuity.trajectory_plot`, the only modules of skidnav that import
+matplotlib).
 
 Every figure function takes the tidy tables (or run arrays) and returns PNG bytes, so the report
-embeds them without touching matplotlib. The Agg backend is forced: no display is needed.
+embeds them without touching matplotlib. The Agg backend is forced: no display is needed. Every
+figure is cropped to what it draws (:func:`to_png`), so no tick label or legend is cut off.
 """
 
 from __future__ import annotations
@@ -20,26 +22,26 @@ import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
-from matplotlib.patches import Rectangle
 
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.metrics import moving_average
-from skidnav.experiments.store import TrialResult
 from skidnav.stats import curve_band
 
-ARENA = (0.62, 0.505)
-"""Arena width and height [m] (the thesis arena, Alhawary (2020), App. A.1.1; as
-:class:`~skidnav.robot.params.RobotParams`)."""
 DPI = 90
 
 
-def to_png(figure: Figure, dpi: int = DPI) -> bytes:
-    """Render ``figure`` in memory at ``dpi`` [pixels per inch] and close it (also when rendering
-    fails); returns the PNG bytes. Nothing here writes a file: callers write the bytes with
-    :func:`~skidnav.atomicfile.write_atomic` (the report embeds them)."""
+def to_png(figure: Figure, dpi: int = DPI, *, crop: bool = True) -> bytes:
+    """Render ``figure`` in memory at ``dpi`` [pixels per inch], cropped to its drawn artists
+    with a small margin (no label cut off; ``crop=False``: at the figure's own size, for a
+    picture of a promised size drawn with a constrained layout), and close it (also when
+    rendering fails); returns the PNG bytes. Nothing here writes a file: callers write the bytes
+    with :func:`~skidnav.atomicfile.write_atomic` (the report embeds them)."""
     buffer = io.BytesIO()
     try:
-        figure.savefig(buffer, format="png", dpi=dpi)
+        if crop:
+            figure.savefig(buffer, format="png", dpi=dpi, bbox_inches="tight", pad_inches=0.08)
+        else:
+            figure.savefig(buffer, format="png", dpi=dpi)
     finally:
         plt.close(figure)
     return buffer.getvalue()
@@ -87,18 +89,14 @@ def _band(
 
 
 def learning_curves(
-    episodes: pd.DataFrame, config: ExperimentConfig, map_label: str, preset: str, limit: float
+    episodes: pd.DataFrame, config: ExperimentConfig, map_label: str, preset: str
 ) -> bytes:
-    """Greedy trajectory length, return and success rate per episode, mean over seeds with a
-    bootstrap band, one line per agent (one map × preset cell). A greedy evaluation that did not
-    reach the goal is drawn at the action limit ``limit``."""
+    """Return and success rate per episode, mean over seeds with a bootstrap band, one line per
+    agent (one map × preset cell); the greedy lengths are :func:`greedy_lengths`."""
     cell = episodes[(episodes["map"] == map_label) & (episodes["preset"] == preset)]
-    panels = (
-        ("greedy_length", f"greedy trajectory length [actions] (failed = {limit:.0f})"),
-        ("return", "episode return"),
-        ("success", f"success (moving average, {max(1, round(config.episodes / 20))} ep.)"),
-    )
-    figure, axes = plt.subplots(1, 3, figsize=(15, 4), layout="constrained")
+    window = max(1, round(config.episodes / 20))
+    panels = (("return", "episode return"), ("success", f"success (moving average, {window} ep.)"))
+    figure, axes = plt.subplots(1, 2, figsize=(11, 3.8), layout="constrained")
     colors = _colors(config.agent_labels)
     rng = np.random.default_rng([config.root_seed, 0xC0])
     for agent in config.agent_labels:
@@ -107,19 +105,99 @@ def learning_curves(
             continue
         for ax, (column, title) in zip(axes, panels, strict=True):
             table = rows.pivot(index="seed", columns="episode", values=column).to_numpy(float)
-            table = np.nan_to_num(table, nan=limit)
             if column == "success":
-                window = max(1, round(config.episodes / 20))
-                table = np.array([moving_average(row, window) for row in table])
+                table = np.array([moving_average(row, window) for row in np.nan_to_num(table)])
             _band(ax, table, rng, agent, colors[agent], config.confidence)
             ax.set_title(title, fontsize=10)
             ax.set_xlabel("episode")
-    axes[0].set_yscale("log")
     axes[0].legend(fontsize=8)
     figure.suptitle(
         f"{map_label} · {preset}: mean over seeds, {config.confidence:.0%} bootstrap band"
     )
     return to_png(figure)
+
+
+GREEDY_CAP = 4.0
+"""The greedy-length figure's ceiling, a multiple of L*: longer greedy rollouts, and
+evaluations where none reached the goal, are drawn at it."""
+GREEDY_BINS = 60
+"""Logarithmic episode bins of the greedy-length figure (fewer where episodes are few)."""
+
+
+def _quartiles_by_bin(
+    episode: np.ndarray, values: np.ndarray, edges: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(bin centres (k,), quartiles (3, k): 25th, 50th, 75th percentile) of ``values`` over
+    the episodes in each bin [edges[b], edges[b + 1]) that holds any."""
+    index = np.searchsorted(edges, episode, side="right") - 1
+    kept = [b for b in range(len(edges) - 1) if np.any(index == b)]
+    centres = np.array([math.sqrt(edges[b] * (edges[b + 1] - 1)) for b in kept])
+    quartiles = np.array([np.percentile(values[index == b], (25, 50, 75)) for b in kept]).T
+    return centres, quartiles.reshape(3, len(kept))
+
+
+def greedy_lengths(
+    episodes: pd.DataFrame, summaries: pd.DataFrame, config: ExperimentConfig, cell: tuple[str, str]
+) -> bytes:
+    """The greedy rollouts' length after each episode relative to the oracle's L* of the run's
+    world (1 = as short as the oracle's expected path), per agent the median over seeds and over
+    the episodes of logarithmic bins with its interquartile band, the episode axis logarithmic;
+    capped at :data:`GREEDY_CAP` × L* (failed evaluations drawn there), the pass threshold
+    dashed. Without an oracle (an env of its own) the lengths in actions, capped at the limit."""
+    map_label, preset = cell
+    rows = episodes[(episodes["map"] == map_label) & (episodes["preset"] == preset)]
+    values, relative, cap = _capped_lengths(rows, summaries)
+    edges = np.unique(np.geomspace(1, config.episodes + 1, GREEDY_BINS).round())
+    figure, axes = plt.subplots(figsize=(7.5, 4.2), layout="constrained")
+    colors = _colors(config.agent_labels)
+    for agent in config.agent_labels:
+        mine = (rows["agent"] == agent).to_numpy()
+        if mine.any():
+            x, (low, median, high) = _quartiles_by_bin(
+                rows["episode"].to_numpy()[mine], values[mine], edges
+            )
+            axes.plot(x, median, color=colors[agent], linewidth=1.6, label=f"{agent}: median")
+            axes.fill_between(x, low, high, color=colors[agent], alpha=0.2, linewidth=0)
+    _greedy_axes(axes, config, relative, cap)
+    unit = "× L*" if relative else "actions"
+    axes.set_title(
+        f"greedy path length · {map_label} · {preset}\nmedian over seeds (band: 25–75 %); "
+        f"failed, or ≥ {cap:g} {unit}: drawn at {cap:g}",
+        fontsize=10,
+    )
+    return to_png(figure)
+
+
+def _capped_lengths(rows: pd.DataFrame, summaries: pd.DataFrame) -> tuple[np.ndarray, bool, float]:
+    """(the greedy length of each episode row over its run's L*, capped at :data:`GREEDY_CAP`,
+    NaN (failed) at the cap; True; the cap), or without an oracle for every run (the lengths in
+    actions capped at the action limit; False; the limit)."""
+    oracle = (
+        summaries.set_index("run_id")["oracle_length"] if "oracle_length" in summaries else None
+    )
+    reference = rows["run_id"].map(oracle) if oracle is not None else pd.Series(np.nan, rows.index)
+    relative = bool(np.isfinite(reference.to_numpy(float)).all())
+    cap = GREEDY_CAP if relative else float(summaries["action_limit"].max())
+    values = (rows["greedy_length"] / (reference if relative else 1.0)).to_numpy(float)
+    return np.minimum(np.nan_to_num(values, nan=cap), cap), relative, cap
+
+
+def _greedy_axes(axes: Axes, config: ExperimentConfig, relative: bool, cap: float) -> None:
+    """Axes, reference lines and legend of :func:`greedy_lengths`."""
+    if relative:
+        axes.axhline(1.0, color="black", linewidth=1, label="L*: the oracle's expected length")
+        if config.convergence_objective == "actions":
+            threshold = 1.0 + config.convergence_tolerance
+            axes.axhline(threshold, color="grey", linestyle="--", linewidth=1,
+                         label=f"pass threshold ({threshold:g} × L*)")  # fmt: skip
+        axes.set_ylabel("greedy path length / L*")
+    else:
+        axes.set_ylabel("greedy path length [actions]")
+    axes.set_xscale("log")
+    axes.set_xlim(1, config.episodes)
+    axes.set_ylim(0, cap * 1.04)
+    axes.set_xlabel("episode (log scale)")
+    axes.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncols=3)
 
 
 def _strip(
@@ -183,162 +261,6 @@ def metric_strips(
         f"{map_label} · {preset}: seeds (grey), mean ● and IQM ■ with "
         f"{config.confidence:.0%} intervals"
     )
-    return to_png(figure)
-
-
-def draw_arena(axes: Axes, run: TrialResult, *, slip: bool = True) -> None:
-    """Walls, slip regions (η shading), start (green), goal (red) of one run's world."""
-    occupancy = run.arrays["occupancy"].astype(bool)
-    if slip:
-        eta = run.arrays["slip_eta"]
-        region_w, region_h = ARENA[0] / (eta.shape[0] - 1), ARENA[1] / (eta.shape[1] - 1)
-        axes.imshow(
-            eta.T,
-            origin="lower",
-            cmap="Oranges",
-            vmin=0.0,
-            vmax=max(1.7, eta.max()),
-            extent=(0, eta.shape[0] * region_w, 0, eta.shape[1] * region_h),
-            alpha=0.6,
-        )
-    draw_cells(axes, occupancy, tuple(run.arrays["start"]), tuple(run.arrays["goal"]))
-
-
-def draw_cells(
-    axes: Axes, occupancy: np.ndarray, start: tuple[int, int], goal: tuple[int, int]
-) -> None:
-    """Walls (``occupancy`` bool (n_x, n_y), True = wall), the start (green) and goal (red)
-    cells on the arena's cells (W / (n_x − 1) by H / (n_y − 1) [m], as the discretization's),
-    equal aspect."""
-    n_x, n_y = occupancy.shape
-    cell_w, cell_h = ARENA[0] / (n_x - 1), ARENA[1] / (n_y - 1)
-    walls = np.ma.masked_where(~occupancy.T, np.ones_like(occupancy.T, dtype=float))
-    axes.imshow(
-        walls,
-        origin="lower",
-        cmap="Greys",
-        vmin=0,
-        vmax=1.2,
-        extent=(0, n_x * cell_w, 0, n_y * cell_h),
-    )
-    for (i, j), color in ((start, "green"), (goal, "red")):
-        axes.add_patch(Rectangle((i * cell_w, j * cell_h), cell_w, cell_h, color=color, alpha=0.8))
-    axes.set_xlim(0, n_x * cell_w)
-    axes.set_ylim(0, n_y * cell_h)
-    axes.set_aspect("equal")
-    axes.tick_params(labelsize=7)
-
-
-def _grid(count: int) -> tuple[Figure, list[Axes]]:
-    columns = min(4, count)
-    rows = math.ceil(count / columns)
-    figure, axes = plt.subplots(
-        rows, columns, figsize=(4.2 * columns, 3.8 * rows), squeeze=False, layout="constrained"
-    )
-    flat = list(axes.ravel())
-    for extra in flat[count:]:
-        extra.axis("off")
-    return figure, flat[:count]
-
-
-def trajectories(runs: list[TrialResult], title: str) -> bytes:
-    """The final greedy trajectory of each run (one panel per run) on its arena."""
-    figure, axes = _grid(len(runs))
-    for ax, run in zip(axes, runs, strict=True):
-        draw_arena(ax, run)
-        poses = run.arrays["greedy_poses"]
-        ax.plot(poses[:, 0], poses[:, 1], color="C0", linewidth=1.5)
-        ax.plot(poses[-1:, 0], poses[-1:, 1], "o", color="C0", markersize=4)
-        reached = (
-            "reached goal"
-            if run.summary["final_length_m"] == run.summary["final_length_m"]
-            else "did not reach goal"
-        )
-        ax.set_title(
-            f"{run.coordinates['agent']} (seed {run.coordinates['seed']})\n"
-            f"{len(poses) - 1} actions, {reached}",
-            fontsize=9,
-        )
-    figure.suptitle(title)
-    return to_png(figure)
-
-
-def value_maps(runs: list[TrialResult], title: str) -> bytes:
-    """State values (max over headings and actions) and preferred headings per cell."""
-    figure, axes = _grid(len(runs))
-    for ax, run in zip(axes, runs, strict=True):
-        draw_arena(ax, run, slip=False)
-        value = run.arrays["value_map"]
-        n_x, n_y = value.shape
-        cell_w, cell_h = ARENA[0] / (n_x - 1), ARENA[1] / (n_y - 1)
-        image = ax.imshow(
-            np.ma.masked_invalid(value).T,
-            origin="lower",
-            cmap="viridis",
-            extent=(0, n_x * cell_w, 0, n_y * cell_h),
-        )
-        heading = run.arrays["heading_map"]
-        n_headings = max(int(heading.max()) + 1, 20)
-        angle = -math.pi + (heading + 0.5) * 2 * math.pi / n_headings
-        ii, jj = np.nonzero(heading >= 0)
-        ax.quiver(
-            (ii + 0.5) * cell_w,
-            (jj + 0.5) * cell_h,
-            np.cos(angle[ii, jj]),
-            np.sin(angle[ii, jj]),
-            scale=40,
-            width=0.003,
-            color="white",
-        )
-        figure.colorbar(image, ax=ax, fraction=0.04)
-        ax.set_title(f"{run.coordinates['agent']} (seed {run.coordinates['seed']})", fontsize=9)
-    figure.suptitle(title)
-    return to_png(figure)
-
-
-ACTION_GLYPHS = (
-    (0, "forward", None),
-    (1, "backward", None),
-    (2, "turn left", r"$\circlearrowleft$"),
-    (3, "turn right", r"$\circlearrowright$"),
-)
-"""(action, name, marker) of the skid-steer env's actions; forward and backward are drawn as
-arrows along and against the heading."""
-
-
-def _policy_panel(ax: Axes, run: TrialResult) -> None:
-    """One run's greedy action per cell at its start heading, as glyphs over the arena."""
-    draw_arena(ax, run, slip=False)
-    policy = run.arrays["policy_map"]
-    n_x, n_y = policy.shape
-    cell_w, cell_h = ARENA[0] / (n_x - 1), ARENA[1] / (n_y - 1)
-    heading = float(run.arrays["start_heading"])
-    for action, name, marker in ACTION_GLYPHS:
-        ii, jj = np.nonzero(policy == action)
-        x, y = (ii + 0.5) * cell_w, (jj + 0.5) * cell_h
-        color = f"C{action}"
-        if marker is None:
-            sign = 1.0 if action == 0 else -1.0
-            u, v = (
-                np.full(ii.size, sign * math.cos(heading)),
-                np.full(ii.size, sign * math.sin(heading)),
-            )
-            ax.quiver(x, y, u, v, color=color, scale=45, width=0.004, pivot="middle", label=name)
-        else:
-            ax.scatter(x, y, s=22, marker=marker, color=color, linewidths=0.4, label=name)
-    ax.set_title(f"{run.coordinates['agent']} (seed {run.coordinates['seed']})", fontsize=9)
-
-
-def policy_maps(runs: list[TrialResult], title: str) -> bytes:
-    """The greedy action per cell with the robot at its start heading (``policy_map``): arrows
-    for forward (along the heading) and backward, circular arrows for the turns; no glyph on walls
-    and on cells whose Q values at that heading were never updated."""
-    figure, axes = _grid(len(runs))
-    for ax, run in zip(axes, runs, strict=True):
-        _policy_panel(ax, run)
-    handles, labels = axes[0].get_legend_handles_labels()
-    figure.legend(handles, labels, loc="outside lower center", ncols=4, fontsize=8)
-    figure.suptitle(title)
     return to_png(figure)
 
 

@@ -14,6 +14,8 @@ import pandas as pd
 
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.report.analysis import speedup_of
+from skidnav.experiments.report.page import table
+from skidnav.formatting import NOT_AVAILABLE, interval, plural
 
 MIN_PAIRS = 10
 """Fewer paired seeds than this make a "no difference" verdict inconclusive."""
@@ -33,16 +35,24 @@ THESIS = {
 
 
 def _ci(row: pd.Series, name: str, scale: float = 1.0, unit: str = "") -> str:
-    estimate, low, high = (
-        row[name] * scale,
-        row[f"{name}_low"] * scale,
-        row[f"{name}_high"] * scale,
-    )
-    if estimate != estimate:
-        return "–"
-    if low != low or high != high:  # one seed: no interval
-        return f"{estimate:.2f}{unit}"
-    return f"{estimate:.2f}{unit} [{low:.2f}, {high:.2f}]"
+    """``name`` of a comparison row with its interval, times ``scale``, ``unit`` after the
+    estimate (:func:`skidnav.formatting.interval`: "n/a" when undefined)."""
+    estimate, low, high = (float(row[key]) * scale for key in (name, f"{name}_low", f"{name}_high"))
+    return _unit(interval(estimate, low, high), unit)
+
+
+def _ratio(ratio: object, low: object, high: object) -> str:
+    """A ratio with its interval (table cells), "×" after the estimate."""
+    return _unit(interval(float(ratio), float(low), float(high)), "×")  # type: ignore[arg-type]
+
+
+def _unit(text: str, unit: str) -> str:
+    """``unit`` after the estimate of an :func:`~skidnav.formatting.interval` text (none after
+    "n/a")."""
+    if text == NOT_AVAILABLE:
+        return text
+    shown, _, bounds = text.partition(" ")
+    return f"{shown}{unit} {bounds}".rstrip()
 
 
 def _name(row: pd.Series) -> str:
@@ -87,7 +97,7 @@ def _surface_claim(surfaces: pd.DataFrame) -> tuple[str, str, str]:
         return THESIS["surfaces"], SURFACES_ELSEWHERE, "not measured here"
     rates = surfaces[surfaces["metric"] == "success_rate"]
     parts = [
-        f"{html.escape(str(r.agent))}: {r.ratio:.2f}× [{r.ratio_low:.2f}, {r.ratio_high:.2f}]"
+        f"{html.escape(str(r.agent))}: {_ratio(r.ratio, r.ratio_low, r.ratio_high)}"
         for r in rates.itertuples()
     ]
     contains = (rates["ratio_low"] <= 2.0) & (rates["ratio_high"] >= 2.0)
@@ -162,7 +172,7 @@ def _details(comparisons: pd.DataFrame) -> pd.DataFrame:
                 "speed-up": speedup_of(row).words(),
                 "speed-up, real actions": speedup_of(row, "speedup_steps").words()
                 if "speedup_steps" in row
-                else "–",
+                else NOT_AVAILABLE,
                 "P(improvement)": _ci(row, "improvement_probability"),
                 "success gain": _ci(row, "success_gain", 100, " pp"),
                 "relative gain": _ci(row, "success_gain_relative", 100, " %"),
@@ -188,8 +198,8 @@ def reproduction_section(
     parts = [
         "<h2>Thesis reproduction</h2>",
         f"<p class='note'>Baseline: <b>{html.escape(config.baseline)}</b>. Intervals: "
-        f"{config.confidence:.0%} bootstrap, paired by seed. {config.seeds} seeds per cell "
-        f"(the thesis's claims need ≥ 30). Convergence: within "
+        f"{config.confidence:.0%} bootstrap, paired by seed. {plural(config.seeds, 'seed')} per "
+        f"cell (the thesis's claims need ≥ 30). Convergence: within "
         f"{config.convergence_tolerance:.0%} of the oracle, staying there in at least "
         f"{config.convergence_level:.0%} of the evaluations to the end of the run "
         "(definitions above).</p>",
@@ -200,7 +210,7 @@ def reproduction_section(
     claims = pd.DataFrame(
         _claims(comparisons, surfaces), columns=["thesis claim", "measured here", "verdict"]
     )
-    parts.append(claims.to_html(index=False, escape=False, border=0))
+    parts.append(table(claims, prose=True, escape=False))
     parts.append("<h3>Every agent against the baseline</h3>")
-    parts.append(_details(comparisons).to_html(index=False, escape=True, border=0))
+    parts.append(table(_details(comparisons), labels=3))
     return "".join(parts)

@@ -27,6 +27,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skidnav.errors import CorruptFileError, UserError, first_line
+from skidnav.realtime.camera.defaults import (
+    BOARD_MARKER_SIZE,
+    BOARD_SQUARE_SIZE,
+    BOARD_SQUARES,
+    DEFAULT_BOARD_DICTIONARY,
+    MIN_VIEWS,
+)
 from skidnav.realtime.camera.markers import FloatArray, aruco_dictionary
 from skidnav.realtime.camera.opencv import cv2
 from skidnav.realtime.camera.sources import read_json_file, write_json_file
@@ -36,11 +43,7 @@ LOGGER = logging.getLogger(__name__)
 FORMAT_NAME = "skidnav-camera-intrinsics"
 FORMAT_VERSION = 1
 DISTORTION_MODEL = "k1 k2 p1 p2 k3"
-# The board's markers come from another dictionary than the arena's DICT_4X4_50, so a board left
-# in view can never be taken for a corner or robot marker.
-DEFAULT_BOARD_DICTIONARY = "DICT_5X5_100"
 MIN_CORNERS = 6  # ChArUco corners, not all on one line, for a view to count
-MIN_VIEWS = 4  # default: views with the board; each gives two constraints on K (Zhang (2000) §3.1)
 RMS_WARNING = 1.0  # [px] reprojection error above which the views are probably poor
 
 
@@ -63,9 +66,9 @@ class CharucoBoardSpec:
     ValueError: expected 0 < marker_size < square_size = 0.03 m, got 0.03 m
     """
 
-    squares: tuple[int, int] = (7, 5)
-    square_size: float = 0.03
-    marker_size: float = 0.022
+    squares: tuple[int, int] = BOARD_SQUARES
+    square_size: float = BOARD_SQUARE_SIZE
+    marker_size: float = BOARD_MARKER_SIZE
     dictionary: str = DEFAULT_BOARD_DICTIONARY
 
     def __post_init__(self) -> None:

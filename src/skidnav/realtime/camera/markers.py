@@ -24,11 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from skidnav.realtime.camera.defaults import DEFAULT_DICTIONARY
 from skidnav.realtime.camera.opencv import cv2
 
 FloatArray = NDArray[np.float64]
-
-DEFAULT_DICTIONARY = "DICT_4X4_50"
 
 
 def aruco_dictionary(name: str) -> cv2.aruco.Dictionary:

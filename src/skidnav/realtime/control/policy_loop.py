@@ -16,7 +16,9 @@ env's rule and logged as a ``transition`` with the observation, the policy's out
 command sent, before the wheels stop at the goal.
 
 A policy that raises, or returns anything but two finite numbers, trips the safety monitor
-(``policy failed: …``): the robot stops and the run ends with exit code 3.
+(``policy failed: …``): the robot stops and the run ends with exit code 3. A policy with a state
+of its own within an episode (:class:`~skidnav.agents.training.RolloutState`: the plan of
+``mppi-kinematic``'s frozen planner) forgets it when an episode starts.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
+from skidnav.agents.training import start_rollout
 from skidnav.envs.navigation import clipped_wheel_speeds
 from skidnav.errors import first_line
 from skidnav.realtime.config import RealtimeConfig
@@ -165,6 +168,7 @@ class PolicyLoop(EpisodeLoop):
         )
 
     def _play(self, result: EpisodeResult) -> None:
+        start_rollout(self.policy)  # a policy with a state (a planner's plan) starts afresh
         for t in range(self.settings.max_actions):
             over = self._step(result, t + 1 == self.settings.max_actions)
             self.progress(self._status(result))

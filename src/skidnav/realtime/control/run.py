@@ -25,6 +25,7 @@ import numpy as np
 from skidnav.atomicfile import write_user_file
 from skidnav.envs.step_info import step_info
 from skidnav.errors import UserError, first_line, shown
+from skidnav.formatting import plural
 from skidnav.outputs import make_output_dir
 from skidnav.realtime.arena import arena_map, seed_streams
 from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
@@ -33,7 +34,7 @@ from skidnav.realtime.control.episodes import EpisodeLoop
 from skidnav.realtime.control.loop import RealtimeLoop
 from skidnav.realtime.control.policy_loop import PolicyLoop
 from skidnav.realtime.control.transition import compile_scoring
-from skidnav.realtime.drivers import DRIVERS, make_driver
+from skidnav.realtime.drivers import DRIVERS, make_driver, require_driver_extras
 from skidnav.realtime.policies import check_policy, select_policy
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
@@ -194,12 +195,14 @@ def run_robot(
     config = with_overrides(
         config, episodes=settings.episodes, time_scale=settings.time_scale, reset=settings.reset
     )
+    require_driver_extras(settings.driver, config)
     robot, grid = RobotParams(), Discretization()
     grid_map = arena_map(config.run.map, config.run.seed, grid)
     policy_name: str | None = None
     if settings.agent is None:
         pilot, policy_name = select_policy(settings.policy, settings.policy_file, config, robot)
-        check_policy(pilot, policy_name, grid_map, grid)
+        action_duration = config.run.period * config.run.substeps
+        check_policy(pilot, policy_name, grid_map, grid, action_duration)
         first_episode, state = _resume_policy(settings, policy_name)
     else:
         context = agent_context(settings.agent, robot, grid)
@@ -308,6 +311,6 @@ def _summarize(loop: EpisodeLoop, out: Path, code: int) -> str:
     }
     write_user_file(out / "summary.json", json.dumps(summary, indent=1).encode(), "run summary")
     return (
-        f"{summary['episodes']} episodes, {summary['goals']} reached the goal, "
+        f"{plural(len(results), 'episode')}, {summary['goals']} reached the goal, "
         f"{summary['aborted']} aborted; results in {out}"
     )

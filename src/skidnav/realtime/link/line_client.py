@@ -18,13 +18,15 @@ import socket
 import threading
 import time
 from collections.abc import Callable
-from typing import Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
-import serial
-
+from skidnav.extras import require
 from skidnav.realtime.link import protocol as pr
 from skidnav.realtime.link.auth import Session, require_secret
 from skidnav.realtime.link.interface import Pose
+
+if TYPE_CHECKING:
+    import serial
 
 log = logging.getLogger(__name__)
 
@@ -90,13 +92,19 @@ class SerialLink:
     """A serial port or any pyserial URL (``/dev/ttyUSB0``, ``loop://``, ``socket://…``)."""
 
     def __init__(self, url: str, baudrate: int = 115200) -> None:
+        require("serial", "the serial link")
+        import serial  # pyserial: the serial extra, imported only by a serial link
+
+        self._serial: Any = serial
         self.url, self.baudrate = url, baudrate
         self._port: serial.SerialBase | None = None
 
     def open(self) -> None:
         try:
-            self._port = serial.serial_for_url(self.url, baudrate=self.baudrate, timeout=READ_POLL)
-        except (serial.SerialException, ValueError) as error:
+            self._port = self._serial.serial_for_url(
+                self.url, baudrate=self.baudrate, timeout=READ_POLL
+            )
+        except (self._serial.SerialException, ValueError) as error:
             raise ConnectionError(f"cannot open {self.url}: {error}") from None
 
     def read(self) -> bytes:
@@ -104,7 +112,7 @@ class SerialLink:
         try:
             waiting = max(1, self._port.in_waiting)
             return bytes(self._port.read(waiting))
-        except (serial.SerialException, OSError) as error:
+        except (self._serial.SerialException, OSError) as error:
             raise ConnectionError(str(error)) from None
 
     def write(self, data: bytes) -> None:
@@ -112,7 +120,7 @@ class SerialLink:
             raise ConnectionError("not connected")
         try:
             self._port.write(data)
-        except (serial.SerialException, OSError) as error:
+        except (self._serial.SerialException, OSError) as error:
             raise ConnectionError(str(error)) from None
 
     def close(self) -> None:

@@ -11,13 +11,19 @@ and its final deterministic policy is rolled out from the start on the same eval
 * ``q-learning`` and ``dyna-full`` (the thesis's agents, discrete actions; the fused trainer),
 * ``cmaes`` (policy search, :mod:`skidnav.agents.policies.search`), ``ppo`` and ``sac``
   (Stable-Baselines3, :mod:`skidnav.agents.deep`) on ``action="continuous"``,
+* ``mppi-kinematic`` (:mod:`skidnav.agents.mpc`), model predictive control through the learned
+  kinematic model on ``action="continuous"``, planning :data:`MPPI_LOOKAHEAD` seconds ahead
+  whatever the control period (:func:`mppi_params`),
 * ``goal-tracker``, the reference controller that ignores walls (nothing learned).
 
 **Real episodes to learn** [episodes]: the training episodes consumed until the learner's
-deterministic policy first reached the goal in every evaluation rollout of a check (discrete and
-deep agents: a check after every episode on the evaluation seeds; CMA-ES: its mean policy,
-checked every ``eval_every`` generations on its own evaluation seeds); NaN if never within the
-budget. Both kinds of action use the same control period, so times and energies compare.
+greedy policy first reached the goal in every evaluation rollout of a check (discrete, deep and
+model-predictive learners: a check after every episode on the evaluation seeds; CMA-ES: its mean
+policy, checked every ``eval_every`` generations on its own evaluation seeds); NaN if never
+within the budget. Every kind of action uses the same control period, so times and energies
+compare. The final policies are deterministic, except ``mppi-kinematic``'s frozen planner, which
+samples from a generator of its own seeded alike for every rollout (the same numbers for the
+same observations).
 
 A :class:`ComparisonConfig` is the runner's grid (:class:`~skidnav.experiments.runs.Grid`): the
 learners are its agents, the world its one map and preset, and seed index k of every learner is
@@ -43,6 +49,7 @@ from skidnav.checks import check_integer
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import first_line, shown
 from skidnav.experiments.config import AgentSpec, MapSpec
+from skidnav.extras import require
 from skidnav.seeding import RUN_ROLES, child, seed_int, streams
 from skidnav.studies.continuity.traces import (
     Policy,
@@ -58,9 +65,16 @@ DISCRETE_PARAMS = {
 }
 """The discrete learners and their settings (the thesis's, with 100 planning updates)."""
 WHEEL_LEARNERS = ("cmaes", "ppo", "sac")
+MODEL_LEARNER = "mppi-kinematic"
+"""The model-predictive wheel-speed learner (docs/agents/mppi-kinematic.md)."""
+MPPI_LOOKAHEAD = 4.0
+"""How far ``mppi-kinematic`` plans ahead [s]: its horizon is this over the control period
+(40 actions of 0.1 s, the setting it was measured at; 4 of 1 s)."""
 REFERENCE = "goal-tracker"
 """The reference controller: it learns nothing, so its runs are alike (one is enough)."""
-LEARNERS = (*DISCRETE_PARAMS, *WHEEL_LEARNERS, REFERENCE)
+LEARNERS = (*DISCRETE_PARAMS, *WHEEL_LEARNERS, MODEL_LEARNER, REFERENCE)
+LEARNER_EXTRAS = {"cmaes": "search", "ppo": "deep", "sac": "deep"}
+"""The learners that need an extra (:mod:`skidnav.extras`) → that extra."""
 MAX_COUNTS = {
     "seeds": 1000, "episodes": 10**6, "generations": 10**6, "population": 10**4,
     "rollouts": 10**4, "max_steps": 10**5,
@@ -80,7 +94,8 @@ class ComparisonConfig:
         map_kind, world_seed, slip: the world (the env's arguments). max_steps: actions per
             episode, training and rollouts. control_period: one action [s], both kinds.
         learners: names from :data:`LEARNERS`. seeds: runs per learner, ≥ 1. root_seed: of
-            everything. episodes: training episodes of the discrete and deep learners.
+            everything. episodes: training episodes of the discrete, deep and
+            model-predictive learners.
         generations, population: CMA-ES's budget (λ · 2 · generations real episodes).
         rollouts: evaluation rollouts of each final policy (and of each check).
     """
@@ -158,6 +173,18 @@ class ComparisonConfig:
         return hashlib.sha256(text.encode()).hexdigest()
 
 
+def require_learner_extras(config: ComparisonConfig) -> None:
+    """Refuse ``config`` before anything runs when a learner's extra is missing (the default
+    learners include ``ppo`` and ``sac``: ``--learners`` without them runs on the core).
+
+    Raises:
+        MissingExtraError: one line naming the learner and the ``pip install`` that brings it.
+    """
+    for learner in config.learners:
+        if learner in LEARNER_EXTRAS:
+            require(LEARNER_EXTRAS[learner], f"learner {learner!r}")
+
+
 def comparison_to_dict(config: ComparisonConfig) -> dict[str, Any]:
     """The config as a JSON-ready dict (inverse of :func:`comparison_from_dict`)."""
     data = dataclasses.asdict(config)
@@ -231,7 +258,13 @@ def train_learner(config: ComparisonConfig, learner: str, seed: int) -> LearnerR
 def _kind(learner: str) -> str:
     if learner in DISCRETE_PARAMS:
         return "discrete"
-    return learner if learner in ("cmaes", REFERENCE) else "deep"
+    return learner if learner in ("cmaes", MODEL_LEARNER, REFERENCE) else "deep"
+
+
+def mppi_params(config: ComparisonConfig) -> dict[str, Any]:
+    """``mppi-kinematic``'s settings in ``config``: its defaults, with the horizon that looks
+    :data:`MPPI_LOOKAHEAD` seconds ahead at the control period (at least one action)."""
+    return {"horizon": max(1, round(MPPI_LOOKAHEAD / config.control_period))}
 
 
 def _train_discrete(
@@ -271,6 +304,20 @@ def _train_deep(
     )
 
 
+def _train_mppi(
+    config: ComparisonConfig, learner: str, seed: int, env: Any
+) -> tuple[Policy, int, float]:
+    from skidnav.agents.mpc.agent import make_mppi_agent
+    from skidnav.agents.mpc.training import train_mppi
+
+    agent = make_mppi_agent(env, mppi_params(config), streams(seed, RUN_ROLES)["agent"])
+    checks = gymnasium.make(ENV_ID, **config.env_kwargs(True))
+    log = train_mppi(agent, env, config.episodes, greedy_eval_env=checks,
+                     greedy_max_steps=config.max_steps, greedy_seeds=evaluation_seeds(config),
+                     seed=seed)  # fmt: skip
+    return tabular_policy(agent), config.episodes, first_learned(log.greedy_lengths)
+
+
 def _train_cmaes(
     config: ComparisonConfig, learner: str, seed: int, env: Any
 ) -> tuple[Policy, int, float]:
@@ -292,6 +339,7 @@ _TRAINERS = {
     "discrete": _train_discrete,
     "deep": _train_deep,
     "cmaes": _train_cmaes,
+    MODEL_LEARNER: _train_mppi,
     "goal-tracker": _reference,
 }
 

@@ -36,6 +36,7 @@ from skidnav.experiments.store import TrialResult
 from skidnav.studies.continuity.comparison import (
     ComparisonConfig,
     comparison_to_dict,
+    require_learner_extras,
     run_seed,
     train_learner,
 )
@@ -84,8 +85,12 @@ class ContinuityStudy:
     backends = STUDY_BACKENDS
 
     def grid(self, document: Mapping[str, Any], path: Path) -> Grid:
-        """The comparison of the config ``document`` read from ``path``."""
-        return comparison_from_document(document, path)
+        """The comparison of the config ``document`` read from ``path``; refused when a
+        learner's extra is missing (:func:`~skidnav.studies.continuity.comparison.
+        require_learner_extras`)."""
+        comparison = comparison_from_document(document, path)
+        require_learner_extras(comparison)
+        return comparison
 
     def trial(self, grid: Grid, out: Path) -> TrialFunction:
         """:func:`continuity_trial` (importable by worker processes)."""

@@ -48,7 +48,7 @@ import numpy as np
 import pandas as pd
 
 from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
-from skidnav.agents.training import Greedy, as_state
+from skidnav.agents.training import Greedy, as_state, start_rollout
 from skidnav.experiments.metrics import path_length
 from skidnav.stats import Interval, bootstrap_interval
 
@@ -119,14 +119,29 @@ METRIC_UNITS = {
 """Unit of each field of :class:`TraceMetrics`."""
 
 
+class GreedyPolicy:
+    """The greedy policy of an agent as a :data:`Policy`: its ``greedy_action`` in the
+    observation's state (:func:`~skidnav.agents.training.as_state`), an int for Discrete actions,
+    float64 wheel speeds (2,) [rad/s] for Box ones. An agent whose greedy policy keeps a state
+    within a rollout (:class:`~skidnav.agents.training.RolloutState`, ``mppi-kinematic``'s
+    frozen planner) forgets it when :func:`record_rollout` starts one."""
+
+    def __init__(self, agent: Greedy) -> None:
+        self.agent = agent
+
+    def __call__(self, observation: Any) -> Any:
+        action = self.agent.greedy_action(as_state(observation))
+        return int(action) if np.ndim(action) == 0 else np.asarray(action, dtype=np.float64)
+
+    def start_greedy_rollout(self) -> None:
+        """A rollout starts (:func:`~skidnav.agents.training.start_rollout` of the agent)."""
+        start_rollout(self.agent)
+
+
 def tabular_policy(agent: Greedy) -> Policy:
-    """The greedy policy of a tabular agent (or any agent with ``greedy_action``): its action in
-    the observation's state (:func:`~skidnav.agents.training.as_state`)."""
-
-    def act(observation: Any) -> int:
-        return int(agent.greedy_action(as_state(observation)))
-
-    return act
+    """The greedy policy of a tabular agent, or of any agent with ``greedy_action``
+    (:class:`GreedyPolicy`)."""
+    return GreedyPolicy(agent)
 
 
 def wheel_speed_policy(policy: WheelSpeedPolicy, env: gymnasium.Env[Any, Any]) -> Policy:
@@ -148,10 +163,23 @@ def wheel_speed_policy(policy: WheelSpeedPolicy, env: gymnasium.Env[Any, Any]) -
             f"{wanted}, got {got}"
         )
 
-    def act(observation: Any) -> np.ndarray:
-        return np.asarray(policy.wheel_speeds(observation), dtype=np.float64)
+    return WheelSpeeds(policy)
 
-    return act
+
+class WheelSpeeds:
+    """A :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy` as a :data:`Policy`
+    (:func:`wheel_speed_policy`); a policy with a state of its own within a rollout forgets it
+    when :func:`record_rollout` starts one."""
+
+    def __init__(self, policy: WheelSpeedPolicy) -> None:
+        self.policy = policy
+
+    def __call__(self, observation: Any) -> np.ndarray:
+        return np.asarray(self.policy.wheel_speeds(observation), dtype=np.float64)
+
+    def start_greedy_rollout(self) -> None:
+        """A rollout starts (:func:`~skidnav.agents.training.start_rollout` of the policy)."""
+        start_rollout(self.policy)
 
 
 def _step_limit(env: gymnasium.Env[Any, Any], max_steps: int | None) -> int:
@@ -175,11 +203,13 @@ def record_rollout(
 
     The episode ends when the env terminates or truncates, or after ``max_steps`` actions
     (default: the env's time limit, ``env.spec.max_episode_steps``; ValueError if it has none),
-    which counts as truncated. Nothing is learned; the policy is called once per action.
+    which counts as truncated. Nothing is learned; the policy is called once per action, after
+    it forgot any state of its own (:func:`~skidnav.agents.training.start_rollout`).
     """
     limit = _step_limit(env, max_steps)
     nav: Any = env.unwrapped  # a SkidSteerNavEnv, or any env with its wheel_commands and robot
     observation, info = env.reset(seed=seed)
+    start_rollout(policy)
     poses, commands, rewards, collisions = [info["pose"]], [], [], []
     terminated = truncated = False
     while not (terminated or truncated):

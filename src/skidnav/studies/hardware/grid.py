@@ -26,6 +26,7 @@ from skidnav.realtime.config import (
     config_from_mapping,
     with_overrides,
 )
+from skidnav.realtime.drivers import require_driver_extras
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import MAP_KINDS
 
@@ -207,6 +208,7 @@ def build_grid(tables: Mapping[str, Any], settings: StudySettings) -> StudyGrid:
         raise UserError(str(error)) from None
     configs = tuple(_preset_config(tables, settings, preset, base) for preset in settings.presets)
     for config in configs:
+        require_driver_extras("sim", config)  # the study's runs drive the sim server
         for agent in settings.agents:
             make_config(agent, config.agents.get(agent))  # UserError if unknown or invalid
     arena_map(base.map, seed, Discretization())  # UserError if unreadable

@@ -26,6 +26,7 @@ import numpy as np
 
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import TrialResult
+from skidnav.formatting import readable
 from skidnav.realtime.arena import arena_map
 from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.control.loop import EXIT_INTERRUPTED
@@ -90,7 +91,7 @@ class RealtimeTrial:
         summary = run_summary(episodes, code)
         self.announce(
             f"{spec.agent.label} {spec.preset} seed {spec.seed}: {summary['successes']}/"
-            f"{summary['episodes']} goals, {summary['mean_length']:.1f} actions/episode, "
+            f"{summary['episodes']} goals, {readable(summary['mean_length'], 1)} actions/episode, "
             f"{summary['aborted']} aborted"
         )
         return TrialResult(spec.run_id, spec.coordinates, episodes, summary, {})

@@ -37,6 +37,7 @@ from skidnav.configtables import build_dataclass, check_keys, toml_value
 from skidnav.errors import shown
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.experiments.store import RunLayout
+from skidnav.extras import require
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.savedfile import ArraySpec
@@ -46,6 +47,9 @@ KIND = "kinematic-models"
 MODELS = ("ridge", "gp")
 """The models compared: Bayesian ridge (:mod:`skidnav.models.kinematic`), Gaussian process
 (:mod:`skidnav.models.gp_kinematic`)."""
+MODEL_EXTRAS = {"gp": "gp"}
+"""The models that need an extra (:mod:`skidnav.extras`; the GP is scikit-learn's) → that
+extra."""
 OUTPUTS = ("v_x", "v_y", "yaw_rate")
 """The predicted outputs, in the order of the log and of every per-output array."""
 MAP_KIND = "obstacles"
@@ -186,6 +190,17 @@ def comparison_from_document(document: Mapping[str, Any], path: Path | str) -> M
     if isinstance(values.get("models"), list):
         values["models"] = tuple(values["models"])
     return build_dataclass(ModelComparison, values, str(path))
+
+
+def require_model_extras(comparison: ModelComparison) -> None:
+    """Refuse ``comparison`` before anything runs when a model's extra is missing.
+
+    Raises:
+        MissingExtraError: one line naming the model and the ``pip install`` that brings it.
+    """
+    for model in comparison.models:
+        if model in MODEL_EXTRAS:
+            require(MODEL_EXTRAS[model], f"model {model!r}")
 
 
 def comparison_toml(comparison: ModelComparison) -> str:

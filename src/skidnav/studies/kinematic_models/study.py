@@ -16,6 +16,7 @@ from skidnav.studies.kinematic_models.grid import (
     LAYOUT,
     ModelComparison,
     comparison_from_document,
+    require_model_extras,
 )
 from skidnav.studies.kinematic_models.table import report_section
 from skidnav.studies.kinematic_models.trial import comparison_trial
@@ -31,8 +32,11 @@ class KinematicModelsStudy:
     backends = STUDY_BACKENDS
 
     def grid(self, document: Mapping[str, Any], path: Path) -> ModelComparison:
-        """The comparison of the config ``document`` read from ``path`` (UserError if invalid)."""
-        return comparison_from_document(document, path)
+        """The comparison of the config ``document`` read from ``path`` (UserError if invalid,
+        or when a model's extra is missing)."""
+        comparison = comparison_from_document(document, path)
+        require_model_extras(comparison)
+        return comparison
 
     def trial(self, grid: Grid, out: Path) -> TrialFunction:
         """:func:`~skidnav.studies.kinematic_models.trial.comparison_trial`."""

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from skidnav.experiments.store import ResultStore
+from skidnav.formatting import MIN_INTERVAL_SEEDS, interval, plural, seeds_caveat
 from skidnav.robot.params import RobotParams
 from skidnav.stats import bootstrap_interval
 from skidnav.studies.kinematic_models.grid import LAYOUT, OUTPUTS, ModelComparison
@@ -34,7 +35,12 @@ def describe(comparison: ModelComparison) -> str:
         f"{comparison.slip}, drift A = {comparison.drift:g} over P = {comparison.period:g} s; "
         f"per seed {comparison.samples:,} sub-steps ({comparison.samples * dt:g} s): the first "
         f"{n_train:,} fitted, the other {comparison.samples - n_train:,} predicted; window "
-        f"{comparison.window}; means over {comparison.seeds} seeds [95 % bootstrap interval]"
+        f"{comparison.window}; means over {plural(comparison.seeds, 'seed')}"
+        + (
+            " [95 % bootstrap interval]"
+            if comparison.seeds >= MIN_INTERVAL_SEEDS
+            else f" [95 % bootstrap interval, not meaningful: {seeds_caveat(comparison.seeds)}]"
+        )
     )
 
 
@@ -55,10 +61,12 @@ def table_rows(comparison: ModelComparison, summaries: pd.DataFrame) -> list[lis
     return rows
 
 
-def _cell(interval: tuple[float, float, float], digits: int) -> str:
-    """``estimate [low, high]``."""
-    estimate, low, high = interval
-    return f"{estimate:.{digits}f} [{low:.{digits}f}, {high:.{digits}f}]"
+def _cell(bounds: tuple[float, float, float], digits: int) -> str:
+    """``estimate [low, high]`` (:func:`skidnav.formatting.interval`: "n/a" when undefined, the
+    estimate alone over one seed; over fewer than
+    :data:`~skidnav.formatting.MIN_INTERVAL_SEEDS` seeds :func:`describe` says the intervals
+    mean little)."""
+    return interval(*bounds, digits)
 
 
 def text_table(rows: list[list[str]]) -> list[str]:

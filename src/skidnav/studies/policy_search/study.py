@@ -10,6 +10,7 @@ from typing import Any
 from skidnav.experiments.runner import TrialFunction
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import RunLayout
+from skidnav.extras import require
 from skidnav.studies.kind import STUDY_BACKENDS, Study
 from skidnav.studies.policy_search.grid import KIND, LAYOUT, PolicySearchGrid, grid_from_document
 from skidnav.studies.policy_search.report import report_section
@@ -25,8 +26,11 @@ class PolicySearchStudy:
     backends = STUDY_BACKENDS
 
     def grid(self, document: Mapping[str, Any], path: Path) -> PolicySearchGrid:
-        """The study of the config ``document`` read from ``path`` (UserError if invalid)."""
-        return grid_from_document(document, path)
+        """The study of the config ``document`` read from ``path`` (UserError if invalid, or
+        when the search extra is missing)."""
+        grid = grid_from_document(document, path)
+        require("search", "a policy search")
+        return grid
 
     def trial(self, grid: Grid, out: Path) -> TrialFunction:
         """A :class:`~skidnav.studies.policy_search.trial.SearchTrial` checkpointing each search

@@ -22,17 +22,19 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from skidnav.agents.policies.search.cmaes import SearchResult, run_search
 from skidnav.agents.policies.search.curve import COUNTS, GenerationRecord
 from skidnav.agents.policies.search.tanh_policy import PolicyLayout, TanhPolicy
 from skidnav.agents.tabular.agent import save_paths
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import TrialResult
 from skidnav.studies.policy_search.grid import EPISODE_COLUMNS, PolicySearchGrid, run_search_config
+
+if TYPE_CHECKING:  # the search itself needs the search extra (cmaes): imported by a run
+    from skidnav.agents.policies.search.cmaes import SearchResult
 
 GenerationCallback = Callable[[RunSpec[Any], GenerationRecord], None]
 """Called with the run and each of its new learning-curve records (module-level, so that it
@@ -53,6 +55,8 @@ class SearchTrial:
 
     def __call__(self, spec: RunSpec[PolicySearchGrid]) -> TrialResult:
         """Run (or continue from its checkpoint) the search of ``spec``."""
+        from skidnav.agents.policies.search.cmaes import run_search
+
         config = run_search_config(spec.config, spec.preset, spec.run_seed)
         checkpoint, resume = None, False
         if self.checkpoints is not None:

@@ -22,7 +22,6 @@ import gymnasium
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
-import skidnav  # noqa: F401  (registers the env)
 from skidnav.agents.policies.search.tanh_policy import PolicyLayout
 from skidnav.envs.registration import ENV_ID
 from skidnav.sim.features import POSE_GOAL_NAMES

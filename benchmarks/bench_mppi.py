@@ -1,0 +1,295 @@
+"""mppi-kinematic: planning time per control step on one core, against the 0.1-s control period
+(real time) and against the same rollouts vectorised in plain NumPy, both measured in this run.
+
+The agent first drives 150 actions of 0.1 s on world 3's obstacles arena (slippery floor), so
+its model has refitted and it has met the wall; then, from that pose, one control step is
+timed whole (:meth:`MPPIKinematicAgent.act`: the draws, the compiled K × H batch, the weights and
+the plan's update) and in its parts (the profile), each the median of :data:`REPEATS` timings.
+The NumPy twin (:func:`numpy_rollout_costs`) rolls the same K sequences with the same draws
+through the same model and costs, loop over the horizon and sub-steps, vectorised over the K
+sequences; its costs are checked against the kernel's. Also timed: what a change of the learned
+map costs (the lattice's local refresh and its values), and a refit's full refresh.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from collections.abc import Callable
+from typing import Any
+
+import gymnasium
+import numpy as np
+
+import skidnav  # noqa: F401  (registers the env)
+from skidnav.agents.mpc.agent import MPPIKinematicAgent
+from skidnav.agents.mpc.config import MPPIConfig
+from skidnav.agents.mpc.rollouts import RolloutDraws, rollout_costs
+from skidnav.agents.training import run_episode
+
+CONTROL_PERIOD = 0.1
+SETTINGS = ((256, 20), (256, 40), (1024, 40))  # (K, H)
+REPEATS = 21
+TARGET_REAL_TIME = 10.0  # control steps planned per control period
+
+
+def median_seconds(call: Callable[[], Any], repeats: int = REPEATS) -> float:
+    """The median wall time [s] of ``call`` over ``repeats`` calls (one warm-up call first)."""
+    call()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
+
+
+def driven_agent(samples: int, horizon: int) -> tuple[MPPIKinematicAgent, np.ndarray]:
+    """An agent that drove 150 actions on world 3's obstacles arena, and its pose."""
+    env = gymnasium.make(
+        "skidnav/SkidSteerNav-v0", map_kind="obstacles", world_seed=3, slip="slippery",
+        action="continuous", observation="pose", control_period=CONTROL_PERIOD,
+    )  # fmt: skip
+    config = MPPIConfig(samples=samples, horizon=horizon)
+    agent = MPPIKinematicAgent.from_env(env, config, np.random.default_rng(0))
+    observation, _ = env.reset(seed=0)
+    run_episode(agent, env, observation, 150)
+    return agent, np.asarray(env.unwrapped.pose, dtype=np.float64)
+
+
+def batch(agent: MPPIKinematicAgent) -> tuple[np.ndarray, RolloutDraws]:
+    """One control step's sequences (clipped) and draws, as the planner makes them."""
+    planner = agent.planner
+    limit = agent.robot.wheel_speed
+    controls = np.clip(planner.plan + planner.perturbations(), -limit, limit)
+    return controls, planner.draws()
+
+
+def kernel_costs(agent: MPPIKinematicAgent, pose: np.ndarray, controls: np.ndarray,
+                 draws: RolloutDraws) -> np.ndarray:  # fmt: skip
+    """The compiled batch's costs."""
+    out = np.zeros(controls.shape[0])
+    rollout_costs(
+        pose, controls, draws, agent.dynamics, agent.evidence.cost_map, agent.costs,
+        agent.kernel_robot, agent.kernel_grid, out,
+    )  # fmt: skip
+    return out
+
+
+def numpy_rollout_costs(
+    agent: MPPIKinematicAgent, pose: np.ndarray, controls: np.ndarray, draws: RolloutDraws
+) -> np.ndarray:
+    """The same costs as :func:`~skidnav.agents.mpc.rollouts.rollout_costs`, vectorised over
+    the K sequences in NumPy (the states' terminal value, Euler or exact integration)."""
+    robot, grid, costs, cost_map = (
+        agent.kernel_robot,
+        agent.kernel_grid,
+        agent.costs,
+        agent.evidence.cost_map,
+    )
+    n = controls.shape[0]
+    x, y, heading = np.full(n, pose[0]), np.full(n, pose[1]), np.full(n, pose[2])
+    ci, cj = cells(x, y, grid)
+    cost, active = np.zeros(n), np.ones(n, dtype=bool)
+    for t in range(controls.shape[1]):
+        moving = active.copy()
+        for _ in range(robot.substeps):
+            twist = numpy_twist(agent, x, y, controls[:, t], draws.model, draws.noise[:, t],
+                                draws.noise_scale)  # fmt: skip
+            nx, ny, nh = numpy_step(robot, x, y, heading, *twist)
+            i, j = cells(nx, ny, grid)
+            entered = moving & ((i != ci) | (j != cj))
+            cost += np.where(entered, costs.collision_cost * cost_map.wall_probability[i, j], 0.0)
+            hit = entered & cost_map.blocked[i, j]
+            heading = np.where(moving, nh, heading)
+            advance = moving & ~hit
+            x, y = np.where(advance, nx, x), np.where(advance, ny, y)
+            ci, cj = np.where(advance, i, ci), np.where(advance, j, cj)
+            moving = advance
+        cost += active
+        active &= ~((ci == costs.goal_i) & (cj == costs.goal_j))
+    return cost + np.where(active, numpy_state_value(agent, x, y, heading), 0.0)
+
+
+def cells(x: np.ndarray, y: np.ndarray, grid: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Cells (i, j) of positions (the discretization's rule, vectorised)."""
+    i = np.clip(np.floor(x / grid.arena_width * (grid.n_x - 1)), 0, grid.n_x - 1).astype(int)
+    j = np.clip(np.floor(y / grid.arena_height * (grid.n_y - 1)), 0, grid.n_y - 1).astype(int)
+    return i, j
+
+
+def numpy_twist(
+    agent: MPPIKinematicAgent,
+    x: np.ndarray,
+    y: np.ndarray,
+    wheels: np.ndarray,
+    z: np.ndarray,
+    noise: np.ndarray,
+    scale: float,
+) -> tuple[np.ndarray, ...]:
+    """:func:`~skidnav.agents.mpc.dynamics.sampled_twist`, vectorised."""
+    grid = agent.kernel_grid
+    ri = np.clip(np.floor(x / grid.arena_width * (grid.regions_x - 1)), 0, grid.regions_x - 1)
+    rj = np.clip(np.floor(y / grid.arena_height * (grid.regions_y - 1)), 0, grid.regions_y - 1)
+    region = (ri * grid.regions_y + rj).astype(int)
+    m, f, o, s = (array[region] for array in agent.dynamics)
+    left, right = wheels[:, 0], wheels[:, 1]
+    v_x = m[:, 0] * left + m[:, 1] * right + m[:, 2]
+    v_x += f[:, 0] * z[:, 0] * (left - o[:, 0]) + (f[:, 1] * z[:, 0] + f[:, 2] * z[:, 1]) * (
+        right - o[:, 1]
+    )
+    yaw = m[:, 3] * left + m[:, 4] * right + m[:, 5]
+    yaw += f[:, 3] * z[:, 2] * (left - o[:, 2]) + (f[:, 4] * z[:, 2] + f[:, 5] * z[:, 3]) * (
+        right - o[:, 3]
+    )
+    yaw += scale * s[:, 2] * noise[:, 2]
+    v_y = m[:, 6] * yaw + m[:, 7] + f[:, 6] * z[:, 4] * (yaw - o[:, 4])
+    return v_x + scale * s[:, 0] * noise[:, 0], v_y + scale * s[:, 1] * noise[:, 1], yaw
+
+
+def numpy_step(robot: Any, x: np.ndarray, y: np.ndarray, heading: np.ndarray, v_x: np.ndarray,
+               v_y: np.ndarray, yaw: np.ndarray) -> tuple[np.ndarray, ...]:  # fmt: skip
+    """One sub-step of the robot's scheme (:func:`skidnav.robot.kinematics.pose_step`) with
+    the arena clip, vectorised."""
+    dt = robot.dt
+    if robot.exact_integration:
+        turn = yaw * dt
+        small = np.abs(turn) < 1e-9
+        safe = np.where(small, 1.0, turn)
+        sinc = np.where(small, 1.0, np.sin(turn) / safe)
+        cosc = np.where(small, 0.0, (1.0 - np.cos(turn)) / safe)
+        forward, lateral = (v_x * sinc - v_y * cosc) * dt, (v_x * cosc + v_y * sinc) * dt
+    else:
+        forward, lateral, turn = v_x * dt, v_y * dt, yaw * dt
+    cos_h, sin_h = np.cos(heading), np.sin(heading)
+    nx = np.clip(x + forward * cos_h - lateral * sin_h, 0.0, robot.arena_width)
+    ny = np.clip(y + forward * sin_h + lateral * cos_h, 0.0, robot.arena_height)
+    return nx, ny, heading + turn
+
+
+def numpy_state_value(agent: MPPIKinematicAgent, x: np.ndarray, y: np.ndarray,
+                      heading: np.ndarray) -> np.ndarray:  # fmt: skip
+    """:func:`~skidnav.agents.mpc.costmap.interpolated_state_value`, vectorised."""
+    grid, cost_map = agent.kernel_grid, agent.evidence.cost_map
+
+    def corner(position: np.ndarray, extent: float, levels: int) -> tuple[np.ndarray, np.ndarray]:
+        scaled = position / extent * (levels - 1) - 0.5
+        lower = np.clip(np.floor(scaled), 0, levels - 2).astype(int)
+        return lower, np.clip(scaled - lower, 0.0, 1.0)
+
+    i0, fx = corner(x, grid.arena_width, grid.n_x)
+    j0, fy = corner(y, grid.arena_height, grid.n_y)
+    wrapped = np.arctan2(np.sin(heading), np.cos(heading))
+    turns = (wrapped + np.pi) / (2 * np.pi) * grid.n_headings - 0.5
+    k0 = np.floor(turns).astype(int)
+    fh = turns - k0
+    total, weights = np.zeros_like(x), np.zeros_like(x)
+    for di in (0, 1):
+        for dj in (0, 1):
+            open_cell = ~cost_map.blocked[i0 + di, j0 + dj]
+            w_cell = np.where(di, fx, 1 - fx) * np.where(dj, fy, 1 - fy) * open_cell
+            for dk in (0, 1):
+                k = (k0 + dk) % grid.n_headings
+                weight = w_cell * np.where(dk, fh, 1 - fh)
+                state = ((i0 + di) * grid.n_y + j0 + dj) * grid.n_headings + k
+                total += weight * cost_map.state_value[state]
+                weights += weight
+    return total / weights  # the arena's interior: never all 8 blocked here
+
+
+def profile(agent: MPPIKinematicAgent, pose: np.ndarray) -> dict[str, float]:
+    """Median seconds of the parts of one control step."""
+    planner = agent.planner
+    controls, draws = batch(agent)
+    out = np.zeros(controls.shape[0])
+    parts = {
+        "perturbations (normals, AR(1) smoothing)": planner.perturbations,
+        "model draws and noise (normals)": planner.draws,
+        "clip": lambda: np.clip(planner.plan + controls, -1.7, 1.7),
+        "compiled K x H rollouts": lambda: kernel_costs(agent, pose, controls, draws),
+        "weights and plan update": lambda: (
+            np.exp(-(out - out.min())),
+            np.einsum("k,kha->ha", out, controls),
+        ),
+    }
+    return {name: median_seconds(call) for name, call in parts.items()}
+
+
+def map_change_seconds(agent: MPPIKinematicAgent) -> dict[str, float]:
+    """What a change of the learned map and a refit cost: a new blocked cell (local refresh of
+    the lattice and its values), a wall probability change (values only), a refit (full)."""
+    evidence, mean = agent.evidence, agent.dynamics.mean
+
+    def new_wall() -> None:
+        evidence.hits[12, 15] += 5  # a cell beside the route: blocked, then cleared
+        evidence.reweigh(mean)
+        evidence.hits[12, 15] -= 5
+        evidence.reweigh(mean)
+
+    return {
+        "new blocked cell (local lattice refresh + values), x2": median_seconds(new_wall, 5),
+        "values only (a wall probability changed)": median_seconds(
+            lambda: evidence.reweigh(mean), 5
+        ),
+        "refit: full lattice refresh + values": median_seconds(
+            lambda: evidence.reweigh(mean, model_changed=True), 3
+        ),
+    }
+
+
+def rollout_rates(quick: bool) -> tuple[float, float]:
+    """Sequences/s of the compiled K × H batch and of its NumPy twin on the same sequences and
+    draws (K = 256, H = 40; their costs checked equal): a key figure of ``make bench``
+    (:mod:`key_figures`) and of the speed guard."""
+    agent, pose = driven_agent(256, 40)
+    controls, draws = batch(agent)
+    compiled = kernel_costs(agent, pose, controls, draws)
+    assert np.allclose(compiled, numpy_rollout_costs(agent, pose, controls, draws), atol=1e-9)
+    kernel = median_seconds(lambda: kernel_costs(agent, pose, controls, draws), 7 if quick else 21)
+    twin = median_seconds(
+        lambda: numpy_rollout_costs(agent, pose, controls, draws), 3 if quick else 7
+    )
+    return controls.shape[0] / kernel, controls.shape[0] / twin
+
+
+def real_time_rates(quick: bool) -> tuple[float, float]:
+    """Control steps planned per second (one whole :meth:`MPPIKinematicAgent.act`, K = 256,
+    H = 40) and the 10 per second of the 0.1-s control period: a key figure of ``make bench``,
+    against a fixed period, so not one the speed guard checks."""
+    agent, pose = driven_agent(256, 40)
+    step = median_seconds(lambda: agent.act(pose), 7 if quick else REPEATS)
+    return 1.0 / step, 1.0 / CONTROL_PERIOD
+
+
+def report(samples: int, horizon: int) -> None:
+    """Print the figures of K = ``samples``, H = ``horizon`` (and, for the default, the
+    profile and the map changes)."""
+    agent, pose = driven_agent(samples, horizon)
+    step = median_seconds(lambda: agent.act(pose))
+    controls, draws = batch(agent)
+    compiled = kernel_costs(agent, pose, controls, draws)
+    twin = numpy_rollout_costs(agent, pose, controls, draws)
+    assert np.allclose(compiled, twin, rtol=1e-9, atol=1e-9), np.abs(compiled - twin).max()
+    kernel = median_seconds(lambda: kernel_costs(agent, pose, controls, draws))
+    numpy_time = median_seconds(lambda: numpy_rollout_costs(agent, pose, controls, draws), 5)
+    print(
+        f"K={samples} H={horizon} ({horizon * CONTROL_PERIOD:g} s): one control step "
+        f"{step * 1e3:.2f} ms = {CONTROL_PERIOD / step:.0f}x faster than real time "
+        f"(target >= {TARGET_REAL_TIME:g}x); compiled rollouts {kernel * 1e3:.2f} ms "
+        f"({samples * horizon / kernel / 1e6:.1f} M sub-steps/s), the same rollouts in "
+        f"vectorised NumPy {numpy_time * 1e3:.1f} ms: {numpy_time / kernel:.0f}x"
+    )
+    if (samples, horizon) == (256, 40):
+        for name, seconds in profile(agent, pose).items():
+            print(f"  profile, {name}: {seconds * 1e3:.3f} ms ({seconds / step:.0%} of a step)")
+        for name, seconds in map_change_seconds(agent).items():
+            print(f"  map change, {name}: {seconds * 1e3:.1f} ms")
+
+
+def main() -> None:
+    for samples, horizon in SETTINGS:
+        report(samples, horizon)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,372 @@
+"""``mppi-kinematic``: MPPI over the two wheel speeds through the online Bayesian ridge kinematic
+model, against the walls found so far, with a cost-to-go over the learned map
+(docs/agents/mppi-kinematic.md).
+
+What the agent knows is what every agent of the navigation env gets: the observation (the pose,
+or the features whose first four entries hold it), the goal cell, the arena and its
+discretization (cells, headings, slip regions), the wheel-speed bound, the control period and
+the nominal robot (:class:`~skidnav.robot.params.RobotParams`: the datasheet's wheel radius,
+half track and x_ICR, the prior of the kinematic model, as ``dyna-kinematic``'s). It never reads
+the map's walls or the floor's slip: it learns the robot's kinematics from ``info
+["kinematic_log"]`` and the walls from ``info["collision"]``.
+
+Per real step: :meth:`MPPIKinematicAgent.act` plans (:class:`~skidnav.agents.mpc.planner.
+MPPIPlanner`) and returns the wheel speeds; :meth:`MPPIKinematicAgent.observe` feeds the step's
+kinematic log to the model (refitted on its schedule, then the sampled dynamics updated) and its
+path and collision to the map evidence (the cost-to-go recomputed when the map changed);
+:meth:`MPPIKinematicAgent.end_episode` forgets the plan. :meth:`MPPIKinematicAgent.policy` hands
+out a frozen copy, a :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from skidnav.agents.mpc.config import MPPIConfig
+from skidnav.agents.mpc.costmap import CostMap, MapCosts
+from skidnav.agents.mpc.dynamics import (
+    SampledDynamics,
+    fixed_dynamics,
+    nominal_speeds,
+    prior_dynamics,
+    true_coefficients_check,
+    update_dynamics,
+)
+from skidnav.agents.mpc.evidence import MapEvidence
+from skidnav.agents.mpc.planner import MPPIPlanner
+from skidnav.agents.tabular.agent import generator_state, save_paths
+from skidnav.agents.tabular.model_based import geometry_json
+from skidnav.atomicfile import write_atomic, write_npz_atomic
+from skidnav.envs.navigation import with_control_period
+from skidnav.errors import UserError, first_line
+from skidnav.models.kinematic import KinematicModel
+from skidnav.robot.params import KinematicConstants, RobotParams
+from skidnav.sim.features import check_lidar
+from skidnav.world.discretization import Discretization
+
+AGENT_NAME = "mppi-kinematic"
+SAVE_FORMAT = "skidnav-mppi-agent"
+"""The ``"format"`` of a saved agent's JSON (also a policy file: the frozen planner)."""
+SAVE_VERSION = 1
+GREEDY_SEED = 0
+"""The seed of the frozen planner :meth:`MPPIKinematicAgent.greedy_action` rolls out: every
+greedy rollout draws the same numbers, none of the agent's."""
+
+
+def pose_of(observation: Any, lidar_rays: int) -> np.ndarray:
+    """The pose (x [m], y [m], heading [rad]) float64 (3,) of a pose observation (3,) or of a
+    feature observation (7 + ``lidar_rays``,) (x, y, cos ψ, sin ψ, …); ValueError otherwise."""
+    values = np.asarray(observation, dtype=np.float64)
+    if values.shape == (3,):
+        pose = values.copy()
+    elif values.shape == (7 + lidar_rays,):
+        pose = np.array([values[0], values[1], math.atan2(values[3], values[2])])
+    else:
+        raise ValueError(
+            f"expected a pose (3,) or a feature observation ({7 + lidar_rays},), got shape "
+            f"{values.shape}"
+        )
+    if not np.isfinite(pose).all():
+        raise ValueError("expected a finite pose")
+    return pose
+
+
+class MPPIKinematicAgent:
+    """The model-based wheel-speed agent (module doc).
+
+    Args:
+        robot: the nominal robot: prior of the model, timing (``dt``, ``substeps``: the control
+            period), arena, integration scheme, wheel-speed bound.
+        discretization: cells, heading bins and slip regions of the arena.
+        goal: the goal cell (i, j).
+        config: hyperparameters (default :class:`MPPIConfig`).
+        rng: the source of every random draw (default: a fresh one).
+        true_coefficients: only for ``kinematic_model = "true"`` — tests and references: the
+            simulator's own coefficients per slip region, float64 (n_regions, 8) (columns of
+            :data:`~skidnav.models.kinematic.N_COEFFICIENTS`), planned with and never learned.
+        lidar_rays, lidar_range: the range readings of the feature observations its frozen
+            policy may be given (read past: only the pose is used).
+    """
+
+    name: ClassVar[str] = AGENT_NAME
+
+    def __init__(
+        self,
+        robot: RobotParams,
+        discretization: Discretization,
+        goal: tuple[int, int],
+        config: MPPIConfig | None = None,
+        rng: np.random.Generator | None = None,
+        *,
+        true_coefficients: np.ndarray | None = None,
+        lidar_rays: int = 8,
+        lidar_range: float = 0.3,
+    ) -> None:
+        self.config = config or MPPIConfig()
+        check_lidar(lidar_rays, lidar_range)
+        self.lidar_rays, self.lidar_range = int(lidar_rays), float(lidar_range)
+        self.robot, self.discretization = robot, discretization
+        self.goal = _checked_goal(goal, discretization)
+        self.rng = rng if rng is not None else np.random.default_rng()
+        self.kernel_robot, self.kernel_grid = robot.kernel_constants(), discretization.grid_shape()
+        self.model = KinematicModel(robot, discretization, self.config.kinematic_config())
+        self.dynamics = self._initial_dynamics(true_coefficients)
+        self.costs = map_costs(self.config, robot, self.goal)
+        lattice_robots = []
+        if self.config.cost_to_go == "states":
+            lattice_robots = [
+                lattice_robot(robot, duration) for duration in self.config.lattice_durations
+            ]
+        self.evidence = MapEvidence(
+            self.costs, self.kernel_robot, self.kernel_grid, lattice_robots, self.dynamics.mean
+        )
+        self.planner = MPPIPlanner(self.config, self.kernel_robot, self.kernel_grid, self.rng)
+        self.steps = 0
+        """Real steps observed."""
+        self.episodes = 0
+        """Episodes ended (:meth:`end_episode`)."""
+        self.rollouts = 0
+        """Sequences rolled out through the model while acting (K per action)."""
+        self._greedy: MPPIPolicy | None = None  # the frozen planner of the greedy rollout
+
+    def _initial_dynamics(self, true_coefficients: np.ndarray | None) -> SampledDynamics:
+        """The dynamics the agent starts with, the model held as ``kinematic_model`` asks."""
+        source = self.config.kinematic_model
+        if source == "true":
+            coefficients = true_coefficients_check(true_coefficients, self.model.grid.n_regions)
+            self.model.hold()
+            return fixed_dynamics(coefficients)
+        if true_coefficients is not None:
+            raise ValueError(f"expected no true coefficients with kinematic_model {source!r}")
+        if source == "prior":
+            self.model.hold()
+        return prior_dynamics(self.model, self.config.prior_spread)
+
+    @classmethod
+    def from_env(
+        cls,
+        env: Any,
+        config: MPPIConfig | None = None,
+        rng: np.random.Generator | None = None,
+        *,
+        true_coefficients: np.ndarray | None = None,
+    ) -> MPPIKinematicAgent:
+        """An agent for the navigation env ``env`` (wrapped or not): it reads the env's robot,
+        discretization, goal cell and lidar layout — nothing of its walls or floor."""
+        nav = env.unwrapped
+        features = nav.features
+        return cls(
+            nav.robot, nav.discretization, tuple(nav.grid_map.goal), config, rng,
+            true_coefficients=true_coefficients, lidar_rays=features.lidar_rays,
+            lidar_range=features.lidar_range,
+        )  # fmt: skip
+
+    @property
+    def planning_updates(self) -> int:
+        """Model rollouts so far (the family's planning work, as a training log counts it)."""
+        return self.rollouts
+
+    # -- acting and learning --------------------------------------------------------------
+
+    def act(self, observation: Any) -> np.ndarray:
+        """The wheel speeds (ω_L, ω_R) [rad/s] to command at ``observation`` (one MPPI step),
+        float64 (2,)."""
+        pose = pose_of(observation, self.lidar_rays)
+        left, right = self.planner.step(pose, self.dynamics, self.evidence.cost_map, self.costs)
+        self.rollouts += self.config.samples
+        return np.array([left, right])
+
+    def greedy_action(self, observation: Any) -> np.ndarray:
+        """The wheel speeds (ω_L, ω_R) [rad/s], float64 (2,), that the agent's planner frozen as
+        it is now commands at ``observation``: the greedy evaluation, which learns nothing and
+        draws none of the agent's numbers. The frozen planner (:meth:`policy` seeded
+        :data:`GREEDY_SEED`) is made at the first call after the agent last learned or a greedy
+        rollout started (:meth:`start_greedy_rollout`), and keeps its plan between calls."""
+        if self._greedy is None:
+            self._greedy = self.policy(GREEDY_SEED)
+        return np.array(self._greedy.wheel_speeds(observation))
+
+    def start_greedy_rollout(self) -> None:
+        """A greedy rollout starts: the next :meth:`greedy_action` freezes the planner afresh
+        (:class:`~skidnav.agents.training.RolloutState`)."""
+        self._greedy = None
+
+    def observe(
+        self,
+        observation: Any,
+        action: Any,
+        reward: float,
+        next_observation: Any,
+        terminated: bool,
+        truncated: bool,
+        info: Mapping[str, Any],
+    ) -> None:
+        """Learn from one real step: the kinematic log to the model (refit on its schedule),
+        the path and a collision to the map evidence. ``reward``, ``next_observation``,
+        ``terminated`` and ``truncated`` teach nothing here (the goal cell is known; costs are
+        the agent's own)."""
+        pose = pose_of(observation, self.lidar_rays)
+        commands = _commands(action, self.robot.wheel_speed)
+        log = np.asarray(info.get("kinematic_log", np.zeros((0, 6))), dtype=np.float64)
+        log = log.reshape(-1, 6)
+        self.steps += 1
+        self._greedy = None  # the frozen planner no longer is the agent's
+        self.model.feed(log)
+        if self.model.maybe_refit():
+            update_dynamics(self.dynamics, self.model)
+            self.evidence.reweigh(self.dynamics.mean, model_changed=True)
+        collided = bool(info.get("collision", False))
+        self.evidence.record_step(pose, commands, log, collided, self.dynamics)
+
+    def end_episode(self) -> None:
+        """Forget the plan (the next episode starts from rest)."""
+        self.planner.reset()
+        self.episodes += 1
+        self._greedy = None
+
+    def policy(self, seed: int = 0) -> MPPIPolicy:
+        """The agent's planner frozen as it is now (its model and map copied), drawing from a
+        Generator of its own seeded with ``seed``: later learning does not change it."""
+        return MPPIPolicy(self, seed)
+
+    # -- saving ---------------------------------------------------------------------------
+
+    def state_arrays(self) -> dict[str, np.ndarray]:
+        """Everything learned, as named arrays for the ``.npz``: the model's samples and fit,
+        the sampled dynamics, the map evidence and the plan."""
+        dynamics = {f"dynamics_{name}": array for name, array in self.dynamics._asdict().items()}
+        return {
+            **self.model.state_arrays(),
+            **dynamics,
+            "hits": self.evidence.hits,
+            "passes": self.evidence.passes,
+            "plan": self.planner.plan,
+        }
+
+    def metadata(self) -> dict[str, Any]:
+        """The ``.json``: format, agent, config, geometry, goal, observation layout, counters
+        and the Generator's state."""
+        return {
+            "format": SAVE_FORMAT,
+            "version": SAVE_VERSION,
+            "agent": self.name,
+            "config": self.config.to_dict(),
+            "geometry": geometry_json(self.robot, self.discretization),
+            "goal": list(self.goal),
+            "lidar_rays": self.lidar_rays,
+            "lidar_range": self.lidar_range,
+            "counters": {"steps": self.steps, "episodes": self.episodes, "rollouts": self.rollouts},
+            "rng": generator_state(self.rng),
+        }
+
+    def save(self, path: str | Path) -> tuple[Path, Path]:
+        """Write ``path.npz`` (:meth:`state_arrays`) and ``path.json`` (:meth:`metadata`), each
+        atomically, never pickle; read back by :func:`skidnav.agents.mpc.loading.load_mppi_agent`.
+        Returns both paths."""
+        npz_path, json_path = save_paths(path)
+        npz_path.parent.mkdir(parents=True, exist_ok=True)
+        write_npz_atomic(npz_path, self.state_arrays(), compress=True)
+        write_atomic(json_path, json.dumps(self.metadata(), indent=1).encode("utf-8"))
+        return npz_path, json_path
+
+
+class MPPIPolicy:
+    """A frozen ``mppi-kinematic`` planner: a
+    :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`.
+
+    MPPI is a controller with a state (its plan, warm-started from step to step) and samples
+    from its own Generator: the wheel speeds depend on the observation, the plan and the draws,
+    the same for the same seed and observations. :meth:`reset` forgets the plan (a new episode).
+    """
+
+    def __init__(self, agent: MPPIKinematicAgent, seed: int) -> None:
+        self.lidar_rays, self.lidar_range = agent.lidar_rays, agent.lidar_range
+        self.goal = agent.goal
+        """The goal cell (i, j) it drives to."""
+        self.control_period = agent.robot.action_duration
+        """The duration [s] of one action it plans with: a run must hold each command as long."""
+        self.dynamics = SampledDynamics(*(np.copy(array) for array in agent.dynamics))
+        self.cost_map = CostMap(*(np.copy(array) for array in agent.evidence.cost_map))
+        self.costs = agent.costs
+        self.planner = MPPIPlanner(
+            agent.config, agent.kernel_robot, agent.kernel_grid, np.random.default_rng(seed)
+        )
+
+    def wheel_speeds(self, observation: np.ndarray) -> tuple[float, float]:
+        """(ω_L, ω_R) [rad/s] for a pose (3,) or feature observation (7 + k,)."""
+        pose = pose_of(observation, self.lidar_rays)
+        return self.planner.step(pose, self.dynamics, self.cost_map, self.costs)
+
+    def reset(self) -> None:
+        """Forget the plan."""
+        self.planner.reset()
+
+    def start_greedy_rollout(self) -> None:
+        """A rollout (an episode) starts: forget the plan
+        (:class:`~skidnav.agents.training.RolloutState`)."""
+        self.planner.reset()
+
+
+def map_costs(config: MPPIConfig, robot: RobotParams, goal: tuple[int, int]) -> MapCosts:
+    """The cost map's scalars: the goal, the config's weights, and the nominal robot's distance
+    [m] and turn [rad] in one control step at top speed."""
+    speed, yaw_rate = nominal_speeds(robot)
+    period = robot.action_duration
+    return MapCosts(
+        goal[0], goal[1], speed * period, yaw_rate * period, float(config.collision_cost),
+        float(config.blocked_cost), float(config.free_prior), float(config.heading_weight),
+        float(config.lookahead), config.cost_to_go == "states",
+    )  # fmt: skip
+
+
+def lattice_robot(robot: RobotParams, duration: float) -> KinematicConstants:
+    """``robot``'s kernel constants timed for a lattice action of ``duration`` [s]; ValueError
+    unless it is a whole number ≥ 1 of the robot's sub-steps."""
+    try:
+        return with_control_period(robot, duration).kernel_constants()
+    except ValueError:
+        raise ValueError(
+            f"expected each lattice duration to be a whole number >= 1 of the robot's "
+            f"{robot.dt:g} s sub-steps, got {duration!r}"
+        ) from None
+
+
+def _checked_goal(goal: Any, grid: Discretization) -> tuple[int, int]:
+    """``goal`` as a cell (i, j) of ``grid``; ValueError otherwise."""
+    cell = tuple(goal) if isinstance(goal, tuple | list) else ()
+    if len(cell) != 2 or not all(
+        isinstance(v, int | np.integer) and not isinstance(v, bool) and 0 <= v < n
+        for v, n in zip(cell, (grid.n_x, grid.n_y), strict=True)
+    ):
+        raise ValueError(
+            f"expected a goal cell (i, j) of the {grid.n_x} × {grid.n_y} grid, got {goal!r}"
+        )
+    return int(cell[0]), int(cell[1])
+
+
+def _commands(action: Any, limit: float) -> tuple[float, float]:
+    """The wheel speeds an action commanded, clipped to ± ``limit`` as the env clips them."""
+    left, right = np.asarray(action, dtype=np.float64).reshape(2).tolist()
+    return min(max(left, -limit), limit), min(max(right, -limit), limit)
+
+
+def make_mppi_agent(
+    env: Any,
+    config: MPPIConfig | Mapping[str, Any] | None = None,
+    rng: np.random.Generator | None = None,
+    **context: Any,
+) -> MPPIKinematicAgent:
+    """:meth:`MPPIKinematicAgent.from_env` with ``config`` a config, a mapping of its fields or
+    None; UserError in one line naming the agent for a bad config."""
+    try:
+        if not isinstance(config, MPPIConfig):
+            config = MPPIConfig.from_mapping(config or {})
+        return MPPIKinematicAgent.from_env(env, config, rng, **context)
+    except (ValueError, TypeError) as error:
+        raise UserError(f"agent {AGENT_NAME!r}: {first_line(error)}") from None

@@ -1,0 +1,158 @@
+"""Hyperparameters of ``mppi-kinematic``: one frozen dataclass, validated on construction.
+
+>>> MPPIConfig(samples=128).horizon
+40
+>>> MPPIConfig(temperature=0.0)
+Traceback (most recent call last):
+...
+ValueError: expected temperature to be a finite number in (0, 1e+12], got 0.0
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from skidnav.agents.tabular.config import KinematicModelFields
+from skidnav.checks import check_integer, check_number
+from skidnav.errors import shown
+
+MAX_SAMPLES = 65_536
+"""Most sampled wheel-speed sequences K per control step."""
+MAX_HORIZON = 10_000
+"""Longest horizon H [control steps]."""
+MAX_ROLLOUT_STEPS = 10_000_000
+"""Most K · H per control step: the pre-drawn normals take 7 · 8 bytes each (about 0.5 GB)."""
+MAX_DURATIONS = 8
+"""Most lattice durations."""
+COST_TO_GO = ("states", "cells")
+"""Values of :attr:`MPPIConfig.cost_to_go`."""
+MAX_COST = 1e12
+"""Greatest cost weight [cost units]: sums of costs stay far from overflow."""
+
+
+@dataclass(frozen=True)
+class MPPIConfig(KinematicModelFields):
+    """MPPI through the learned kinematic model (docs/agents/mppi-kinematic.md).
+
+    Costs are in *control steps*, the unit of the env's reward: a control step costs 1 (the
+    reward −1 of a free action), a collision ``collision_cost`` more (the reward −10). The
+    kinematic model's fields (``kinematic_*``, :class:`KinematicModelFields`) are those of
+    ``dyna-kinematic``, with refits sooner by default (every 50 new sub-steps, then doubling),
+    since this agent plans with the model from its first real step; ``kinematic_model`` "prior"
+    plans with the nominal robot throughout, "true" with the coefficients handed to the agent
+    (a reference for tests; no robot offers them)."""
+
+    samples: int = 256
+    """K, wheel-speed sequences sampled per control step, in [2, 65,536]."""
+    horizon: int = 40
+    """H, control steps each sequence looks ahead, in [1, 10,000] (40 × 0.1 s = 4 s: a
+    quarter turn takes 2.5 s; measured against 20 and 60 in docs/agents/mppi-kinematic.md)."""
+    temperature: float = 1.0
+    """λ [cost units] of the sequence weights exp(−S/λ) (Williams et al. 2017), > 0."""
+    control_cost: float = 0.0
+    """γ [cost units] of MPPI's control-cost term γ Σ_t U_tᵀ Σ⁻¹ ε_t, ≥ 0. Williams et al.
+    (2017) use γ = λ; it amounts to a quadratic cost ½ γ uᵀ Σ⁻¹ u on the wheel speeds, at
+    λ = 1 and σ = 0.6 rad/s about 8 per control step at top speed, eight times the time cost
+    of a step: the robot then crawled, 1210 actions to the free map's goal against 100
+    (docs/agents/mppi-kinematic.md). 0 (the default) leaves time and collisions the only
+    costs."""
+    noise_std: float = 0.6
+    """σ [rad/s], the standard deviation of each wheel's sampled perturbation, > 0."""
+    noise_correlation: float = 0.5
+    """β in [0, 1): the perturbations follow ε_t = β ε_{t−1} + √(1 − β²) σ n_t over the
+    horizon (n_t standard normal), so a larger β samples smoother sequences; 0: white noise."""
+    collision_cost: float = 10.0
+    """C [cost units] of running into a cell known for certain to be a wall; a cell of wall
+    probability p costs C · p on entering, in [0, 10¹²]."""
+    blocked_cost: float = 1000.0
+    """Extra cost [cost units] of entering a blocked cell (wall evidence above free evidence)
+    in the cost-to-go, in [0, 10¹²]: large, so the route goes around every known wall while a
+    way exists, and finite, so every cell keeps a finite cost-to-go."""
+    free_prior: float = 1.0
+    """f₀ ≥ 0, pseudo-passes of free evidence every cell starts with: a cell of h collisions
+    and f passes has wall probability h / (h + f + f₀) and is blocked while h > f + f₀
+    (f₀ = 0: the rule of ``dyna-kinematic``, one collision blocks an unvisited cell)."""
+    cost_to_go: str = "states"
+    """The terminal value: "states", the heading-aware value over the discrete states through
+    the model's predictions (:mod:`skidnav.agents.mpc.lattice`), or "cells", the shortest
+    route over the cells with a turn-time term (:mod:`skidnav.agents.mpc.costmap`)."""
+    lattice_durations: tuple[float, ...] = (0.5, 1.0)
+    """Durations [s] the four actions of the states' lattice are held for, each a whole number
+    of the robot's sub-steps, 1 to 8 of them (a list is stored as a tuple); 1 s: the thesis's
+    actions, 3.8 cm or 36.5° each."""
+    heading_weight: float = 1.0
+    """("cells" only) Weight ≥ 0 of the terminal turn time: the time [control steps] to turn,
+    at the nominal top yaw rate, to face (or back towards) the route's look-ahead cell."""
+    lookahead: float = 0.08
+    """("cells" only) How far along the learned route the terminal value aims [m], ≥ 0
+    (0: the next cell); about what the robot drives in 2 s at top speed."""
+    prior_spread: float = 0.2
+    """Relative standard deviation ≥ 0 of each nominal slope of the kinematic model in a
+    region with no fit yet (the prior's spread, sampled per sequence like a posterior)."""
+    sample_uncertainty: bool = True
+    """Draw the model per sequence (posterior weights and sub-step noise); False plans every
+    sequence with the posterior mean."""
+    kinematic_refit_every: int = 50
+    """Minimum new sub-step samples between refits (checked after every real step)."""
+
+    def __post_init__(self) -> None:
+        check_integer("samples", self.samples, 2, MAX_SAMPLES)
+        check_integer("horizon", self.horizon, 1, MAX_HORIZON)
+        if self.samples * self.horizon > MAX_ROLLOUT_STEPS:
+            raise ValueError(
+                f"expected samples × horizon at most {MAX_ROLLOUT_STEPS:,}, got "
+                f"{self.samples * self.horizon:,}"
+            )
+        check_number("temperature", self.temperature, 0.0, MAX_COST)
+        check_number("noise_std", self.noise_std, 0.0, MAX_COST)
+        correlation = self.noise_correlation
+        if isinstance(correlation, bool) or not (
+            isinstance(correlation, int | float) and 0.0 <= correlation < 1.0
+        ):
+            raise ValueError(f"expected noise_correlation in [0, 1), got {shown(correlation)}")
+        for name in (
+            "control_cost",
+            "collision_cost",
+            "blocked_cost",
+            "free_prior",
+            "heading_weight",
+        ):
+            check_number(name, getattr(self, name), 0.0, MAX_COST, closed=True)
+        if self.cost_to_go not in COST_TO_GO:
+            raise ValueError(f"expected cost_to_go in {COST_TO_GO}, got {shown(self.cost_to_go)}")
+        durations = self.lattice_durations
+        durations = tuple(durations) if isinstance(durations, list | tuple) else ()
+        if not 1 <= len(durations) <= MAX_DURATIONS:
+            raise ValueError(
+                f"expected lattice_durations as 1 to {MAX_DURATIONS} numbers, got "
+                f"{shown(self.lattice_durations)}"
+            )
+        for duration in durations:
+            check_number("each lattice duration", duration, 0.0, 3600.0)
+        object.__setattr__(self, "lattice_durations", durations)
+        check_number("lookahead", self.lookahead, 0.0, 1e6, closed=True)
+        check_number("prior_spread", self.prior_spread, 0.0, 10.0, closed=True)
+        if not isinstance(self.sample_uncertainty, bool):
+            raise ValueError(
+                f"expected sample_uncertainty true or false, got {self.sample_uncertainty!r}"
+            )
+        self.kinematic_config()  # validates the kinematic model's fields
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every field, JSON-able (read back by :meth:`from_mapping`)."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_mapping(cls, values: Mapping[str, Any]) -> MPPIConfig:
+        """A config from a mapping of its fields (a TOML table, a saved agent's JSON);
+        ValueError in one line for an unknown key or a bad value."""
+        known = {field.name for field in dataclasses.fields(cls)}
+        unknown = sorted(set(values) - known)
+        if unknown:
+            raise ValueError(
+                f"unknown option {shown(unknown[0])}; expected one of {', '.join(sorted(known))}"
+            )
+        return cls(**dict(values))

@@ -1,0 +1,180 @@
+"""What one real step teaches the map: the free sub-steps' cells and a collision's wall cell.
+
+The kinematic log of a step holds the body twist (v_x, v_y, yaw_rate) the robot really had in
+each free sub-step, so integrating it from the pose before the step with the robot's own scheme
+(:func:`skidnav.sim.navigation.integrate`) retraces the step's path: each sub-step's cell gets a
+pass. After a collision the robot stands at the last free position with the heading of the
+colliding sub-step; the colliding sub-step itself is not logged. Its wall cell is guessed as
+``dyna-kinematic`` guesses it (:func:`~skidnav.models.kinematic_prediction.collision_wall_cell`):
+repeat the model's predicted sub-step — here the posterior-mean twist of the commanded wheel
+speeds, from the retraced pose before the collision — until it leaves the current cell.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from skidnav._jit import jit
+from skidnav.agents.mpc.costmap import CostMap, MapCosts, empty_cost_map, weigh_map
+from skidnav.agents.mpc.dynamics import SampledDynamics, sampled_twist
+from skidnav.agents.mpc.lattice import (
+    cells_near,
+    empty_lattice,
+    lattice_reach,
+    refresh_table,
+    state_values,
+)
+from skidnav.models.kinematic_prediction import collision_wall_cell
+from skidnav.robot.kinematics import N_ACTIONS
+from skidnav.robot.params import KinematicConstants
+from skidnav.sim.navigation import integrate
+from skidnav.world.discretization import GridShape, cell_of, region_of
+
+MAX_GUESS_SUBSTEPS = 1000
+"""Most predicted sub-steps repeated to find a collision's wall cell: a cell crossed at a
+hundredth of the top speed."""
+
+
+@jit
+def retrace_free_substeps(
+    pose: np.ndarray,
+    log: np.ndarray,
+    robot: KinematicConstants,
+    grid: GridShape,
+    hits: np.ndarray,
+    passes: np.ndarray,
+) -> tuple[float, float, float, bool]:
+    """Integrate the logged twists (columns 3–5 of ``log``, float64 (n, 6)) from ``pose``
+    (x [m], y [m], heading [rad]) and add a pass to the cell of each sub-step (int64 ``passes``,
+    in place). Returns the last pose and whether a cell with hits got a pass (its wall
+    probability changed)."""
+    x, y, heading = pose[0], pose[1], pose[2]
+    changed = False
+    for k in range(log.shape[0]):
+        x, y, heading = integrate(robot, x, y, heading, (log[k, 3], log[k, 4], log[k, 5]))
+        i, j = cell_of(x, y, grid)
+        passes[i, j] += 1
+        if hits[i, j] > 0:
+            changed = True
+    return x, y, heading, changed
+
+
+@jit
+def mean_twist(
+    dynamics: SampledDynamics, region: int, omega_left: float, omega_right: float
+) -> tuple[float, float, float]:
+    """The posterior-mean body twist (v_x, v_y, yaw_rate) of the commanded wheel speeds."""
+    zeros = np.zeros(5)
+    return sampled_twist(dynamics, region, omega_left, omega_right, zeros, zeros, 0.0)
+
+
+class MapEvidence:
+    """Hits and passes of every cell and the cost map weighed from them
+    (:mod:`skidnav.agents.mpc.costmap`), with the heading-aware lattice
+    (:mod:`skidnav.agents.mpc.lattice`) when the terminal value is the states'.
+
+    Args:
+        costs: the cost map's scalars (goal cell, step length, weights).
+        robot: the robot's timing, arena and scheme. grid: the discretization.
+        lattice_robots: ``robot`` timed for each lattice duration (its ``substeps``), or empty
+            for the cells' cost-to-go only.
+        coefficients: the model's mean coefficients (n_regions, 8) the lattice predicts with.
+    """
+
+    def __init__(
+        self,
+        costs: MapCosts,
+        robot: KinematicConstants,
+        grid: GridShape,
+        lattice_robots: list[KinematicConstants],
+        coefficients: np.ndarray,
+    ) -> None:
+        self.costs, self.robot, self.grid = costs, robot, grid
+        self.lattice_robots = lattice_robots
+        self.hits = np.zeros((grid.n_x, grid.n_y), dtype=np.int64)
+        """int64 (n_x, n_y): collisions whose guessed wall cell was each cell."""
+        self.passes = np.zeros((grid.n_x, grid.n_y), dtype=np.int64)
+        """int64 (n_x, n_y): free sub-steps that ended in each cell."""
+        n_states = grid.n_x * grid.n_y * grid.n_headings
+        n_regions = coefficients.shape[0]
+        steps = [lattice.substeps / robot.substeps for lattice in lattice_robots]
+        action_steps = np.repeat(np.array(steps, dtype=np.float64), N_ACTIONS)
+        self.lattice = empty_lattice(n_states if lattice_robots else 1, n_regions, action_steps)
+        self.cost_map: CostMap = empty_cost_map(grid.n_x, grid.n_y, self.lattice.value)
+        self.reweighs = 0
+        """Times the cost map was recomputed."""
+        self.table_refreshes = 0
+        """Times the lattice's predictions were recomputed."""
+        self.reweigh(coefficients, model_changed=True)
+
+    def reweigh(self, coefficients: np.ndarray, model_changed: bool = False) -> None:
+        """Recompute the cost map from the evidence: the wall probabilities, the cells' routes
+        and, with a lattice, its predictions (when the blocked cells or, ``model_changed``, the
+        model's ``coefficients`` changed) and its values."""
+        blocked_before = self.cost_map.blocked.copy()
+        weigh_map(self.hits, self.passes, self.costs, self.grid, self.cost_map)
+        self.reweighs += 1
+        if not self.lattice_robots:
+            return
+        changed = blocked_before != self.cost_map.blocked
+        if model_changed or changed.any():
+            goal = (self.costs.goal_i, self.costs.goal_j)
+            if model_changed:
+                cells = np.ones_like(changed)
+            else:
+                longest = max(robot.substeps * robot.dt for robot in self.lattice_robots)
+                reach = lattice_reach(self.lattice.velocities, longest, self.grid)
+                cells = cells_near(changed, reach)
+            refresh_table(
+                self.lattice, coefficients, self.cost_map.blocked, goal, self.lattice_robots,
+                self.grid, cells,
+            )  # fmt: skip
+            self.table_refreshes += 1
+        state_values(
+            self.lattice, self.cost_map.wall_probability, self.costs.goal_i, self.costs.goal_j,
+            self.costs.collision_cost, self.costs.blocked_cost, self.grid,
+        )  # fmt: skip
+
+    def record_step(
+        self,
+        pose: np.ndarray,
+        commands: tuple[float, float],
+        log: np.ndarray,
+        collided: bool,
+        dynamics: SampledDynamics,
+    ) -> None:
+        """Learn from one real step from ``pose`` (x [m], y [m], heading [rad]) commanding
+        ``commands`` (ω_L, ω_R) [rad/s]: its free sub-steps ``log`` (n, 6) and whether it
+        collided (module doc); the cost map is recomputed if the evidence changed it."""
+        x, y, heading, changed = retrace_free_substeps(
+            pose, log, self.robot, self.grid, self.hits, self.passes
+        )
+        if collided:
+            wall = self.guess_wall(x, y, heading, commands, dynamics)
+            if wall is not None:
+                self.hits[wall] += 1
+                changed = True
+        if changed:
+            self.reweigh(dynamics.mean)
+
+    def guess_wall(
+        self,
+        x: float,
+        y: float,
+        heading: float,
+        commands: tuple[float, float],
+        dynamics: SampledDynamics,
+    ) -> tuple[int, int] | None:
+        """The guessed wall cell of a collision from the pose before the colliding sub-step
+        (module doc), or None when the predicted motion does not leave the cell."""
+        region = int(region_of(x, y, self.grid))
+        twist = mean_twist(dynamics, region, commands[0], commands[1])
+        n_regions = dynamics.mean.shape[0]
+        velocities = np.tile(np.array(twist, dtype=np.float64), (n_regions, 1, 1))
+        # collision_wall_cell rewinds the heading by one predicted sub-step first
+        ahead = heading + twist[2] * self.robot.dt
+        repeats = self.robot._replace(substeps=MAX_GUESS_SUBSTEPS)
+        i, j = collision_wall_cell(x, y, ahead, 0, velocities, repeats, self.grid)
+        if i < 0 or (i, j) == (self.costs.goal_i, self.costs.goal_j):
+            return None
+        return int(i), int(j)

@@ -1,0 +1,124 @@
+"""Reading a saved ``mppi-kinematic`` agent (``.npz`` + ``.json``, never pickle) and its frozen
+policy.
+
+As every saved agent (:func:`skidnav.agents.linear.registry.load_linear_agent`): the JSON is
+read within a size and nesting limit and every field checked before a fresh agent of it is
+built (the model's size checked before anything is allocated); the archive's member names,
+dtypes and shapes are checked against that agent's arrays before any is read; the values
+(finite numbers, counts ≥ 0, wheel speeds within the bound, the model's sample counts
+consistent) before they are used. Anything wrong is one :class:`~skidnav.errors.CorruptFileError`
+line naming the file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skidnav.agents.mpc.agent import (
+    AGENT_NAME,
+    SAVE_FORMAT,
+    SAVE_VERSION,
+    MPPIKinematicAgent,
+    MPPIPolicy,
+)
+from skidnav.agents.mpc.config import MPPIConfig
+from skidnav.agents.mpc.dynamics import SampledDynamics
+from skidnav.agents.tabular.agent import generator_from_state, save_paths
+from skidnav.agents.tabular.model_based import geometry_from_json
+from skidnav.errors import UserError, shown
+from skidnav.models.kinematic import N_COEFFICIENTS, KinematicModel
+from skidnav.savedfile import ArraySpec, SavedArchive, loading, read_json
+
+MAX_AGENT_JSON_BYTES = 2**20
+"""Largest ``.json`` of a saved agent [bytes]."""
+MAX_STATES = 4_000_000
+"""Most discrete states a saved agent's discretization may have (its lattice holds 45 bytes
+per state and duration)."""
+
+
+def load_mppi_agent(path: str | Path) -> MPPIKinematicAgent:
+    """The agent saved at ``path`` (:meth:`MPPIKinematicAgent.save`); CorruptFileError in one
+    line naming the file when either file is missing, damaged or inconsistent (module doc)."""
+    npz_path, json_path = save_paths(path)
+    meta = read_json(json_path, max_bytes=MAX_AGENT_JSON_BYTES, what="agent file")
+    with loading(json_path, "agent", (ValueError, TypeError, OverflowError, UserError)):
+        agent = _fresh_agent(meta)
+    specs = {
+        name: ArraySpec(tuple(array.shape), array.dtype.str)
+        for name, array in agent.state_arrays().items()
+    }
+    with loading(npz_path, "agent"):
+        with SavedArchive(npz_path) as archive:
+            arrays = archive.read_all(specs)
+        restore_arrays(agent, arrays)
+    return agent
+
+
+def _fresh_agent(meta: Mapping[str, Any]) -> MPPIKinematicAgent:
+    """A new agent of the saved config, geometry, goal and observation layout, its counters
+    and Generator restored (its arrays not yet)."""
+    if meta.get("format") != SAVE_FORMAT or meta.get("version") != SAVE_VERSION:
+        raise ValueError(f"not a skidnav {AGENT_NAME} agent file of version {SAVE_VERSION}")
+    if meta["agent"] != AGENT_NAME:
+        raise ValueError(f"expected agent {AGENT_NAME!r}, got {shown(meta['agent'])}")
+    config_values = meta["config"]
+    if not isinstance(config_values, Mapping):
+        raise ValueError("expected config to be a JSON object")
+    config = MPPIConfig.from_mapping(config_values)
+    robot, grid = geometry_from_json(meta["geometry"])
+    if grid is None or grid.n_states > MAX_STATES:
+        raise ValueError(f"expected a discretization of at most {MAX_STATES:,} states")
+    KinematicModel.check_size(grid, config.kinematic_config())
+    placeholder = np.zeros((grid.n_regions, N_COEFFICIENTS))
+    agent = MPPIKinematicAgent(
+        robot, grid, meta["goal"], config,
+        true_coefficients=placeholder if config.kinematic_model == "true" else None,
+        lidar_rays=meta["lidar_rays"], lidar_range=meta["lidar_range"],
+    )  # fmt: skip
+    counters, rng_state = meta["counters"], meta["rng"]
+    if not isinstance(counters, Mapping) or not isinstance(rng_state, Mapping):
+        raise ValueError("expected counters and rng to be JSON objects")
+    for name in ("steps", "episodes", "rollouts"):
+        value = counters[name]
+        if type(value) is not int or value < 0:
+            raise ValueError(f"expected counter {name} to be an integer >= 0, got {shown(value)}")
+        setattr(agent, name, value)
+    agent.rng = generator_from_state(rng_state)
+    agent.planner.rng = agent.rng
+    return agent
+
+
+def restore_arrays(agent: MPPIKinematicAgent, arrays: Mapping[str, np.ndarray]) -> None:
+    """Fill ``agent`` (built by :func:`_fresh_agent`) with the saved arrays, each checked; then
+    its cost map is recomputed from the evidence and the model. ValueError (or
+    CorruptFileError) for a value the agent cannot hold."""
+    agent.model.load_arrays(dict(arrays))
+    dynamics = SampledDynamics(
+        *(np.asarray(arrays[f"dynamics_{name}"]) for name in SampledDynamics._fields)
+    )
+    if not all(np.isfinite(array).all() for array in dynamics) or (dynamics.noise_std < 0).any():
+        raise ValueError("saved dynamics are not finite (or a noise is negative)")
+    for saved, own in zip(dynamics, agent.dynamics, strict=True):
+        own[...] = saved
+    for name in ("hits", "passes"):
+        counts = np.asarray(arrays[name])
+        if (counts < 0).any():
+            raise ValueError(f"saved {name} are not counts")
+        getattr(agent.evidence, name)[...] = counts
+    plan = np.asarray(arrays["plan"])
+    if not (np.abs(plan) <= agent.robot.wheel_speed).all():  # NaN fails too
+        raise ValueError("saved plan holds wheel speeds beyond the bound")
+    agent.planner.plan[...] = plan
+    agent.evidence.reweigh(agent.dynamics.mean, model_changed=True)
+
+
+def policy_from_file(json_path: Path, meta: Mapping[str, Any]) -> MPPIPolicy:
+    """The frozen planner of the agent saved at ``json_path`` (``meta``: its parsed JSON, read
+    again by the agent's loader), its Generator seeded 0: a loader for
+    :data:`skidnav.agents.policies.loading.POLICY_LOADERS` (format ``"skidnav-mppi-agent"``)."""
+    del meta  # the agent's own loader reads and checks the file
+    return load_mppi_agent(json_path).policy(seed=0)

@@ -1,0 +1,127 @@
+"""Model predictive path integral control (MPPI; Williams et al. 2017, "Information theoretic
+MPC for model-based reinforcement learning", ICRA, Algorithm 2) over the two wheel speeds.
+
+Each control step, from the robot's pose and the plan U (H, 2) [rad/s] kept from the last step:
+
+1. draw K perturbation sequences ε (K, H, 2): ε_t = β ε_{t−1} + √(1 − β²) σ n_t, n_t standard
+   normal (β = 0: the white noise of Williams et al.; β > 0 samples smoother sequences, ours);
+   sequence 0 is the plan itself (ε = 0);
+2. clip U + ε to the wheel-speed bounds ± Ω and keep the clipped perturbation
+   ε ← clip(U + ε) − U (the sequence the robot could drive);
+3. roll every sequence out through its own draw of the learned model and cost it
+   (:func:`~skidnav.agents.mpc.rollouts.rollout_costs`), S_k, and add the control cost
+   γ Σ_t U_tᵀ Σ⁻¹ ε_t, Σ = σ² I (Williams et al. 2017, with γ = λ there; a parameter here,
+   0 by default: :attr:`~skidnav.agents.mpc.config.MPPIConfig.control_cost`);
+4. weigh the sequences w_k ∝ exp(−(S_k − min S) / λ) and move the plan: U ← U + Σ_k w_k ε_k;
+5. command U_0, then shift the plan by one step for the next control step (warm start), the
+   last step repeated.
+
+Every random number is drawn here, in Python, from the planner's Generator (``standard_normal``
+in a fixed order: perturbations, then the model draws and the noise of
+:class:`~skidnav.agents.mpc.rollouts.RolloutDraws`); the compiled kernel draws none.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from skidnav.agents.mpc.config import MPPIConfig
+from skidnav.agents.mpc.costmap import CostMap, MapCosts
+from skidnav.agents.mpc.dynamics import N_DRAWS, SampledDynamics
+from skidnav.agents.mpc.rollouts import RolloutDraws, rollout_costs
+from skidnav.robot.params import KinematicConstants
+from skidnav.world.discretization import GridShape
+
+
+class MPPIPlanner:
+    """The MPPI loop of the module doc for one robot.
+
+    Args:
+        config: K, H, λ, σ, β and whether to sample the model.
+        robot: the robot's timing, arena, scheme and wheel-speed bound Ω [rad/s].
+        grid: the discretization.
+        rng: the source of every draw.
+    """
+
+    def __init__(
+        self,
+        config: MPPIConfig,
+        robot: KinematicConstants,
+        grid: GridShape,
+        rng: np.random.Generator,
+    ) -> None:
+        self.config, self.robot, self.grid, self.rng = config, robot, grid, rng
+        self.plan = np.zeros((config.horizon, 2))
+        """float64 (H, 2): the wheel speeds (ω_L, ω_R) [rad/s] planned for the next H steps."""
+        self.costs = np.zeros(config.samples)
+        """float64 (K,): the last batch's sequence costs, control cost included."""
+        self.weights = np.zeros(config.samples)
+        """float64 (K,): the last batch's weights (summing to 1)."""
+        self._zero_draws: RolloutDraws | None = None
+
+    def reset(self) -> None:
+        """Forget the plan (a new episode): the next step starts from U = 0."""
+        self.plan[...] = 0.0
+
+    def perturbations(self) -> np.ndarray:
+        """Step 1: float64 (K, H, 2) time-correlated perturbations, sequence 0 all zero."""
+        config = self.config
+        white = self.rng.standard_normal((config.samples, config.horizon, 2))
+        white *= config.noise_std
+        beta = config.noise_correlation
+        if beta > 0.0:
+            innovation = math.sqrt(1.0 - beta * beta)
+            for t in range(1, config.horizon):
+                white[:, t] = beta * white[:, t - 1] + innovation * white[:, t]
+        white[0] = 0.0
+        return white
+
+    def draws(self) -> RolloutDraws:
+        """The model draws and noise of a batch (standard normals), or zeros when the model
+        is not sampled."""
+        config = self.config
+        if not config.sample_uncertainty:
+            if self._zero_draws is None:  # allocated once, at the first plan
+                shape = (config.samples, config.horizon, 3)
+                self._zero_draws = RolloutDraws(
+                    np.zeros((config.samples, N_DRAWS)), np.zeros(shape), 0.0
+                )
+            return self._zero_draws
+        model = self.rng.standard_normal((config.samples, N_DRAWS))
+        noise = self.rng.standard_normal((config.samples, config.horizon, 3))
+        return RolloutDraws(model, noise, 1.0 / math.sqrt(self.robot.substeps))
+
+    def step(
+        self,
+        pose: np.ndarray,
+        dynamics: SampledDynamics,
+        cost_map: CostMap,
+        costs: MapCosts,
+    ) -> tuple[float, float]:
+        """Steps 1–5 of the module doc from ``pose`` (x [m], y [m], heading [rad]); returns
+        the wheel speeds (ω_L, ω_R) [rad/s] to command now."""
+        config, limit = self.config, self.robot.wheel_speed
+        controls = np.clip(self.plan + self.perturbations(), -limit, limit)
+        perturbation = controls - self.plan
+        rollout_costs(
+            np.asarray(pose, dtype=np.float64), controls, self.draws(), dynamics, cost_map,
+            costs, self.robot, self.grid, self.costs,
+        )  # fmt: skip
+        if config.control_cost > 0.0:
+            control_cost = np.einsum("ha,kha->k", self.plan, perturbation)
+            self.costs += config.control_cost / config.noise_std**2 * control_cost
+        shifted = self.costs - self.costs.min()
+        np.exp(-shifted / config.temperature, out=self.weights)
+        self.weights /= self.weights.sum()
+        self.plan += np.einsum("k,kha->ha", self.weights, perturbation)
+        np.clip(self.plan, -limit, limit, out=self.plan)
+        left, right = float(self.plan[0, 0]), float(self.plan[0, 1])
+        self.plan[:-1] = self.plan[1:].copy()
+        return left, right
+
+    @property
+    def effective_samples(self) -> float:
+        """1 / Σ w_k² of the last batch: how many sequences the update really averaged."""
+        return float(1.0 / np.square(self.weights).sum())

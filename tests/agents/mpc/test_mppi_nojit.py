@@ -1,0 +1,86 @@
+"""mppi-kinematic gives the same actions and numbers with and without numba
+(NUMBA_DISABLE_JIT=1): the rollouts, the cost maps, the lattice, the model's refits."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+TRAINING = """
+import sys
+import gymnasium
+import numpy as np
+import skidnav
+from skidnav.agents.mpc.agent import MPPIKinematicAgent
+from skidnav.agents.mpc.config import MPPIConfig
+from skidnav.world.discretization import Discretization
+from skidnav.world.mapfile import parse_map
+
+MAP = '''skidnav-map 1
+width 9
+height 7
+map
+#########
+#.......#
+#...#...#
+#S..#.G.#
+#...#...#
+#...#...#
+#########
+'''
+grid = Discretization(n_x=9, n_y=7, n_headings=8, regions_x=3, regions_y=3)
+results = {}
+for mode in ("states", "cells"):
+    env = gymnasium.make(
+        "skidnav/SkidSteerNav-v0", grid_map=parse_map(MAP), discretization=grid,
+        slip="slippery", world_seed=1, action="continuous", observation="pose",
+        control_period=0.1,
+    )
+    nav = env.unwrapped
+    config = MPPIConfig(
+        samples=16, horizon=15, cost_to_go=mode, lattice_durations=(2.0,),
+        kinematic_min_samples=5, kinematic_refit_every=20,
+    )
+    agent = MPPIKinematicAgent(
+        nav.robot, nav.discretization, nav.grid_map.goal, config, np.random.default_rng(4)
+    )
+    observation, _ = env.reset(seed=4)
+    actions = []
+    for _ in range(150):
+        action = agent.act(observation)
+        next_observation, reward, terminated, truncated, info = env.step(action)
+        agent.observe(observation, action, reward, next_observation, terminated, truncated, info)
+        observation = next_observation
+        actions.append(action)
+    results[f"{mode}_actions"] = np.array(actions)
+    results[f"{mode}_costs"] = agent.planner.costs
+    results[f"{mode}_refits"] = np.array([agent.model.refits, agent.evidence.hits.sum()])
+    for name, array in {**agent.state_arrays(), **agent.evidence.cost_map._asdict()}.items():
+        results[f"{mode}_{name}"] = array
+np.savez(sys.argv[1], **results)
+"""
+
+
+def run(out: Path, disable_jit: bool) -> dict[str, np.ndarray]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(Path(__file__).resolve().parents[3] / "src")
+    env["NUMBA_DISABLE_JIT"] = "1" if disable_jit else "0"
+    subprocess.run([sys.executable, "-c", TRAINING, str(out)], check=True, env=env, timeout=600)
+    with np.load(out) as archive:
+        return {key: archive[key] for key in archive.files}
+
+
+def test_same_actions_and_numbers_without_jit(tmp_path: Path) -> None:
+    compiled = run(tmp_path / "jit.npz", disable_jit=False)
+    interpreted = run(tmp_path / "nojit.npz", disable_jit=True)
+    assert compiled.keys() == interpreted.keys()
+    for key in compiled:
+        assert compiled[key].tobytes() == interpreted[key].tobytes(), key
+    for mode in ("states", "cells"):
+        refits, hits = compiled[f"{mode}_refits"]
+        assert refits >= 2 and hits >= 1  # the ridge refits ran, the robot ran into the wall
+        assert np.abs(compiled[f"{mode}_actions"]).max() > 0.5  # it drove
