@@ -32,7 +32,9 @@ from typing import Any
 import gymnasium
 import pandas as pd
 
-from skidnav.agents.catalog import CatalogEntry, agent_names, entry
+from skidnav import API
+from skidnav.agents.catalog import CatalogEntry, entry
+from skidnav.agents.catalog import agent_names as agent_names
 from skidnav.agents.interface import Agent
 from skidnav.agents.saved import load_saved_agent
 from skidnav.agents.training import Rollout, TrainingLog, greedy_evaluation
@@ -45,19 +47,7 @@ from skidnav.experiments.store import ResultStore, RunLayout
 from skidnav.seeding import TRAINING_ROLES, child_sequences, seed_int
 from skidnav.world.grid import MAP_KINDS
 
-__all__ = [
-    "RunResults",
-    "agent_names",
-    "convergence_episode",
-    "evaluate",
-    "load_agent",
-    "make_agent",
-    "make_env",
-    "reference_length",
-    "run_config",
-    "save_agent",
-    "train",
-]
+__all__ = list(API)  # the one list of the API's names, the package's (skidnav.API)
 
 Env = gymnasium.Env[Any, Any]
 DEFAULTS: Mapping[str, Any] = {
