@@ -325,7 +325,7 @@ def compile_trajectory_kernels(grid: Any) -> None:
     """Compile (or load from the cache) the kernels a model-based agent first calls when an
     episode reaches the goal, which the warm-up episodes may not do: otherwise a cold cache puts
     their compilation (~1.4 s) inside the timed episodes."""
-    from skidnav.agents.tabular import kinematic_planning as kp
+    from skidnav.agents import kinematic_planning as kp
 
     trajectory = kp.loop_erase(np.zeros(2, dtype=np.int64), 4, 12_500)
     kp.neighbourhood_keys(trajectory, np.zeros((grid.n_x, grid.n_y), np.bool_), grid, 4, True)

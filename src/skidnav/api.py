@@ -283,7 +283,7 @@ def run_config(
         RunsFailedError: runs raised; the finished ones are kept for a resume.
     """
     from skidnav.commands.run import load_grid, run_loaded
-    from skidnav.outputs import check_output_dir
+    from skidnav.files.outputs import check_output_dir
 
     loaded = load_grid(Path(config))
     folder = Path(out) if out is not None else Path("runs") / loaded.grid.name

@@ -14,7 +14,7 @@ import pytest
 
 from skidnav.cli import main
 from skidnav.errors import UserError
-from skidnav.outputs import check_output_dir, check_output_file
+from skidnav.files.outputs import check_output_dir, check_output_file
 from tests.experiments.exp_support import TINY_TOML
 from tests.saved_file_support import listing
 

@@ -13,7 +13,7 @@ import pytest
 from skidnav.cli import build_parser, main
 from skidnav.commands.run import load_grid, parse_grid
 from skidnav.commands.shortcut import FLAGS
-from skidnav.configtables import toml_document
+from skidnav.files.configtables import toml_document
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 

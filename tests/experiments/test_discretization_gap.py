@@ -11,10 +11,11 @@ from skidnav.agents.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import train_agent
 from skidnav.commands.report import write_results_report
+from skidnav.envs.wrappers import FineStates
 from skidnav.errors import UserError
 from skidnav.experiments.config import config_from_dict, config_to_dict
 from skidnav.experiments.configfile import parse_config
-from skidnav.experiments.reference.finegrid import FineStates, state_grid
+from skidnav.experiments.reference.finegrid import state_grid
 from skidnav.experiments.reference.optimum import Optimum, compute_optimum, optimum_columns
 from skidnav.experiments.reference.oracle import compute_oracle, solve
 from skidnav.experiments.report.html import build_report

@@ -19,11 +19,11 @@ from skidnav.agents.catalog import DEEP_AGENTS, entry
 from skidnav.agents.interface import Agent
 from skidnav.agents.linear.agent import SAVE_FORMAT as LINEAR_FORMAT
 from skidnav.agents.linear.registry import load_linear_agent
+from skidnav.agents.saving import save_paths
 from skidnav.agents.tabular.agent import SAVE_FORMAT as TABULAR_FORMAT
-from skidnav.agents.tabular.agent import save_paths
 from skidnav.agents.tabular.registry import AGENT_MODULES, load_agent
 from skidnav.errors import CorruptFileError, UserError, shown
-from skidnav.savedfile import read_json
+from skidnav.files.saved import read_json
 
 MAX_JSON_BYTES = 2**20
 """Largest ``.json`` of a saved agent read to tell its family [bytes] (they are kilobytes)."""

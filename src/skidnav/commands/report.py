@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from skidnav.errors import UserError
-from skidnav.outputs import check_output_file
+from skidnav.files.outputs import check_output_file
 
 
 def add_parser(subparsers: Any) -> None:
@@ -94,7 +94,7 @@ def write_results_report(
 
 def study_command(run_dir: Path, output: Path) -> int:
     """Write the study's tables of ``run_dir`` to ``output``; print its path."""
-    from skidnav.atomicfile import write_user_file
+    from skidnav.files.atomic import write_user_file
     from skidnav.studies.hardware.experiment_tables import experiment_study_report
 
     write_user_file(output, experiment_study_report(run_dir).encode("utf-8"), "study tables")

@@ -25,9 +25,9 @@ from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import EXPERIMENT_LAYOUT, RunLayout
 from skidnav.experiments.tensorboard_log import TensorBoardLog
 from skidnav.extras import require
-from skidnav.formatting import plural
-from skidnav.outputs import check_output_dir
-from skidnav.savedfile import read_config_text
+from skidnav.files.outputs import check_output_dir
+from skidnav.files.saved import read_config_text
+from skidnav.statistics.formatting import plural
 from skidnav.studies.kind import EXPERIMENT_KIND, Study, study, study_kind
 
 

@@ -23,7 +23,7 @@ from skidnav.commands.run import parse_grid, run_loaded
 from skidnav.commands.shortcut import FLAGS
 from skidnav.errors import UserError
 from skidnav.experiments.runs import expand_runs
-from skidnav.outputs import check_output_dir
+from skidnav.files.outputs import check_output_dir
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.studies.policy_search.export import export_search
 from skidnav.studies.policy_search.grid import PolicySearchGrid, grid_toml

@@ -17,9 +17,9 @@ from skidnav.commands.run import (
     parse_grid,
     run_loaded,
 )
-from skidnav.configtables import toml_document
 from skidnav.experiments.runner import RunOutcome
-from skidnav.outputs import check_output_dir
+from skidnav.files.configtables import toml_document
+from skidnav.files.outputs import check_output_dir
 
 FLAGS = Path("<flags>")
 """Where a shortcut's config comes from, as its errors name it."""
@@ -63,6 +63,6 @@ def run_text(text: str, args: argparse.Namespace) -> tuple[LoadedConfig, RunOutc
 
 def run_document(document: Mapping[str, Any], args: argparse.Namespace) -> tuple[Any, RunOutcome]:
     """:func:`run_text` of a config ``document`` (its TOML text written by
-    :func:`skidnav.configtables.toml_document`); returns (the grid, what the runner did)."""
+    :func:`skidnav.files.configtables.toml_document`); returns (the grid, what the runner did)."""
     loaded, outcome = run_text(toml_document(document), args)
     return loaded.grid, outcome

@@ -13,8 +13,8 @@ from dataclasses import fields
 from typing import Any
 
 from skidnav.agents.tabular.registry import available_agents
-from skidnav.atomicfile import write_user_file
 from skidnav.commands.shortcut import add_run_arguments, run_document
+from skidnav.files.atomic import write_user_file
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.studies.transfer.grid import FLOORS, KIND, LAYOUT, TransferGrid
 from skidnav.world.grid import MAP_KINDS

@@ -14,14 +14,14 @@ Layout of a results directory::
     .skidnav.lock        held (``flock``) by the process writing here, its pid inside
 
 Every file is written to a temporary name, synced and moved into place with ``os.replace``
-(:func:`skidnav.atomicfile.write_atomic`), so a run is either completely there or absent: after a
+(:func:`skidnav.files.atomic.write_atomic`), so a run is either completely there or absent: after a
 kill, the runs already written are skipped and the rest are run again (none lost, none
 duplicated), and reopening removes the temporaries of writers that died. A write that fails (a
-full disk) is one line naming the file (:func:`skidnav.atomicfile.writing`): the files before
+full disk) is one line naming the file (:func:`skidnav.files.atomic.writing`): the files before
 it stay whole, so the same command resumes once there is room. One process at a time writes a
 directory (:func:`directory_lock`). The tidy tables are read back as saved files too
 (:func:`read_table`). Run files are read as
-:class:`~skidnav.savedfile.SavedArchive` with the arrays and sizes the config allows; nothing is
+:class:`~skidnav.files.saved.SavedArchive` with the arrays and sizes the config allows; nothing is
 pickled.
 
 What a run file holds depends on the kind of grid, described by a :class:`RunLayout`: an
@@ -45,12 +45,6 @@ from typing import Any, BinaryIO, NamedTuple
 import numpy as np
 import pandas as pd
 
-from skidnav.atomicfile import (
-    remove_stale_temporaries,
-    write_npz_atomic,
-    write_user_file,
-    writing,
-)
 from skidnav.errors import CorruptFileError, UserError, first_line, shown
 from skidnav.experiments.config import (
     MAX_STEPS,
@@ -59,8 +53,14 @@ from skidnav.experiments.config import (
     config_to_dict,
 )
 from skidnav.experiments.runs import Grid
-from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, parse_json, read_json, up_to
-from skidnav.userfile import open_user_file
+from skidnav.files.atomic import (
+    remove_stale_temporaries,
+    write_npz_atomic,
+    write_user_file,
+    writing,
+)
+from skidnav.files.saved import READ_ERRORS, ArraySpec, SavedArchive, parse_json, read_json, up_to
+from skidnav.files.user import open_user_file
 from skidnav.world.grid import MAX_SIZE
 
 EPISODE_COLUMNS = (
@@ -429,7 +429,7 @@ def results_kind(root: Path | str) -> str:
 
 def read_table(path: Path) -> pd.DataFrame:
     """A Parquet table of :meth:`ResultStore.consolidate`, read as a saved file: a regular file
-    (:func:`skidnav.userfile.open_user_file`) of at most :data:`MAX_TABLE_BYTES` whose row groups
+    (:func:`skidnav.files.user.open_user_file`) of at most :data:`MAX_TABLE_BYTES` whose row groups
     announce at most that much data (its footer is read first); CorruptFileError naming it
     otherwise."""
     import pyarrow

@@ -46,8 +46,9 @@ from typing import Any
 
 import numpy as np
 
-from skidnav.atomicfile import write_atomic, write_npz_atomic
 from skidnav.errors import CorruptFileError, first_line
+from skidnav.files.atomic import write_atomic, write_npz_atomic
+from skidnav.files.saved import MAX_ARCHIVE_BYTES, READ_ERRORS, ArraySpec, SavedArchive, read_json
 from skidnav.models.bayesian_ridge import RidgePosterior, fit_bayesian_ridge
 from skidnav.models.kinematic_prediction import (
     action_velocities,
@@ -57,7 +58,6 @@ from skidnav.models.kinematic_prediction import (
 )
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
-from skidnav.savedfile import MAX_ARCHIVE_BYTES, READ_ERRORS, ArraySpec, SavedArchive, read_json
 from skidnav.world.discretization import Discretization
 
 logger = logging.getLogger(__name__)
@@ -447,7 +447,7 @@ class KinematicModel:
         """ValueError unless a model of ``grid`` and ``config`` is one a saved file may describe:
         no more slip regions than cells, and its arrays (per region the ``window × 5`` samples,
         2 counts, 8 coefficients, 12 velocities, float64 or int64) within
-        :data:`~skidnav.savedfile.MAX_ARCHIVE_BYTES`. Checked before a loader allocates one."""
+        :data:`~skidnav.files.saved.MAX_ARCHIVE_BYTES`. Checked before a loader allocates one."""
         n_bytes = grid.n_regions * (config.window * 5 + 22) * 8
         if grid.n_regions > grid.n_x * grid.n_y or n_bytes > MAX_ARCHIVE_BYTES:
             raise ValueError(

@@ -16,10 +16,10 @@ import numpy as np
 from skidnav.agents.policies.goal_tracker import GoalTracker, GoalTrackerConfig
 from skidnav.agents.policies.loading import load_policy, policy_json
 from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
-from skidnav.configtables import build_dataclass
-from skidnav.envs.navigation import clipped_wheel_speeds
 from skidnav.errors import UserError, first_line, shown
+from skidnav.files.configtables import build_dataclass
 from skidnav.realtime.config import RealtimeConfig
+from skidnav.robot.kinematics import clipped_wheel_speeds
 from skidnav.robot.params import RobotParams
 from skidnav.sim.features import PoseFeatures
 from skidnav.sim.navigation import is_forward_drive

@@ -38,7 +38,7 @@ import numpy as np
 from gymnasium.wrappers import RescaleObservation
 from gymnasium.wrappers.utils import rescale_box
 
-from skidnav.agents.tabular.agent import save_paths
+from skidnav.agents.saving import save_paths
 from skidnav.agents.training import (
     NOT_REACHED,
     Rollout,
@@ -47,9 +47,9 @@ from skidnav.agents.training import (
     log_from_rows,
     record_evaluation,
 )
-from skidnav.atomicfile import write_atomic, write_npz_atomic
 from skidnav.errors import CorruptFileError, first_line, shown
-from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, read_json
+from skidnav.files.atomic import write_atomic, write_npz_atomic
+from skidnav.files.saved import READ_ERRORS, ArraySpec, SavedArchive, read_json
 
 if TYPE_CHECKING:
     import torch

@@ -28,6 +28,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from skidnav.agents.geometry import geometry_json
 from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.costmap import CostMap, MapCosts
 from skidnav.agents.mpc.dynamics import (
@@ -40,11 +41,10 @@ from skidnav.agents.mpc.dynamics import (
 )
 from skidnav.agents.mpc.evidence import MapEvidence
 from skidnav.agents.mpc.planner import MPPIPlanner
-from skidnav.agents.tabular.agent import generator_state, save_paths
-from skidnav.agents.tabular.model_based import geometry_json
-from skidnav.atomicfile import write_atomic, write_npz_atomic
+from skidnav.agents.saving import generator_state, save_paths
 from skidnav.envs.navigation import with_control_period
 from skidnav.errors import UserError, first_line
+from skidnav.files.atomic import write_atomic, write_npz_atomic
 from skidnav.models.kinematic import KinematicModel
 from skidnav.robot.params import KinematicConstants, RobotParams
 from skidnav.sim.features import check_lidar

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from skidnav.agents.geometry import geometry_from_json
 from skidnav.agents.mpc.agent import (
     AGENT_NAME,
     SAVE_FORMAT,
@@ -27,11 +28,10 @@ from skidnav.agents.mpc.agent import (
 )
 from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.dynamics import SampledDynamics
-from skidnav.agents.tabular.agent import generator_from_state, save_paths
-from skidnav.agents.tabular.model_based import geometry_from_json
+from skidnav.agents.saving import generator_from_state, save_paths
 from skidnav.errors import UserError, shown
+from skidnav.files.saved import ArraySpec, SavedArchive, loading, read_json
 from skidnav.models.kinematic import N_COEFFICIENTS, KinematicModel
-from skidnav.savedfile import ArraySpec, SavedArchive, loading, read_json
 
 MAX_AGENT_JSON_BYTES = 2**20
 """Largest ``.json`` of a saved agent [bytes]."""

@@ -31,9 +31,9 @@ from pathlib import Path
 from typing import Any
 
 from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
-from skidnav.agents.tabular.agent import save_paths
+from skidnav.agents.saving import save_paths
 from skidnav.errors import CorruptFileError, UserError, shown
-from skidnav.savedfile import read_json
+from skidnav.files.saved import read_json
 
 POLICY_LOADERS: dict[str, str] = {
     "skidnav-tanh-policy": "skidnav.agents.policies.search.policy_file:policy_from_file",

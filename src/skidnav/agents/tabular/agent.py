@@ -28,6 +28,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from skidnav.agents.config import QLearningConfig
 from skidnav.agents.learning import (
     N_COUNTERS,
     PLANNING_UPDATES,
@@ -35,9 +36,9 @@ from skidnav.agents.learning import (
     experience_from_info,
     learn,
 )
-from skidnav.agents.tabular.config import QLearningConfig
-from skidnav.atomicfile import write_atomic, write_npz_atomic
+from skidnav.agents.saving import generator_from_state, generator_state, save_paths
 from skidnav.errors import CorruptFileError, shown
+from skidnav.files.atomic import write_atomic, write_npz_atomic
 from skidnav.sim.q_values import epsilon_at, epsilon_greedy, greedy_first
 
 logger = logging.getLogger(__name__)
@@ -46,39 +47,6 @@ SAVE_FORMAT = "skidnav-agent"
 SAVE_VERSION = 3
 """2: a model-based agent's geometry in the JSON (1 held it as 19 numbers in the archive);
 3: a model-based agent's planner keeps the wall and free evidence of every cell."""
-
-
-def save_paths(path: str | Path) -> tuple[Path, Path]:
-    """The ``.npz`` and ``.json`` files of a saved agent; a ``.npz``/``.json`` suffix is dropped."""
-    base = Path(path)
-    if base.suffix in (".npz", ".json"):
-        base = base.with_suffix("")
-    return base.with_name(base.name + ".npz"), base.with_name(base.name + ".json")
-
-
-def generator_state(rng: np.random.Generator) -> dict[str, Any]:
-    """The generator's bit-generator state as a JSON-able dict."""
-    return dict(rng.bit_generator.state)
-
-
-def generator_from_state(state: Mapping[str, Any]) -> np.random.Generator:
-    """A generator restored from :func:`generator_state`; ValueError if unusable (the message
-    quotes at most :data:`~skidnav.errors.EXCERPT_CHARS` characters of the saved state)."""
-    name = state.get("bit_generator")
-    bit_generator_class = getattr(np.random, str(name), None)
-    if not isinstance(bit_generator_class, type) or not issubclass(
-        bit_generator_class, np.random.BitGenerator
-    ):
-        raise ValueError(f"unknown bit generator {shown(name)}")
-    bit_generator = bit_generator_class()
-    try:
-        bit_generator.state = dict(state)
-    except (ValueError, TypeError, OverflowError, IndexError) as error:
-        # NumPy's messages may quote the saved values whole: name only the kind of problem.
-        raise ValueError(
-            f"unusable {bit_generator_class.__name__} state ({type(error).__name__})"
-        ) from None
-    return np.random.Generator(bit_generator)
 
 
 class TabularAgent:
@@ -214,8 +182,8 @@ class TabularAgent:
 
     def save(self, path: str | Path) -> tuple[Path, Path]:
         """Write ``path.npz`` (Q and model arrays) and ``path.json`` (name, config, counters,
-        generator state), each atomically (:func:`~skidnav.atomicfile.write_npz_atomic`,
-        :func:`~skidnav.atomicfile.write_atomic`): a failure or a kill leaves the old file, never
+        generator state), each atomically (:func:`~skidnav.files.atomic.write_npz_atomic`,
+        :func:`~skidnav.files.atomic.write_atomic`): a failure or a kill leaves the old file, never
         a torn one. Returns both paths."""
         npz_path, json_path = save_paths(path)
         npz_path.parent.mkdir(parents=True, exist_ok=True)

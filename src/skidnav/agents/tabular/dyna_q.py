@@ -18,9 +18,10 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
+from skidnav.agents.config import QLearningConfig
 from skidnav.agents.learning import PLANNING_UPDATES, Experience, learning_step
 from skidnav.agents.tabular.agent import TabularAgent
-from skidnav.agents.tabular.config import DynaQConfig, QLearningConfig
+from skidnav.agents.tabular.config import DynaQConfig
 from skidnav.agents.tabular.planning import dyna_planning
 from skidnav.models.multinomial import MultinomialModel
 from skidnav.models.multinomial_kernels import MultinomialArrays, model_observe

@@ -15,8 +15,9 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
+from skidnav.agents.config import QLearningConfig
 from skidnav.agents.learning import PLANNING_UPDATES, STEPS, Experience, learning_step
-from skidnav.agents.tabular.config import DynaQPlusConfig, QLearningConfig
+from skidnav.agents.tabular.config import DynaQPlusConfig
 from skidnav.agents.tabular.dyna_q import DynaQAgent
 from skidnav.agents.tabular.planning import dyna_plus_planning
 from skidnav.models.multinomial_kernels import MultinomialArrays, model_observe

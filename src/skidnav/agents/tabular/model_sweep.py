@@ -6,7 +6,7 @@ One sweep updates every pair (s, a) of every state outside the known wall cells,
 * a pair seen in reality: the multinomial model's expected target Σ p(s′|s, a)(r̄ + γ (1 − β)
   max_a′ Q(s′, a′)) (:func:`skidnav.models.multinomial_kernels.expected_target`);
 * a pair never seen: the kinematic table's predicted outcome with the learned mean rewards
-  (:func:`skidnav.agents.tabular.kinematic_planning.kinematic_value`), walls found by collisions
+  (:func:`skidnav.agents.kinematic_planning.kinematic_value`), walls found by collisions
   respected — the optimistic "unknown cells are free" model that makes the agent try the
   shortest predicted path and learn the walls it meets.
 
@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from skidnav._jit import jit
-from skidnav.agents.tabular.kinematic_planning import (
+from skidnav.agents.kinematic_planning import (
     USE_KINEMATIC,
     PlannerArrays,
     kinematic_value,

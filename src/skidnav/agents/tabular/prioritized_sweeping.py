@@ -29,8 +29,9 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
+from skidnav.agents.config import QLearningConfig
 from skidnav.agents.learning import PLANNING_UPDATES, Experience, learning_step
-from skidnav.agents.tabular.config import PrioritizedSweepingConfig, QLearningConfig
+from skidnav.agents.tabular.config import PrioritizedSweepingConfig
 from skidnav.agents.tabular.dyna_q import DynaQAgent
 from skidnav.agents.tabular.planning import sampled_sweep_step, sweep_step
 from skidnav.agents.tabular.priority_queue import HeapArrays, heap_push, make_heap

@@ -58,10 +58,11 @@ import numpy as np
 
 from skidnav.agents.fast_training import evaluate_q_fast
 from skidnav.agents.training import greedy_run
-from skidnav.atomicfile import remove_stale_temporaries, write_npz_atomic
+from skidnav.envs.wrappers import fine_grid
 from skidnav.errors import CorruptFileError
-from skidnav.experiments.reference.finegrid import TablePolicy, fine_grid, goal_states, refined_task
-from skidnav.savedfile import ArraySpec, SavedArchive
+from skidnav.experiments.reference.finegrid import TablePolicy, goal_states, refined_task
+from skidnav.files.atomic import remove_stale_temporaries, write_npz_atomic
+from skidnav.files.saved import ArraySpec, SavedArchive
 from skidnav.sim.navigation import NavigationTask
 from skidnav.sim.value_iteration import (
     GOAL_STATE,
@@ -231,7 +232,7 @@ def compute_oracle(
 
     Args:
         env: a ``skidnav/SkidSteerNav-v0`` env (wrapped or not) with discrete observations, or a
-            :class:`~skidnav.experiments.reference.finegrid.FineStates` view of one (the oracle on
+            :class:`~skidnav.envs.wrappers.FineStates` view of one (the oracle on
             its finer grid); its evaluation resets are used for the rollouts.
         n_samples: sampled poses per state (each tries every action), ≥ 1.
         seed: seed of the sampling generator.

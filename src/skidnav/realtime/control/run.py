@@ -22,11 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from skidnav.atomicfile import write_user_file
 from skidnav.envs.step_info import step_info
 from skidnav.errors import UserError, first_line, shown
-from skidnav.formatting import plural
-from skidnav.outputs import make_output_dir
+from skidnav.files.atomic import write_user_file
+from skidnav.files.outputs import make_output_dir
 from skidnav.realtime.arena import arena_map, seed_streams
 from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
 from skidnav.realtime.control.checkpoint import Checkpoints
@@ -38,6 +37,7 @@ from skidnav.realtime.drivers import DRIVERS, make_driver, require_driver_extras
 from skidnav.realtime.policies import check_policy, select_policy
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
+from skidnav.statistics.formatting import plural
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 

@@ -36,12 +36,12 @@ from typing import Any
 from skidnav.agents.policies.search.config import MAX_SEED, SearchConfig
 from skidnav.agents.policies.search.curve import COUNTS, GenerationRecord
 from skidnav.checks import check_integer
-from skidnav.configtables import check_keys, table, toml_value
 from skidnav.errors import UserError, shown
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.experiments.store import RunLayout
+from skidnav.files.configtables import check_keys, table, toml_value
+from skidnav.files.saved import ArraySpec
 from skidnav.robot.slip import SLIP_PRESETS
-from skidnav.savedfile import ArraySpec
 from skidnav.seeding import SeedKey, seed_int
 
 KIND = "policy-search"

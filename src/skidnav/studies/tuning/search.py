@@ -1,7 +1,8 @@
 """Hyperparameter search with Optuna: one resumable study per agent, on tuning worlds that are
 never evaluation worlds (docs/tuning.md).
 
-* **Objective** (minimized): the interquartile mean (:func:`skidnav.stats.iqm`) over a trial's
+* **Objective** (minimized): the interquartile mean (:func:`skidnav.statistics.intervals.iqm`) over
+a trial's
   tuning runs (tuning maps × slip presets × ``seeds``) of the summary's ``convergence_episode``;
   a run that never converged counts at its censoring time, which is the penalty.
 * **Pruning**: runs are submitted seed-major; whenever every run of the first k seeds has
@@ -45,7 +46,6 @@ import numpy as np
 import optuna
 from optuna.trial import FrozenTrial, TrialState
 
-from skidnav.atomicfile import remove_stale_temporaries, write_atomic
 from skidnav.errors import CorruptFileError, RunsFailedError, UserError
 from skidnav.experiments.config import (
     DEFAULT_ENV_ID,
@@ -66,8 +66,9 @@ from skidnav.experiments.runner import (
 from skidnav.experiments.runner import execute as execute_runs
 from skidnav.experiments.runs import expand_runs
 from skidnav.experiments.store import TrialResult, directory_lock
+from skidnav.files.atomic import remove_stale_temporaries, write_atomic
 from skidnav.seeding import ROOT_ROLES, WORLD_ROLES, SeedKey, child_sequences
-from skidnav.stats import iqm
+from skidnav.statistics.intervals import iqm
 from skidnav.studies.tuning.config import ParamRange, TuneConfig, check_tuning, default_point
 from skidnav.studies.tuning.tuned_file import write_tuned
 from skidnav.world.grid import GridMap

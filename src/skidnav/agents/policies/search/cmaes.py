@@ -51,7 +51,7 @@ from skidnav.agents.policies.search.curve import record_rows as record_rows
 from skidnav.agents.policies.search.curve import scheduled
 from skidnav.agents.policies.search.rollouts import PopulationRollouts
 from skidnav.agents.policies.search.tanh_policy import TanhPolicy
-from skidnav.agents.tabular.agent import save_paths
+from skidnav.agents.saving import save_paths
 from skidnav.errors import UserError, first_line
 from skidnav.seeding import child, child_sequences
 
