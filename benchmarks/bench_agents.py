@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from plain_python import interpreted
 
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.planning import dyna_planning
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import train_agent

@@ -243,8 +243,8 @@ LOADERS: dict[str, Loader] = {
         _linear_agent, _import("skidnav.agents.linear.registry:load_linear_agent")
     ),
     "kinematic model": Loader(_kinematic_model, _load_kinematic_model),
-    "tanh policy": Loader(_tanh_policy, _import("skidnav.agents.policies.loading:load_policy")),
-    "ppo policy": Loader(_ppo_policy, _import("skidnav.agents.policies.loading:load_policy")),
+    "tanh policy": Loader(_tanh_policy, _import("skidnav.agents.saved:load_policy")),
+    "ppo policy": Loader(_ppo_policy, _import("skidnav.agents.saved:load_policy")),
     "CMA-ES checkpoint": Loader(_cma_checkpoint, _load_cma_checkpoint),
     "real-time checkpoint": Loader(_realtime_checkpoint, _latest_checkpoint),
     "calibration": Loader(

@@ -105,7 +105,8 @@ def make_agent(name: str, env: Env, *, seed: int = 0, **params: Any) -> Agent:
     described = entry(name)
     _check_observation(described, env)
     sequence = child_sequences(seed, TRAINING_ROLES)["agent"]
-    return described.build(env.unwrapped, params, sequence, _limit(env)).agent
+    agent: Agent = described.build(env.unwrapped, params, sequence, _limit(env)).agent
+    return agent
 
 
 def _check_observation(described: CatalogEntry, env: Env) -> None:

@@ -8,7 +8,7 @@ import gymnasium
 import numpy as np
 
 import skidnav  # noqa: F401  (registers the env)
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.model_sweep import model_value_iteration
 from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.experiments.metrics import (

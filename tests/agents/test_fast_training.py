@@ -14,7 +14,11 @@ import numpy as np
 import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.fast_training import evaluate_q_fast, train_agent_fast, train_for_steps_fast
+from skidnav.agents.tabular.fast_training import (
+    evaluate_q_fast,
+    train_agent_fast,
+    train_for_steps_fast,
+)
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import TrainingLog, train_agent, train_for_steps
 from skidnav.envs.mazes import blocking_maze, dyna_maze
@@ -149,7 +153,7 @@ _SCRIPT = """
 import json, sys
 import numpy as np, gymnasium as gym
 import skidnav.envs
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
@@ -188,7 +192,8 @@ def test_identical_without_numba() -> None:
 _MAZE_SCRIPT = """
 import json
 import numpy as np
-from skidnav.agents.fast_training import evaluate_q_fast, train_agent_fast, train_for_steps_fast
+from skidnav.agents.tabular.fast_training import evaluate_q_fast, train_agent_fast,
+train_for_steps_fast
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.envs.mazes import dyna_maze, shortcut_maze
 out = {}

@@ -12,9 +12,9 @@ import pytest
 
 import skidnav.envs  # noqa: F401  (registers the envs)
 from skidnav.agents.catalog import entry
-from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
 from skidnav.agents.tabular import registry
 from skidnav.agents.tabular.agent import TabularAgent
+from skidnav.agents.tabular.fast_training import train_agent_fast, train_for_steps_fast
 from skidnav.agents.training import train_agent, train_for_steps
 from skidnav.envs.mazes import dyna_maze
 

@@ -8,7 +8,7 @@ import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents import kinematic_planning as kp
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.models.kinematic_prediction import PREDICT_COLLISION, PREDICT_FREE
 from skidnav.world.discretization import Discretization

@@ -243,7 +243,7 @@ NO_JIT_SCRIPT = """
 import hashlib
 import gymnasium, numpy as np
 import skidnav
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.experiments.reference.oracle import compute_oracle
 from skidnav.robot.params import RobotParams

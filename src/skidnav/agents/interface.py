@@ -6,7 +6,7 @@
 * :class:`StepLearningAgent` — the tabular, linear and model-predictive (``mppi-kinematic``)
   agents, which a loop drives one real step at a time: ``act``, ``observe``, ``end_episode``
   and the ``planning_updates`` counter, as :func:`skidnav.agents.training.train_agent` (and,
-  for the tabular ones, the compiled :func:`skidnav.agents.fast_training.train_agent_fast`)
+  for the tabular ones, the compiled :func:`skidnav.agents.tabular.fast_training.train_agent_fast`)
   calls them;
 * :class:`EpisodeTrainingAgent` — the deep agents, which own their loop and train by episodes
   (``train_episodes``) with the same greedy evaluations and the same

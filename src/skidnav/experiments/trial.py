@@ -13,7 +13,8 @@ number.
 
 Agents of every family (:mod:`skidnav.agents.catalog`: tabular, linear on continuous
 observations, deep) are built and trained through one door, the catalog entry of their name.
-Tabular agents train in the compiled trainer ``skidnav.agents.fast_training.train_agent_fast``
+Tabular agents train in the compiled trainer
+``skidnav.agents.tabular.fast_training.train_agent_fast``
 for the skid-steer environment when it supports the agent, else in
 ``skidnav.agents.training.train_agent`` (which it falls back to on its own, e.g. for
 ``[env] dynamics = "mujoco"``, the physical robot, whose runs have no oracle); linear agents

@@ -19,7 +19,7 @@ from skidnav.agents.deep.common import DeepConfig
 from skidnav.agents.deep.ppo import PPOAgent, PPOConfig, load_ppo
 from skidnav.agents.deep.sac import SACAgent, SACConfig, load_sac
 from skidnav.agents.deep.wheel_speeds import WheelSpeedAgent
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization

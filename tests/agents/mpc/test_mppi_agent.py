@@ -10,8 +10,8 @@ import pytest
 
 from skidnav.agents.mpc.agent import MPPIKinematicAgent, make_mppi_agent
 from skidnav.agents.mpc.training import train_mppi
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
 from skidnav.agents.training import greedy_run
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import UserError
 from skidnav.world.discretization import Discretization
 from tests.agents.mpc.support import (

@@ -15,7 +15,7 @@ MPPIPlanner`) and returns the wheel speeds; :meth:`MPPIKinematicAgent.observe` f
 kinematic log to the model (refitted on its schedule, then the sampled dynamics updated) and its
 path and collision to the map evidence (the cost-to-go recomputed when the map changed);
 :meth:`MPPIKinematicAgent.end_episode` forgets the plan. :meth:`MPPIKinematicAgent.policy` hands
-out a frozen copy, a :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`.
+out a frozen copy, a :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`.
 """
 
 from __future__ import annotations
@@ -278,7 +278,7 @@ class MPPIKinematicAgent:
 
 class MPPIPolicy:
     """A frozen ``mppi-kinematic`` planner: a
-    :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`.
+    :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`.
 
     MPPI is a controller with a state (its plan, warm-started from step to step) and samples
     from its own Generator: the wheel speeds depend on the observation, the plan and the draws,

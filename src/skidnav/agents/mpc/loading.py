@@ -119,6 +119,6 @@ def restore_arrays(agent: MPPIKinematicAgent, arrays: Mapping[str, np.ndarray]) 
 def policy_from_file(json_path: Path, meta: Mapping[str, Any]) -> MPPIPolicy:
     """The frozen planner of the agent saved at ``json_path`` (``meta``: its parsed JSON, read
     again by the agent's loader), its Generator seeded 0: a loader for
-    :data:`skidnav.agents.policies.loading.POLICY_LOADERS` (format ``"skidnav-mppi-agent"``)."""
+    the mpc family (:mod:`skidnav.agents.mpc.family`, format ``"skidnav-mppi-agent"``)."""
     del meta  # the agent's own loader reads and checks the file
     return load_mppi_agent(json_path).policy(seed=0)

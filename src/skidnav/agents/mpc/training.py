@@ -17,22 +17,9 @@ from typing import Any
 
 import gymnasium as gym
 
+from skidnav.agents.family import check_wheel_speed_env
 from skidnav.agents.mpc.agent import MPPIKinematicAgent
 from skidnav.agents.training import TrainingLog, train_loop
-
-
-def check_wheel_speed_env(env: gym.Env[Any, Any]) -> None:
-    """ValueError unless ``env`` takes two wheel speeds and observes a ``Box``."""
-    space = env.action_space
-    if not isinstance(space, gym.spaces.Box) or space.shape != (2,):
-        raise ValueError(
-            f"expected an env of two wheel speeds (action='continuous'), got actions {space}"
-        )
-    if not isinstance(env.observation_space, gym.spaces.Box):
-        raise ValueError(
-            "expected an env observing the pose or the features (observation='pose' or "
-            f"'features'), got {env.observation_space}"
-        )
 
 
 def train_mppi(

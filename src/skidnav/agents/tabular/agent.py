@@ -5,7 +5,8 @@ An agent owns a Q table ``q`` (float64, shape (n_states, n_actions)), a ``numpy.
 (:mod:`skidnav.agents.learning`). What one real transition teaches it is one compiled kernel,
 registered for the class of its :meth:`TabularAgent.learning_arrays` and given the scalars of
 :meth:`TabularAgent.learning_settings`; the step-by-step :meth:`TabularAgent.observe`
-and the fused trainer (:mod:`skidnav.agents.fast_training`) both call it, so there is one learning
+and the fused trainer (:mod:`skidnav.agents.tabular.fast_training`) both call it, so there is one
+learning
 step per agent. Subclasses keeping more state also implement :meth:`TabularAgent.reserve` (room
 the kernel cannot allocate) and :meth:`TabularAgent._state_arrays` /
 :meth:`TabularAgent._restore_state_arrays`.

@@ -108,7 +108,7 @@ def check_grids(
             continue
         if config.env_id != DEFAULT_ENV_ID:
             raise UserError(f"{what}: a discretization needs the {DEFAULT_ENV_ID} environment")
-        if described is not None and described.family != "tabular":
+        if described is not None and described.family.name != "tabular":
             raise UserError(f"{what}: only tabular agents take a discretization")
         try:
             refine_map(grid_map, (levels[0], levels[1]))

@@ -20,7 +20,8 @@ For a skid-steer world (map, slip field, robot, discretization) the oracle
    C* > L*, and the cheapest path may take more actions than the shortest;
 4. for information, rolls each objective's greedy policy out in the simulator from the start,
    once per evaluation seed — the evaluation every agent gets after each of its episodes
-   (:func:`skidnav.agents.fast_training.evaluate_q_fast`). A greedy policy over cells can loop
+   (:func:`skidnav.agents.tabular.fast_training.evaluate_q_fast`). A greedy policy over cells can
+   loop
    from one exact pose (an action that works on average over a cell fails from that point), so
    these rollouts are a diagnostic, not the reference.
 
@@ -56,7 +57,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from skidnav.agents.fast_training import evaluate_q_fast
+from skidnav.agents.tabular.fast_training import evaluate_q_fast
 from skidnav.agents.training import greedy_run
 from skidnav.envs.wrappers import fine_grid
 from skidnav.errors import CorruptFileError

@@ -1,6 +1,6 @@
 """The real-time loop of a frozen continuous policy (docs/realtime.md, "Continuous policies").
 
-A :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy` chooses both wheel speeds from the
+A :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy` chooses both wheel speeds from the
 env's ``"features"`` observation. Each action, the loop computes that observation from the
 newest tracked pose (:class:`~skidnav.sim.features.PoseFeatures` of the run's map, with the
 policy's ``lidar_rays`` and ``lidar_range``), asks the policy for (ω_L, ω_R), clips them to
@@ -31,8 +31,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
 from skidnav.agents.training import start_rollout
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import first_line
 from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.control.episodes import EpisodeLoop

@@ -261,7 +261,7 @@ def drive(
     restored first, if any), SIGINT and SIGTERM tripping its safety monitor, and shut the driver
     down, the loop's scoring kernels compiled before connecting; returns (exit code of
     :meth:`EpisodeLoop.run`, the loop). With a ``policy_name``, ``agent`` is a frozen continuous
-    policy (:class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`) run by
+    policy (:class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`) run by
     :class:`PolicyLoop`; else a tabular agent run by :class:`RealtimeLoop`.
 
     Raises:

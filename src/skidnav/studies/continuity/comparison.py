@@ -270,7 +270,7 @@ def mppi_params(config: ComparisonConfig) -> dict[str, Any]:
 def _train_discrete(
     config: ComparisonConfig, learner: str, seed: int, env: Any
 ) -> tuple[Policy, int, float]:
-    from skidnav.agents.fast_training import train_agent_fast
+    from skidnav.agents.tabular.fast_training import train_agent_fast
     from skidnav.agents.tabular.registry import make_agent
 
     nav = env.unwrapped

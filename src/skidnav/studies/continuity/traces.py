@@ -4,7 +4,7 @@ The thesis's future work asks for continuous wheel speeds because its four discr
 trajectories that jerk between full-speed commands. This module measures that on any policy:
 :func:`record_rollout` runs one episode of a policy (a callable observation → action; adapters
 :func:`tabular_policy` for a tabular agent's greedy action, :func:`wheel_speed_policy` for a
-:class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy` on ``action="continuous"``) and
+:class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy` on ``action="continuous"``) and
 returns a :class:`Trace`; :func:`trace_metrics` turns a trace into the numbers below;
 :func:`aggregate` and :func:`comparison_table` average them over many traces with bootstrap
 intervals (:mod:`skidnav.statistics.intervals`). Definitions, T being the number of actions of the
@@ -48,8 +48,8 @@ import gymnasium
 import numpy as np
 import pandas as pd
 
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
 from skidnav.agents.training import Greedy, as_state, start_rollout
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.experiments.metrics import path_length
 from skidnav.statistics.intervals import Interval, bootstrap_interval
 
@@ -168,7 +168,7 @@ def wheel_speed_policy(policy: WheelSpeedPolicy, env: gymnasium.Env[Any, Any]) -
 
 
 class WheelSpeeds:
-    """A :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy` as a :data:`Policy`
+    """A :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy` as a :data:`Policy`
     (:func:`wheel_speed_policy`); a policy with a state of its own within a rollout forgets it
     when :func:`record_rollout` starts one."""
 

@@ -139,7 +139,7 @@ def grid_to_dict(grid: PolicySearchGrid) -> dict[str, Any]:
 def grid_from_dict(values: dict[str, Any]) -> PolicySearchGrid:
     """The grid of :func:`grid_to_dict` (KeyError, TypeError or ValueError if invalid)."""
     presets = tuple(values["presets"])
-    search = SearchConfig.from_dict({**values["search"], "slip": presets[0], "seed": 0})
+    search = SearchConfig.from_mapping({**values["search"], "slip": presets[0], "seed": 0})
     return PolicySearchGrid(search, presets, values["seeds"], values["root_seed"], values["name"])
 
 

@@ -1,6 +1,6 @@
 """One run of the textbook checks: one agent of one check (:class:`~skidnav.studies.sutton_barto.
 grid.Check`) trained once on its maze, with the fused compiled maze trainers
-(:mod:`skidnav.agents.fast_training`; the same numbers as the plain Gymnasium loop).
+(:mod:`skidnav.agents.tabular.fast_training`; the same numbers as the plain Gymnasium loop).
 
 Its randomness: the agent's generator (ε-greedy, planning samples) is the ``"agent"`` child of the
 run's stream ``RunSpec.run_seed`` and the env's first ``reset`` seed its ``"episodes"`` child
@@ -25,8 +25,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
 from skidnav.agents.tabular.agent import TabularAgent
+from skidnav.agents.tabular.fast_training import train_agent_fast, train_for_steps_fast
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.envs.mazes import GridMazeEnv, blocking_maze, dyna_maze, shortcut_maze
 from skidnav.experiments.runs import RunSpec

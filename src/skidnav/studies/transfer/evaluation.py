@@ -19,7 +19,7 @@ import numpy as np
 
 import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents.catalog import entry
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import TrainingLog, greedy_evaluation, rollout_summary
 from skidnav.seeding import seed_int

@@ -166,7 +166,7 @@ def _settings(meta: dict[str, Any], where: Path) -> tuple[SearchConfig, float, i
     try:
         if not isinstance(meta.get("config"), dict):
             raise ValueError("expected the config to be an object")
-        config = SearchConfig.from_dict(meta["config"])
+        config = SearchConfig.from_mapping(meta["config"])
         sigma = check_number("sigma", meta.get("sigma"), 0.0, MAX_SIGMA)
         generation = meta.get("generation")
         check_integer("generation", generation, 1, MAX_GENERATIONS)

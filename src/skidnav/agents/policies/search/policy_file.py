@@ -86,7 +86,7 @@ def load_policy(path: str | Path) -> TanhPolicy:
 def policy_from_file(json_path: Path, meta: Mapping[str, Any]) -> TanhPolicy:
     """The policy of the JSON file ``json_path`` already parsed as ``meta``, its arrays read from
     the ``.npz`` beside it (the ``function(path, content)`` a registry of policy formats such as
-    ``skidnav.agents.policies.loading`` calls); CorruptFileError as :func:`load_policy`."""
+    :mod:`skidnav.agents.policies.family` calls); CorruptFileError as :func:`load_policy`."""
     npz_path = save_paths(json_path)[0]
     if meta.get("format") != SAVE_FORMAT or meta.get("version") != SAVE_VERSION:
         raise CorruptFileError(

@@ -3,8 +3,9 @@
 (:class:`skidnav.envs.mazes.GridMazeEnv`), and :func:`train_for_steps_fast`, a drop-in for
 :func:`skidnav.agents.training.train_for_steps` on the same envs.
 
-Episodes run in compiled stretches (:func:`skidnav.agents.fused_loop.learn_stretch`, at most
-:data:`STRETCH` steps each): the env's compiled step (:mod:`skidnav.agents.env_steps`), ε-greedy,
+Episodes run in compiled stretches (:func:`skidnav.agents.tabular.fused_loop.learn_stretch`, at most
+:data:`STRETCH` steps each): the env's compiled step (:mod:`skidnav.agents.tabular.env_steps`),
+ε-greedy,
 and the agent's own learning step — the very kernel its ``observe`` calls, so there is one learning
 step per agent. Between stretches Python makes room in the agent's buffers (``reserve``); between
 episodes it does what the agent does in ``end_episode`` (ε decay, trajectory bookkeeping, kinematic
@@ -25,10 +26,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from skidnav.agents import env_steps, fused_loop
-from skidnav.agents.fused_loop import ELAPSED, ENDED, LENGTH, Limits
 from skidnav.agents.learning import NO_LOG_ROWS, NO_POSE
+from skidnav.agents.tabular import env_steps, fused_loop
 from skidnav.agents.tabular.agent import TabularAgent
+from skidnav.agents.tabular.fused_loop import ELAPSED, ENDED, LENGTH, Limits
 from skidnav.agents.training import (
     NOT_REACHED,
     Rollout,
@@ -61,7 +62,7 @@ def _unwrapped(env: gym.Env[Any, Any]) -> tuple[Any, int]:
 class FusedEnv:
     """An unwrapped env the compiled loop drives, with the smallest step limit along its
     wrappers; subclasses convert the env's state to and from the loop's
-    (:mod:`skidnav.agents.env_steps`)."""
+    (:mod:`skidnav.agents.tabular.env_steps`)."""
 
     def __init__(self, env: Any, limit: int) -> None:
         self.env, self.limit = env, limit

@@ -1,0 +1,119 @@
+"""The policy family: wheel-speed policies that are not learned step by step.
+
+``cmaes`` searches a tanh policy's parameters by CMA-ES on batches of real episodes
+(:class:`~skidnav.agents.policies.search.agent.CMAESAgent`); ``goal-tracker`` is a fixed
+proportional controller towards the goal, the reference every wheel-speed learner is compared
+with (:class:`~skidnav.agents.policies.agent.GoalTrackerAgent`). Both drive the two wheel speeds
+on the feature observation; a saved one runs on the robot as a frozen policy, and loads back as a
+frozen agent (a loaded ``cmaes`` acts as the search left it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from numpy.random import SeedSequence
+
+from skidnav.agents.family import Env, Family, Params, Seeds, check_wheel_speed_env
+from skidnav.agents.interface import Agent, AgentConfig
+from skidnav.agents.policies.agent import (
+    GOAL_TRACKER_FORMAT,
+    GoalTrackerAgent,
+    PolicyAgent,
+    TanhPolicyAgent,
+    load_goal_tracker,
+    load_tanh_agent,
+)
+from skidnav.agents.policies.goal_tracker import POLICY_NAME, GoalTracker, GoalTrackerConfig
+from skidnav.agents.policies.search.agent import CMAESAgent, make_cmaes_agent
+from skidnav.agents.policies.search.config import SearchConfig
+from skidnav.agents.policies.search.policy_file import SAVE_FORMAT as TANH_FORMAT
+from skidnav.agents.training import TrainingLog, train_loop
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
+from skidnav.errors import CorruptFileError, UserError, first_line
+from skidnav.seeding import seed_int
+
+CLASSES: dict[str, type[Any]] = {"cmaes": CMAESAgent, POLICY_NAME: GoalTrackerAgent}
+"""Registry name → the agent's class."""
+CONFIGS: dict[str, type[Any]] = {"cmaes": SearchConfig, POLICY_NAME: GoalTrackerConfig}
+"""Registry name → its config class (a search's settings, a tracker's gains)."""
+
+
+def _agent_class(name: str) -> type[Any]:
+    return CLASSES[name]
+
+
+def _config_class(name: str) -> type[AgentConfig]:
+    return CONFIGS[name]
+
+
+def _make(name: str, env: Env, params: Params, seed: SeedSequence, max_steps: int) -> Agent:
+    try:
+        check_wheel_speed_env(env)
+    except ValueError as error:
+        raise UserError(f"agent {name!r}: {error} (set [env] action and observation)") from None
+    if name == "cmaes":
+        return make_cmaes_agent(env, params, seed_int(seed), max_steps)
+    try:
+        config = GoalTrackerConfig.from_mapping(params)
+    except (ValueError, TypeError, UserError) as error:
+        raise UserError(f"agent {name!r}: {first_line(error)}") from None
+    robot: Any = getattr(env.unwrapped, "robot", None)
+    return GoalTrackerAgent(GoalTracker(config, robot))
+
+
+def _train(
+    agent: Agent,
+    env: Env,
+    episodes: int,
+    *,
+    max_steps: int,
+    greedy_eval_env: Env | None,
+    greedy_seeds: Seeds,
+) -> TrainingLog:
+    """CMA-ES by generations (:meth:`~skidnav.agents.policies.search.agent.CMAESAgent.
+    train_episodes`); a frozen policy's episodes in the plain loop, learning nothing."""
+    if isinstance(agent, CMAESAgent):
+        return agent.train_episodes(
+            episodes, greedy_eval_env=greedy_eval_env, greedy_seeds=greedy_seeds,
+            greedy_max_steps=max_steps,
+        )  # fmt: skip
+    assert isinstance(agent, PolicyAgent)
+    return train_loop(
+        agent, env, episodes, max_steps=max_steps, greedy_eval_env=greedy_eval_env,
+        greedy_seeds=greedy_seeds,
+    )  # fmt: skip
+
+
+def _load(json_path: Path, meta: Mapping[str, Any], env: Env | None) -> PolicyAgent:
+    if meta.get("format") == GOAL_TRACKER_FORMAT:
+        return load_goal_tracker(json_path, meta)
+    return load_tanh_agent(json_path, meta)
+
+
+def _policy(json_path: Path, meta: Mapping[str, Any]) -> WheelSpeedPolicy:
+    agent = _load(json_path, meta, None)
+    if not isinstance(agent, (GoalTrackerAgent, TanhPolicyAgent)):
+        raise CorruptFileError(f"{json_path}: not a saved policy")
+    return agent.policy
+
+
+FAMILY: Family[Any] = Family(
+    name="policies",
+    summary="wheel-speed policies not learned step by step: a tanh policy searched by CMA-ES, "
+    "and the goal tracker, a fixed controller towards the goal",
+    agents=("cmaes", POLICY_NAME),
+    observation="box",
+    actions="wheel-speeds",
+    agent_class=_agent_class,
+    config_class=_config_class,
+    make=_make,
+    train=_train,
+    save_formats=(TANH_FORMAT, GOAL_TRACKER_FORMAT),
+    load=_load,
+    policy=_policy,
+    documentation={POLICY_NAME: "cmaes"},
+)
+"""The policy family (:class:`~skidnav.agents.family.Family`)."""
