@@ -36,7 +36,7 @@ from skidnav import API
 from skidnav.agents.catalog import CatalogEntry, entry
 from skidnav.agents.catalog import agent_names as agent_names
 from skidnav.agents.interface import Agent
-from skidnav.agents.saved import load_saved_agent
+from skidnav.agents.saved import SavedPath, load_saved_agent
 from skidnav.agents.training import Rollout, TrainingLog, greedy_evaluation
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import UserError
@@ -193,8 +193,9 @@ def save_agent(agent: Agent, path: str | Path) -> tuple[Path, Path]:
     return agent.save(path)
 
 
-def load_agent(path: str | Path, env: Env | None = None) -> Agent:
-    """The agent saved at ``path`` by :func:`save_agent`, of any family
+def load_agent(path: SavedPath, env: Env | None = None) -> Agent:
+    """The agent saved at ``path`` by :func:`save_agent` (the path given to it, either file, or
+    the pair it returned), of any family
     (:func:`skidnav.agents.saved.load_saved_agent`; a deep agent needs the ``env`` it acts in).
     """
     return load_saved_agent(path, env)

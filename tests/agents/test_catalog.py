@@ -33,7 +33,7 @@ def _pose_env() -> gym.Env[Any, Any]:
 
 def test_each_name_is_described_once_with_its_family_observation_and_config() -> None:
     described = {name: entry(name) for name in ("dyna-q", "linear-q", "dqn")}
-    assert [(e.family, e.observation) for e in described.values()] == [
+    assert [(e.family.name, e.observation) for e in described.values()] == [
         ("tabular", "discrete"), ("linear", "box"), ("deep", "box"),
     ]  # fmt: skip
     assert described["dyna-q"].config_class is DynaQConfig
