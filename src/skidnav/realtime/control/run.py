@@ -86,12 +86,27 @@ class RobotRunSettings:
             )
 
 
+def online_agent_class(name: str) -> type[Any]:
+    """The class of agent ``name`` if it learns online on the robot (the tabular family, the
+    one whose agents the real-time loop trains step by step); UserError in one line naming
+    those agents otherwise, or for an unknown name."""
+    from skidnav.agents.catalog import entry, family
+
+    described = entry(name)
+    if described.family.name != "tabular":
+        online = ", ".join(family("tabular").agents)
+        raise UserError(
+            f"agent {name!r} ({described.family.name} family) does not learn online on the "
+            f"robot: expected one of {online} (a saved wheel-speed policy runs with "
+            "--policy-file)"
+        )
+    return described.agent_class
+
+
 def agent_context(name: str, robot: RobotParams, grid: Discretization) -> dict[str, Any]:
     """Extra constructor arguments of agent ``name``: the model-based agents take the robot
     geometry and discretization (``robot``, ``discretization``) for their kinematic model."""
-    from skidnav.agents.tabular.registry import agent_class
-
-    parameters = inspect.signature(agent_class(name).__init__).parameters
+    parameters = inspect.signature(online_agent_class(name).__init__).parameters
     context: dict[str, Any] = {}
     if "robot" in parameters:
         context["robot"] = robot
