@@ -284,8 +284,8 @@ def run_config(
             results or is in use, or the backend's extra is missing.
         RunsFailedError: runs raised; the finished ones are kept for a resume.
     """
-    from skidnav.commands.run import load_grid, run_loaded
     from skidnav.files.outputs import check_output_dir
+    from skidnav.studies.loading import load_grid, run_loaded
 
     loaded = load_grid(Path(config))
     folder = Path(out) if out is not None else Path("runs") / loaded.grid.name

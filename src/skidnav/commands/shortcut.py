@@ -1,5 +1,5 @@
 """What the ``skidnav study`` shortcuts share: their flags become a study config, which runs as
-``skidnav run`` runs a config file (:func:`skidnav.commands.run.run_loaded`): the same grid, the
+``skidnav run`` runs a config file (:func:`skidnav.studies.loading.run_loaded`): the same grid, the
 same runner and backends, a results directory (``--out``) that resumes, and the config's text
 saved there as ``config.toml`` (``skidnav run OUT/config.toml --out OUT`` resumes it too)."""
 
@@ -10,16 +10,11 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from skidnav.commands.run import (
-    LoadedConfig,
-    add_backend_arguments,
-    outcome_line,
-    parse_grid,
-    run_loaded,
-)
+from skidnav.commands.run import add_backend_arguments, outcome_line
 from skidnav.experiments.runner import RunOutcome
 from skidnav.files.configtables import toml_document
 from skidnav.files.outputs import check_output_dir
+from skidnav.studies.loading import LoadedConfig, parse_grid, run_loaded
 
 FLAGS = Path("<flags>")
 """Where a shortcut's config comes from, as its errors name it."""
