@@ -17,7 +17,8 @@ from skidnav.cli import main
 from skidnav.envs.mazes import dyna_maze
 from skidnav.errors import CorruptFileError
 from skidnav.files.saved import SavedArchive
-from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+from skidnav.models.kinematic import KinematicModel
+from skidnav.models.kinematic_config import KinematicModelConfig
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
 from tests.saved_file_support import (

@@ -24,16 +24,15 @@ from skidnav.experiments.trial import measure_trial
 from skidnav.files.configtables import toml_key, toml_value
 from skidnav.statistics.intervals import iqm
 from skidnav.studies.tuning.config import ParamRange, TuneConfig, load_tune_config
-from skidnav.studies.tuning.search import (
-    JOURNAL,
+from skidnav.studies.tuning.optuna_setup import open_storage
+from skidnav.studies.tuning.runs import (
     TUNE_STREAM,
     check_separation,
-    open_storage,
     run_map,
     trial_config,
-    tune_experiment,
     tuning_runs,
 )
+from skidnav.studies.tuning.search import JOURNAL, tune_experiment
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from skidnav.errors import shown
-from skidnav.models.kinematic import KinematicModelConfig
+from skidnav.models.kinematic_config import KinematicModelConfig
 
 KINEMATIC_MODELS = ("learned", "prior", "true")
 """Values of :attr:`KinematicModelFields.kinematic_model`."""
@@ -86,9 +86,9 @@ class QLearningConfig:
 @dataclass(frozen=True)
 class KinematicModelFields:
     """The learned kinematic model's hyperparameters as fields of an agent's config (those of
-    :class:`~skidnav.models.kinematic.KinematicModelConfig`, prefixed ``kinematic_``), for every
-    agent that learns one (``dyna-kinematic`` and its variants, ``linear-dyna-kinematic``); the
-    agent's ``__post_init__`` validates them by calling :meth:`kinematic_config`."""
+    :class:`~skidnav.models.kinematic_config.KinematicModelConfig`, prefixed ``kinematic_``), for
+    every agent that learns one (``dyna-kinematic`` and its variants, ``linear-dyna-kinematic``);
+    the agent's ``__post_init__`` validates them by calling :meth:`kinematic_config`."""
 
     kinematic_min_samples: int = 20
     """Samples a region needs before its own regression is used."""

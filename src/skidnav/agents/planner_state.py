@@ -56,7 +56,7 @@ MAP_ARRAYS = ("walls", "goals", "stale", "wall_evidence", "free_evidence")
 
 def check_planner_map(planner: kp.PlannerArrays) -> None:
     """ValueError unless the planner's map evidence are counts and its walls are the cells the
-    evidence make walls (:func:`~skidnav.agents.kinematic_planning.weigh_cell`)."""
+    evidence make walls (:func:`~skidnav.agents.planner_learning.weigh_cell`)."""
     if (planner.wall_evidence < 0).any() or (planner.free_evidence < 0).any():
         raise ValueError("saved planner wall or free evidence are not counts")
     weighed = (planner.wall_evidence > planner.free_evidence) & ~planner.goals

@@ -55,6 +55,7 @@ from skidnav.agents.linear.kinematic_planning import (
     kinematic_planning,
     observe_pose,
 )
+from skidnav.agents.planner_learning import planner_observe
 from skidnav.agents.planner_state import (
     check_planner_counters,
     check_planner_map,
@@ -325,7 +326,7 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
         state = grid.state(*self.pose_of(self._observation))
         next_pose = np.array(self.pose_of(self._next_observation))
         next_state = grid.state(*next_pose)
-        kp.planner_observe(
+        planner_observe(
             self.planner, state, action, reward, next_state, terminated,
             bool(info.get("collision", False)), next_pose, self.kernel_robot, self.kernel_grid,
         )  # fmt: skip

@@ -89,7 +89,8 @@ class MPPIKinematicAgent:
         rng: the source of every random draw (default: a fresh one).
         true_coefficients: only for ``kinematic_model = "true"`` — tests and references: the
             simulator's own coefficients per slip region, float64 (n_regions, 8) (columns of
-            :data:`~skidnav.models.kinematic.N_COEFFICIENTS`), planned with and never learned.
+            :data:`~skidnav.models.kinematic_regression.N_COEFFICIENTS`), planned with and never
+            learned.
         lidar_rays, lidar_range: the range readings of the feature observations its frozen
             policy may be given (read past: only the pose is used).
     """

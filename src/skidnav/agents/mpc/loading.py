@@ -31,7 +31,8 @@ from skidnav.agents.mpc.dynamics import SampledDynamics
 from skidnav.agents.saving import generator_from_state, save_paths
 from skidnav.errors import UserError, shown
 from skidnav.files.saved import ArraySpec, SavedArchive, loading, read_json
-from skidnav.models.kinematic import N_COEFFICIENTS, KinematicModel
+from skidnav.models.kinematic import KinematicModel
+from skidnav.models.kinematic_regression import N_COEFFICIENTS
 
 MAX_AGENT_JSON_BYTES = 2**20
 """Largest ``.json`` of a saved agent [bytes]."""

@@ -25,9 +25,10 @@ import json
 import logging
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Generic
 
 import numpy as np
+from typing_extensions import TypeVar
 
 from skidnav.agents.config import QLearningConfig
 from skidnav.agents.learning import (
@@ -50,8 +51,20 @@ SAVE_VERSION = 3
 3: a model-based agent's planner keeps the wall and free evidence of every cell."""
 
 
-class TabularAgent:
-    """Base of every tabular agent: Q table, ε-greedy behaviour, counters, save/load."""
+# The defaults (PEP 696) make a bare ``TabularAgent`` any tabular agent.
+ArraysT = TypeVar("ArraysT", bound=tuple[Any, ...], default=tuple[Any, ...])
+"""The NamedTuple of arrays an agent's learning step learns into
+(:meth:`TabularAgent.learning_arrays`)."""
+SettingsT = TypeVar("SettingsT", bound=tuple[Any, ...], default=tuple[Any, ...])
+"""The NamedTuple of scalars an agent's learning step reads
+(:meth:`TabularAgent.learning_settings`)."""
+
+
+class TabularAgent(Generic[ArraysT, SettingsT]):
+    """Base of every tabular agent: Q table, ε-greedy behaviour, counters, save/load.
+
+    Generic in the NamedTuples its learning step takes: a concrete agent subclasses
+    ``TabularAgent[ItsArrays, ItsSettings]`` (a bare ``TabularAgent`` is any agent)."""
 
     name: ClassVar[str] = "tabular"
     """Registry name of the agent (e.g. ``"dyna-q"``)."""
@@ -145,13 +158,13 @@ class TabularAgent:
         arrays, settings = self.learning_arrays(), self.learning_settings()
         learn(arrays, settings, self.counters, experience, self.rng)
 
-    def learning_arrays(self) -> tuple[Any, ...]:
+    def learning_arrays(self) -> ArraysT:
         """The NamedTuple of arrays the agent's learning step learns into (its class chooses the
         kernel: :func:`~skidnav.agents.learning.learning_step`); views, never copies, to be
         asked again after :meth:`reserve`, which may reallocate. Subclasses override."""
         raise NotImplementedError
 
-    def learning_settings(self) -> tuple[Any, ...]:
+    def learning_settings(self) -> SettingsT:
         """The NamedTuple of scalars the agent's learning step reads. Subclasses override."""
         raise NotImplementedError
 

@@ -19,7 +19,7 @@ import math
 from dataclasses import dataclass
 
 from skidnav.agents.config import QLearningConfig, check
-from skidnav.models.multinomial_kernels import PLANNING_MODES
+from skidnav.models.multinomial_targets import PLANNING_MODES
 
 MAX_PLANNING_STEPS = 10_000_000
 """Most planning updates per real step (10 M: about a second of compiled planning)."""

@@ -23,13 +23,15 @@ from skidnav.agents import kinematic_planning as kp
 from skidnav.agents.config import KinematicModelFields, QLearningConfig
 from skidnav.agents.geometry import geometry_from_task, geometry_json
 from skidnav.agents.learning import PLANNING_UPDATES, Experience, learning_step
+from skidnav.agents.planner_learning import feed_log, planner_observe, refresh_stale
 from skidnav.agents.planner_state import (
     MAP_ARRAYS,
     check_planner_counters,
     check_planner_map,
     hold_kinematic_model,
 )
-from skidnav.agents.tabular.dyna_q import DynaQAgent
+from skidnav.agents.tabular.dyna_q import DynaAgent
+from skidnav.agents.trajectory_keys import loop_erase, neighbourhood_keys
 from skidnav.models.kinematic import KinematicModel
 from skidnav.models.multinomial_kernels import MultinomialArrays, model_observe
 from skidnav.robot.params import KinematicConstants, RobotParams
@@ -97,20 +99,20 @@ def model_based_step(
     logged = s.has_kinematic and step.n_logged >= 0
     if logged:  # kinematic planning starts with the first step that brings samples
         a.planner.counters[kp.USE_KINEMATIC] = 1
-    kp.planner_observe(
+    planner_observe(
         a.planner, step.state, step.action, step.reward, step.next_state, step.terminated,
         step.collided, pose, s.robot, s.grid,
     )  # fmt: skip
     if logged:
         n_regions = a.kinematic_counts.shape[0]
-        kp.feed_log(a.kinematic_data, a.kinematic_counts, step.log, step.n_logged, n_regions)
+        feed_log(a.kinematic_data, a.kinematic_counts, step.log, step.n_logged, n_regions)
     if s.shares.n_steps > 0:
         counters[PLANNING_UPDATES] += kp.combined_planning(
             a.q, a.model, a.planner, s.shares, s.grid, rng
         )
 
 
-class ModelBasedAgent(DynaQAgent):
+class ModelBasedAgent(DynaAgent[ModelBasedArrays, ModelBasedSettings]):
     """Shared machinery of ``dyna-kinematic``, ``trajectory-prioritized``, ``dyna-full`` and
     ``dyna-sweep``: multinomial model, optional kinematic model, optional best-trajectory sweeps.
 
@@ -215,13 +217,13 @@ class ModelBasedAgent(DynaQAgent):
         super().reserve(n_steps)
         self.reserve_episode(n_steps)
 
-    def learning_arrays(self) -> ModelBasedArrays:  # type: ignore[override]
+    def learning_arrays(self) -> ModelBasedArrays:
         data, counts = (
             (self.kinematic.data, self.kinematic.counts) if self.kinematic else _NO_KINEMATIC
         )
         return ModelBasedArrays(self.q, self.model.arrays, self.planner, data, counts, self.visits)
 
-    def learning_settings(self) -> ModelBasedSettings:  # type: ignore[override]
+    def learning_settings(self) -> ModelBasedSettings:
         return ModelBasedSettings(
             self.shares, self.kernel_robot, self.kernel_grid, self.discretization is not None,
             self.kinematic is not None, float(self.config.alpha_visit_exponent),
@@ -232,13 +234,13 @@ class ModelBasedAgent(DynaQAgent):
         counters = self.planner.counters
         if self.uses_trajectories and counters[kp.EPISODE_TERMINATED]:
             keys = self.planner.episode_keys[: counters[kp.EPISODE_LENGTH]]
-            self._offer_trajectory(kp.loop_erase(keys, self.n_actions, self.n_states))
+            self._offer_trajectory(loop_erase(keys, self.n_actions, self.n_states))
         counters[kp.EPISODE_LENGTH] = 0
         counters[kp.EPISODE_TERMINATED] = 0
         if self.kinematic is not None and self.kinematic.maybe_refit():
             self._refresh_table()
         elif self.kinematic is not None and self.planner.stale.any():
-            kp.refresh_stale(self.planner, self.kernel_robot, self.kernel_grid)
+            refresh_stale(self.planner, self.kernel_robot, self.kernel_grid)
         self.planner.stale[:] = False
         super().end_episode()
 
@@ -262,7 +264,7 @@ class ModelBasedAgent(DynaQAgent):
         backward = _first_occurrences(np.concatenate([t[::-1] for t in self.trajectories]))
         spatial = self.discretization is not None
         around = np.concatenate([
-            kp.neighbourhood_keys(t, self.planner.walls, self.kernel_grid, self.n_actions, spatial)
+            neighbourhood_keys(t, self.planner.walls, self.kernel_grid, self.n_actions, spatial)
             for t in self.trajectories
         ])  # fmt: skip
         around = _first_occurrences(around)

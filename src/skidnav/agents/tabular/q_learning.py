@@ -52,7 +52,7 @@ def q_learning_step(
     )  # fmt: skip
 
 
-class QLearningAgent(TabularAgent):
+class QLearningAgent(TabularAgent[QArrays, TDSettings]):
     """Tabular one-step Q-learning with ε-greedy behaviour."""
 
     name: ClassVar[str] = "q-learning"

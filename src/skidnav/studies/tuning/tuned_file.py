@@ -141,7 +141,7 @@ def write_tuned(
 ) -> Path:
     """Write ``out/tuned.toml`` atomically from the ``studies`` (by agent label) kept in
     ``journal``; ``compared``: evaluation maps
-    :func:`~skidnav.studies.tuning.search.check_separation`
+    :func:`~skidnav.studies.tuning.runs.check_separation`
     compared the tuning maps with. Returns the path."""
     agents: list[tuple[AgentSpec, Sequence[str]]] = []
     for agent in config.agents:
