@@ -55,7 +55,7 @@ from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.training import check_wheel_speed_env, train_mppi
 from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.agents.tabular.registry import AGENT_MODULES, agent_class, make_agent
-from skidnav.agents.training import TrainingLog, train_agent
+from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog, train_agent
 from skidnav.errors import UserError, first_line, shown
 from skidnav.extras import MissingExtraError, missing_message, require
 
@@ -94,8 +94,9 @@ AgentT_contra = TypeVar("AgentT_contra", bound=Agent, contravariant=True)
 
 class Trainer(Protocol[AgentT_contra]):
     """How a family trains: ``episodes`` episodes of ``agent`` on ``env`` (the env it was built
-    for), each cut at ``max_steps`` actions, the greedy policy evaluated on ``greedy_eval_env``
-    after each (one rollout per seed of ``greedy_seeds``, each cut at ``max_steps`` too)."""
+    for), each cut at ``max_steps`` actions, the first from a reset with ``seed`` (if given),
+    the greedy policy measured by ``evaluation`` after each
+    (:func:`skidnav.agents.training.train_episodes`)."""
 
     def __call__(
         self,
@@ -104,9 +105,9 @@ class Trainer(Protocol[AgentT_contra]):
         episodes: int,
         /,
         *,
-        max_steps: int,
-        greedy_eval_env: Env | None,
-        greedy_seeds: Seeds,
+        max_steps: int | None = None,
+        evaluation: Evaluation = NO_EVALUATION,
+        seed: int | None = None,
     ) -> TrainingLog: ...
 
 
@@ -122,16 +123,15 @@ class BuiltAgent(Generic[AgentT]):
         env: Env,
         episodes: int,
         *,
-        max_steps: int,
-        greedy_eval_env: Env | None,
-        greedy_seeds: Seeds,
+        max_steps: int | None = None,
+        evaluation: Evaluation = NO_EVALUATION,
+        seed: int | None = None,
     ) -> TrainingLog:
         """Train the agent for ``episodes`` episodes on ``env`` (the env it was built for), as
         its family trains (:class:`Trainer`)."""
         return self.trainer(
-            self.agent, env, episodes, max_steps=max_steps, greedy_eval_env=greedy_eval_env,
-            greedy_seeds=greedy_seeds,
-        )  # fmt: skip
+            self.agent, env, episodes, max_steps=max_steps, evaluation=evaluation, seed=seed
+        )
 
 
 @dataclass(frozen=True)
@@ -389,16 +389,16 @@ def _train_by_episodes(
     agent: EpisodeTrainingAgent,
     env: Env,
     episodes: int,
+    /,
     *,
-    max_steps: int,
-    greedy_eval_env: Env | None,
-    greedy_seeds: Seeds,
+    max_steps: int | None = None,
+    evaluation: Evaluation = NO_EVALUATION,
+    seed: int | None = None,
 ) -> TrainingLog:
-    """The agent's own loop, on the env it was built with (``env`` is that env)."""
-    return agent.train_episodes(
-        episodes, greedy_eval_env=greedy_eval_env, greedy_seeds=greedy_seeds,
-        greedy_max_steps=max_steps,
-    )  # fmt: skip
+    """The agent's own loop, on the env it was built with (``env`` is that env, its episodes
+    already cut at ``max_steps``, which limits the rollouts as in every trainer)."""
+    limited = evaluation._replace(max_steps=evaluation.limit(max_steps))
+    return agent.train_episodes(episodes, evaluation=limited, seed=seed)
 
 
 def _mpc_entry(name: str) -> AgentEntry[MPPIKinematicAgent]:
