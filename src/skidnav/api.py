@@ -37,7 +37,7 @@ from skidnav.agents.catalog import CatalogEntry, entry
 from skidnav.agents.catalog import agent_names as agent_names
 from skidnav.agents.interface import Agent
 from skidnav.agents.saved import SavedPath, load_saved_agent
-from skidnav.agents.training import Rollout, TrainingLog, greedy_evaluation
+from skidnav.agents.training import Evaluation, Rollout, TrainingLog, greedy_evaluation
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig
@@ -166,10 +166,8 @@ def train(
     if seed is not None:
         env.reset(seed=seed_int(child_sequences(seed, TRAINING_ROLES)["episodes"]))
     built = entry(agent.name).bind(agent)
-    return built.train(
-        env.unwrapped, episodes, max_steps=limit,
-        greedy_eval_env=None if evaluation is None else evaluation.unwrapped, greedy_seeds=seeds,
-    )  # fmt: skip
+    measured = Evaluation(None if evaluation is None else evaluation.unwrapped, seeds)
+    return built.train(env.unwrapped, episodes, max_steps=limit, evaluation=measured)
 
 
 def _twin(env: Env) -> Env | None:

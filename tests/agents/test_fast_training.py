@@ -20,7 +20,7 @@ from skidnav.agents.tabular.fast_training import (
     train_for_steps_fast,
 )
 from skidnav.agents.tabular.registry import make_agent
-from skidnav.agents.training import TrainingLog, train_agent, train_for_steps
+from skidnav.agents.training import Evaluation, TrainingLog, train_agent, train_for_steps
 from skidnav.envs.mazes import blocking_maze, dyna_maze
 from skidnav.experiments.reference.oracle import compute_oracle
 from skidnav.world.discretization import Discretization
@@ -45,7 +45,7 @@ def _run(trainer: Any, name: str, world_seed: int = 2) -> tuple[TrainingLog, Any
     context = {"task": env.unwrapped.task} if name in AGENTS[4:] else {}  # type: ignore[attr-defined]
     config = {"epsilon": 0.2} if name == "q-learning" else {"epsilon": 0.2, "planning_steps": 8}
     agent = make_agent(name, 12_500, 4, config, np.random.default_rng(7), **context)
-    log = trainer(agent, env, 6, max_steps=250, greedy_eval_env=evaluation, seed=11)
+    log = trainer(agent, env, 6, max_steps=250, evaluation=Evaluation(evaluation), seed=11)
     return log, agent
 
 
@@ -119,7 +119,7 @@ def test_fast_maze_trainer_matches_the_python_loop(name: str) -> None:
     for trainer in (train_agent, train_agent_fast):
         agent = make_agent(name, 54, 4, _maze_config(name), np.random.default_rng(5))
         env, evaluation = dyna_maze(max_episode_steps=400), dyna_maze(max_episode_steps=40)
-        log = trainer(agent, env, 8, max_steps=300, greedy_eval_env=evaluation, seed=5)
+        log = trainer(agent, env, 8, max_steps=300, evaluation=Evaluation(evaluation), seed=5)
         runs.append((log, agent, env.progress(), evaluation.progress()))
     (slow, slow_agent, *slow_envs), (fast, fast_agent, *fast_envs) = runs
     for field in TrainingLog._fields:

@@ -85,6 +85,6 @@ def test_the_catalog_describes_the_new_agent_from_the_registry() -> None:
     assert (described.family.name, described.observation) == ("tabular", "discrete")
     env = dyna_maze(max_episode_steps=400)
     built = described.build(env, {"epsilon": 0.2}, np.random.SeedSequence(3), 300)
-    log = built.train(env, 5, max_steps=300, greedy_eval_env=None, greedy_seeds=None)
+    log = built.train(env, 5, max_steps=300)
     assert isinstance(built.agent, TabularAgent)
     assert built.agent.visits.sum() == built.agent.steps == log.lengths.sum() > 0

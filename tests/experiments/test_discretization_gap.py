@@ -9,7 +9,7 @@ import pytest
 import skidnav  # noqa: F401  (registers the env)
 from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
-from skidnav.agents.training import train_agent
+from skidnav.agents.training import Evaluation, train_agent
 from skidnav.commands.report import write_results_report
 from skidnav.envs.wrappers import FineStates
 from skidnav.errors import UserError
@@ -82,8 +82,7 @@ def test_fine_states_on_the_maps_own_grid_train_as_the_compiled_trainer():
     ):  # fmt: skip
         agent = make_agent("q-learning", 12_500, 4, {}, np.random.default_rng(0))
         env.reset(seed=0)
-        logs.append(trainer(agent, env, 8, max_steps=100, greedy_eval_env=eval_env,
-                            greedy_seeds=[1, 2]))  # fmt: skip
+        logs.append(trainer(agent, env, 8, max_steps=100, evaluation=Evaluation(eval_env, [1, 2])))
     assert np.array_equal(logs[0].returns, logs[1].returns)
     assert np.array_equal(logs[0].greedy_lengths, logs[1].greedy_lengths)
 

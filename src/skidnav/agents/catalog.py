@@ -21,9 +21,9 @@ from typing import Any, Generic
 
 from numpy.random import SeedSequence
 
-from skidnav.agents.family import AgentT, Env, Family, Params, Seeds, asks_for, constructor_context
+from skidnav.agents.family import AgentT, Env, Family, Params, asks_for, constructor_context
 from skidnav.agents.interface import Agent, AgentConfig
-from skidnav.agents.training import TrainingLog
+from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog
 from skidnav.errors import UserError, first_line, shown
 
 FAMILY_MODULES: tuple[str, ...] = (
@@ -79,16 +79,15 @@ class BuiltAgent(Generic[AgentT]):
         env: Env,
         episodes: int,
         *,
-        max_steps: int,
-        greedy_eval_env: Env | None,
-        greedy_seeds: Seeds,
+        max_steps: int | None = None,
+        evaluation: Evaluation = NO_EVALUATION,
+        seed: int | None = None,
     ) -> TrainingLog:
         """Train the agent for ``episodes`` episodes on ``env`` (the env it was built for), as
         its family trains (:class:`~skidnav.agents.family.Trainer`)."""
         return self.family.train(
-            self.agent, env, episodes, max_steps=max_steps, greedy_eval_env=greedy_eval_env,
-            greedy_seeds=greedy_seeds,
-        )  # fmt: skip
+            self.agent, env, episodes, max_steps=max_steps, evaluation=evaluation, seed=seed
+        )
 
 
 @dataclass(frozen=True)

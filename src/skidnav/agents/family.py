@@ -16,7 +16,7 @@ The helpers below (:func:`observation_space`, :func:`discrete_actions`,
 from __future__ import annotations
 
 import inspect
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Generic, Literal, Protocol, TypeAlias, TypeVar
@@ -25,13 +25,12 @@ import gymnasium
 from numpy.random import SeedSequence
 
 from skidnav.agents.interface import Agent, AgentConfig
-from skidnav.agents.training import TrainingLog
+from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import UserError
 
 Env: TypeAlias = gymnasium.Env[Any, Any]
 Params: TypeAlias = Mapping[str, Any]
-Seeds: TypeAlias = Sequence[int] | None
 Observation = Literal["discrete", "box"]
 """What an agent learns over: the env's ``Discrete`` state, or a ``Box`` observation."""
 Actions = Literal["discrete", "wheel-speeds"]
@@ -56,8 +55,9 @@ class Maker(Protocol[AgentT_co]):
 
 class Trainer(Protocol[AgentT_contra]):
     """How a family trains: ``episodes`` episodes of ``agent`` on ``env`` (the env it was built
-    for), each cut at ``max_steps`` actions, the greedy policy evaluated on ``greedy_eval_env``
-    after each (one rollout per seed of ``greedy_seeds``, each cut at ``max_steps`` too)."""
+    for), each cut at ``max_steps`` actions, the first from a reset with ``seed`` (if given),
+    the greedy policy measured by ``evaluation`` after each
+    (:func:`skidnav.agents.training.train_episodes`)."""
 
     def __call__(
         self,
@@ -66,9 +66,9 @@ class Trainer(Protocol[AgentT_contra]):
         episodes: int,
         /,
         *,
-        max_steps: int,
-        greedy_eval_env: Env | None,
-        greedy_seeds: Seeds,
+        max_steps: int | None = None,
+        evaluation: Evaluation = NO_EVALUATION,
+        seed: int | None = None,
     ) -> TrainingLog: ...
 
 

@@ -37,7 +37,7 @@ import numpy as np
 from skidnav.agents.catalog import CatalogAgent, CatalogEntry, entry
 from skidnav.agents.interface import Agent
 from skidnav.agents.tabular.agent import TabularAgent
-from skidnav.agents.training import TrainingLog, greedy_path
+from skidnav.agents.training import Evaluation, TrainingLog, greedy_path
 from skidnav.envs.registration import allowed_env_modules, registered_env_id, with_env_modules
 from skidnav.envs.wrappers import FineStates
 from skidnav.errors import UserError
@@ -293,13 +293,8 @@ def warm_up(spec: ExperimentRun) -> None:
     eval_env.reset(seed=2)
     built = _agent(spec, env, np.random.SeedSequence(3), max(WARM_UP_LIMITS))
     for limit in WARM_UP_LIMITS:
-        built.train(
-            env,
-            1,
-            max_steps=limit,
-            greedy_eval_env=eval_env if spec.config.greedy_eval else None,
-            greedy_seeds=[2, 3],
-        )
+        evaluation = Evaluation(eval_env if spec.config.greedy_eval else None, [2, 3])
+        built.train(env, 1, max_steps=limit, evaluation=evaluation)
     greedy_path(built.agent, eval_env, max(WARM_UP_LIMITS), seed=2)
     if grid_map is not None:
         _world_arrays(built.agent, grid_map, env)
@@ -345,13 +340,8 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
         pose_env = functools.partial(trial_env, spec, grid_map, slip_seed, observation="pose")
         envs = (oracle_env, pose_env)
     world = world_reference(config, eval_env, envs, world_streams["oracle"], eval_seeds, max_steps)
-    log = built.train(
-        env,
-        config.episodes,
-        max_steps=max_steps,
-        greedy_eval_env=eval_env if config.greedy_eval else None,
-        greedy_seeds=eval_seeds,
-    )
+    measured = Evaluation(eval_env if config.greedy_eval else None, eval_seeds)
+    log = built.train(env, config.episodes, max_steps=max_steps, evaluation=measured)
     episodes = _episode_arrays(log)
     poses, reached = greedy_path(built.agent, eval_env, max_steps, seed=eval_seeds[0])
     arrays = {"greedy_poses": poses}

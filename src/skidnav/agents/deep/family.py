@@ -20,9 +20,9 @@ import gymnasium
 from gymnasium.wrappers import TimeLimit
 from numpy.random import SeedSequence
 
-from skidnav.agents.family import Env, Family, Params, Seeds, observation_space
+from skidnav.agents.family import Env, Family, Params, observation_space
 from skidnav.agents.interface import AgentConfig, EpisodeTrainingAgent
-from skidnav.agents.training import TrainingLog
+from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError, UserError
 from skidnav.extras import MissingExtraError, missing_message, require
@@ -85,16 +85,16 @@ def _train(
     agent: EpisodeTrainingAgent,
     env: Env,
     episodes: int,
+    /,
     *,
-    max_steps: int,
-    greedy_eval_env: Env | None,
-    greedy_seeds: Seeds,
+    max_steps: int | None = None,
+    evaluation: Evaluation = NO_EVALUATION,
+    seed: int | None = None,
 ) -> TrainingLog:
-    """The agent's own loop, on the env it was built with (``env`` is that env)."""
-    return agent.train_episodes(
-        episodes, greedy_eval_env=greedy_eval_env, greedy_seeds=greedy_seeds,
-        greedy_max_steps=max_steps,
-    )  # fmt: skip
+    """The agent's own loop, on the env it was built with (``env`` is that env, its episodes
+    already cut at ``max_steps``, which limits the rollouts as in every trainer)."""
+    limited = evaluation._replace(max_steps=evaluation.limit(max_steps))
+    return agent.train_episodes(episodes, evaluation=limited, seed=seed)
 
 
 def _saved_name(json_path: Path, meta: Mapping[str, Any]) -> str:

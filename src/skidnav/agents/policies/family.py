@@ -16,7 +16,7 @@ from typing import Any
 
 from numpy.random import SeedSequence
 
-from skidnav.agents.family import Env, Family, Params, Seeds, check_wheel_speed_env
+from skidnav.agents.family import Env, Family, Params, check_wheel_speed_env
 from skidnav.agents.interface import Agent, AgentConfig
 from skidnav.agents.policies.agent import (
     GOAL_TRACKER_FORMAT,
@@ -30,7 +30,7 @@ from skidnav.agents.policies.goal_tracker import POLICY_NAME, GoalTracker, GoalT
 from skidnav.agents.policies.search.agent import CMAESAgent, make_cmaes_agent
 from skidnav.agents.policies.search.config import SearchConfig
 from skidnav.agents.policies.search.policy_file import SAVE_FORMAT as TANH_FORMAT
-from skidnav.agents.training import TrainingLog, train_loop
+from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog, train_plain
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError, UserError, first_line
 from skidnav.seeding import seed_int
@@ -68,23 +68,19 @@ def _train(
     agent: Agent,
     env: Env,
     episodes: int,
+    /,
     *,
-    max_steps: int,
-    greedy_eval_env: Env | None,
-    greedy_seeds: Seeds,
+    max_steps: int | None = None,
+    evaluation: Evaluation = NO_EVALUATION,
+    seed: int | None = None,
 ) -> TrainingLog:
     """CMA-ES by generations (:meth:`~skidnav.agents.policies.search.agent.CMAESAgent.
     train_episodes`); a frozen policy's episodes in the plain loop, learning nothing."""
     if isinstance(agent, CMAESAgent):
-        return agent.train_episodes(
-            episodes, greedy_eval_env=greedy_eval_env, greedy_seeds=greedy_seeds,
-            greedy_max_steps=max_steps,
-        )  # fmt: skip
+        limited = evaluation._replace(max_steps=evaluation.limit(max_steps))
+        return agent.train_episodes(episodes, evaluation=limited, seed=seed)
     assert isinstance(agent, PolicyAgent)
-    return train_loop(
-        agent, env, episodes, max_steps=max_steps, greedy_eval_env=greedy_eval_env,
-        greedy_seeds=greedy_seeds,
-    )  # fmt: skip
+    return train_plain(agent, env, episodes, max_steps=max_steps, evaluation=evaluation, seed=seed)
 
 
 def _load(json_path: Path, meta: Mapping[str, Any], env: Env | None) -> PolicyAgent:

@@ -45,6 +45,7 @@ import gymnasium
 import numpy as np
 
 from skidnav.agents.policies.goal_tracker import GoalTracker
+from skidnav.agents.training import Evaluation
 from skidnav.checks import check_integer
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import first_line, shown
@@ -280,9 +281,8 @@ def _train_discrete(
     # (the env's episodes are reset from ``seed`` itself: an agent on default_rng(seed) drew the
     # very numbers of the env's slip noise)
     checks = gymnasium.make(ENV_ID, **config.env_kwargs(False))
-    log = train_agent_fast(agent, env, config.episodes, greedy_eval_env=checks,
-                           greedy_max_steps=config.max_steps,
-                           greedy_seeds=evaluation_seeds(config), seed=seed)  # fmt: skip
+    evaluation = Evaluation(checks, evaluation_seeds(config), config.max_steps)
+    log = train_agent_fast(agent, env, config.episodes, evaluation=evaluation, seed=seed)
     return tabular_policy(agent), config.episodes, first_learned(log.greedy_lengths)
 
 
@@ -294,9 +294,8 @@ def _train_deep(
 
     agent = (PPOAgent if learner == "ppo" else SACAgent)(env, seed=seed)
     checks = gymnasium.make(ENV_ID, **config.env_kwargs(True))
-    log = agent.train_episodes(config.episodes, greedy_eval_env=checks,
-                               greedy_seeds=evaluation_seeds(config),
-                               greedy_max_steps=config.max_steps)  # fmt: skip
+    evaluation = Evaluation(checks, evaluation_seeds(config), config.max_steps)
+    log = agent.train_episodes(config.episodes, evaluation=evaluation)
     return (
         wheel_speed_policy(agent.policy(), env),
         config.episodes,
@@ -312,9 +311,8 @@ def _train_mppi(
 
     agent = make_mppi_agent(env, mppi_params(config), streams(seed, RUN_ROLES)["agent"])
     checks = gymnasium.make(ENV_ID, **config.env_kwargs(True))
-    log = train_mppi(agent, env, config.episodes, greedy_eval_env=checks,
-                     greedy_max_steps=config.max_steps, greedy_seeds=evaluation_seeds(config),
-                     seed=seed)  # fmt: skip
+    evaluation = Evaluation(checks, evaluation_seeds(config), config.max_steps)
+    log = train_mppi(agent, env, config.episodes, evaluation=evaluation, seed=seed)
     return tabular_policy(agent), config.episodes, first_learned(log.greedy_lengths)
 
 

@@ -28,6 +28,7 @@ import numpy as np
 from skidnav.agents.catalog import entry
 from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.agents.tabular.fast_training import train_agent_fast, train_for_steps_fast
+from skidnav.agents.training import Evaluation
 from skidnav.envs.mazes import GridMazeEnv, blocking_maze, dyna_maze, shortcut_maze
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import TrialResult
@@ -166,7 +167,7 @@ def updates_until_near_optimal(
     steps, reward = [], []
     for episode in range(MAX_SWEEP_EPISODES):
         log = train_agent_fast(
-            agent, env, 1, greedy_eval_env=dyna_maze(scale), greedy_max_steps=4 * shortest,
+            agent, env, 1, evaluation=Evaluation(dyna_maze(scale), max_steps=4 * shortest),
             seed=reset_seed if episode == 0 else None,
         )  # fmt: skip
         steps.append(int(log.lengths[0]))

@@ -14,7 +14,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -26,11 +26,12 @@ from skidnav.agents.policies.search.config import SearchConfig
 from skidnav.agents.policies.search.policy_file import save_policy
 from skidnav.agents.policies.search.tanh_policy import TanhPolicy
 from skidnav.agents.training import (
-    NOT_REACHED,
+    NO_EVALUATION,
+    Episode,
+    Evaluation,
+    LogRows,
     TrainingLog,
-    greedy_evaluation,
-    log_from_rows,
-    record_evaluation,
+    plain_evaluations,
 )
 from skidnav.errors import UserError
 
@@ -94,42 +95,32 @@ class CMAESAgent:
         return np.array(self.mean_policy().wheel_speeds(np.asarray(state, dtype=np.float64)))
 
     def train_episodes(
-        self,
-        episodes: int,
-        *,
-        greedy_eval_env: gymnasium.Env[Any, Any] | None = None,
-        greedy_seeds: Sequence[int] | None = None,
-        greedy_max_steps: int | None = None,
+        self, episodes: int, *, evaluation: Evaluation = NO_EVALUATION, seed: int | None = None
     ) -> TrainingLog:
-        """Run ⌈``episodes`` / (λ E)⌉ generations; one log row per real episode, each with the
-        greedy evaluation of the mean in force after it. Collisions are not counted by the
-        search's vector envs: that column is 0."""
+        """Run ⌈``episodes`` / (λ E)⌉ generations; one log row per real episode
+        (:class:`~skidnav.agents.training.LogRows`), each with the greedy evaluation of the mean
+        in force after it (:func:`~skidnav.agents.training.plain_evaluations`). The search seeds
+        its own episodes (``seed`` only seeds the evaluation env, as in every loop); its vector
+        envs do not count collisions: that column is 0."""
         per_generation = self.config.episodes_per_generation
-        limit = greedy_max_steps or self.config.max_episode_steps
-        columns: dict[str, list[Any]] = {name: [] for name in TrainingLog._fields}
-        before = self._evaluate(greedy_eval_env, greedy_seeds, limit)
-        for _ in range(math.ceil(episodes / per_generation) if episodes > 0 else 0):
+        rows = LogRows(evaluation.n_rollouts)
+        limit = evaluation.limit(self.config.max_episode_steps)
+        evaluate = plain_evaluations(self, evaluation)
+        evaluation.start(seed)
+        before = evaluation.run(evaluate, limit)
+        for _ in range(math.ceil(max(episodes, 0) / per_generation)):
             start = time.perf_counter()
             batch = self.search.advance()
             seconds = (time.perf_counter() - start) / per_generation
-            after = self._evaluate(greedy_eval_env, greedy_seeds, limit)
+            after = evaluation.run(evaluate, limit)
             for row in range(per_generation):
-                columns["returns"].append(float(batch.returns.flat[row]))
-                columns["lengths"].append(int(batch.lengths.flat[row]))
-                columns["successes"].append(bool(batch.successes.flat[row]))
-                columns["collisions"].append(0)
-                columns["planning_updates"].append(0)
-                columns["wall_time"].append(seconds)
-                record_evaluation(columns, after if row == per_generation - 1 else before)
+                episode = Episode(
+                    float(batch.returns.flat[row]), int(batch.lengths.flat[row]),
+                    bool(batch.successes.flat[row]), 0, 0,
+                )  # fmt: skip
+                rows.add(episode, seconds, after if row == per_generation - 1 else before)
             before = after
-        return log_from_rows(columns, 1 if greedy_seeds is None else len(greedy_seeds))
-
-    def _evaluate(
-        self, env: gymnasium.Env[Any, Any] | None, seeds: Sequence[int] | None, limit: int
-    ) -> list[Any]:
-        if env is None:
-            return [NOT_REACHED] * (1 if seeds is None else len(seeds))
-        return greedy_evaluation(self, env, limit, seeds)
+        return rows.log()
 
     def save(self, path: str | Path) -> tuple[Path, Path]:
         """The mean policy's file (:func:`~skidnav.agents.policies.search.policy_file.
