@@ -224,13 +224,14 @@ class DeepAgent(Generic[ConfigT]):
     ) -> TrainingLog:
         """Learn for ``episodes`` more episodes, the greedy policy measured after each by
         ``evaluation`` with the pieces of the one loop
-        (:func:`~skidnav.agents.training.train_episodes`: :meth:`Evaluation.start
-        <skidnav.agents.training.Evaluation.start>`, :meth:`~skidnav.agents.training.Evaluation.run`
-        of :func:`~skidnav.agents.training.plain_evaluations`,
-        :class:`~skidnav.agents.training.LogRows`); each rollout is cut at
-        ``evaluation.limit(None)`` actions (the env's own limit cuts the episodes). ``seed``
-        seeds this call's first reset (None: Stable-Baselines3 continues). Returns the loop's
-        log (``planning_updates``: 0; wall time without the evaluations).
+        (:func:`~skidnav.agents.training.train_episodes`): the evaluation env's first reset
+        (:meth:`~skidnav.agents.training.Evaluation.start`), the rollouts of
+        :func:`~skidnav.agents.training.plain_evaluations`
+        (:meth:`~skidnav.agents.training.Evaluation.run`, each cut at
+        ``evaluation.limit(None)`` actions: the env's own limit cuts the episodes) and the log
+        (:class:`~skidnav.agents.training.LogRows`; ``planning_updates`` 0, wall time without
+        the evaluations). ``seed`` seeds this call's first reset (None: Stable-Baselines3
+        continues its env).
 
         Stable-Baselines3 owns the step loop: ``learn`` collects steps across episodes (PPO's
         ``n_steps``, the off-policy ``train_freq``) and trains between collections, so a call
