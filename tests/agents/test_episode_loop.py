@@ -9,10 +9,10 @@ from typing import Any
 
 import numpy as np
 import pytest
-from skidnav.agents.fast_training import train_agent_fast
 
-from skidnav.agents.catalog import _train_by_episodes
+from skidnav.agents.catalog import families
 from skidnav.agents.mpc.training import train_mppi
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.training import (
     NO_EVALUATION,
     NOT_REACHED,
@@ -120,7 +120,7 @@ def test_every_family_trainer_has_the_one_signature() -> None:
         parameters = inspect.signature(trainer).parameters.values()
         return [(p.kind, p.default) for p in parameters][1:]  # the agent's type differs
 
-    trainers = (train_agent, train_agent_fast, train_mppi, _train_by_episodes)
+    trainers = (train_agent, train_agent_fast, train_mppi, *(f.train for f in families()))
     expected = [
         (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.empty),
         (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.empty),
