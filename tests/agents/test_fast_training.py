@@ -192,8 +192,9 @@ def test_identical_without_numba() -> None:
 _MAZE_SCRIPT = """
 import json
 import numpy as np
-from skidnav.agents.tabular.fast_training import evaluate_q_fast, train_agent_fast,
-train_for_steps_fast
+from skidnav.agents.tabular.fast_training import (
+    evaluate_q_fast, train_agent_fast, train_for_steps_fast,
+)
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.envs.mazes import dyna_maze, shortcut_maze
 out = {}

@@ -41,25 +41,27 @@ SavedPath = str | Path | Sequence[str | Path]
 of paths ``save`` returned."""
 
 
-def saved_json(path: SavedPath) -> Path:
+def saved_json(path: SavedPath, what: str = "agent file") -> Path:
     """The ``.json`` file of a saved agent or policy at ``path`` (:data:`SavedPath`: a pair's
     ``.json`` member, else ``path`` with a ``.npz``/``.json`` suffix replaced); UserError for a
-    path that names no file (empty, ``.``, ``/``) or a pair without a ``.json``."""
+    path that names no file (empty, ``.``, ``/``) or a pair without a ``.json`` (``what``:
+    the kind of file the message names)."""
     if not isinstance(path, (str, Path)):
         found = [Path(p) for p in path if isinstance(p, (str, Path)) and str(p).endswith(".json")]
         if len(found) != 1:
-            raise UserError(f"expected the path of a saved agent or its two files, got {path!r}")
+            raise UserError(f"expected the path of a {what} or its two files, got {path!r}")
         return found[0]
     if not Path(path).name:
-        raise UserError(f"{str(path)!r}: not the path of a saved agent or policy")
+        raise UserError(f"{str(path)!r}: not the path of a {what}")
     return save_paths(path)[1]
 
 
-def _saved(path: SavedPath) -> tuple[Path, dict[str, Any], Family[Any]]:
+def _saved(path: SavedPath, what: str) -> tuple[Path, dict[str, Any], Family[Any]]:
     """(the ``.json`` path, its content, the family of its format); CorruptFileError in one line
-    when it is unreadable or of no family's format."""
-    json_path = saved_json(path)
-    meta = read_json(json_path, max_bytes=MAX_JSON_BYTES, what="agent file")
+    naming the ``what`` (``"agent file"``, ``"policy file"``) when it is unreadable or of no
+    family's format."""
+    json_path = saved_json(path, what)
+    meta = read_json(json_path, max_bytes=MAX_JSON_BYTES, what=what)
     kind = meta.get("format")
     described = family_of_format(kind)
     if described is None:
@@ -82,7 +84,7 @@ def load_saved_agent(path: SavedPath, env: gymnasium.Env[Any, Any] | None = None
             it).
         UserError: a deep agent without ``env``, or its extra missing.
     """
-    json_path, meta, described = _saved(path)
+    json_path, meta, described = _saved(path, "agent file")
     return described.load(json_path, meta, env)
 
 
@@ -94,7 +96,7 @@ def load_policy(path: SavedPath) -> WheelSpeedPolicy:
         UserError: one line naming the file: unreadable, of no family's format, of a family
             whose agents do not drive by wheel speeds, or refused by the loader.
     """
-    json_path, meta, described = _saved(path)
+    json_path, meta, described = _saved(path, "policy file")
     if described.policy is None:
         drivers = ", ".join(f.name for f in families() if f.policy is not None)
         raise UserError(

@@ -47,7 +47,7 @@ def select_policy(
     if (name is None) == (file is None):
         raise UserError("expected one of --policy and --policy-file")
     if file is not None:
-        return load_policy(file), f"file:{saved_json(file).resolve()}"
+        return load_policy(file), f"file:{saved_json(file, 'policy file').resolve()}"
     assert name is not None
     builder = NAMED_POLICIES.get(name)
     if builder is None:

@@ -10,7 +10,6 @@ extra is checked.
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Mapping
 from pathlib import Path
 from types import ModuleType
@@ -25,7 +24,7 @@ from skidnav.agents.interface import AgentConfig, EpisodeTrainingAgent
 from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError, UserError
-from skidnav.extras import MissingExtraError, missing_message, require
+from skidnav.extras import MissingExtraError, import_with, missing_message
 
 DEEP_AGENTS: dict[str, str] = {
     "dqn": "skidnav.agents.deep.dqn",
@@ -41,13 +40,7 @@ FORMATS = {f"skidnav-{name}": name for name in DEEP_AGENTS}
 def _module(name: str) -> ModuleType:
     """The module of agent ``name``; UserError when the ``deep`` extra is missing (checked
     before anything is imported, so a config naming the agent is refused up front)."""
-    require("deep", f"agent {name!r}")
-    try:
-        return importlib.import_module(DEEP_AGENTS[name])
-    except ModuleNotFoundError as error:
-        raise MissingExtraError(
-            missing_message("deep", f"agent {name!r}", str(error.name))
-        ) from None
+    return import_with("deep", f"agent {name!r}", DEEP_AGENTS[name])
 
 
 def _agent_class(name: str) -> type[EpisodeTrainingAgent]:

@@ -12,12 +12,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 from numpy.random import SeedSequence
 
 from skidnav.agents.family import Env, Family, Params, check_wheel_speed_env
-from skidnav.agents.interface import Agent, AgentConfig
+from skidnav.agents.interface import Agent, AgentConfig, EpisodeTrainingAgent
 from skidnav.agents.policies.agent import (
     GOAL_TRACKER_FORMAT,
     GoalTrackerAgent,
@@ -27,22 +28,28 @@ from skidnav.agents.policies.agent import (
     load_tanh_agent,
 )
 from skidnav.agents.policies.goal_tracker import POLICY_NAME, GoalTracker, GoalTrackerConfig
-from skidnav.agents.policies.search.agent import CMAESAgent, make_cmaes_agent
 from skidnav.agents.policies.search.config import SearchConfig
 from skidnav.agents.policies.search.policy_file import SAVE_FORMAT as TANH_FORMAT
 from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog, train_plain
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError, UserError, first_line
+from skidnav.extras import import_with
 from skidnav.seeding import seed_int
 
-CLASSES: dict[str, type[Any]] = {"cmaes": CMAESAgent, POLICY_NAME: GoalTrackerAgent}
-"""Registry name → the agent's class."""
+SEARCH_MODULE = "skidnav.agents.policies.search.agent"
+"""The module of ``cmaes``'s agent, imported when it is asked for (it needs the ``search``
+extra)."""
 CONFIGS: dict[str, type[Any]] = {"cmaes": SearchConfig, POLICY_NAME: GoalTrackerConfig}
 """Registry name → its config class (a search's settings, a tracker's gains)."""
 
 
+def _search_module() -> ModuleType:
+    """The CMA-ES agent's module; UserError in one line without the ``search`` extra."""
+    return import_with("search", "agent 'cmaes'", SEARCH_MODULE)
+
+
 def _agent_class(name: str) -> type[Any]:
-    return CLASSES[name]
+    return _search_module().CMAESAgent if name == "cmaes" else GoalTrackerAgent
 
 
 def _config_class(name: str) -> type[AgentConfig]:
@@ -55,7 +62,8 @@ def _make(name: str, env: Env, params: Params, seed: SeedSequence, max_steps: in
     except ValueError as error:
         raise UserError(f"agent {name!r}: {error} (set [env] action and observation)") from None
     if name == "cmaes":
-        return make_cmaes_agent(env, params, seed_int(seed), max_steps)
+        agent: Agent = _search_module().make_cmaes_agent(env, params, seed_int(seed), max_steps)
+        return agent
     try:
         config = GoalTrackerConfig.from_mapping(params)
     except (ValueError, TypeError, UserError) as error:
@@ -76,7 +84,7 @@ def _train(
 ) -> TrainingLog:
     """CMA-ES by generations (:meth:`~skidnav.agents.policies.search.agent.CMAESAgent.
     train_episodes`); a frozen policy's episodes in the plain loop, learning nothing."""
-    if isinstance(agent, CMAESAgent):
+    if isinstance(agent, EpisodeTrainingAgent):  # the search, by generations
         limited = evaluation._replace(max_steps=evaluation.limit(max_steps))
         return agent.train_episodes(episodes, evaluation=limited, seed=seed)
     assert isinstance(agent, PolicyAgent)
