@@ -36,12 +36,12 @@ from typing import Any
 import numpy as np
 from plain_python import interpreted
 
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.planning import dyna_planning
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import train_agent
 from skidnav.envs.mazes import dyna_maze
-from skidnav.models.multinomial_kernels import MOST_PROBABLE
+from skidnav.models.multinomial_targets import MOST_PROBABLE
 from skidnav.studies.sutton_barto.grid import BOOK, TextbookChecks
 from skidnav.studies.sutton_barto.trial import dyna_maze_run
 
@@ -325,10 +325,10 @@ def compile_trajectory_kernels(grid: Any) -> None:
     """Compile (or load from the cache) the kernels a model-based agent first calls when an
     episode reaches the goal, which the warm-up episodes may not do: otherwise a cold cache puts
     their compilation (~1.4 s) inside the timed episodes."""
-    from skidnav.agents.tabular import kinematic_planning as kp
+    from skidnav.agents.trajectory_keys import loop_erase, neighbourhood_keys
 
-    trajectory = kp.loop_erase(np.zeros(2, dtype=np.int64), 4, 12_500)
-    kp.neighbourhood_keys(trajectory, np.zeros((grid.n_x, grid.n_y), np.bool_), grid, 4, True)
+    trajectory = loop_erase(np.zeros(2, dtype=np.int64), 4, 12_500)
+    neighbourhood_keys(trajectory, np.zeros((grid.n_x, grid.n_y), np.bool_), grid, 4, True)
 
 
 def plain_arena_rate(name: str) -> float:

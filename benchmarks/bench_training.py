@@ -25,7 +25,7 @@ import numpy as np
 from plain_python import interpreted
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import AGENT_MODULES, make_agent
 from skidnav.agents.training import train_agent
 

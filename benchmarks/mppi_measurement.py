@@ -25,6 +25,7 @@ import skidnav  # noqa: F401  (registers the env)
 from skidnav.agents.mpc.agent import MPPIKinematicAgent
 from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.training import train_mppi
+from skidnav.agents.training import NO_EVALUATION, Evaluation
 from skidnav.models.kinematic import KinematicModel
 from skidnav.robot.kinematics import ACTION_NAMES
 
@@ -67,11 +68,8 @@ def run(
     config = MPPIConfig(**SETTINGS[setting])
     agent = MPPIKinematicAgent.from_env(env, config, np.random.default_rng(seed))
     start = time.perf_counter()
-    log = train_mppi(
-        agent, env, episodes, MAX_STEPS, seed=seed,
-        greedy_eval_env=evaluation if evaluate else None,
-        greedy_seeds=EVALUATION_SEEDS if evaluate else None,
-    )  # fmt: skip
+    measured = Evaluation(evaluation, EVALUATION_SEEDS) if evaluate else NO_EVALUATION
+    log = train_mppi(agent, env, episodes, max_steps=MAX_STEPS, evaluation=measured, seed=seed)
     successes = log.successes.tolist()
     learned_turn, nominal_turn = turn_rates(agent)
     return {

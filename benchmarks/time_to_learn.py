@@ -30,7 +30,7 @@ import pandas as pd
 from skidnav.experiments.configfile import load_config
 from skidnav.experiments.runner import run_experiment
 from skidnav.experiments.store import ResultStore
-from skidnav.survival import km_median
+from skidnav.statistics.survival import km_median
 
 CONFIG = Path(__file__).with_name("time_to_learn.toml")
 

@@ -84,7 +84,8 @@ def _linear_agent(folder: Path) -> tuple[Path, list[Path]]:
 
 
 def _kinematic_model(folder: Path) -> tuple[Path, list[Path]]:
-    from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+    from skidnav.models.kinematic import KinematicModel
+    from skidnav.models.kinematic_config import KinematicModelConfig
     from skidnav.robot.params import RobotParams
     from skidnav.world.discretization import Discretization
 
@@ -206,7 +207,7 @@ def _load_tables(root: Path) -> Any:
 def _journal(folder: Path) -> tuple[Path, list[Path]]:
     import optuna
 
-    from skidnav.studies.tuning.search import open_storage
+    from skidnav.studies.tuning.optuna_setup import open_storage
 
     path = folder / "journal.log"
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -243,8 +244,8 @@ LOADERS: dict[str, Loader] = {
         _linear_agent, _import("skidnav.agents.linear.registry:load_linear_agent")
     ),
     "kinematic model": Loader(_kinematic_model, _load_kinematic_model),
-    "tanh policy": Loader(_tanh_policy, _import("skidnav.agents.policies.loading:load_policy")),
-    "ppo policy": Loader(_ppo_policy, _import("skidnav.agents.policies.loading:load_policy")),
+    "tanh policy": Loader(_tanh_policy, _import("skidnav.agents.saved:load_policy")),
+    "ppo policy": Loader(_ppo_policy, _import("skidnav.agents.saved:load_policy")),
     "CMA-ES checkpoint": Loader(_cma_checkpoint, _load_cma_checkpoint),
     "real-time checkpoint": Loader(_realtime_checkpoint, _latest_checkpoint),
     "calibration": Loader(

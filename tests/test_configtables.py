@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from skidnav.configtables import build_dataclass, check_keys, resolve_path, table, table_array
 from skidnav.errors import EXCERPT_CHARS, UserError
 from skidnav.experiments.configfile import parse_config
+from skidnav.files.configtables import build_dataclass, check_keys, resolve_path, table, table_array
 from skidnav.realtime.config import config_from_mapping
 from tests.experiments.exp_support import TINY_TOML
 

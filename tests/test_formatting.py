@@ -1,4 +1,5 @@
-"""Numbers for people (:mod:`skidnav.formatting`): never "nan", "[nan, nan]", "1 episodes" or
+"""Numbers for people (:mod:`skidnav.statistics.formatting`): never "nan", "[nan, nan]", "1
+episodes" or
 a bare 95 % interval over two seeds."""
 
 from __future__ import annotations
@@ -7,7 +8,7 @@ import math
 
 import pytest
 
-from skidnav.formatting import MIN_INTERVAL_SEEDS, interval, plural, readable
+from skidnav.statistics.formatting import MIN_INTERVAL_SEEDS, interval, plural, readable
 
 NAN = math.nan
 

@@ -12,9 +12,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from skidnav import jsondepth
-from skidnav.jsondepth import json_depth
-from skidnav.savedfile import nesting_depth, parse_json
+from skidnav.files import jsondepth
+from skidnav.files.jsondepth import json_depth
+from skidnav.files.saved import nesting_depth, parse_json
 
 
 def scanned_depth(data: bytes) -> int:

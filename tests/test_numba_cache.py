@@ -18,8 +18,8 @@ import json
 import gymnasium
 import numpy as np
 import skidnav.envs
-from skidnav.agents import fused_loop
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular import fused_loop
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
 
 env = gymnasium.make("skidnav/SkidSteerNav-v0", map_kind="free", world_seed=1).unwrapped

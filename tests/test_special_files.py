@@ -18,12 +18,12 @@ import numpy as np
 import pytest
 from numpy.lib import format as npy_format
 
-from skidnav import userfile
 from skidnav.cli import main
 from skidnav.errors import CorruptFileError, UserError
 from skidnav.experiments.configfile import load_config
-from skidnav.savedfile import MAX_DIRECTORY_BYTES, MAX_MEMBERS, ArraySpec, SavedArchive
-from skidnav.userfile import open_user_file, read_limited
+from skidnav.files import user as userfile
+from skidnav.files.saved import MAX_DIRECTORY_BYTES, MAX_MEMBERS, ArraySpec, SavedArchive
+from skidnav.files.user import open_user_file, read_limited
 from tests.saved_file_support import replace_with, within, write_npz
 from tests.saved_loaders import LOADERS, fresh_copy
 

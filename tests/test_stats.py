@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skidnav.stats import (
+from skidnav.statistics.intervals import (
     bootstrap_interval,
     curve_band,
     difference_interval,

@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from skidnav.survival import (
+from skidnav.statistics.survival import (
     SpeedupInterval,
     gehan_scores,
     kaplan_meier,

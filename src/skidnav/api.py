@@ -36,8 +36,8 @@ from skidnav import API
 from skidnav.agents.catalog import CatalogEntry, entry
 from skidnav.agents.catalog import agent_names as agent_names
 from skidnav.agents.interface import Agent
-from skidnav.agents.saved import load_saved_agent
-from skidnav.agents.training import Rollout, TrainingLog, greedy_evaluation
+from skidnav.agents.saved import SavedPath, load_saved_agent
+from skidnav.agents.training import Evaluation, Rollout, TrainingLog, greedy_evaluation
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import UserError
 from skidnav.experiments.config import ExperimentConfig
@@ -105,7 +105,8 @@ def make_agent(name: str, env: Env, *, seed: int = 0, **params: Any) -> Agent:
     described = entry(name)
     _check_observation(described, env)
     sequence = child_sequences(seed, TRAINING_ROLES)["agent"]
-    return described.build(env.unwrapped, params, sequence, _limit(env)).agent
+    agent: Agent = described.build(env.unwrapped, params, sequence, _limit(env)).agent
+    return agent
 
 
 def _check_observation(described: CatalogEntry, env: Env) -> None:
@@ -165,10 +166,8 @@ def train(
     if seed is not None:
         env.reset(seed=seed_int(child_sequences(seed, TRAINING_ROLES)["episodes"]))
     built = entry(agent.name).bind(agent)
-    return built.train(
-        env.unwrapped, episodes, max_steps=limit,
-        greedy_eval_env=None if evaluation is None else evaluation.unwrapped, greedy_seeds=seeds,
-    )  # fmt: skip
+    measured = Evaluation(None if evaluation is None else evaluation.unwrapped, seeds)
+    return built.train(env.unwrapped, episodes, max_steps=limit, evaluation=measured)
 
 
 def _twin(env: Env) -> Env | None:
@@ -192,8 +191,9 @@ def save_agent(agent: Agent, path: str | Path) -> tuple[Path, Path]:
     return agent.save(path)
 
 
-def load_agent(path: str | Path, env: Env | None = None) -> Agent:
-    """The agent saved at ``path`` by :func:`save_agent`, of any family
+def load_agent(path: SavedPath, env: Env | None = None) -> Agent:
+    """The agent saved at ``path`` by :func:`save_agent` (the path given to it, either file, or
+    the pair it returned), of any family
     (:func:`skidnav.agents.saved.load_saved_agent`; a deep agent needs the ``env`` it acts in).
     """
     return load_saved_agent(path, env)
@@ -282,8 +282,8 @@ def run_config(
             results or is in use, or the backend's extra is missing.
         RunsFailedError: runs raised; the finished ones are kept for a resume.
     """
-    from skidnav.commands.run import load_grid, run_loaded
-    from skidnav.outputs import check_output_dir
+    from skidnav.files.outputs import check_output_dir
+    from skidnav.studies.loading import load_grid, run_loaded
 
     loaded = load_grid(Path(config))
     folder = Path(out) if out is not None else Path("runs") / loaded.grid.name

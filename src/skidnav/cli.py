@@ -1,7 +1,7 @@
 """The ``skidnav`` command: parse arguments, call the subcommand, turn user errors into one line.
 
 A full disk is the user's to fix too: every writer of skidnav reports it in one line naming its
-file (:func:`skidnav.atomicfile.writing`), and :func:`main` turns one that escaped them (an
+file (:func:`skidnav.files.atomic.writing`), and :func:`main` turns one that escaped them (an
 append to a log or journal written by a library) into one line as well.
 """
 

@@ -16,6 +16,7 @@ refuses in one line naming the ``pip install`` that fixes it.
 from __future__ import annotations
 
 import importlib.util
+from types import ModuleType
 
 from skidnav.errors import UserError
 
@@ -76,6 +77,20 @@ def require(extra: str, what: str) -> None:
     module = missing_module(extra)
     if module is not None:
         raise MissingExtraError(missing_message(extra, what, module))
+
+
+def import_with(extra: str, what: str, module: str) -> ModuleType:
+    """The module named ``module`` once :func:`require` has found ``extra`` installed; an import
+    that fails all the same (a module of the extra missing) is refused in the same one line.
+
+    Raises:
+        MissingExtraError: as :func:`require`.
+    """
+    require(extra, what)
+    try:
+        return importlib.import_module(module)
+    except ModuleNotFoundError as error:
+        raise MissingExtraError(missing_message(extra, what, str(error.name))) from None
 
 
 def missing_message(extra: str, what: str, module: str) -> str:

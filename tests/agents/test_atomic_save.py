@@ -19,7 +19,8 @@ import pytest
 from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.cli import main
 from skidnav.errors import CorruptFileError
-from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+from skidnav.models.kinematic import KinematicModel
+from skidnav.models.kinematic_config import KinematicModelConfig
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
 from tests.saved_file_support import (
@@ -45,7 +46,8 @@ if sys.argv[1] == "agent":
     saved = make_agent("dyna-q", 5400, 4, {}, rng)
     saved.q[:] = rng.random(saved.q.shape)  # incompressible: far past the limit
 else:
-    from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+    from skidnav.models.kinematic import KinematicModel
+    from skidnav.models.kinematic_config import KinematicModelConfig
     from skidnav.robot.params import RobotParams
     from skidnav.world.discretization import Discretization
 

@@ -33,7 +33,7 @@ def _pose_env() -> gym.Env[Any, Any]:
 
 def test_each_name_is_described_once_with_its_family_observation_and_config() -> None:
     described = {name: entry(name) for name in ("dyna-q", "linear-q", "dqn")}
-    assert [(e.family, e.observation) for e in described.values()] == [
+    assert [(e.family.name, e.observation) for e in described.values()] == [
         ("tabular", "discrete"), ("linear", "box"), ("deep", "box"),
     ]  # fmt: skip
     assert described["dyna-q"].config_class is DynaQConfig
@@ -85,10 +85,8 @@ def _trained_linear_q(bound_again: bool) -> tuple[Any, TrainingLog]:
     env.reset(seed=5)
     if bound_again:
         bound = entry("linear-q").bind(built.agent)
-        return bound.agent, bound.train(
-            env, 3, max_steps=30, greedy_eval_env=None, greedy_seeds=None
-        )
-    return built.agent, built.train(env, 3, max_steps=30, greedy_eval_env=None, greedy_seeds=None)
+        return bound.agent, bound.train(env, 3, max_steps=30)
+    return built.agent, built.train(env, 3, max_steps=30)
 
 
 def test_step_learners_answer_their_protocol_and_train_alike_when_bound_again() -> None:
@@ -108,7 +106,7 @@ def test_a_deep_agent_trains_by_episodes() -> None:
     built = entry("dqn").build(env.unwrapped, DQN_PARAMS, np.random.SeedSequence(1), 30)
     assert isinstance(built.agent, EpisodeTrainingAgent)
     assert not isinstance(built.agent, StepLearningAgent)
-    log = built.train(env.unwrapped, 2, max_steps=30, greedy_eval_env=None, greedy_seeds=None)
+    log = built.train(env.unwrapped, 2, max_steps=30)
     assert log.returns.shape == (2,) and (log.lengths >= 1).all()
 
 

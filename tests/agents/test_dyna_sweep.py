@@ -8,9 +8,10 @@ import gymnasium
 import numpy as np
 
 import skidnav  # noqa: F401  (registers the env)
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.model_sweep import model_value_iteration
 from skidnav.agents.tabular.registry import load_agent, make_agent
+from skidnav.agents.training import Evaluation
 from skidnav.experiments.metrics import (
     ConvergenceRule,
     convergence_episode,
@@ -46,7 +47,7 @@ def _convergence(name: str, episodes: int) -> tuple[int, bool, object]:
         )
     env.reset(seed=4)
     log = train_agent_fast(
-        agent, env, episodes, max_steps=300, greedy_eval_env=evaluation, greedy_seeds=[0, 1, 2]
+        agent, env, episodes, max_steps=300, evaluation=Evaluation(evaluation, [0, 1, 2])
     )
     mean, share = evaluation_summary(log.greedy_lengths)
     rule = ConvergenceRule(oracle.start_value, 0.1, 5, level=0.9)

@@ -14,9 +14,13 @@ import numpy as np
 import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.fast_training import evaluate_q_fast, train_agent_fast, train_for_steps_fast
+from skidnav.agents.tabular.fast_training import (
+    evaluate_q_fast,
+    train_agent_fast,
+    train_for_steps_fast,
+)
 from skidnav.agents.tabular.registry import make_agent
-from skidnav.agents.training import TrainingLog, train_agent, train_for_steps
+from skidnav.agents.training import Evaluation, TrainingLog, train_agent, train_for_steps
 from skidnav.envs.mazes import blocking_maze, dyna_maze
 from skidnav.experiments.reference.oracle import compute_oracle
 from skidnav.world.discretization import Discretization
@@ -41,7 +45,7 @@ def _run(trainer: Any, name: str, world_seed: int = 2) -> tuple[TrainingLog, Any
     context = {"task": env.unwrapped.task} if name in AGENTS[4:] else {}  # type: ignore[attr-defined]
     config = {"epsilon": 0.2} if name == "q-learning" else {"epsilon": 0.2, "planning_steps": 8}
     agent = make_agent(name, 12_500, 4, config, np.random.default_rng(7), **context)
-    log = trainer(agent, env, 6, max_steps=250, greedy_eval_env=evaluation, seed=11)
+    log = trainer(agent, env, 6, max_steps=250, evaluation=Evaluation(evaluation), seed=11)
     return log, agent
 
 
@@ -115,7 +119,7 @@ def test_fast_maze_trainer_matches_the_python_loop(name: str) -> None:
     for trainer in (train_agent, train_agent_fast):
         agent = make_agent(name, 54, 4, _maze_config(name), np.random.default_rng(5))
         env, evaluation = dyna_maze(max_episode_steps=400), dyna_maze(max_episode_steps=40)
-        log = trainer(agent, env, 8, max_steps=300, greedy_eval_env=evaluation, seed=5)
+        log = trainer(agent, env, 8, max_steps=300, evaluation=Evaluation(evaluation), seed=5)
         runs.append((log, agent, env.progress(), evaluation.progress()))
     (slow, slow_agent, *slow_envs), (fast, fast_agent, *fast_envs) = runs
     for field in TrainingLog._fields:
@@ -149,7 +153,7 @@ _SCRIPT = """
 import json, sys
 import numpy as np, gymnasium as gym
 import skidnav.envs
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
@@ -188,7 +192,9 @@ def test_identical_without_numba() -> None:
 _MAZE_SCRIPT = """
 import json
 import numpy as np
-from skidnav.agents.fast_training import evaluate_q_fast, train_agent_fast, train_for_steps_fast
+from skidnav.agents.tabular.fast_training import (
+    evaluate_q_fast, train_agent_fast, train_for_steps_fast,
+)
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.envs.mazes import dyna_maze, shortcut_maze
 out = {}

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 import skidnav  # noqa: F401  (registers the env)
 from skidnav.agents.policies.goal_tracker import GoalTracker, GoalTrackerConfig
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.robot.kinematics import body_velocities
 from skidnav.robot.params import RobotParams
 

@@ -13,8 +13,8 @@ import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents.catalog import entry
-from skidnav.agents.fast_training import train_agent_fast
 from skidnav.agents.linear.registry import load_linear_agent
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.agents.training import train_agent
 from skidnav.errors import CorruptFileError, UserError

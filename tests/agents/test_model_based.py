@@ -11,11 +11,12 @@ import numpy as np
 import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.tabular import kinematic_planning as kp
+from skidnav.agents import kinematic_planning as kp
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.model_based import ModelBasedAgent
 from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.agents.training import greedy_rollout, train_agent
+from skidnav.agents.trajectory_keys import loop_erase
 from skidnav.envs.mazes import dyna_maze
 from skidnav.errors import CorruptFileError
 from skidnav.robot.params import RobotParams
@@ -114,7 +115,7 @@ def test_loop_erasure_keeps_a_chain_of_real_transitions() -> None:
     # states 1 → 2 → 3 → 2 → 4 → 1 → 5 (actions = step index), 4 actions
     states = [1, 2, 3, 2, 4, 1, 5]
     keys = np.array([s * 4 + k % 4 for k, s in enumerate(states)], dtype=np.int64)
-    erased = kp.loop_erase(keys, 4, 10)
+    erased = loop_erase(keys, 4, 10)
     assert (erased // 4).tolist() == [1, 5]
     assert erased.tolist() == [keys[5], keys[6]]
 

@@ -20,7 +20,7 @@ import json, resource, tracemalloc
 import gymnasium as gym
 import numpy as np
 import skidnav.envs
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.world.discretization import Discretization
 

@@ -4,6 +4,8 @@ learns the Dyna Maze, and saves and loads like the built-in agents."""
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Iterator
 from pathlib import Path
 
 import gymnasium as gym
@@ -11,19 +13,27 @@ import numpy as np
 import pytest
 
 import skidnav.envs  # noqa: F401  (registers the envs)
+from skidnav.agents import catalog
 from skidnav.agents.catalog import entry
-from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
+from skidnav.agents.tabular import family as tabular_family
 from skidnav.agents.tabular import registry
 from skidnav.agents.tabular.agent import TabularAgent
+from skidnav.agents.tabular.fast_training import train_agent_fast, train_for_steps_fast
 from skidnav.agents.training import train_agent, train_for_steps
 from skidnav.envs.mazes import dyna_maze
 
 
 @pytest.fixture(autouse=True)
-def _registered(monkeypatch: pytest.MonkeyPatch) -> None:
+def _registered(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+    """The agent in the registry and in its family's descriptor (the line its module adds)."""
     monkeypatch.setitem(
         registry.AGENT_MODULES, "sample-average-q", "tests.agents.sample_average_agent"
     )
+    described = dataclasses.replace(tabular_family.FAMILY, agents=tuple(registry.AGENT_MODULES))
+    monkeypatch.setattr(tabular_family, "FAMILY", described)
+    catalog.families.cache_clear()
+    yield
+    catalog.families.cache_clear()
 
 
 def _agent(seed: int) -> registry.TabularAgent:
@@ -72,9 +82,9 @@ def test_the_new_agent_saves_and_loads(tmp_path: Path) -> None:
 
 def test_the_catalog_describes_the_new_agent_from_the_registry() -> None:
     described = entry("sample-average-q")
-    assert (described.family, described.observation) == ("tabular", "discrete")
+    assert (described.family.name, described.observation) == ("tabular", "discrete")
     env = dyna_maze(max_episode_steps=400)
     built = described.build(env, {"epsilon": 0.2}, np.random.SeedSequence(3), 300)
-    log = built.train(env, 5, max_steps=300, greedy_eval_env=None, greedy_seeds=None)
+    log = built.train(env, 5, max_steps=300)
     assert isinstance(built.agent, TabularAgent)
     assert built.agent.visits.sum() == built.agent.steps == log.lengths.sum() > 0

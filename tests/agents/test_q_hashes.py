@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import train_agent
 from skidnav.envs.mazes import dyna_maze

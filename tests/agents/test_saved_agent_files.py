@@ -16,9 +16,10 @@ from skidnav.agents.training import train_agent
 from skidnav.cli import main
 from skidnav.envs.mazes import dyna_maze
 from skidnav.errors import CorruptFileError
-from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+from skidnav.files.saved import SavedArchive
+from skidnav.models.kinematic import KinematicModel
+from skidnav.models.kinematic_config import KinematicModelConfig
 from skidnav.robot.params import RobotParams
-from skidnav.savedfile import SavedArchive
 from skidnav.world.discretization import Discretization
 from tests.saved_file_support import (
     arrays_of,

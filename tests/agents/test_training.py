@@ -8,6 +8,7 @@ import pytest
 
 from skidnav.agents.tabular.registry import available_agents, make_agent
 from skidnav.agents.training import (
+    Evaluation,
     TrainingLog,
     greedy_path,
     greedy_rollout,
@@ -21,7 +22,7 @@ def test_log_fields_on_frozen_lake() -> None:
     env = gym.make("FrozenLake-v1", is_slippery=True)
     agent = make_agent("dyna-q", 16, 4, {"planning_steps": 3}, np.random.default_rng(0))
     log = train_agent(
-        agent, env, 40, max_steps=30, greedy_eval_env=gym.make("FrozenLake-v1"), seed=0
+        agent, env, 40, max_steps=30, evaluation=Evaluation(gym.make("FrozenLake-v1")), seed=0
     )
     assert isinstance(log, TrainingLog)
     assert all(len(column) == 40 for column in log)
@@ -41,7 +42,8 @@ def test_cliff_walking_learns_the_cliff_path() -> None:
     agent = make_agent(
         "dyna-q", 48, 4, {"planning_steps": 10, "alpha": 0.5}, np.random.default_rng(1)
     )
-    log = train_agent(agent, env, 60, max_steps=500, greedy_eval_env=gym.make("CliffWalking-v1"))
+    evaluation = Evaluation(gym.make("CliffWalking-v1"))
+    log = train_agent(agent, env, 60, max_steps=500, evaluation=evaluation)
     assert log.greedy_lengths[-1, 0] == 13  # Q-learning's optimal path along the cliff
     assert np.isnan(log.greedy_costs).all()  # the env reports no cost
 
@@ -55,7 +57,7 @@ def test_every_agent_learns_the_cliff_path(name: str) -> None:
     agent = make_agent(name, 48, 4, options, np.random.default_rng(0))
     log = train_agent(
         agent, gym.make("CliffWalking-v1"), 100, max_steps=500,
-        greedy_eval_env=gym.make("CliffWalking-v1"), seed=0,
+        evaluation=Evaluation(gym.make("CliffWalking-v1")), seed=0,
     )  # fmt: skip
     assert log.greedy_lengths[-20:, 0].tolist() == [13] * 20
 
@@ -96,7 +98,7 @@ def test_truncation_by_max_steps_reaches_the_agent() -> None:
         def end_episode(self) -> None:
             seen.append((False, False))
 
-    log = train_agent(Recorder(), dyna_maze(), 2, max_steps=4, greedy_eval_env=dyna_maze())
+    log = train_agent(Recorder(), dyna_maze(), 2, max_steps=4, evaluation=Evaluation(dyna_maze()))
     assert log.lengths.tolist() == [4, 4] and not log.successes.any()
     assert seen[:5] == [(False, False)] * 3 + [(False, True), (False, False)]
     assert log.greedy_lengths.tolist() == [[-1], [-1]]
@@ -105,8 +107,8 @@ def test_truncation_by_max_steps_reaches_the_agent() -> None:
 
 def test_a_maze_move_costs_one() -> None:
     agent = make_agent("dyna-q", 54, 4, {"planning_steps": 10}, np.random.default_rng(3))
-    log = train_agent(agent, dyna_maze(), 12, max_steps=400, greedy_eval_env=dyna_maze(),
-                      greedy_seeds=[0, 1], seed=3)  # fmt: skip
+    evaluation = Evaluation(dyna_maze(), [0, 1])
+    log = train_agent(agent, dyna_maze(), 12, max_steps=400, evaluation=evaluation, seed=3)
     reached = log.greedy_lengths > 0
     assert reached.any() and not reached.all()
     assert log.greedy_costs.dtype == np.float64 and log.greedy_costs.shape == (12, 2)

@@ -7,8 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from skidnav.agents.config import QLearningConfig
 from skidnav.agents.linear.config import LinearConfig
-from skidnav.agents.tabular.config import PrioritizedSweepingConfig, QLearningConfig
+from skidnav.agents.tabular.config import PrioritizedSweepingConfig
 from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.agents.training import train_agent
 from skidnav.envs.mazes import dyna_maze

@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.tabular import kinematic_planning as kp
+from skidnav.agents import kinematic_planning as kp
+from skidnav.agents.planner_learning import planner_observe, weigh_cell
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.models.kinematic_prediction import PREDICT_COLLISION, PREDICT_FREE
 from skidnav.world.discretization import Discretization
@@ -22,23 +23,23 @@ def _planner() -> kp.PlannerArrays:
 
 def test_a_cell_is_a_wall_while_its_wall_evidence_outweighs_its_free_evidence() -> None:
     planner = _planner()
-    kp.weigh_cell(planner, 3, 4, 1, 0)  # one collision guessed into (3, 4)
+    weigh_cell(planner, 3, 4, 1, 0)  # one collision guessed into (3, 4)
     assert planner.walls[3, 4] and planner.stale[3, 4]
     assert planner.counters[kp.MAP_CHANGES] == 1
     planner.stale[:] = False
-    kp.weigh_cell(planner, 3, 4, 0, 1)  # the robot seen in it: one against one, cleared
+    weigh_cell(planner, 3, 4, 0, 1)  # the robot seen in it: one against one, cleared
     assert not planner.walls[3, 4] and planner.stale[3, 4]
     assert planner.counters[kp.MAP_CHANGES] == 2
     planner.stale[:] = False
-    kp.weigh_cell(planner, 3, 4, 1, 0)  # two guesses against one sighting: a wall again
-    kp.weigh_cell(planner, 3, 4, 0, 2)  # three sightings against two
+    weigh_cell(planner, 3, 4, 1, 0)  # two guesses against one sighting: a wall again
+    weigh_cell(planner, 3, 4, 0, 2)  # three sightings against two
     assert not planner.walls[3, 4]
     assert (planner.wall_evidence[3, 4], planner.free_evidence[3, 4]) == (2, 3)
     for _ in range(5):  # a real wall: the robot is never seen in it
-        kp.weigh_cell(planner, 7, 7, 1, 0)
+        weigh_cell(planner, 7, 7, 1, 0)
     assert planner.walls[7, 7] and planner.walls.sum() == 1
     planner.goals[9, 9] = True  # a known goal is never a wall
-    kp.weigh_cell(planner, 9, 9, 4, 0)
+    weigh_cell(planner, 9, 9, 4, 0)
     assert not planner.walls[9, 9]
 
 
@@ -54,10 +55,10 @@ def test_a_step_ending_in_a_guessed_wall_clears_it() -> None:
     state = grid.state(x, y, 0.0)
     first = (10 * grid.n_y + 10) * grid.n_headings
     in_cell = slice(first, first + grid.n_headings)  # every heading of cell (10, 10)
-    kp.weigh_cell(planner, 10, 10, 1, 0)  # a wrong guess
+    weigh_cell(planner, 10, 10, 1, 0)  # a wrong guess
     agent.end_episode()
     assert (planner.pred_outcome[in_cell] == PREDICT_COLLISION).all()
-    kp.planner_observe(
+    planner_observe(
         planner, state, 0, -1.0, state, False, False, np.array([x, y, 0.0]),
         agent.kernel_robot, agent.kernel_grid,  # type: ignore[attr-defined]
     )  # fmt: skip

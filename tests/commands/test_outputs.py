@@ -14,7 +14,7 @@ import pytest
 
 from skidnav.cli import main
 from skidnav.errors import UserError
-from skidnav.outputs import check_output_dir, check_output_file
+from skidnav.files.outputs import check_output_dir, check_output_file
 from tests.experiments.exp_support import TINY_TOML
 from tests.saved_file_support import listing
 
@@ -23,29 +23,29 @@ REALTIME = REPOSITORY / "configs" / "realtime.toml"
 
 COMMANDS: dict[str, tuple[list[str], str]] = {
     # name: (arguments, {out} the output, the function that starts the work)
-    "run": (["run", "{config}", "--out", "{dir}"], "skidnav.commands.run.run_experiment"),
+    "run": (["run", "{config}", "--out", "{dir}"], "skidnav.studies.loading.run_experiment"),
     "tune": (["tune", "{tune}", "--out", "{dir}"], "skidnav.studies.tuning.search.tune_experiment"),
     "generalise": (
         ["study", "generalise", "--out", "{dir}"],
-        "skidnav.commands.run.run_experiment",
+        "skidnav.studies.loading.run_experiment",
     ),
-    "transfer": (["study", "transfer", "--out", "{dir}"], "skidnav.commands.run.run_experiment"),
+    "transfer": (["study", "transfer", "--out", "{dir}"], "skidnav.studies.loading.run_experiment"),
     "floors calibrate": (
         ["world", "floors", "calibrate", "--out", "{file}"],
         "skidnav.physics.calibration.calibrate",
     ),
     "continuity": (
         ["study", "continuity", "--out", "{dir}"],
-        "skidnav.commands.run.run_experiment",
+        "skidnav.studies.loading.run_experiment",
     ),
-    "search": (["study", "search", "--out", "{dir}"], "skidnav.commands.run.run_experiment"),
+    "search": (["study", "search", "--out", "{dir}"], "skidnav.studies.loading.run_experiment"),
     "kinematic compare": (
         ["study", "kinematic", "compare", "--out", "{dir}"],
-        "skidnav.commands.run.run_experiment",
+        "skidnav.studies.loading.run_experiment",
     ),
     "reproduce": (
         ["study", "reproduce", "sutton-barto", "--out", "{dir}"],
-        "skidnav.commands.run.run_experiment",
+        "skidnav.studies.loading.run_experiment",
     ),
     "map generate": (
         ["world", "map", "generate", "--out", "{file}"],

@@ -15,8 +15,8 @@ import pytest
 
 from skidnav.cli import build_parser, main
 from skidnav.commands.reproduce import checks_from_flags
-from skidnav.commands.run import load_grid
 from skidnav.experiments.store import ResultStore
+from skidnav.studies.loading import load_grid
 from skidnav.studies.sutton_barto.grid import LAYOUT, TextbookChecks
 from skidnav.studies.sutton_barto.report import summary_text
 from skidnav.studies.sutton_barto.results import (

@@ -38,7 +38,7 @@ def _limit(env_id: str, limit: str = "", env: str = "") -> tuple[int, int | None
     config = parse_config(CONFIG.format(env_id=env_id, limit=limit, env=env))
     spec = expand_runs(config)[0]
     grid_map = GridMap(border_walls((6, 6)), start=(1, 1), goal=(3, 1))
-    made = trial.make_env(spec, grid_map, 0)
+    made = trial.trial_env(spec, grid_map, 0)
     assert made.unwrapped.spec.max_episode_steps is None  # the env itself never truncates
     return trial.action_limit(made), made.spec.max_episode_steps
 

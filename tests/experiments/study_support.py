@@ -11,9 +11,9 @@ import pandas as pd
 import pytest
 
 from skidnav.cli import build_parser, main
-from skidnav.commands.run import load_grid, parse_grid
 from skidnav.commands.shortcut import FLAGS
-from skidnav.configtables import toml_document
+from skidnav.files.configtables import toml_document
+from skidnav.studies.loading import load_grid, parse_grid
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 

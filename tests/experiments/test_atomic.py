@@ -14,10 +14,11 @@ from pathlib import Path
 
 import pytest
 
-from skidnav.atomicfile import remove_stale_temporaries, write_atomic
 from skidnav.cli import main
+from skidnav.experiments.lock import LOCK_FILE, directory_lock
 from skidnav.experiments.report import html
-from skidnav.experiments.store import LOCK_FILE, ResultStore, directory_lock
+from skidnav.experiments.store import ResultStore
+from skidnav.files.atomic import remove_stale_temporaries, write_atomic
 from tests.experiments.exp_support import cli_command, cli_env
 
 

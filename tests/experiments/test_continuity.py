@@ -13,8 +13,8 @@ import pytest
 from PIL import Image
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
 from skidnav.agents.tabular.registry import make_agent
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.envs.navigation import SkidSteerNavEnv
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import UserError

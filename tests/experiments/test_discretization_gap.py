@@ -7,14 +7,15 @@ import numpy as np
 import pytest
 
 import skidnav  # noqa: F401  (registers the env)
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.registry import make_agent
-from skidnav.agents.training import train_agent
+from skidnav.agents.training import Evaluation, train_agent
 from skidnav.commands.report import write_results_report
+from skidnav.envs.wrappers import FineStates
 from skidnav.errors import UserError
 from skidnav.experiments.config import config_from_dict, config_to_dict
 from skidnav.experiments.configfile import parse_config
-from skidnav.experiments.reference.finegrid import FineStates, state_grid
+from skidnav.experiments.reference.finegrid import state_grid
 from skidnav.experiments.reference.optimum import Optimum, compute_optimum, optimum_columns
 from skidnav.experiments.reference.oracle import compute_oracle, solve
 from skidnav.experiments.report.html import build_report
@@ -81,8 +82,7 @@ def test_fine_states_on_the_maps_own_grid_train_as_the_compiled_trainer():
     ):  # fmt: skip
         agent = make_agent("q-learning", 12_500, 4, {}, np.random.default_rng(0))
         env.reset(seed=0)
-        logs.append(trainer(agent, env, 8, max_steps=100, greedy_eval_env=eval_env,
-                            greedy_seeds=[1, 2]))  # fmt: skip
+        logs.append(trainer(agent, env, 8, max_steps=100, evaluation=Evaluation(eval_env, [1, 2])))
     assert np.array_equal(logs[0].returns, logs[1].returns)
     assert np.array_equal(logs[0].greedy_lengths, logs[1].greedy_lengths)
 

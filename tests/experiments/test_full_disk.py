@@ -10,9 +10,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from skidnav import atomicfile
 from skidnav.cli import main
 from skidnav.experiments.store import ResultStore
+from skidnav.files import atomic as atomicfile
 from tests.experiments.exp_support import comparable
 
 

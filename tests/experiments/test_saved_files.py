@@ -20,8 +20,8 @@ from skidnav.cli import main
 from skidnav.errors import CorruptFileError
 from skidnav.experiments.reference.oracle import cache_dir, load_or_compute_oracle
 from skidnav.experiments.store import ResultStore
-from skidnav.jsondepth import json_depth
-from skidnav.savedfile import parse_json
+from skidnav.files.jsondepth import json_depth
+from skidnav.files.saved import parse_json
 from skidnav.world.grid import GridMap, border_walls
 from tests.experiments.exp_support import cli_command, cli_env
 from tests.saved_file_support import arrays_of, forged_npy, npy_bytes, write_npz

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from skidnav.commands.run import load_grid
 from skidnav.experiments.configfile import load_config
 from skidnav.realtime.config import load_config as load_realtime_config
+from skidnav.studies.loading import load_grid
 from skidnav.studies.tuning.config import load_tune_config
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
@@ -30,7 +30,7 @@ def test_shipped_config_loads(path: Path) -> None:
         assert experiment.agents and tune is not None
     elif "kind" in tomllib.loads(path.read_text()):  # a study config (docs/experiments.md)
         loaded = load_grid(path)
-        assert loaded.study is not None and loaded.grid.n_runs > 0
+        assert loaded.study.kind == loaded.layout.kind and loaded.grid.n_runs > 0
     else:
         config = load_config(path)
         assert config.agents and config.seeds > 0 and config.episodes > 0

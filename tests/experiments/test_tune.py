@@ -15,25 +15,24 @@ import pytest
 from optuna.trial import TrialState
 
 from skidnav.cli import main
-from skidnav.configtables import toml_key, toml_value
 from skidnav.errors import RunsFailedError, UserError
 from skidnav.experiments.config import config_to_dict
 from skidnav.experiments.configfile import load_config, parse_config
 from skidnav.experiments.runs import RunSpec, expand_runs
 from skidnav.experiments.store import TrialResult
 from skidnav.experiments.trial import measure_trial
-from skidnav.stats import iqm
+from skidnav.files.configtables import toml_key, toml_value
+from skidnav.statistics.intervals import iqm
 from skidnav.studies.tuning.config import ParamRange, TuneConfig, load_tune_config
-from skidnav.studies.tuning.search import (
-    JOURNAL,
+from skidnav.studies.tuning.optuna_setup import open_storage
+from skidnav.studies.tuning.runs import (
     TUNE_STREAM,
     check_separation,
-    open_storage,
     run_map,
     trial_config,
-    tune_experiment,
     tuning_runs,
 )
+from skidnav.studies.tuning.search import JOURNAL, tune_experiment
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 

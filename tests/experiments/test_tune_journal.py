@@ -12,7 +12,8 @@ import pytest
 from skidnav.cli import main
 from skidnav.errors import CorruptFileError
 from skidnav.experiments.journalfile import check_journal
-from skidnav.studies.tuning.search import JOURNAL, open_storage
+from skidnav.studies.tuning.optuna_setup import open_storage
+from skidnav.studies.tuning.search import JOURNAL
 from tests.saved_loaders import fresh_copy
 
 LINE = b'{"op_code":4,"worker_id":"w","study_id":0,"datetime_start":null}\n'

@@ -118,16 +118,16 @@ def test_an_out_that_is_a_file_is_one_line(
 def test_a_discrete_agent_does_not_draw_the_env_s_numbers(monkeypatch: pytest.MonkeyPatch) -> None:
     """The agent's stream is not the one the env's episodes are reset from (both on
     ``default_rng(seed)``, exploration repeated the slip noise's numbers)."""
-    from skidnav.agents.tabular import registry
+    from skidnav.agents.tabular import family
 
-    states: list[dict[str, object]] = []  # each agent's generator as it was given
-    make_agent = registry.make_agent
+    states: list[dict[str, object]] = []  # each agent's generator as the family made it
+    make_agent = family.make_agent
 
     def recording(*args: object, **kwargs: object) -> object:
         states.append(args[4].bit_generator.state)  # type: ignore[attr-defined]
         return make_agent(*args, **kwargs)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(registry, "make_agent", recording)
+    monkeypatch.setattr(family, "make_agent", recording)
     config = dataclasses.replace(TINY, learners=("q-learning",), seeds=1, episodes=1)
     (run,) = run_comparison(config)
     env_stream = np.random.default_rng(run.seed).bit_generator.state

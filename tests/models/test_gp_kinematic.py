@@ -12,7 +12,8 @@ from skidnav.models.gp_kinematic import (
     GaussianProcessConfig,
     GaussianProcessKinematicModel,
 )
-from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+from skidnav.models.kinematic import KinematicModel
+from skidnav.models.kinematic_config import KinematicModelConfig
 from skidnav.robot.params import RobotParams
 from skidnav.studies.kinematic_models.trial import Z_LEVEL
 from skidnav.world.discretization import Discretization

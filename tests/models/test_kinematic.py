@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+from skidnav.models.kinematic import KinematicModel
+from skidnav.models.kinematic_config import KinematicModelConfig
 from skidnav.models.kinematic_prediction import (
     PREDICT_COLLISION,
     PREDICT_FREE,

@@ -7,13 +7,8 @@ import pytest
 
 from skidnav.errors import CorruptFileError
 from skidnav.models.multinomial import MultinomialModel
-from skidnav.models.multinomial_kernels import (
-    EXPECTED,
-    MOST_PROBABLE,
-    SAMPLE,
-    find_pair,
-    model_target,
-)
+from skidnav.models.multinomial_kernels import find_pair
+from skidnav.models.multinomial_targets import EXPECTED, MOST_PROBABLE, SAMPLE, model_target
 
 
 def deterministic_mdp(n_states: int, n_actions: int, seed: int) -> tuple[np.ndarray, np.ndarray]:

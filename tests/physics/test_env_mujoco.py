@@ -16,7 +16,7 @@ pytest.importorskip("mujoco")
 from gymnasium.utils.env_checker import check_env
 
 import skidnav.envs  # noqa: F401  (registers the env)
-from skidnav.agents.fast_training import FusedEnv
+from skidnav.agents.tabular.fast_training import FusedEnv
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.agents.training import greedy_rollout, train_agent
 from skidnav.physics import backend

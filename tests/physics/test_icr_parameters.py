@@ -8,7 +8,8 @@ import pytest
 
 pytest.importorskip("mujoco")
 
-from skidnav.models.kinematic import KinematicModel, icr_parameters, nominal_coefficients
+from skidnav.models.kinematic import KinematicModel
+from skidnav.models.kinematic_regression import icr_parameters, nominal_coefficients
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
 

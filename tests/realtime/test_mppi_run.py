@@ -14,7 +14,7 @@ import pytest
 
 from skidnav.agents.mpc.agent import make_mppi_agent
 from skidnav.agents.mpc.training import train_mppi
-from skidnav.agents.policies.loading import load_policy
+from skidnav.agents.saved import load_policy
 from skidnav.cli import main
 from skidnav.realtime.arena import arena_map
 from skidnav.realtime.policies import check_policy

@@ -4,6 +4,7 @@ the policy's output clipped to the wheels' limit."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import math
@@ -15,7 +16,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from skidnav.agents.policies import loading
+from skidnav.agents import catalog, saved
 from skidnav.agents.policies.goal_tracker import GoalTracker
 from skidnav.cli import main
 from skidnav.realtime.arena import arena_map
@@ -51,6 +52,18 @@ class Overdriven:
         return self.gain * left, self.gain * right
 
 
+def register_format(monkeypatch: pytest.MonkeyPatch, name: str, loader: Any) -> None:
+    """Saved files of the format ``name`` load as policies by ``loader``: a test family, the
+    policy family's descriptor with that format and loader."""
+    test_family = dataclasses.replace(
+        catalog.family("policies"), name=f"test-{name}", save_formats=(name,), policy=loader
+    )
+    original = saved.family_of_format
+    monkeypatch.setattr(
+        saved, "family_of_format", lambda kind: test_family if kind == name else original(kind)
+    )
+
+
 def load_overdriven(path: Path, data: dict[str, Any]) -> Overdriven:
     """The loader of the test format ``test-overdriven``: ``{"gain": g, "fail_after": n}``."""
     return Overdriven(data.get("gain", 2.0), data.get("fail_after"))
@@ -59,7 +72,7 @@ def load_overdriven(path: Path, data: dict[str, Any]) -> Overdriven:
 @pytest.fixture
 def overdriven_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
     """Factory of saved ``test-overdriven`` policies, the format registered for the test."""
-    monkeypatch.setitem(loading.POLICY_LOADERS, "test-overdriven", f"{__name__}:load_overdriven")
+    register_format(monkeypatch, "test-overdriven", load_overdriven)
 
     def write(**fields: Any) -> Path:
         path = tmp_path / "overdriven.json"
@@ -301,7 +314,7 @@ def test_bad_policy_settings_and_files_are_one_line_errors(
     saved = tmp_path / "policy.json"
     for content, message in [
         ("[1, 2]", "policy.json: "),
-        ('{"format": "ppo-wheel"}', "unknown policy format 'ppo-wheel'"),
+        ('{"format": "ppo-wheel"}', "not a saved skidnav agent or policy (format 'ppo-wheel')"),
     ]:
         saved.write_text(content, encoding="utf-8")
         assert main([*argv, "--policy-file", str(saved)]) == 2
@@ -414,9 +427,7 @@ def test_a_slow_policy_is_not_driven_into_a_wall(
     """The command held while the policy answers is checked by the virtual bumper too: a policy
     taking 20 ms (a third of a period at this time scale) never pushes the robot against the
     wall; the bumper stops it before, as a collision."""
-    monkeypatch.setitem(
-        loading.POLICY_LOADERS, "test-slow-forward", f"{__name__}:load_slow_forward"
-    )
+    register_format(monkeypatch, "test-slow-forward", load_slow_forward)
     (tmp_path / "wall.txt").write_text(WALL_AHEAD, encoding="utf-8")
     policy = tmp_path / "slow.json"
     policy.write_text(json.dumps({"format": "test-slow-forward", "delay": 0.02}))

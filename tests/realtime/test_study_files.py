@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from skidnav.cli import main
-from skidnav.experiments.store import directory_lock
+from skidnav.experiments.lock import directory_lock
 from skidnav.studies.hardware.study import load_study, run_study
 from tests.realtime.realtime_helpers import cli_env, wait_for
 from tests.realtime.test_study import fake_realtime, study_config

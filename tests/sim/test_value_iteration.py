@@ -243,7 +243,8 @@ NO_JIT_SCRIPT = """
 import hashlib
 import gymnasium, numpy as np
 import skidnav
-from skidnav.agents.fast_training import train_agent_fast
+from skidnav.agents.tabular.fast_training import train_agent_fast
+from skidnav.agents.training import Evaluation
 from skidnav.agents.tabular.registry import make_agent
 from skidnav.experiments.reference.oracle import compute_oracle
 from skidnav.robot.params import RobotParams
@@ -257,7 +258,7 @@ make = lambda: gymnasium.make("skidnav/SkidSteerNav-v0", map_kind="obstacles", w
 oracle = compute_oracle(make(), 2, 1, [0, 1], 60)
 config = {"epsilon": 0.3, "planning_steps": 10}
 agent = make_agent("dyna-q", grid.n_states, 4, config, np.random.default_rng(2))
-log = train_agent_fast(agent, make(), 10, greedy_eval_env=make(), greedy_seeds=[0, 1], seed=4)
+log = train_agent_fast(agent, make(), 10, evaluation=Evaluation(make(), [0, 1]), seed=4)
 digest = hashlib.sha256()
 for value in (*oracle, log.greedy_lengths, log.greedy_costs):
     digest.update(np.asarray(value).tobytes())

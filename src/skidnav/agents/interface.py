@@ -6,10 +6,10 @@
 * :class:`StepLearningAgent` — the tabular, linear and model-predictive (``mppi-kinematic``)
   agents, which a loop drives one real step at a time: ``act``, ``observe``, ``end_episode``
   and the ``planning_updates`` counter, as :func:`skidnav.agents.training.train_agent` (and,
-  for the tabular ones, the compiled :func:`skidnav.agents.fast_training.train_agent_fast`)
+  for the tabular ones, the compiled :func:`skidnav.agents.tabular.fast_training.train_agent_fast`)
   calls them;
 * :class:`EpisodeTrainingAgent` — the deep agents, which own their loop and train by episodes
-  (``train_episodes``) with the same greedy evaluations and the same
+  (``train_episodes``) with the same :class:`~skidnav.agents.training.Evaluation` and the same
   :class:`~skidnav.agents.training.TrainingLog`;
 * :class:`AgentConfig` — an agent's frozen config dataclass, validated from a mapping (a TOML
   table, a saved agent's JSON).
@@ -25,13 +25,11 @@ presence of the members only).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, ClassVar, Protocol, Self, runtime_checkable
 
-import gymnasium
-
-from skidnav.agents.training import Greedy, Learner, TrainingLog
+from skidnav.agents.training import NO_EVALUATION, Evaluation, Greedy, Learner, TrainingLog
 
 
 @runtime_checkable
@@ -59,16 +57,10 @@ class EpisodeTrainingAgent(Agent, Protocol):
     """An agent that trains itself by whole episodes on the env it was built for (deep)."""
 
     def train_episodes(
-        self,
-        episodes: int,
-        *,
-        greedy_eval_env: gymnasium.Env[Any, Any] | None = None,
-        greedy_seeds: Sequence[int] | None = None,
-        greedy_max_steps: int | None = None,
+        self, episodes: int, *, evaluation: Evaluation = NO_EVALUATION, seed: int | None = None
     ) -> TrainingLog:
-        """Learn for ``episodes`` more episodes, evaluating the greedy policy on
-        ``greedy_eval_env`` after each (one rollout per seed of ``greedy_seeds``, at most
-        ``greedy_max_steps`` actions); the per-episode log."""
+        """Learn for ``episodes`` more episodes (the first from a reset with ``seed``, if
+        given), the greedy policy measured by ``evaluation`` after each; the per-episode log."""
         ...
 
 

@@ -3,7 +3,7 @@
 Every agent owns one compiled learning step, registered for the NamedTuple class of its arrays with
 :func:`learning_step` in the agent's module, and called through :func:`learn` once per real step by
 the step-by-step loop (:meth:`skidnav.agents.tabular.agent.TabularAgent.observe`) and by the fused
-trainer (:mod:`skidnav.agents.fused_loop`) alike::
+trainer (:mod:`skidnav.agents.tabular.fused_loop`) alike::
 
     kernel(arrays, settings, counters, experience, rng) -> None
 

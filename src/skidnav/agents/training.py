@@ -1,18 +1,23 @@
-"""The plain training loop: any agent on any Gymnasium env with Discrete actions and Discrete
-(tabular agents) or Box (agents on continuous states) observations.
+"""The episode loop, written once, and the plain training loop: any agent on any Gymnasium env
+with Discrete actions and Discrete (tabular agents) or Box (agents on continuous states)
+observations.
 
-:func:`train_agent` runs whole episodes and returns a :class:`TrainingLog` of per-episode arrays;
-:func:`train_for_steps` runs a fixed number of real steps across episodes (the cumulative-reward
-view of Sutton & Barto (2018) Examples 8.2 and 8.3). A compiled trainer may replace
-:func:`train_agent` for speed as long as it has the same signature and output.
+:func:`train_episodes` is the one episode loop: a family hands it an :data:`EpisodeFunction`
+and an :data:`EvaluationFunction`, and it owns the reset seeds, the timing, the greedy
+:class:`Evaluation` after each episode and the :class:`TrainingLog` of per-episode arrays.
+:func:`train_agent` is that loop with the plain pair (:func:`plain_episodes`,
+:func:`plain_evaluations`); a compiled trainer passes its own pair. Every family trainer has
+the signature ``trainer(agent, env, episodes, /, *, max_steps=None, evaluation=NO_EVALUATION,
+seed=None) -> TrainingLog``. :func:`train_for_steps` runs a fixed number of real steps across
+episodes (the cumulative-reward view of Sutton & Barto (2018) Examples 8.2 and 8.3).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
-from typing import Any, NamedTuple, Protocol, runtime_checkable
+from collections.abc import Callable, Sequence
+from typing import Any, NamedTuple, Protocol, TypeAlias, runtime_checkable
 
 import gymnasium as gym
 import numpy as np
@@ -115,6 +120,67 @@ _NO_POSE = (math.nan, math.nan, math.nan)
 """The pose :func:`greedy_run` records for an env whose ``info`` has none."""
 
 
+class Evaluation(NamedTuple):
+    """How the greedy policy is measured after each training episode: rollouts on ``env``
+    (:func:`greedy_evaluation`), one per seed of ``seeds``, each cut at :meth:`limit` actions.
+    The same seeds at every evaluation meet the same slip noise (common random numbers)."""
+
+    env: gym.Env[Any, Any] | None = None
+    """Where the greedy rollouts run; None: no evaluation (every rollout :data:`NOT_REACHED`)."""
+    seeds: Sequence[int] | None = None
+    """One rollout per seed (each from ``env.reset(seed=s)``); None: one rollout continuing the
+    env's own generator (whose first reset the loop seeds with the training seed + 1)."""
+    max_steps: int | None = None
+    """Actions per rollout; None: the training ``max_steps``, else 10,000."""
+
+    @property
+    def n_rollouts(self) -> int:
+        """Rollouts per evaluation: one per seed, else one."""
+        return 1 if self.seeds is None else len(self.seeds)
+
+    def limit(self, max_steps: int | None) -> int:
+        """Actions per rollout when training cuts episodes at ``max_steps`` (None: uncut)."""
+        return self.max_steps or max_steps or 10_000
+
+    def start(self, seed: int | None) -> None:
+        """Seed the env's first reset with ``seed + 1`` if there are an env, a training ``seed``
+        and no ``seeds`` (whose rollouts each reset with their own seed)."""
+        if self.env is not None and seed is not None and self.seeds is None:
+            self.env.reset(seed=seed + 1)
+
+    def run(self, evaluate: EvaluationFunction, limit: int) -> list[Rollout]:
+        """One evaluation's rollouts: ``evaluate(limit)`` if there is an env, else
+        :data:`NOT_REACHED` each."""
+        return [NOT_REACHED] * self.n_rollouts if self.env is None else evaluate(limit)
+
+
+NO_EVALUATION = Evaluation()
+"""Training without greedy evaluations (the log's ``greedy_lengths`` all −1)."""
+
+
+class Episode(NamedTuple):
+    """One learning episode, as an :data:`EpisodeFunction` returns it."""
+
+    total: float
+    """Its return: the undiscounted sum of rewards."""
+    length: int
+    """Actions taken."""
+    terminated: bool
+    """True if it reached a terminal state rather than being truncated."""
+    collisions: int
+    """Steps whose ``info["collision"]`` was true."""
+    planning_updates: int
+    """Model-based updates made during the episode (its ``end_episode`` included)."""
+
+
+EpisodeFunction: TypeAlias = Callable[[int | None], Episode]
+"""A family's learning episode: from ``env.reset(seed=seed)`` (None: the env's own generator)
+to the episode's end (goal, the env's limit or the training ``max_steps``)."""
+EvaluationFunction: TypeAlias = Callable[[int], list[Rollout]]
+"""A family's greedy evaluation: the rollouts of one :class:`Evaluation`, each cut at the
+given number of actions."""
+
+
 def _check_spaces(env: gym.Env[Any, Any]) -> None:
     if not isinstance(env.observation_space, (gym.spaces.Discrete, gym.spaces.Box)) or not (
         isinstance(env.action_space, gym.spaces.Discrete)
@@ -191,13 +257,6 @@ def greedy_evaluation(
     return [greedy_run(agent, env, max_steps, seed=int(seed)) for seed in seeds]
 
 
-def record_evaluation(columns: dict[str, list[Any]], rollouts: Sequence[Rollout]) -> None:
-    """Append one evaluation's ``rollouts`` to the ``greedy_lengths`` and ``greedy_costs``
-    lists of ``columns`` (:func:`log_from_rows`)."""
-    columns["greedy_lengths"].append([rollout.length for rollout in rollouts])
-    columns["greedy_costs"].append([rollout.cost for rollout in rollouts])
-
-
 def rollout_summary(lengths: Sequence[int]) -> tuple[float, float]:
     """(share that reached the goal, mean length [actions] of those that did, NaN if none) of
     greedy rollout lengths as :func:`greedy_rollout` returns them (−1: not reached)."""
@@ -226,90 +285,140 @@ def run_episode(
             return total, length, bool(terminated), collisions
 
 
+def plain_episodes(
+    agent: Learner, env: gym.Env[Any, Any], max_steps: int | None
+) -> EpisodeFunction:
+    """The :data:`EpisodeFunction` of the plain loop: ``env.reset(seed=seed)``, then
+    :func:`run_episode` (``max_steps`` actions at most, if given)."""
+
+    def episode(seed: int | None) -> Episode:
+        planned_before = agent.planning_updates
+        state, _ = env.reset(seed=seed)
+        total, length, terminated, collisions = run_episode(agent, env, as_state(state), max_steps)
+        return Episode(
+            total, length, terminated, collisions, agent.planning_updates - planned_before
+        )
+
+    return episode
+
+
+def plain_evaluations(agent: Greedy, evaluation: Evaluation) -> EvaluationFunction:
+    """The :data:`EvaluationFunction` of the plain loop: :func:`greedy_evaluation` of ``agent``
+    on ``evaluation.env`` with ``evaluation.seeds``."""
+
+    def evaluate(limit: int) -> list[Rollout]:
+        assert evaluation.env is not None  # the loop evaluates only with an env
+        return greedy_evaluation(agent, evaluation.env, limit, evaluation.seeds)
+
+    return evaluate
+
+
 def train_agent(
     agent: Learner,
     env: gym.Env[Any, Any],
-    n_episodes: int,
+    episodes: int,
+    /,
     *,
     max_steps: int | None = None,
-    greedy_eval_env: gym.Env[Any, Any] | None = None,
-    greedy_max_steps: int | None = None,
-    greedy_seeds: Sequence[int] | None = None,
+    evaluation: Evaluation = NO_EVALUATION,
     seed: int | None = None,
 ) -> TrainingLog:
-    """Train ``agent`` for ``n_episodes`` episodes on ``env``.
-
-    ``max_steps`` truncates each episode (the env's own time limit applies too). ``seed`` seeds the
-    first ``env.reset`` (and, without ``greedy_seeds``, ``seed + 1`` the evaluation env's first
-    reset); later resets continue the env's own generator, as Gymnasium intends. After each
-    episode the greedy policy is evaluated on ``greedy_eval_env`` (:func:`greedy_evaluation`:
-    one rollout per seed of ``greedy_seeds``), each rollout stopped after ``greedy_max_steps``
-    actions (default: ``max_steps``, else 10,000).
-    """
+    """Train ``agent`` for ``episodes`` episodes on ``env`` (Discrete actions, Discrete or Box
+    observations; UserError otherwise): :func:`train_episodes` of the plain loop
+    (:func:`plain_episodes`, :func:`plain_evaluations`), with its ``max_steps``,
+    ``evaluation`` and ``seed``."""
     _check_spaces(env)
-    return train_loop(
-        agent, env, n_episodes, max_steps=max_steps, greedy_eval_env=greedy_eval_env,
-        greedy_max_steps=greedy_max_steps, greedy_seeds=greedy_seeds, seed=seed,
+    return train_plain(agent, env, episodes, max_steps=max_steps, evaluation=evaluation, seed=seed)
+
+
+def train_plain(
+    agent: Learner,
+    env: gym.Env[Any, Any],
+    episodes: int,
+    /,
+    *,
+    max_steps: int | None = None,
+    evaluation: Evaluation = NO_EVALUATION,
+    seed: int | None = None,
+) -> TrainingLog:
+    """:func:`train_agent` on an env whose spaces the caller has checked: a family of other
+    actions (``mppi-kinematic``'s wheel speeds) trains through the same loop."""
+    return train_episodes(
+        plain_episodes(agent, env, max_steps), plain_evaluations(agent, evaluation), episodes,
+        max_steps=max_steps, evaluation=evaluation, seed=seed,
     )  # fmt: skip
 
 
-def train_loop(
-    agent: Learner,
-    env: gym.Env[Any, Any],
-    n_episodes: int,
+def train_episodes(
+    run: EpisodeFunction,
+    evaluate: EvaluationFunction,
+    episodes: int,
     *,
     max_steps: int | None = None,
-    greedy_eval_env: gym.Env[Any, Any] | None = None,
-    greedy_max_steps: int | None = None,
-    greedy_seeds: Sequence[int] | None = None,
+    evaluation: Evaluation = NO_EVALUATION,
     seed: int | None = None,
 ) -> TrainingLog:
-    """The episodes of :func:`train_agent` (same arguments and log) on an env whose spaces the
-    caller has checked: a family of other actions (``mppi-kinematic``'s wheel speeds) trains
-    through the same loop and evaluations."""
-    if n_episodes < 0 or (max_steps is not None and max_steps < 1):
-        raise ValueError(
-            f"expected n_episodes >= 0 and max_steps >= 1, got {n_episodes}, {max_steps}"
-        )
-    limit = greedy_max_steps or max_steps or 10_000
-    columns: dict[str, list[Any]] = {name: [] for name in TrainingLog._fields}
-    for episode in range(n_episodes):
+    """The episode loop of every family that can run one episode at a time.
+
+    1. Check the arguments (ValueError unless ``episodes`` >= 0 and ``max_steps``, if given,
+       >= 1); the rollout limit is ``evaluation.limit(max_steps)``.
+    2. Run ``episodes`` episodes (``run``), the first from ``reset(seed=seed)``, the others
+       continuing the env's own generator, as Gymnasium intends; each is timed.
+    3. After each, record the greedy evaluation (:meth:`Evaluation.run`; after the first
+       episode, :meth:`Evaluation.start` seeds the evaluation env with ``seed + 1``).
+    4. Return the :class:`TrainingLog`.
+    """
+    if episodes < 0 or (max_steps is not None and max_steps < 1):
+        raise ValueError(f"expected episodes >= 0 and max_steps >= 1, got {episodes}, {max_steps}")
+    limit = evaluation.limit(max_steps)
+    rows = LogRows(evaluation.n_rollouts)
+    for episode in range(episodes):
         start = time.perf_counter()
-        planned_before = agent.planning_updates
-        state, _ = env.reset(seed=seed if episode == 0 else None)
-        total, length, success, collisions = run_episode(agent, env, as_state(state), max_steps)
-        columns["wall_time"].append(time.perf_counter() - start)
-        columns["returns"].append(total)
-        columns["lengths"].append(length)
-        columns["successes"].append(success)
-        columns["collisions"].append(collisions)
-        columns["planning_updates"].append(agent.planning_updates - planned_before)
-        greedy = [NOT_REACHED] * (1 if greedy_seeds is None else len(greedy_seeds))
-        if greedy_eval_env is not None:
-            if episode == 0 and seed is not None and greedy_seeds is None:
-                greedy_eval_env.reset(seed=seed + 1)
-            greedy = greedy_evaluation(agent, greedy_eval_env, limit, greedy_seeds)
-        record_evaluation(columns, greedy)
-    return log_from_rows(columns, 1 if greedy_seeds is None else len(greedy_seeds))
+        result = run(seed if episode == 0 else None)
+        wall_time = time.perf_counter() - start
+        if episode == 0:
+            evaluation.start(seed)
+        rows.add(result, wall_time, evaluation.run(evaluate, limit))
+    return rows.log()
 
 
-LOG_DTYPES = (
-    np.float64, np.int64, np.bool_, np.int64, np.int64, np.float64, np.int64, np.float64,
-)  # fmt: skip
-"""dtypes of the :class:`TrainingLog` fields, in order."""
+class LogRows:
+    """A :class:`TrainingLog` written one episode at a time (:meth:`add`), each evaluation of
+    ``n_rollouts`` rollouts."""
 
+    dtypes = (
+        np.float64, np.int64, np.bool_, np.int64, np.int64, np.float64, np.int64, np.float64,
+    )  # fmt: skip
+    """dtypes of the :class:`TrainingLog` fields, in order."""
+    episode_fields = ("returns", "lengths", "successes", "collisions", "planning_updates")
+    """The :class:`TrainingLog` fields of an :class:`Episode`, in order."""
 
-def log_from_rows(columns: dict[str, list[Any]], n_rollouts: int) -> TrainingLog:
-    """A :class:`TrainingLog` from per-episode lists keyed by field name (``greedy_lengths``
-    and ``greedy_costs`` hold one list of ``n_rollouts`` values per episode:
-    :func:`record_evaluation`)."""
-    arrays: dict[str, np.ndarray] = {
-        name: np.array(columns[name], dtype=dtype)
-        for name, dtype in zip(TrainingLog._fields, LOG_DTYPES, strict=True)
-    }
-    for name in ("greedy_lengths", "greedy_costs"):
-        arrays[name] = arrays[name].reshape(-1, n_rollouts)
-    return TrainingLog(**arrays)
+    def __init__(self, n_rollouts: int) -> None:
+        self.n_rollouts = n_rollouts
+        self.columns: dict[str, list[Any]] = {name: [] for name in TrainingLog._fields}
+
+    def __len__(self) -> int:
+        """Episodes recorded."""
+        return len(self.columns["returns"])
+
+    def add(self, episode: Episode, wall_time: float, rollouts: Sequence[Rollout]) -> None:
+        """Record ``episode``, its ``wall_time`` [s] and the ``rollouts`` of the greedy
+        evaluation after it."""
+        for name, value in zip(self.episode_fields, episode, strict=True):
+            self.columns[name].append(value)
+        self.columns["wall_time"].append(wall_time)
+        self.columns["greedy_lengths"].append([rollout.length for rollout in rollouts])
+        self.columns["greedy_costs"].append([rollout.cost for rollout in rollouts])
+
+    def log(self) -> TrainingLog:
+        """The arrays of the episodes recorded so far."""
+        arrays: dict[str, np.ndarray] = {
+            name: np.array(self.columns[name], dtype=dtype)
+            for name, dtype in zip(TrainingLog._fields, self.dtypes, strict=True)
+        }
+        for name in ("greedy_lengths", "greedy_costs"):
+            arrays[name] = arrays[name].reshape(-1, self.n_rollouts)
+        return TrainingLog(**arrays)
 
 
 def train_for_steps(

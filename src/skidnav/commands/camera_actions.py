@@ -8,7 +8,7 @@ import itertools
 import math
 
 from skidnav.errors import UserError
-from skidnav.outputs import check_output_file, make_output_dir
+from skidnav.files.outputs import check_output_file, make_output_dir
 from skidnav.realtime.camera.calibration import check_intrinsics
 from skidnav.realtime.camera.markers import aruco_dictionary
 from skidnav.realtime.camera.opencv import cv2

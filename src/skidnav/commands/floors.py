@@ -9,12 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
-from skidnav import formatting
-from skidnav.atomicfile import write_user_file
 from skidnav.errors import UserError
-from skidnav.outputs import check_output_file
+from skidnav.files.atomic import write_user_file
+from skidnav.files.outputs import check_output_file
 from skidnav.physics.backend import PhysicsUnavailable
 from skidnav.physics.materials import MATERIALS
+from skidnav.statistics import formatting
 
 MAX_SEGMENTS = 10_000
 """Most 1-s excitation segments per material."""

@@ -15,9 +15,9 @@ import json
 from dataclasses import fields
 from typing import Any
 
-from skidnav.atomicfile import write_user_file
 from skidnav.commands.shortcut import add_run_arguments, run_document
 from skidnav.errors import UserError, shown
+from skidnav.files.atomic import write_user_file
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.studies.generalisation.grid import KIND, LAYOUT, OBSERVATIONS, GeneralisationGrid
 from skidnav.world.grid import MAP_KINDS

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from skidnav.errors import UserError
-from skidnav.outputs import check_output_file
+from skidnav.files.outputs import check_output_file
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import MAP_KINDS, MAX_SIZE, generate_map
 from skidnav.world.mapfile import format_map, load_map, save_map

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from skidnav.errors import UserError
-from skidnav.outputs import check_output_file
+from skidnav.files.outputs import check_output_file
 
 
 def add_parser(subparsers: Any) -> None:
@@ -68,33 +68,30 @@ def report_command(args: argparse.Namespace) -> int:
 def write_results_report(
     run_dir: Path, output: Path | None = None, *, progress: bool = False
 ) -> ResultsReport:
-    """Write the report of ``run_dir`` by its kind to ``output`` (default
-    ``RUN_DIR/report.html``), atomically, an experiment's with a progress bar on stderr when
-    ``progress``; returns its path and verdict line (None for a study).
+    """Write the report of ``run_dir`` by its kind (its study, :func:`~skidnav.studies.kind.
+    study_of_results`) to ``output`` (default ``RUN_DIR/report.html``), atomically, an
+    experiment's with a progress bar on stderr when ``progress``; returns its path and verdict
+    line (None for a study without one, :class:`~skidnav.studies.kind.VerdictStudy`).
 
     Raises:
         UserError: the results are missing, damaged or of no known kind, or the report cannot
             be written there.
     """
     from skidnav.experiments.store import results_kind
-    from skidnav.studies.kind import EXPERIMENT_KIND, experiment_sections, study_of_results
+    from skidnav.studies.kind import VerdictStudy, study_of_results
 
-    kind = results_kind(run_dir)
-    if kind == EXPERIMENT_KIND:
-        from skidnav.experiments.report.html import write_report
-
-        written = write_report(run_dir, output, experiment_sections(), progress=progress)
-        return ResultsReport(written.path, written.verdict)
+    chosen = study_of_results(results_kind(run_dir), run_dir)
+    if isinstance(chosen, VerdictStudy):
+        return ResultsReport(*chosen.write_report(run_dir, output, progress=progress))
     from skidnav.experiments.report.page import report_path, study_report, write_page
 
-    chosen = study_of_results(kind, run_dir)
     text = study_report(run_dir, chosen.layout, chosen.report(run_dir))
     return ResultsReport(write_page(report_path(run_dir, output), text), None)
 
 
 def study_command(run_dir: Path, output: Path) -> int:
     """Write the study's tables of ``run_dir`` to ``output``; print its path."""
-    from skidnav.atomicfile import write_user_file
+    from skidnav.files.atomic import write_user_file
     from skidnav.studies.hardware.experiment_tables import experiment_study_report
 
     write_user_file(output, experiment_study_report(run_dir).encode("utf-8"), "study tables")

@@ -21,7 +21,7 @@ from typing import IO, Any
 
 from skidnav.commands.parsing import positive_number
 from skidnav.errors import UserError
-from skidnav.outputs import check_output_dir
+from skidnav.files.outputs import check_output_dir
 
 
 def port_number(text: str) -> int:

@@ -1,34 +1,26 @@
 """``skidnav run CONFIG``: run (or resume) an experiment grid or a study (a config with a
-``kind``, :mod:`skidnav.studies.kind`) on the one runner.
+``kind``, :mod:`skidnav.studies.kind`) on the one runner, loaded and run by
+:mod:`skidnav.studies.loading`; here only the flags and what is printed.
 
 The study shortcuts (``skidnav study …``, ``skidnav robot study``; :mod:`skidnav.commands.shortcut`)
-write the config of their flags and run it through :func:`parse_grid` and :func:`run_loaded`, the
-path of ``skidnav run``: the same grid, runs, files and resume."""
+write the config of their flags and run it through the same
+:func:`~skidnav.studies.loading.parse_grid` and :func:`~skidnav.studies.loading.run_loaded`: the
+same grid, runs, files and resume."""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any
 
 from skidnav.envs.registration import allow_env_modules
-from skidnav.errors import UserError
-from skidnav.experiments.configfile import config_from_tables, parse_tables
-from skidnav.experiments.runner import (
-    BACKENDS,
-    RunObserver,
-    RunOutcome,
-    TrialFunction,
-    run_experiment,
-)
-from skidnav.experiments.runs import Grid
-from skidnav.experiments.store import EXPERIMENT_LAYOUT, RunLayout
+from skidnav.experiments.runner import BACKENDS, RunOutcome
 from skidnav.experiments.tensorboard_log import TensorBoardLog
 from skidnav.extras import require
-from skidnav.formatting import plural
-from skidnav.outputs import check_output_dir
-from skidnav.savedfile import read_config_text
-from skidnav.studies.kind import EXPERIMENT_KIND, Study, study, study_kind
+from skidnav.files.outputs import check_output_dir
+from skidnav.statistics.formatting import plural
+from skidnav.studies.kind import VerdictStudy
+from skidnav.studies.loading import load_grid, run_loaded
 
 
 def add_parser(subparsers: Any) -> None:
@@ -60,7 +52,8 @@ def add_parser(subparsers: Any) -> None:
 
 def add_backend_arguments(parser: argparse.ArgumentParser, default: str | None = "process") -> None:
     """``--jobs``, ``--backend`` and ``--scheduler``: how runs are executed (``run``, ``tune``,
-    the study shortcuts). A ``default`` of None leaves the backend to :func:`choose_backend`."""
+    the study shortcuts). A ``default`` of None leaves the backend to
+    :func:`skidnav.studies.loading.choose_backend`."""
     parser.add_argument(
         "--jobs", type=int, default=None, help="worker processes (default: local cores)"
     )
@@ -91,109 +84,6 @@ def add_env_module_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
-class LoadedConfig(NamedTuple):
-    """A config ready to run.
-
-    Attributes:
-        grid: its runs (an experiment config, or the study's grid).
-        study: the study of its ``kind``; None for an experiment.
-        text: the config's text (saved as ``config.toml`` beside the results).
-        path: the file it was read from (named in errors).
-    """
-
-    grid: Grid
-    study: Study | None
-    text: str
-    path: Path
-
-    @property
-    def layout(self) -> RunLayout:
-        """What its results directory holds."""
-        return EXPERIMENT_LAYOUT if self.study is None else self.study.layout
-
-
-def load_grid(path: Path) -> LoadedConfig:
-    """The config at ``path``, ready to run.
-
-    Raises:
-        UserError: the file cannot be read, or its TOML, kind or content is invalid.
-    """
-    return parse_grid(read_config_text(path), path)
-
-
-def parse_grid(text: str, path: Path) -> LoadedConfig:
-    """The config of ``text`` (read from ``path``, or written by a study shortcut), ready to run.
-
-    Raises:
-        UserError: its TOML, kind or content is invalid (one line naming ``path``).
-    """
-    document = parse_tables(text, path)
-    kind = study_kind(document, path)
-    if kind == EXPERIMENT_KIND:
-        return LoadedConfig(config_from_tables(document, path), None, text, path)
-    chosen = study(kind)
-    return LoadedConfig(chosen.grid(document, path), chosen, text, path)
-
-
-def choose_backend(loaded: LoadedConfig, backend: str | None) -> str:
-    """``backend``, or when None ``process`` (``serial`` for a study that runs only serially,
-    :attr:`~skidnav.studies.kind.Study.backends`).
-
-    Raises:
-        UserError: the study does not run on ``backend``.
-    """
-    if loaded.study is None:
-        return backend or "process"
-    allowed = loaded.study.backends
-    if backend is None:
-        return "process" if "process" in allowed else allowed[0]
-    if backend not in allowed:
-        raise UserError(
-            f"{loaded.path}: a {loaded.study.kind} study runs only with --backend "
-            f"{' or '.join(allowed)}, not {backend}"
-        )
-    return backend
-
-
-def run_loaded(
-    loaded: LoadedConfig,
-    out: Path,
-    *,
-    backend: str | None = None,
-    jobs: int | None = None,
-    scheduler: str | None = None,
-    progress: bool = False,
-    trial: TrialFunction | None = None,
-    on_run: RunObserver | None = None,
-) -> RunOutcome:
-    """Run (or resume) every run of ``loaded`` into ``out`` on the runner
-    (:func:`~skidnav.experiments.runner.run_experiment`), with the study's run function
-    (:meth:`~skidnav.studies.kind.Study.trial`) unless ``trial`` is given (the same function with
-    other progress callbacks: ``skidnav robot study``); ``on_run`` is told of every finished run
-    (the TensorBoard log).
-
-    Raises:
-        UserError: bad backend options, ``out`` holds other results or is in use.
-        RunsFailedError: runs raised (the finished ones are kept).
-    """
-    backend = choose_backend(loaded, backend)
-    if trial is None and loaded.study is not None:
-        trial = loaded.study.trial(loaded.grid, out)
-    return run_experiment(
-        loaded.grid,
-        out,
-        backend=backend,
-        jobs=jobs,
-        scheduler=scheduler,
-        trial=trial,
-        source_text=loaded.text,
-        config_path=loaded.path,
-        progress=progress,
-        layout=loaded.layout,
-        on_run=on_run,
-    )
-
-
 def outcome_line(outcome: RunOutcome) -> str:
     """What a run of a config did, in one line: runs, where, how many now and before, time."""
     return (
@@ -212,8 +102,9 @@ def tensorboard_log(directory: Path | None) -> TensorBoardLog | None:
 
 
 def run_command(args: argparse.Namespace) -> int:
-    """Run the experiment or study; print where the results are and, for an experiment, its
-    verdict line (:mod:`skidnav.experiments.report.verdict`), with the report when asked."""
+    """Run the experiment or study; print where the results are and, for a study with a verdict
+    (:class:`~skidnav.studies.kind.VerdictStudy`: an experiment), its verdict line, with the
+    report when asked."""
     allow_env_modules(args.env_module)
     log = tensorboard_log(args.tensorboard)
     loaded = load_grid(args.config)
@@ -234,8 +125,6 @@ def run_command(args: argparse.Namespace) -> int:
         from skidnav.commands.report import print_report, write_results_report
 
         print_report(write_results_report(outcome.out_dir, progress=not args.no_progress))
-    elif loaded.study is None:
-        from skidnav.experiments.report.verdict import experiment_verdict
-
-        print(experiment_verdict(outcome.out_dir))
+    elif isinstance(loaded.study, VerdictStudy):
+        print(loaded.study.verdict(outcome.out_dir))
     return 0

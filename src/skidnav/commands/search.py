@@ -19,12 +19,12 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from skidnav.commands.run import parse_grid, run_loaded
 from skidnav.commands.shortcut import FLAGS
 from skidnav.errors import UserError
 from skidnav.experiments.runs import expand_runs
-from skidnav.outputs import check_output_dir
+from skidnav.files.outputs import check_output_dir
 from skidnav.robot.slip import SLIP_PRESETS
+from skidnav.studies.loading import parse_grid, run_loaded
 from skidnav.studies.policy_search.export import export_search
 from skidnav.studies.policy_search.grid import PolicySearchGrid, grid_toml
 from skidnav.studies.policy_search.trial import SearchTrial

@@ -1,5 +1,5 @@
 """What the ``skidnav study`` shortcuts share: their flags become a study config, which runs as
-``skidnav run`` runs a config file (:func:`skidnav.commands.run.run_loaded`): the same grid, the
+``skidnav run`` runs a config file (:func:`skidnav.studies.loading.run_loaded`): the same grid, the
 same runner and backends, a results directory (``--out``) that resumes, and the config's text
 saved there as ``config.toml`` (``skidnav run OUT/config.toml --out OUT`` resumes it too)."""
 
@@ -10,16 +10,11 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from skidnav.commands.run import (
-    LoadedConfig,
-    add_backend_arguments,
-    outcome_line,
-    parse_grid,
-    run_loaded,
-)
-from skidnav.configtables import toml_document
+from skidnav.commands.run import add_backend_arguments, outcome_line
 from skidnav.experiments.runner import RunOutcome
-from skidnav.outputs import check_output_dir
+from skidnav.files.configtables import toml_document
+from skidnav.files.outputs import check_output_dir
+from skidnav.studies.loading import LoadedConfig, parse_grid, run_loaded
 
 FLAGS = Path("<flags>")
 """Where a shortcut's config comes from, as its errors name it."""
@@ -63,6 +58,6 @@ def run_text(text: str, args: argparse.Namespace) -> tuple[LoadedConfig, RunOutc
 
 def run_document(document: Mapping[str, Any], args: argparse.Namespace) -> tuple[Any, RunOutcome]:
     """:func:`run_text` of a config ``document`` (its TOML text written by
-    :func:`skidnav.configtables.toml_document`); returns (the grid, what the runner did)."""
+    :func:`skidnav.files.configtables.toml_document`); returns (the grid, what the runner did)."""
     loaded, outcome = run_text(toml_document(document), args)
     return loaded.grid, outcome

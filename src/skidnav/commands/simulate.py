@@ -17,15 +17,15 @@ from typing import Any
 
 import numpy as np
 
-from skidnav.atomicfile import write_atomic
 from skidnav.errors import UserError, excerpt
-from skidnav.formatting import plural
-from skidnav.outputs import check_output_file
+from skidnav.files.atomic import write_atomic
+from skidnav.files.outputs import check_output_file
+from skidnav.files.user import read_limited
 from skidnav.robot.kinematics import ACTION_NAMES
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.seeding import ARENA_ROLES, child_sequences, seed_int
-from skidnav.userfile import read_limited
+from skidnav.statistics.formatting import plural
 from skidnav.world.grid import MAP_KINDS
 
 ACTION_ALIASES = {name: index for index, name in enumerate(ACTION_NAMES)} | {

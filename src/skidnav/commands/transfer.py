@@ -12,9 +12,9 @@ import argparse
 from dataclasses import fields
 from typing import Any
 
-from skidnav.agents.tabular.registry import available_agents
-from skidnav.atomicfile import write_user_file
+from skidnav.agents.catalog import family
 from skidnav.commands.shortcut import add_run_arguments, run_document
+from skidnav.files.atomic import write_user_file
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.studies.transfer.grid import FLOORS, KIND, LAYOUT, TransferGrid
 from skidnav.world.grid import MAP_KINDS
@@ -36,7 +36,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "(resumable in --out); print the table and write --out/transfer.csv.",
     )
     parser.add_argument(
-        "--agent", action="append", choices=available_agents(),
+        "--agent", action="append", choices=family("tabular").agents,
         help=f"repeatable; default {DEFAULT_AGENTS}",
     )  # fmt: skip
     counts = {

@@ -12,7 +12,7 @@ from skidnav.commands.run import add_backend_arguments, add_env_module_argument
 from skidnav.envs.registration import allow_env_modules
 from skidnav.errors import UserError
 from skidnav.extras import require
-from skidnav.outputs import check_output_dir
+from skidnav.files.outputs import check_output_dir
 from skidnav.studies.tuning.config import load_tune_config_and_text
 
 

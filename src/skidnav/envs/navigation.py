@@ -14,7 +14,11 @@ from gymnasium import spaces
 from skidnav.envs.step_info import step_info
 from skidnav.physics.mdp import floor_materials, physics_transition
 from skidnav.physics.mujoco_robot import PhysicsRobot
-from skidnav.robot.kinematics import commanded_wheel_speeds, wrap_angle
+from skidnav.robot.kinematics import (
+    clipped_wheel_speeds,
+    commanded_wheel_speeds,
+    wrap_angle,
+)
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
 from skidnav.seeding import ARENA_ROLES, streams
@@ -371,35 +375,6 @@ def action_space(kind: str, robot: RobotParams) -> spaces.Space[Any]:
         return spaces.Discrete(4)
     limit = np.float32(robot.wheel_speed)
     return spaces.Box(low=-limit, high=limit, shape=(2,), dtype=np.float32)
-
-
-def real_values(action: Any) -> np.ndarray | None:
-    """``action`` as a float64 array, or None unless it holds real numbers: a complex number
-    (whose imaginary part a cast would drop), a string, or a ragged or non-numeric sequence
-    gives None.
-
-    >>> real_values([1.7, -1]), real_values(np.array([1.7 + 0j, 1.0])), real_values("17")
-    (array([ 1.7, -1. ]), None, None)
-    """
-    try:
-        values = np.asarray(action)
-        if values.dtype.kind not in "biufO":
-            return None
-        return values.astype(np.float64, copy=False)
-    except (TypeError, ValueError):  # ragged, or an object that is not a real number
-        return None
-
-
-def clipped_wheel_speeds(action: Any, limit: float) -> tuple[float, float]:
-    """A continuous action (ω_L, ω_R) [rad/s] as two floats clipped to ± ``limit``; ValueError
-    unless it holds two finite real numbers."""
-    values = real_values(action)
-    if values is None:
-        raise ValueError(f"expected an action of two wheel speeds, got {action!r}")
-    if values.shape != (2,) or not np.isfinite(values).all():
-        raise ValueError(f"expected an action of two finite wheel speeds, got {action!r}")
-    left, right = values.tolist()
-    return min(max(left, -limit), limit), min(max(right, -limit), limit)
 
 
 def _check_same_arena(robot: RobotParams, discretization: Discretization) -> None:

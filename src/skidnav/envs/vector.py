@@ -46,10 +46,10 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from skidnav.checks import check_integer
-from skidnav.envs.navigation import SkidSteerNavEnv, real_values
+from skidnav.envs.navigation import SkidSteerNavEnv
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import shown
-from skidnav.robot.kinematics import commanded_wheel_speeds
+from skidnav.robot.kinematics import commanded_wheel_speeds, real_values
 from skidnav.sim.vector_step import (
     DISCRETE_OBSERVATION,
     FEATURE_OBSERVATION,

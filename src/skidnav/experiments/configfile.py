@@ -3,7 +3,8 @@
 Every problem raises :class:`skidnav.errors.UserError` naming the file and the key, e.g.
 ``configs/a.toml: [experiment]: unknown key 'episods' (expected one of …)`` or
 ``configs/a.toml:4:9: malformed TOML: Invalid value``. Tables, keys and map paths (relative to
-the config file) follow :mod:`skidnav.configtables`. Agent names and hyperparameters are checked
+the config file) follow :mod:`skidnav.files.configtables`. Agent names and hyperparameters are
+checked
 against the agents package by :func:`skidnav.experiments.trial.check_config`, which the runner
 calls before any run starts.
 """
@@ -14,7 +15,6 @@ import itertools
 from pathlib import Path
 from typing import Any
 
-from skidnav.configtables import check_keys, resolve_path, table, table_array
 from skidnav.errors import UserError, shown
 from skidnav.experiments.config import (
     DEFAULT_ENV_ID,
@@ -23,7 +23,8 @@ from skidnav.experiments.config import (
     MapSpec,
     freeze_params,
 )
-from skidnav.savedfile import MAX_CONFIG_BYTES, parse_toml, read_config_text
+from skidnav.files.configtables import check_keys, resolve_path, table, table_array
+from skidnav.files.saved import MAX_CONFIG_BYTES, parse_toml, read_config_text
 
 MAX_CONFIG_CHARS = MAX_CONFIG_BYTES // 4
 """Longest config text accepted [characters] (a config is a few kilobytes)."""
@@ -61,7 +62,7 @@ MAP_KEYS = ("kind", "file", "label", "options")
 
 def load_config(path: Path | str) -> ExperimentConfig:
     """Read and validate an experiment config file (at most
-    :data:`~skidnav.savedfile.MAX_CONFIG_BYTES`; a device or a pipe ends at that limit).
+    :data:`~skidnav.files.saved.MAX_CONFIG_BYTES`; a device or a pipe ends at that limit).
 
     Raises:
         UserError: missing, unreadable or too long file, malformed TOML (with line and column),

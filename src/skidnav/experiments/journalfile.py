@@ -2,9 +2,9 @@
 
 Optuna replays a journal line by line and trusts it: an unknown op code fails an ``assert``, a
 missing field is a ``KeyError`` deep in the replay, a directory an ``IsADirectoryError``. So
-:func:`check_journal` reads the file first (:func:`skidnav.userfile.read_limited`: a regular
+:func:`check_journal` reads the file first (:func:`skidnav.files.user.read_limited`: a regular
 file of at most :data:`MAX_JOURNAL_BYTES`) and checks every complete line — a JSON object
-(:func:`skidnav.savedfile.parse_json`) with a known integer ``op_code`` and a string
+(:func:`skidnav.files.saved.parse_json`) with a known integer ``op_code`` and a string
 ``worker_id`` — then replays them into a scratch storage in memory. Only a journal that passes
 may have its last line repaired: a line cut short by a kill during a write is a prefix of what
 Optuna writes (``{"op_code":…``), and nothing else is ever truncated. Every problem is one
@@ -21,8 +21,8 @@ import optuna
 from optuna.storages.journal import BaseJournalBackend
 
 from skidnav.errors import CorruptFileError, excerpt, first_line, shown
-from skidnav.savedfile import parse_json
-from skidnav.userfile import read_limited
+from skidnav.files.saved import parse_json
+from skidnav.files.user import read_limited
 
 MAX_JOURNAL_BYTES = 256 * 2**20
 """Largest journal read [bytes]: a trial writes a few kilobytes, so this holds tens of

@@ -57,16 +57,11 @@ from skidnav.childprocess import safe_path_children
 from skidnav.errors import RunsFailedError, UserError
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.failures import RunFailure, attempt, failed_runs_message
+from skidnav.experiments.lock import directory_lock
 from skidnav.experiments.provenance import CODE_KEYS, code_version, package_versions
 from skidnav.experiments.runs import Grid, RunSpec, expand_runs
 from skidnav.experiments.sessions import mixed_code_message, other_code, update_sessions
-from skidnav.experiments.store import (
-    EXPERIMENT_LAYOUT,
-    ResultStore,
-    RunLayout,
-    TrialResult,
-    directory_lock,
-)
+from skidnav.experiments.store import EXPERIMENT_LAYOUT, ResultStore, RunLayout, TrialResult
 from skidnav.experiments.workers import init_worker
 from skidnav.extras import require
 

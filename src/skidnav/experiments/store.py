@@ -14,14 +14,14 @@ Layout of a results directory::
     .skidnav.lock        held (``flock``) by the process writing here, its pid inside
 
 Every file is written to a temporary name, synced and moved into place with ``os.replace``
-(:func:`skidnav.atomicfile.write_atomic`), so a run is either completely there or absent: after a
+(:func:`skidnav.files.atomic.write_atomic`), so a run is either completely there or absent: after a
 kill, the runs already written are skipped and the rest are run again (none lost, none
 duplicated), and reopening removes the temporaries of writers that died. A write that fails (a
-full disk) is one line naming the file (:func:`skidnav.atomicfile.writing`): the files before
+full disk) is one line naming the file (:func:`skidnav.files.atomic.writing`): the files before
 it stay whole, so the same command resumes once there is room. One process at a time writes a
-directory (:func:`directory_lock`). The tidy tables are read back as saved files too
-(:func:`read_table`). Run files are read as
-:class:`~skidnav.savedfile.SavedArchive` with the arrays and sizes the config allows; nothing is
+directory (:func:`~skidnav.experiments.lock.directory_lock`). The tidy tables are read back as
+saved files too (:func:`~skidnav.experiments.tables.read_table`). Run files are read as
+:class:`~skidnav.files.saved.SavedArchive` with the arrays and sizes the config allows; nothing is
 pickled.
 
 What a run file holds depends on the kind of grid, described by a :class:`RunLayout`: an
@@ -33,25 +33,16 @@ kind is never read as another.
 
 from __future__ import annotations
 
-import contextlib
-import fcntl
 import json
-import os
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, BinaryIO, NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import pandas as pd
 
-from skidnav.atomicfile import (
-    remove_stale_temporaries,
-    write_npz_atomic,
-    write_user_file,
-    writing,
-)
-from skidnav.errors import CorruptFileError, UserError, first_line, shown
+from skidnav.errors import CorruptFileError, UserError, shown
 from skidnav.experiments.config import (
     MAX_STEPS,
     ExperimentConfig,
@@ -59,8 +50,14 @@ from skidnav.experiments.config import (
     config_to_dict,
 )
 from skidnav.experiments.runs import Grid
-from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, parse_json, read_json, up_to
-from skidnav.userfile import open_user_file
+from skidnav.experiments.tables import read_table
+from skidnav.files.atomic import (
+    remove_stale_temporaries,
+    write_npz_atomic,
+    write_user_file,
+    writing,
+)
+from skidnav.files.saved import ArraySpec, SavedArchive, parse_json, read_json, up_to
 from skidnav.world.grid import MAX_SIZE
 
 EPISODE_COLUMNS = (
@@ -109,10 +106,6 @@ class TrialResult(NamedTuple):
     arrays: dict[str, np.ndarray]
 
 
-MAX_TABLE_BYTES = 4 * 2**30
-"""Largest tidy table read back [bytes], on disk and as announced uncompressed."""
-LOCK_FILE = ".skidnav.lock"
-"""The lock file of a results or study directory."""
 _WORLD_ARRAYS = {
     "value_map": "f", "heading_map": "i", "policy_map": "i", "occupancy": "b", "slip_eta": "f",
 }  # fmt: skip
@@ -175,52 +168,6 @@ EXPERIMENT_LAYOUT = RunLayout(
     "experiment", EPISODE_COLUMNS, config_to_dict, config_from_dict, run_file_specs, OPTIONAL_ARRAYS
 )
 """The layout of ``skidnav run``'s results (an :class:`ExperimentConfig` grid)."""
-
-
-@contextlib.contextmanager
-def directory_lock(root: Path | str) -> Iterator[Path]:
-    """Hold ``root``'s lock (``fcntl.flock`` on :data:`LOCK_FILE`, our pid written inside) while
-    writing there; creates ``root``. The kernel releases the lock when its holder dies (even by
-    SIGKILL), so a later process takes it over. A directory this call created is removed again
-    on the way out if nothing but the lock was written in it.
-
-    Raises:
-        UserError: ``root`` is not a directory, or another process holds the lock (named by pid).
-    """
-    root = Path(root)
-    created = not root.exists()
-    try:
-        root.mkdir(parents=True, exist_ok=True)
-        descriptor = os.open(root / LOCK_FILE, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
-    except (FileExistsError, NotADirectoryError):
-        raise UserError(f"{root}: not a directory; choose another --out") from None
-    except OSError as error:
-        raise UserError(f"{root}: cannot write there ({error.strerror or error})") from None
-    try:
-        try:
-            fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            raise UserError(
-                f"{root}: in use by another skidnav process{_holder(descriptor)}; wait for it "
-                "to finish or choose another --out"
-            ) from None
-        os.ftruncate(descriptor, 0)
-        os.pwrite(descriptor, f"{os.getpid()}\n".encode(), 0)
-        try:
-            yield root
-        finally:
-            os.ftruncate(descriptor, 0)
-            if created and [entry.name for entry in root.iterdir()] == [LOCK_FILE]:
-                (root / LOCK_FILE).unlink()
-                root.rmdir()
-    finally:
-        os.close(descriptor)
-
-
-def _holder(descriptor: int) -> str:
-    """`` (pid N)`` of the lock's holder as written in the lock file (empty if unreadable)."""
-    text = os.pread(descriptor, 24, 0).decode("ascii", errors="replace").strip()
-    return f" (pid {text})" if text.isdigit() else ""
 
 
 class ResultStore:
@@ -425,37 +372,6 @@ def results_kind(root: Path | str) -> str:
     if not isinstance(kind, str):
         raise CorruptFileError(f"{path}: kind: expected a string, got {shown(kind)}")
     return kind
-
-
-def read_table(path: Path) -> pd.DataFrame:
-    """A Parquet table of :meth:`ResultStore.consolidate`, read as a saved file: a regular file
-    (:func:`skidnav.userfile.open_user_file`) of at most :data:`MAX_TABLE_BYTES` whose row groups
-    announce at most that much data (its footer is read first); CorruptFileError naming it
-    otherwise."""
-    import pyarrow
-
-    with open_user_file(path, "table") as handle:
-        try:
-            announced = _announced_bytes(handle)
-            if announced > MAX_TABLE_BYTES:
-                raise ValueError(f"{announced:,} bytes, expected at most {MAX_TABLE_BYTES:,}")
-            handle.seek(0)
-            return pd.read_parquet(handle)
-        except (*READ_ERRORS, pyarrow.ArrowException) as error:
-            raise CorruptFileError(f"{path}: unreadable table ({first_line(error, 80)})") from None
-
-
-def _announced_bytes(handle: BinaryIO) -> int:
-    """The larger of a Parquet file's size and the data its row groups announce (the footer is
-    read only when the file is within :data:`MAX_TABLE_BYTES`)."""
-    import pyarrow.parquet
-
-    size = handle.seek(0, os.SEEK_END)
-    if size > MAX_TABLE_BYTES:
-        return size
-    footer = pyarrow.parquet.ParquetFile(handle).metadata
-    groups = range(footer.num_row_groups)
-    return max(size, sum(int(footer.row_group(group).total_byte_size) for group in groups))
 
 
 def _with_missing_columns(

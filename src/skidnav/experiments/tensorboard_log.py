@@ -13,7 +13,7 @@ path: ``/`` becomes ``%2F``, so two labels never share a directory), holding one
 file was written plus the run's training time up to that episode, so TensorBoard's *Relative*
 axis shows training seconds. A study's runs log their own episode columns the same way.
 
-A file is written whole (:func:`skidnav.atomicfile.write_user_file`), so a resumed sweep writes
+A file is written whole (:func:`skidnav.files.atomic.write_user_file`), so a resumed sweep writes
 the same directory again without duplicating a point. TensorBoard stores scalars as float32:
 the values read back equal the episodes table's after rounding to float32.
 
@@ -33,10 +33,10 @@ from urllib.parse import quote
 
 import numpy as np
 
-from skidnav.atomicfile import write_user_file
 from skidnav.errors import UserError
 from skidnav.experiments.store import TrialResult
 from skidnav.extras import require
+from skidnav.files.atomic import write_user_file
 
 EVENT_FILE = "events.out.tfevents.skidnav"
 """The event file of a run's directory (TensorBoard reads every file named ``*tfevents*``)."""

@@ -13,7 +13,8 @@ number.
 
 Agents of every family (:mod:`skidnav.agents.catalog`: tabular, linear on continuous
 observations, deep) are built and trained through one door, the catalog entry of their name.
-Tabular agents train in the compiled trainer ``skidnav.agents.fast_training.train_agent_fast``
+Tabular agents train in the compiled trainer
+``skidnav.agents.tabular.fast_training.train_agent_fast``
 for the skid-steer environment when it supports the agent, else in
 ``skidnav.agents.training.train_agent`` (which it falls back to on its own, e.g. for
 ``[env] dynamics = "mujoco"``, the physical robot, whose runs have no oracle); linear agents
@@ -36,8 +37,9 @@ import numpy as np
 from skidnav.agents.catalog import CatalogAgent, CatalogEntry, entry
 from skidnav.agents.interface import Agent
 from skidnav.agents.tabular.agent import TabularAgent
-from skidnav.agents.training import TrainingLog, greedy_path
+from skidnav.agents.training import Evaluation, TrainingLog, greedy_path
 from skidnav.envs.registration import allowed_env_modules, registered_env_id, with_env_modules
+from skidnav.envs.wrappers import FineStates
 from skidnav.errors import UserError
 from skidnav.experiments.config import CONVERGENCE_OBJECTIVES, ExperimentConfig, MapSpec
 from skidnav.experiments.metrics import (
@@ -45,12 +47,7 @@ from skidnav.experiments.metrics import (
     evaluation_summary,
     run_metrics,
 )
-from skidnav.experiments.reference.finegrid import (
-    FineStates,
-    check_grids,
-    refines_positions,
-    state_grid,
-)
+from skidnav.experiments.reference.finegrid import check_grids, refines_positions, state_grid
 from skidnav.experiments.reference.world import warm_up_references, world_reference
 from skidnav.experiments.runs import RunSpec, expand_runs
 from skidnav.experiments.store import EPISODE_COLUMNS, TrialResult
@@ -81,7 +78,7 @@ def config_map(entry: MapSpec, rng: np.random.Generator) -> GridMap:
     return build_map(rng, kind=entry.kind, file=entry.file or None, options=dict(entry.options))
 
 
-def make_env(
+def trial_env(
     spec: ExperimentRun, grid_map: GridMap, slip_seed: int, observation: str | None = None
 ) -> gymnasium.Env[Any, Any]:
     """The environment of a run, as ``gymnasium.make`` gives it (wrappers included).
@@ -100,7 +97,7 @@ def make_env(
     An agent's ``discretization`` (n_x, n_y, n_headings) with the map's cells becomes the env's own
     discretization (finer heading bins, the compiled trainer); one with finer cells than the map's
     leaves the env on poses, which :func:`agent_view` turns into the states of the finer grid
-    (:class:`~skidnav.experiments.reference.finegrid.FineStates`). ``observation`` overrides both.
+    (:class:`~skidnav.envs.wrappers.FineStates`). ``observation`` overrides both.
     """
     config = spec.config
     options: dict[str, Any] = dict(config.env_options)
@@ -131,7 +128,7 @@ def make_env(
 
 def agent_view(spec: ExperimentRun, env: gymnasium.Env[Any, Any]) -> gymnasium.Env[Any, Any]:
     """What a run's agent trains and is evaluated on: ``env.unwrapped``, seen through the finer
-    states of the agent's ``discretization`` when it refines the map's cells (:func:`make_env`)."""
+    states of the agent's ``discretization`` when it refines the map's cells (:func:`trial_env`)."""
     nav = env.unwrapped
     levels = spec.agent.discretization
     if refines_positions(levels, getattr(nav, "grid_map", None)):
@@ -140,7 +137,7 @@ def agent_view(spec: ExperimentRun, env: gymnasium.Env[Any, Any]) -> gymnasium.E
 
 
 def action_limit(env: gymnasium.Env[Any, Any]) -> int:
-    """Actions per episode of a run on ``env`` (from :func:`make_env`): its time limit
+    """Actions per episode of a run on ``env`` (from :func:`trial_env`): its time limit
     (``env.spec.max_episode_steps``), or 10,000 for an env registered without one."""
     limit = env.spec.max_episode_steps if env.spec is not None else None
     return int(limit or 10_000)
@@ -192,7 +189,7 @@ def _world_arrays(
 ) -> dict[str, np.ndarray]:
     """Walls, start, goal and slip η of a skid-steer run, and of a tabular agent its value,
     heading and policy maps (on the agent's finer grid, and the map refined to it, for an agent
-    seeing :class:`~skidnav.experiments.reference.finegrid.FineStates`)."""
+    seeing :class:`~skidnav.envs.wrappers.FineStates`)."""
     grid = getattr(env, "discretization", None)
     nav: Any = env
     if isinstance(env, FineStates):
@@ -241,11 +238,11 @@ def _world(
     spec: ExperimentRun, map_rng: np.random.Generator, slip_seed: int
 ) -> tuple[GridMap | None, gymnasium.Env[Any, Any], gymnasium.Env[Any, Any], int]:
     """(map or None, training env, evaluation env, action limit) of a run, the map drawn with
-    ``map_rng``; the envs unwrapped (:func:`make_env`)."""
+    ``map_rng``; the envs unwrapped (:func:`trial_env`)."""
     skid = spec.config.env_id == SKID_ENV_ID
     grid_map = config_map(spec.map, map_rng) if skid else None
-    env = make_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
-    eval_env = make_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
+    env = trial_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
+    eval_env = trial_env(spec, grid_map, slip_seed)  # type: ignore[arg-type]
     return grid_map, agent_view(spec, env), agent_view(spec, eval_env), action_limit(env)
 
 
@@ -257,7 +254,7 @@ def _oracle_env(
     the same for every agent of a world)."""
     if isinstance(eval_env.observation_space, gymnasium.spaces.Discrete):
         return eval_env
-    return make_env(spec, grid_map, slip_seed, observation="discrete").unwrapped
+    return trial_env(spec, grid_map, slip_seed, observation="discrete").unwrapped
 
 
 def _agent(
@@ -290,19 +287,14 @@ def warm_up(spec: ExperimentRun) -> None:
             spec, agent=agent,
             config=dataclasses.replace(spec.config, max_steps=max(WARM_UP_LIMITS)),
         )  # fmt: skip
-    made = (make_env(spec, grid_map, 0) for _ in range(2))  # type: ignore[arg-type]
+    made = (trial_env(spec, grid_map, 0) for _ in range(2))  # type: ignore[arg-type]
     env, eval_env = (agent_view(spec, each) for each in made)
     env.reset(seed=1)
     eval_env.reset(seed=2)
     built = _agent(spec, env, np.random.SeedSequence(3), max(WARM_UP_LIMITS))
     for limit in WARM_UP_LIMITS:
-        built.train(
-            env,
-            1,
-            max_steps=limit,
-            greedy_eval_env=eval_env if spec.config.greedy_eval else None,
-            greedy_seeds=[2, 3],
-        )
+        evaluation = Evaluation(eval_env if spec.config.greedy_eval else None, [2, 3])
+        built.train(env, 1, max_steps=limit, evaluation=evaluation)
     greedy_path(built.agent, eval_env, max(WARM_UP_LIMITS), seed=2)
     if grid_map is not None:
         _world_arrays(built.agent, grid_map, env)
@@ -345,16 +337,11 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     envs = None
     if grid_map is not None:
         oracle_env = functools.partial(_oracle_env, spec, grid_map, slip_seed, eval_env)
-        pose_env = functools.partial(make_env, spec, grid_map, slip_seed, observation="pose")
+        pose_env = functools.partial(trial_env, spec, grid_map, slip_seed, observation="pose")
         envs = (oracle_env, pose_env)
     world = world_reference(config, eval_env, envs, world_streams["oracle"], eval_seeds, max_steps)
-    log = built.train(
-        env,
-        config.episodes,
-        max_steps=max_steps,
-        greedy_eval_env=eval_env if config.greedy_eval else None,
-        greedy_seeds=eval_seeds,
-    )
+    measured = Evaluation(eval_env if config.greedy_eval else None, eval_seeds)
+    log = built.train(env, config.episodes, max_steps=max_steps, evaluation=measured)
     episodes = _episode_arrays(log)
     poses, reached = greedy_path(built.agent, eval_env, max_steps, seed=eval_seeds[0])
     arrays = {"greedy_poses": poses}
@@ -396,7 +383,7 @@ def _check_config(config: ExperimentConfig) -> None:
         for map_spec in config.maps:
             grid_map = config_map(map_spec, np.random.default_rng(0))
             check_grids(config, grid_map, map_spec.label, entries)
-        make_env(first, grid_map, 0).close()
+        trial_env(first, grid_map, 0).close()
     except gymnasium.error.Error as error:
         raise UserError(f"environment {config.env_id!r}: {error}") from None
     except (TypeError, ValueError) as error:

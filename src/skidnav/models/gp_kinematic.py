@@ -43,7 +43,7 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, Kernel, WhiteKernel
 
-from skidnav.models.kinematic import window_slots
+from skidnav.models.kinematic_config import window_slots
 from skidnav.models.kinematic_prediction import feed_rows
 
 logger = logging.getLogger(__name__)

@@ -40,106 +40,36 @@ from __future__ import annotations
 
 import json
 import logging
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from skidnav.atomicfile import write_atomic, write_npz_atomic
 from skidnav.errors import CorruptFileError, first_line
-from skidnav.models.bayesian_ridge import RidgePosterior, fit_bayesian_ridge
+from skidnav.files.atomic import write_atomic, write_npz_atomic
+from skidnav.files.saved import MAX_ARCHIVE_BYTES, READ_ERRORS, ArraySpec, SavedArchive, read_json
+from skidnav.models.kinematic_config import KinematicModelConfig, window_slots
 from skidnav.models.kinematic_prediction import (
     action_velocities,
     feed_rows,
     predict_action,
     prediction_table,
 )
+from skidnav.models.kinematic_regression import (
+    Posterior,
+    fit_coefficients,
+    icr_parameters,
+    nominal_coefficients,
+    twist_std,
+)
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
-from skidnav.savedfile import MAX_ARCHIVE_BYTES, READ_ERRORS, ArraySpec, SavedArchive, read_json
 from skidnav.world.discretization import Discretization
 
 logger = logging.getLogger(__name__)
 
-N_COEFFICIENTS = 8
-"""Columns of :attr:`KinematicModel.coefficients`:
-``[vx_wl, vx_wr, vx_b, yaw_wl, yaw_wr, yaw_b, vy_yaw, vy_b]``."""
 _FORMAT_VERSION = 1
-Posterior = tuple[RidgePosterior | None, RidgePosterior | None, RidgePosterior | None]
-"""The fitted regressions of a region (v_x, yaw_rate, v_y); None where nothing was fitted."""
-
-
-@dataclass(frozen=True)
-class KinematicModelConfig:
-    """Hyperparameters of the learned kinematic model.
-
-    Attributes:
-        min_samples: samples a region (or the pool) needs before its own fit is used.
-        refit_every: minimum new samples (free sub-steps) between two refits.
-        refit_growth: also wait for ``refit_growth ×`` the samples seen at the last refit
-            (0: refit every ``refit_every`` samples).
-        window: samples kept per region (sliding window) [sub-steps].
-        forgetting: per-sample weight decay in (0, 1]; 1 weighs all kept samples equally.
-        fit_intercept: fit the intercepts vx_b, yaw_b, vy_b.
-    """
-
-    min_samples: int = 20
-    refit_every: int = 500
-    refit_growth: float = 1.0
-    window: int = 500
-    forgetting: float = 1.0
-    fit_intercept: bool = False
-
-    def __post_init__(self) -> None:
-        for name in ("min_samples", "refit_every", "window"):
-            value = getattr(self, name)
-            if not (isinstance(value, int) and value >= 1):
-                raise ValueError(f"expected {name} to be an integer >= 1, got {value!r}")
-        if not self.refit_growth >= 0:
-            raise ValueError(f"expected refit_growth >= 0, got {self.refit_growth}")
-        if not 0 < self.forgetting <= 1:
-            raise ValueError(f"expected forgetting in (0, 1], got {self.forgetting}")
-
-
-def nominal_coefficients(robot: RobotParams) -> np.ndarray:
-    """The prior: coefficients of the nominal (slip-free) robot, shape (8,)."""
-    half = robot.wheel_radius / 2.0
-    turn = robot.wheel_radius / (2.0 * robot.half_track)
-    return np.array([half, half, 0.0, -turn, turn, 0.0, -robot.x_icr, 0.0])
-
-
-def icr_parameters(
-    vx_coefficients: np.ndarray, yaw_coefficients: np.ndarray, vy_slope: np.ndarray | float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The ICR model's reading of the thesis's three regressions (v_x and yaw rate on
-    (ω_L, ω_R), v_y on the yaw rate): effective wheel radius r = β_L + β_R [m], effective half
-    track c = r / (γ_R − γ_L) [m], x_ICR = −s [m] (Kozłowski & Pazderski 2004). Used by the
-    learned model (:meth:`KinematicModel.estimates`) and the floor calibration
-    (:mod:`skidnav.physics.calibration`).
-
-    Args:
-        vx_coefficients: (β_L, β_R) of v_x on (ω_L, ω_R) [m/rad], shape (..., 2).
-        yaw_coefficients: (γ_L, γ_R) of the yaw rate on (ω_L, ω_R) [1], shape (..., 2).
-        vy_slope: s of v_y on the yaw rate [m], shape (...) (a scalar for one fit).
-
-    Returns:
-        (r, c, x_ICR), each of shape (...): one set per fit or per posterior draw.
-
-    >>> r, c, x_icr = icr_parameters(np.array([0.01125, 0.01125]),
-    ...                              np.array([-0.1875, 0.1875]), -0.05)
-    >>> round(float(r), 4), round(float(c), 4), round(float(x_icr), 4)
-    (0.0225, 0.06, 0.05)
-    """
-    beta, gamma = np.asarray(vx_coefficients), np.asarray(yaw_coefficients)
-    radius = beta.sum(axis=-1)
-    return radius, radius / (gamma[..., 1] - gamma[..., 0]), -np.asarray(vy_slope)
-
-
-def window_slots(count: int, window: int) -> np.ndarray:
-    """Ring-buffer slots of the kept samples of a region that has received ``count`` samples
-    into a buffer of ``window``, oldest first: int64 (min(count, window),)."""
-    return np.arange(count - min(count, window), count) % window
 
 
 class KinematicModel:
@@ -247,7 +177,8 @@ class KinematicModel:
                 self._posteriors[region] = pooled_posterior
             elif fresh[region] >= minimum or self.fitted_counts[region] < minimum:
                 x, w = self._region_samples(region)
-                self.coefficients[region], self._posteriors[region] = self._fit(x, w, pooled)
+                fit = fit_coefficients(x, w, pooled, self.config.fit_intercept)
+                self.coefficients[region], self._posteriors[region] = fit
                 self.fitted_counts[region] = self.counts[region]
         self.refits += 1
         self._pooled_fitted = int(self.counts.sum())
@@ -270,33 +201,7 @@ class KinematicModel:
         parts = [self._region_samples(int(r)) for r in active]
         x = np.concatenate([p[0][-share:] for p in parts])
         w = np.concatenate([p[1][-share:] for p in parts])
-        return self._fit(x, w, prior)
-
-    def _fit(
-        self, samples: np.ndarray, weights: np.ndarray, base: np.ndarray
-    ) -> tuple[np.ndarray, Posterior]:
-        """Fit the three regressions on the residual of ``base`` coefficients; returns (8,) and
-        the fitted regressions (v_x, yaw_rate, v_y)."""
-        wheels = samples[:, 0:2]
-        v_x, v_y, yaw_rate = samples[:, 2], samples[:, 3], samples[:, 4]
-        out = base.copy()
-        out[0:3], vx_fit = self._ridge(wheels, v_x, weights, base[0:3])
-        out[3:6], yaw_fit = self._ridge(wheels, yaw_rate, weights, base[3:6])
-        out[6:8], vy_fit = self._ridge(yaw_rate[:, None], v_y, weights, base[6:8])
-        return out, (vx_fit, yaw_fit, vy_fit)
-
-    def _ridge(
-        self, inputs: np.ndarray, target: np.ndarray, weights: np.ndarray, base: np.ndarray
-    ) -> tuple[np.ndarray, RidgePosterior | None]:
-        """Bayesian ridge on ``target − base·[inputs, 1]``; returns base + (coef, intercept) and
-        the regression (None when the residual is zero: nothing to fit)."""
-        slopes, intercept = base[:-1], base[-1]
-        residual = target - inputs @ slopes - intercept
-        if not np.any(np.abs(residual) > 1e-15):
-            return base.copy(), None
-        regression = fit_bayesian_ridge(inputs, residual, weights, self.config.fit_intercept)
-        coefficients: np.ndarray = base + np.append(regression.coef, regression.intercept)
-        return coefficients, regression
+        return fit_coefficients(x, w, prior, self.config.fit_intercept)
 
     # -- prediction ------------------------------------------------------------------------
 
@@ -324,7 +229,7 @@ class KinematicModel:
             posterior = self._posteriors[int(region)]
             if posterior is not None:
                 rows = regions == region
-                std[rows] = _twist_std(posterior, wheels[rows], yaw[rows], c[rows, 6])
+                std[rows] = twist_std(posterior, wheels[rows], yaw[rows], c[rows, 6])
         return mean, std
 
     def posterior(self, region: int) -> Posterior | None:
@@ -447,7 +352,7 @@ class KinematicModel:
         """ValueError unless a model of ``grid`` and ``config`` is one a saved file may describe:
         no more slip regions than cells, and its arrays (per region the ``window × 5`` samples,
         2 counts, 8 coefficients, 12 velocities, float64 or int64) within
-        :data:`~skidnav.savedfile.MAX_ARCHIVE_BYTES`. Checked before a loader allocates one."""
+        :data:`~skidnav.files.saved.MAX_ARCHIVE_BYTES`. Checked before a loader allocates one."""
         n_bytes = grid.n_regions * (config.window * 5 + 22) * 8
         if grid.n_regions > grid.n_x * grid.n_y or n_bytes > MAX_ARCHIVE_BYTES:
             raise ValueError(
@@ -490,23 +395,6 @@ class KinematicModel:
                 f"{base}: cannot load kinematic model ({first_line(error)})"
             ) from None
         return model
-
-
-def _spread(regression: RidgePosterior | None, inputs: np.ndarray) -> np.ndarray:
-    """Posterior predictive standard deviation of one regression at ``inputs`` (n, k)."""
-    if regression is None:
-        return np.zeros(len(inputs))
-    return regression.predictive_std(inputs)
-
-
-def _twist_std(
-    posterior: Posterior, wheels: np.ndarray, yaw: np.ndarray, vy_yaw: np.ndarray
-) -> np.ndarray:
-    """(n, 3) standard deviations of (v_x, v_y, yaw_rate): v_y's adds vy_yaw² · var(yaw_rate)."""
-    vx_fit, yaw_fit, vy_fit = posterior
-    yaw_std = _spread(yaw_fit, wheels)
-    vy_std = np.hypot(_spread(vy_fit, yaw[:, None]), vy_yaw * yaw_std)
-    return np.stack([_spread(vx_fit, wheels), vy_std, yaw_std], axis=1)
 
 
 def _table(meta: dict[str, Any], key: str) -> dict[str, Any]:

@@ -28,7 +28,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from skidnav.models.bayesian_ridge import fit_bayesian_ridge
-from skidnav.models.kinematic import icr_parameters
+from skidnav.models.kinematic_regression import icr_parameters
 from skidnav.physics.mjcf import PhysicsParams, uniform_floor
 from skidnav.physics.mujoco_robot import PhysicsRobot
 from skidnav.robot.kinematics import N_ACTIONS, commanded_wheel_speeds

@@ -16,13 +16,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from skidnav.configtables import build_dataclass, check_keys, resolve_path, table
 from skidnav.errors import UserError, shown
+from skidnav.files.configtables import build_dataclass, check_keys, resolve_path, table
+from skidnav.files.saved import parse_toml, read_config_text
 from skidnav.physics.materials import MATERIALS
 from skidnav.realtime.link.auth import require_secret
 from skidnav.realtime.link.protocol import MAX_LINE_BYTES
 from skidnav.robot.slip import SLIP_PRESETS
-from skidnav.savedfile import parse_toml, read_config_text
 from skidnav.world.grid import MAP_KINDS
 
 DRIVER_TABLES = ("tcp", "serial", "ros2")
@@ -284,9 +284,9 @@ def config_from_mapping(data: Mapping[str, Any], preset: str | None = None) -> R
 
 
 def read_tables(path: Path) -> dict[str, Any]:
-    """The TOML tables of a config file (read by :func:`~skidnav.savedfile.read_config_text`:
-    at most :data:`~skidnav.savedfile.MAX_CONFIG_BYTES`, a device or a pipe ends at that limit;
-    nested at most :data:`~skidnav.savedfile.MAX_JSON_DEPTH` levels), with every map file path
+    """The TOML tables of a config file (read by :func:`~skidnav.files.saved.read_config_text`:
+    at most :data:`~skidnav.files.saved.MAX_CONFIG_BYTES`, a device or a pipe ends at that limit;
+    nested at most :data:`~skidnav.files.saved.MAX_JSON_DEPTH` levels), with every map file path
     made absolute (:func:`resolve_map_paths`); UserError (one line naming the file) if unreadable
     or malformed."""
     return resolve_map_paths(parse_toml(read_config_text(path), path), path.parent)
@@ -295,7 +295,7 @@ def read_tables(path: Path) -> dict[str, Any]:
 def resolve_map_paths(data: dict[str, Any], folder: Path) -> dict[str, Any]:
     """``data`` (parsed TOML tables, changed in place) with every map file path (``[run] map``
     and ``[presets.NAME.run] map``, when not a map kind) made absolute, a relative one against
-    ``folder``, the config file's (:func:`~skidnav.configtables.resolve_path`)."""
+    ``folder``, the config file's (:func:`~skidnav.files.configtables.resolve_path`)."""
     presets = data.get("presets", {})
     runs = [data.get("run")]
     if isinstance(presets, dict):

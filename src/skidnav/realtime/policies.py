@@ -1,7 +1,7 @@
 """The continuous policies ``skidnav robot run`` can drive (docs/realtime.md, "Continuous
 policies"): a named one (``--policy NAME``, its settings from the config's ``[policies.NAME]``
 table) or a saved one (``--policy-file PATH``, by the loader of its format:
-:mod:`skidnav.agents.policies.loading`).
+:func:`skidnav.agents.saved.load_policy`).
 """
 
 from __future__ import annotations
@@ -14,12 +14,12 @@ from typing import Any
 import numpy as np
 
 from skidnav.agents.policies.goal_tracker import GoalTracker, GoalTrackerConfig
-from skidnav.agents.policies.loading import load_policy, policy_json
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
-from skidnav.configtables import build_dataclass
-from skidnav.envs.navigation import clipped_wheel_speeds
+from skidnav.agents.saved import load_policy, saved_json
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import UserError, first_line, shown
+from skidnav.files.configtables import build_dataclass
 from skidnav.realtime.config import RealtimeConfig
+from skidnav.robot.kinematics import clipped_wheel_speeds
 from skidnav.robot.params import RobotParams
 from skidnav.sim.features import PoseFeatures
 from skidnav.sim.navigation import is_forward_drive
@@ -47,7 +47,7 @@ def select_policy(
     if (name is None) == (file is None):
         raise UserError("expected one of --policy and --policy-file")
     if file is not None:
-        return load_policy(file), f"file:{policy_json(file).resolve()}"
+        return load_policy(file), f"file:{saved_json(file, 'policy file').resolve()}"
     assert name is not None
     builder = NAMED_POLICIES.get(name)
     if builder is None:

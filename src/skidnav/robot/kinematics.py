@@ -14,6 +14,9 @@ World-frame rates: Ẋ = v_x cos ψ − v_y sin ψ, Ẏ = v_x sin ψ + v_y cos �
 from __future__ import annotations
 
 import math
+from typing import Any
+
+import numpy as np
 
 from skidnav._jit import inline_jit, jit
 
@@ -197,3 +200,32 @@ def expected_body_velocities(
         expected_slipped_speed(omega_left, eta), expected_slipped_speed(omega_right, eta),
         x_icr, wheel_radius, half_track,
     )  # fmt: skip
+
+
+def real_values(action: Any) -> np.ndarray | None:
+    """``action`` as a float64 array, or None unless it holds real numbers: a complex number
+    (whose imaginary part a cast would drop), a string, or a ragged or non-numeric sequence
+    gives None.
+
+    >>> real_values([1.7, -1]), real_values(np.array([1.7 + 0j, 1.0])), real_values("17")
+    (array([ 1.7, -1. ]), None, None)
+    """
+    try:
+        values = np.asarray(action)
+        if values.dtype.kind not in "biufO":
+            return None
+        return values.astype(np.float64, copy=False)
+    except (TypeError, ValueError):  # ragged, or an object that is not a real number
+        return None
+
+
+def clipped_wheel_speeds(action: Any, limit: float) -> tuple[float, float]:
+    """A continuous action (ω_L, ω_R) [rad/s] as two floats clipped to ± ``limit``; ValueError
+    unless it holds two finite real numbers."""
+    values = real_values(action)
+    if values is None:
+        raise ValueError(f"expected an action of two wheel speeds, got {action!r}")
+    if values.shape != (2,) or not np.isfinite(values).all():
+        raise ValueError(f"expected an action of two finite wheel speeds, got {action!r}")
+    left, right = values.tolist()
+    return min(max(left, -limit), limit), min(max(right, -limit), limit)

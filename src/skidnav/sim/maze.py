@@ -1,6 +1,7 @@
 """The grid mazes of Sutton & Barto (2018) ch. 8 for compiled code: their walls and goal
 (:class:`MazeArrays`, built by :meth:`skidnav.envs.mazes.GridMazeEnv.maze_arrays`) and their move
-(:func:`maze_move`, as ``GridMazeEnv.step``), driven by :func:`skidnav.agents.env_steps.maze_step`.
+(:func:`maze_move`, as ``GridMazeEnv.step``), driven by
+:func:`skidnav.agents.tabular.env_steps.maze_step`.
 """
 
 from __future__ import annotations

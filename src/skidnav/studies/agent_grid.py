@@ -37,12 +37,12 @@ import numpy as np
 import pandas as pd
 
 from skidnav.agents.training import TrainingLog
-from skidnav.configtables import check_keys, table, table_array
 from skidnav.errors import UserError, shown
 from skidnav.experiments.config import AgentSpec, MapSpec, freeze_params
 from skidnav.experiments.store import ResultStore, RunLayout
-from skidnav.savedfile import ArraySpec, up_to
-from skidnav.stats import Interval
+from skidnav.files.configtables import check_keys, table, table_array
+from skidnav.files.saved import ArraySpec, up_to
+from skidnav.statistics.intervals import Interval
 
 MAX_SEEDS = 1000
 """Most seeds (runs per agent) of a study."""

@@ -1,7 +1,8 @@
 """What a study is to ``skidnav run``: a kind of config the one runner executes.
 
-A study config is a TOML file whose top-level ``kind`` names its study (an experiment config
-has no ``kind``, or ``kind = "experiment"``). The study turns the parsed document into a
+A config is a TOML file whose top-level ``kind`` names its study; a config without one is a plain
+experiment (agents × maps × presets × seeds), ``kind = "experiment"``, a study like the others
+(:mod:`skidnav.studies.experiment`). The study turns the parsed document into a
 :class:`~skidnav.experiments.runs.Grid` (its runs are the grid's agent × map × preset × seed
 points, each with its own seeds), gives the function that executes one run and the
 :class:`~skidnav.experiments.store.RunLayout` of its results, and writes its section of the
@@ -11,7 +12,8 @@ Ctrl-C or SIGKILL resumes with nothing finished lost), the tidy Parquet tables, 
 the sessions in ``metadata.json``.
 
 :data:`STUDY_MODULES` lists the studies; each module defines ``STUDY``, an object of the
-:class:`Study` protocol. Only the named study's module is imported.
+:class:`Study` protocol. Only the named study's module is imported. A study whose report is a page
+of its own with a one-line verdict (the experiment's) is also a :class:`VerdictStudy`.
 
 An experiment's report draws the sections some studies add to it (the discretization-gap
 table): :data:`EXPERIMENT_SECTIONS` lists them, the one place the commands take them from
@@ -24,7 +26,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 from skidnav.errors import UserError
 from skidnav.experiments.runner import BACKENDS, TrialFunction
@@ -70,20 +72,45 @@ class Study(Protocol):
         ...
 
     def report(self, run_dir: Path) -> str:
-        """The study's section of the HTML report of ``run_dir`` (an HTML fragment)."""
+        """The study's section of the HTML report of ``run_dir`` (an HTML fragment; a
+        :class:`VerdictStudy`'s whole report page)."""
+        ...
+
+
+@runtime_checkable
+class VerdictStudy(Protocol):
+    """A study whose report is a page of its own, led by a one-line verdict (the experiment's:
+    :mod:`skidnav.experiments.report.html`), rather than a section in the page every other study's
+    report shares (:func:`skidnav.experiments.report.page.study_report`)."""
+
+    def write_report(
+        self, run_dir: Path, output: Path | None = None, *, progress: bool = False
+    ) -> tuple[Path, str]:
+        """Write the report of ``run_dir`` to ``output`` (default ``RUN_DIR/report.html``),
+        atomically, with a progress bar on stderr when ``progress``; (its path, its verdict).
+
+        Raises:
+            UserError: the results are missing or damaged, or the report cannot be written.
+        """
+        ...
+
+    def verdict(self, run_dir: Path) -> str:
+        """The one line the report of ``run_dir`` opens with (``skidnav run`` prints it)."""
         ...
 
 
 STUDY_MODULES: dict[str, str] = {
+    EXPERIMENT_KIND: "skidnav.studies.experiment.study",
+    "continuity": "skidnav.studies.continuity.study",
+    "generalisation": "skidnav.studies.generalisation.study",
     "kinematic-models": "skidnav.studies.kinematic_models.study",
     "policy-search": "skidnav.studies.policy_search.study",
-    "generalisation": "skidnav.studies.generalisation.study",
-    "transfer": "skidnav.studies.transfer.study",
-    "continuity": "skidnav.studies.continuity.study",
     "robot-study": "skidnav.studies.hardware.study",
     "sutton-barto-checks": "skidnav.studies.sutton_barto.study",
+    "transfer": "skidnav.studies.transfer.study",
 }
-"""Study kind → the module defining its ``STUDY``."""
+"""Study kind → the module defining its ``STUDY``: the plain experiment first, then the studies
+alphabetically, the order errors list them in."""
 
 EXPERIMENT_SECTIONS: tuple[str, ...] = ("skidnav.studies.gap:gap_section",)
 """The sections studies add to an experiment report, ``"module:function"``, in page order; each
@@ -98,10 +125,9 @@ def study_kind(document: Mapping[str, Any], path: Path | str) -> str:
         UserError: ``kind`` is not a string naming a study.
     """
     kind = document.get("kind", EXPERIMENT_KIND)
-    if kind != EXPERIMENT_KIND and kind not in STUDY_MODULES:
-        known = ", ".join([EXPERIMENT_KIND, *sorted(STUDY_MODULES)])
-        raise UserError(f"{path}: kind: expected one of {known}, got {kind!r}")
-    return str(kind)
+    if not isinstance(kind, str) or kind not in STUDY_MODULES:
+        raise UserError(f"{path}: kind: expected one of {', '.join(STUDY_MODULES)}, got {kind!r}")
+    return kind
 
 
 def study(kind: str) -> Study:
@@ -117,7 +143,7 @@ def study_of_results(kind: str, where: Path | str) -> Study:
         UserError: no study writes results of that kind.
     """
     if kind not in STUDY_MODULES:
-        known = ", ".join([EXPERIMENT_KIND, *sorted(STUDY_MODULES)])
+        known = ", ".join(STUDY_MODULES)
         raise UserError(f"{where}: holds {kind!r} results; known kinds: {known}")
     return study(kind)
 

@@ -26,9 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
-from skidnav.atomicfile import write_atomic
 from skidnav.errors import UserError, excerpt
-from skidnav.userfile import read_limited
+from skidnav.files.atomic import write_atomic
+from skidnav.files.user import read_limited
 from skidnav.world.grid import MAX_SIZE, MIN_SIZE, GridMap, on_far_edge
 
 MAGIC = "skidnav-map 1"

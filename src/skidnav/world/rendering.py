@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from skidnav.atomicfile import write_user_file
 from skidnav.errors import UserError
+from skidnav.files.atomic import write_user_file
 from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.slip import SlipField
 from skidnav.world.colours import GOAL, LANDMARKS, START, TRAIL
@@ -146,7 +146,7 @@ def _legend_font() -> ImageFont.ImageFont | ImageFont.FreeTypeFont:
 def save_frame(frame: np.ndarray, path: Path | str) -> None:
     """Write an RGB frame (H, W, 3) uint8 as a picture, its format chosen by the file suffix
     (e.g. ``.png``), all-or-nothing: the picture is encoded in memory, then written with
-    :func:`~skidnav.atomicfile.write_user_file`, so a failed write leaves the old file, if any.
+    :func:`~skidnav.files.atomic.write_user_file`, so a failed write leaves the old file, if any.
 
     Raises:
         UserError: the path cannot be written (missing directory, no permission, disk full) or

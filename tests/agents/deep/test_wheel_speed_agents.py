@@ -19,7 +19,7 @@ from skidnav.agents.deep.common import DeepConfig
 from skidnav.agents.deep.ppo import PPOAgent, PPOConfig, load_ppo
 from skidnav.agents.deep.sac import SACAgent, SACConfig, load_sac
 from skidnav.agents.deep.wheel_speeds import WheelSpeedAgent
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
@@ -208,12 +208,13 @@ def test_bad_settings_are_one_line(make: Any, message: str) -> None:
 def test_a_saved_policy_loads_without_its_world(
     trained: tuple[str, WheelSpeedAgent[Any], Any, Any], tmp_path: Path
 ) -> None:
-    """Through the policy-file registry: the real-time loop's way to run a policy."""
-    from skidnav.agents.policies import loading
+    """Through the saved-file door (the families' policy loaders): the real-time loop's way to
+    run a policy."""
+    from skidnav.agents.saved import load_policy
 
     name, agent, _, _ = trained
     _, json_path = agent.save(tmp_path / name)
-    policy = loading.load_policy(json_path)
+    policy = load_policy(json_path)
     assert (policy.lidar_rays, policy.lidar_range) == (8, 0.3)
     space = tiny_env().observation_space
     space.seed(1)
@@ -243,5 +244,5 @@ def test_a_saved_policy_loads_without_its_world(
     for key, value, match in edits:
         json_path.write_text(json.dumps({**meta, key: value}))
         with pytest.raises(CorruptFileError, match=match) as error:
-            loading.load_policy(json_path)
+            load_policy(json_path)
         assert "\n" not in str(error.value)

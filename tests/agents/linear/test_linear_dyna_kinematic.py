@@ -16,10 +16,10 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from skidnav.agents import kinematic_planning as kp
 from skidnav.agents.catalog import entry
 from skidnav.agents.linear.dyna_kinematic import LinearDynaKinematicAgent
 from skidnav.agents.linear.registry import load_linear_agent, make_linear_agent
-from skidnav.agents.tabular import kinematic_planning as kp
 from skidnav.agents.training import train_agent
 from skidnav.errors import CorruptFileError, UserError
 from skidnav.experiments.configfile import parse_config

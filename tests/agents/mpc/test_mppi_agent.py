@@ -10,8 +10,8 @@ import pytest
 
 from skidnav.agents.mpc.agent import MPPIKinematicAgent, make_mppi_agent
 from skidnav.agents.mpc.training import train_mppi
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
-from skidnav.agents.training import greedy_run
+from skidnav.agents.training import Evaluation, greedy_run
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import UserError
 from skidnav.world.discretization import Discretization
 from tests.agents.mpc.support import (
@@ -29,7 +29,7 @@ def test_with_the_true_model_it_reaches_a_goal_behind_a_wall_in_its_first_episod
     0.1 s at top speed."""
     env = nav_env(WALL_BETWEEN)
     agent = agent_for(env, seed=0, true=True)
-    log = train_mppi(agent, SealedEnv(env), 1, 600, seed=0)
+    log = train_mppi(agent, SealedEnv(env), 1, max_steps=600, seed=0)
     assert log.successes[0] and log.lengths[0] < 600
     assert log.collisions[0] >= 1  # it found the wall by running into it
     assert agent.evidence.cost_map.blocked[6, 3:8].any()  # a cell of the real wall is blocked
@@ -40,7 +40,9 @@ def test_with_the_learned_model_it_gets_past_the_wall_and_its_policy_too() -> No
     env = nav_env(WALL_BETWEEN)
     agent = agent_for(env, seed=1)
     evaluation = SealedEnv(nav_env(WALL_BETWEEN))
-    log = train_mppi(agent, SealedEnv(env), 2, 600, seed=1, greedy_eval_env=evaluation)
+    log = train_mppi(
+        agent, SealedEnv(env), 2, max_steps=600, evaluation=Evaluation(evaluation), seed=1
+    )
     assert log.successes.all()
     assert (log.greedy_lengths[-1] > 0).all()  # the frozen planner reached the goal too
     assert (log.planning_updates == log.lengths * 64).all()  # K sequences per action

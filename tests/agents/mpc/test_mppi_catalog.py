@@ -16,7 +16,7 @@ from skidnav.agents.catalog import agent_names, entry
 from skidnav.agents.interface import Agent, StepLearningAgent
 from skidnav.agents.mpc.agent import MPPIKinematicAgent
 from skidnav.agents.mpc.config import MPPIConfig
-from skidnav.agents.training import greedy_evaluation
+from skidnav.agents.training import Evaluation, greedy_evaluation
 from skidnav.cli import main
 from skidnav.errors import UserError
 from skidnav.experiments.store import ResultStore
@@ -38,7 +38,7 @@ def wheel_speed_env(**options: Any) -> gymnasium.Env[Any, Any]:
 def test_its_entry_describes_the_family_observation_and_config() -> None:
     described = entry("mppi-kinematic")
     assert "mppi-kinematic" in agent_names()
-    assert (described.family, described.observation) == ("mpc", "box")
+    assert (described.family.name, described.observation) == ("mpc", "box")
     assert described.env_observation(None) == "pose"  # its default Box observation
     assert described.env_observation("features") == "features"
     assert described.config_class is MPPIConfig
@@ -72,7 +72,7 @@ def test_built_by_the_catalog_it_learns_and_its_greedy_rollouts_start_afresh() -
     assert isinstance(agent, MPPIKinematicAgent)
     assert isinstance(agent, StepLearningAgent) and isinstance(agent, Agent)
     env.reset(seed=4)
-    log = built.train(env, 2, max_steps=60, greedy_eval_env=evaluation, greedy_seeds=[7, 8])
+    log = built.train(env, 2, max_steps=60, evaluation=Evaluation(evaluation, [7, 8]))
     assert log.greedy_lengths.shape == (2, 2) and agent.steps == log.lengths.sum()
     assert (log.planning_updates == 64 * log.lengths).all()
     assert log.successes.any()  # 0.25 m to the goal: it gets there within 30 s

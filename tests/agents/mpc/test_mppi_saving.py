@@ -12,8 +12,8 @@ import pytest
 
 from skidnav.agents.mpc.agent import MPPIKinematicAgent
 from skidnav.agents.mpc.loading import load_mppi_agent, policy_from_file
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
 from skidnav.agents.training import run_episode
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError
 from tests.agents.mpc.support import agent_for, nav_env
 

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 import skidnav  # noqa: F401  (registers the env)
-from skidnav.agents.policies.loading import load_policy as load_any_policy
 from skidnav.agents.policies.search.policy_file import load_policy, save_policy
 from skidnav.agents.policies.search.tanh_policy import PolicyLayout, TanhPolicy, parameter_count
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
+from skidnav.agents.saved import load_policy as load_any_policy
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError, UserError
 from tests.saved_file_support import arrays_of, write_npz
 

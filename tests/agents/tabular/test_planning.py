@@ -12,11 +12,11 @@ import pytest
 from skidnav.agents.tabular.planning import dyna_planning, prioritized_sweeping
 from skidnav.agents.tabular.priority_queue import heap_pop, heap_push, make_heap
 from skidnav.models.multinomial import MultinomialModel
-from skidnav.models.multinomial_kernels import (
+from skidnav.models.multinomial_kernels import find_pair
+from skidnav.models.multinomial_targets import (
     EXPECTED,
     MOST_PROBABLE,
     SAMPLE,
-    find_pair,
     model_target,
     model_target_call,
     most_probable_target,

@@ -12,9 +12,10 @@ Stable-Baselines3 model and says which network acts; everything else lives here:
 3. observations rescaled from the ``Box`` bounds to [−1, 1] (Gymnasium's ``RescaleObservation``
    in training, its ``rescale_box`` function when acting), so metres and radians reach the
    network on one scale;
-4. training by **episodes** (:meth:`DeepAgent.train_episodes`): a callback records each episode's
-   return, length, collisions and success, runs the greedy evaluation, and stops after the last
-   episode with Stable-Baselines3's state as if the step had run to its end;
+4. training by **episodes** (:meth:`DeepAgent.train_episodes`, with the
+   :class:`~skidnav.agents.training.Evaluation` of every trainer): a callback records each
+   episode's return, length, collisions and success, runs the greedy evaluation, and stops after
+   the last episode with Stable-Baselines3's state as if the step had run to its end;
 5. saved files that are not pickle (:meth:`DeepAgent.save`, :func:`load_agent`): the acting
    network's weights as float32 arrays in ``.npz`` and the config, spaces, seed and counters in
    ``.json``; loading checks every array's name, dtype and shape against a new network of the
@@ -28,7 +29,7 @@ import json
 import math
 import random
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Generic, NamedTuple, Self, TypeVar
@@ -38,18 +39,19 @@ import numpy as np
 from gymnasium.wrappers import RescaleObservation
 from gymnasium.wrappers.utils import rescale_box
 
-from skidnav.agents.tabular.agent import save_paths
+from skidnav.agents.saving import save_paths
 from skidnav.agents.training import (
-    NOT_REACHED,
+    NO_EVALUATION,
+    Episode,
+    Evaluation,
+    LogRows,
     Rollout,
     TrainingLog,
-    greedy_evaluation,
-    log_from_rows,
-    record_evaluation,
+    plain_evaluations,
 )
-from skidnav.atomicfile import write_atomic, write_npz_atomic
 from skidnav.errors import CorruptFileError, first_line, shown
-from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, read_json
+from skidnav.files.atomic import write_atomic, write_npz_atomic
+from skidnav.files.saved import READ_ERRORS, ArraySpec, SavedArchive, read_json
 
 if TYPE_CHECKING:
     import torch
@@ -218,29 +220,30 @@ class DeepAgent(Generic[ConfigT]):
         return deterministic_action(self.network(), self.scale, observation)
 
     def train_episodes(
-        self,
-        episodes: int,
-        *,
-        greedy_eval_env: gymnasium.Env[Any, Any] | None = None,
-        greedy_seeds: Sequence[int] | None = None,
-        greedy_max_steps: int | None = None,
+        self, episodes: int, *, evaluation: Evaluation = NO_EVALUATION, seed: int | None = None
     ) -> TrainingLog:
-        """Learn for ``episodes`` more episodes; after each, the greedy policy is evaluated on
-        ``greedy_eval_env`` as the plain loop does
-        (:func:`~skidnav.agents.training.greedy_evaluation`, ``greedy_max_steps`` actions at
-        most, default 10,000). Returns the loop's log (``planning_updates``: 0; wall time
-        without the evaluations)."""
-        columns: dict[str, list[Any]] = {name: [] for name in TrainingLog._fields}
-        n_rollouts = 1 if greedy_seeds is None else len(greedy_seeds)
-        limit = greedy_max_steps or 10_000
+        """Learn for ``episodes`` more episodes, the greedy policy measured after each by
+        ``evaluation`` with the pieces of the one loop
+        (:func:`~skidnav.agents.training.train_episodes`): the evaluation env's first reset
+        (:meth:`~skidnav.agents.training.Evaluation.start`), the rollouts of
+        :func:`~skidnav.agents.training.plain_evaluations`
+        (:meth:`~skidnav.agents.training.Evaluation.run`, each cut at
+        ``evaluation.limit(None)`` actions: the env's own limit cuts the episodes) and the log
+        (:class:`~skidnav.agents.training.LogRows`; ``planning_updates`` 0, wall time without
+        the evaluations). ``seed`` seeds this call's first reset (None: Stable-Baselines3
+        continues its env).
 
-        def evaluate() -> list[Rollout]:
-            if greedy_eval_env is None:
-                return [NOT_REACHED] * n_rollouts
-            return greedy_evaluation(self, greedy_eval_env, limit, greedy_seeds)
-
+        Stable-Baselines3 owns the step loop: ``learn`` collects steps across episodes (PPO's
+        ``n_steps``, the off-policy ``train_freq``) and trains between collections, so a call
+        per episode would change what it learns; a callback records each episode instead
+        (:func:`episode_recorder`)."""
+        rows = LogRows(evaluation.n_rollouts)
+        limit, evaluate = evaluation.limit(None), plain_evaluations(self, evaluation)
+        if seed is not None:
+            self._reset_env(seed)
+        evaluation.start(seed)
         if episodes > 0:
-            recorder = episode_recorder(episodes, columns, evaluate)
+            recorder = episode_recorder(episodes, rows, lambda: evaluation.run(evaluate, limit))
             outside = global_random_state()
             set_global_random_state(self._random_state)
             try:
@@ -251,8 +254,17 @@ class DeepAgent(Generic[ConfigT]):
             finally:
                 self._random_state = global_random_state()
                 set_global_random_state(outside)
-        self.episodes += len(columns["returns"])
-        return log_from_rows(columns, n_rollouts)
+        self.episodes += len(rows)
+        return rows.log()
+
+    def _reset_env(self, seed: int) -> None:
+        """Reset the training env with ``seed`` and make its observation the next one
+        Stable-Baselines3 acts on (as its ``learn`` does for a model that has not started)."""
+        env = self.model.get_env()
+        assert env is not None
+        env.seed(seed)
+        self.model._last_obs = env.reset()  # type: ignore[assignment]
+        self.model._last_episode_starts = np.ones((env.num_envs,), dtype=bool)
 
     def weights(self) -> dict[str, np.ndarray]:
         """The acting network's parameters by name, float32 arrays (copies)."""
@@ -313,11 +325,10 @@ def set_global_random_state(state: RandomState) -> None:
 
 
 def episode_recorder(
-    episodes: int, columns: dict[str, list[Any]], evaluate: Callable[[], list[Rollout]]
+    episodes: int, rows: LogRows, evaluate: Callable[[], list[Rollout]]
 ) -> BaseCallback:
-    """A Stable-Baselines3 callback that appends each finished episode to ``columns`` (the
-    :class:`TrainingLog` fields; ``evaluate()`` gives its greedy rollouts) and stops training after
-    ``episodes`` of them."""
+    """A Stable-Baselines3 callback that adds each finished episode to ``rows`` (``evaluate()``
+    gives its greedy rollouts) and stops training after ``episodes`` of them."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class EpisodeRecorder(BaseCallback):
@@ -335,16 +346,13 @@ def episode_recorder(
             self.collisions += int(bool(info.get("collision", False)))
             if not self.locals["dones"][0]:
                 return True
-            columns["wall_time"].append(time.perf_counter() - self.start)
-            columns["returns"].append(self.total)
-            columns["lengths"].append(self.length)
-            columns["successes"].append(not info.get("TimeLimit.truncated", False))
-            columns["collisions"].append(self.collisions)
-            columns["planning_updates"].append(0)
-            record_evaluation(columns, evaluate())
+            wall_time = time.perf_counter() - self.start
+            terminated = not info.get("TimeLimit.truncated", False)
+            episode = Episode(self.total, self.length, terminated, self.collisions, 0)
+            rows.add(episode, wall_time, evaluate())
             self.total, self.length, self.collisions = 0.0, 0, 0
             self.start = time.perf_counter()
-            if len(columns["returns"]) < episodes:
+            if len(rows) < episodes:
                 return True
             finish_step(self.model, self.locals)
             return False

@@ -106,7 +106,7 @@ def load_ppo(path: str | Path, env: gymnasium.Env[Any, Any]) -> PPOAgent:
 
 def policy_from_file(json_path: Path, meta: dict[str, Any]) -> FrozenWheelPolicy:
     """The frozen policy saved by :meth:`PPOAgent.save` (``meta``: its parsed ``.json``), as
-    :data:`skidnav.agents.policies.loading.POLICY_LOADERS` calls it, without an env."""
+    its family (:mod:`skidnav.agents.deep.family`) calls it, without an env."""
     return saved_policy(PPOAgent, json_path, meta)
 
 

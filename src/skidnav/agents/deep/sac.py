@@ -107,7 +107,7 @@ def load_sac(path: str | Path, env: gymnasium.Env[Any, Any]) -> SACAgent:
 
 def policy_from_file(json_path: Path, meta: dict[str, Any]) -> FrozenWheelPolicy:
     """The frozen policy saved by :meth:`SACAgent.save` (``meta``: its parsed ``.json``), as
-    :data:`skidnav.agents.policies.loading.POLICY_LOADERS` calls it, without an env."""
+    its family (:mod:`skidnav.agents.deep.family`) calls it, without an env."""
     return saved_policy(SACAgent, json_path, meta)
 
 

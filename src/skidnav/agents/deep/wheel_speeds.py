@@ -4,7 +4,7 @@ They train on the env's ``action="continuous"`` box (ω_L, ω_R) within ± ``rob
 [rad/s] as it is: Stable-Baselines3 clips a Gaussian action to the box (PPO) or squashes it into
 the box with tanh (SAC), so the actions reach the env in rad/s and nothing rescales them here.
 The observation must be the env's ``"features"`` (:mod:`skidnav.sim.features`), so that the
-frozen policy meets :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`.
+frozen policy meets :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from skidnav.errors import CorruptFileError, first_line
 
 class FrozenWheelPolicy:
     """A deep agent's deterministic policy, frozen: a copy of its acting network that later
-    training does not change (a :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`).
+    training does not change (a :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`).
 
     Attributes:
         lidar_rays: the range readings its observations carry.

@@ -31,9 +31,9 @@ import numpy as np
 from skidnav.agents.linear.config import LinearConfig
 from skidnav.agents.linear.tile_coding import active_tiles, check_coder
 from skidnav.agents.linear.updates import choose_action, greedy_linear
-from skidnav.agents.tabular.agent import generator_from_state, generator_state, save_paths
-from skidnav.atomicfile import write_atomic, write_npz_atomic
+from skidnav.agents.saving import generator_from_state, generator_state, save_paths
 from skidnav.errors import CorruptFileError, shown
+from skidnav.files.atomic import write_atomic, write_npz_atomic
 from skidnav.sim.q_values import epsilon_at
 
 logger = logging.getLogger(__name__)

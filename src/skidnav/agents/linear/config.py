@@ -1,6 +1,6 @@
 """Hyperparameters of the linear agents: frozen dataclasses validated on construction.
 
-They extend the tabular :class:`~skidnav.agents.tabular.config.QLearningConfig` (α, γ, ε and its
+They extend the tabular :class:`~skidnav.agents.config.QLearningConfig` (α, γ, ε and its
 decay, the initial value, the same checks and ``from_mapping``) with the tile coder:
 :class:`LinearConfig` ⊂ :class:`LinearSarsaConfig` and :class:`LinearDynaConfig`.
 
@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from skidnav.agents.tabular.config import QLearningConfig, _check
+from skidnav.agents.config import QLearningConfig, check
 
 MAX_TILINGS = 1024
 """Most tilings of a tile coder."""
@@ -48,25 +48,25 @@ class LinearConfig(QLearningConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        _check(
+        check(
             self.alpha_visit_exponent == 0.0,
             "alpha_visit_exponent 0 (visit counts are tabular)",
             self.alpha_visit_exponent,
         )
-        _check(
+        check(
             isinstance(self.n_tilings, int) and 1 <= self.n_tilings <= MAX_TILINGS,
             f"an integer n_tilings in [1, {MAX_TILINGS}]",
             self.n_tilings,
         )
         tiles = tuple(self.tiles) if isinstance(self.tiles, list | tuple) else ()
-        _check(
+        check(
             bool(tiles) and all(isinstance(n, int) and n >= 1 for n in tiles),
             "tiles as a non-empty list of integers >= 1",
             self.tiles,
         )
         object.__setattr__(self, "tiles", tiles)
         dimensions = tuple(self.dimensions) if isinstance(self.dimensions, list | tuple) else None
-        _check(
+        check(
             dimensions is not None
             and all(isinstance(i, int) and i >= 0 for i in dimensions)
             and len(set(dimensions)) == len(dimensions),
@@ -107,7 +107,7 @@ class LinearSarsaConfig(LinearConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        _check(0.0 <= self.lam <= 1.0, "lam in [0, 1]", self.lam)
+        check(0.0 <= self.lam <= 1.0, "lam in [0, 1]", self.lam)
 
 
 @dataclass(frozen=True)
@@ -123,14 +123,14 @@ class LinearDynaConfig(LinearConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        _check(
+        check(
             isinstance(self.planning_steps, int)
             and 0 <= self.planning_steps <= MAX_LINEAR_PLANNING_STEPS,
             f"an integer planning_steps in [0, {MAX_LINEAR_PLANNING_STEPS:,}]",
             self.planning_steps,
         )
-        _check(0.0 < self.model_alpha <= 1.0, "model_alpha in (0, 1]", self.model_alpha)
-        _check(
+        check(0.0 < self.model_alpha <= 1.0, "model_alpha in (0, 1]", self.model_alpha)
+        check(
             isinstance(self.planning_memory, int)
             and 1 <= self.planning_memory <= MAX_PLANNING_MEMORY,
             f"an integer planning_memory in [1, {MAX_PLANNING_MEMORY:,}]",

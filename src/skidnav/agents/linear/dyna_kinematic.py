@@ -9,7 +9,7 @@ After each real step (s, a, r, s′) with the env's ``info``:
 2. the pose of s (x [m], y [m], heading [rad], read from the observation) into a second ring
    buffer, row for row beside the features;
 3. what the tabular ``dyna-kinematic`` learns from the step, with its own code
-   (:mod:`skidnav.agents.tabular.model_based`, :mod:`skidnav.agents.tabular.kinematic_planning`):
+   (:mod:`skidnav.agents.tabular.model_based`, :mod:`skidnav.agents.kinematic_planning`):
    the free sub-steps of ``info["kinematic_log"]`` fed to the per-region Bayesian ridge
    :class:`~skidnav.models.kinematic.KinematicModel`; the reward into the reward statistics of its
    outcome (free step by region, collision, goal arrival); the goal cell of a termination and the
@@ -37,6 +37,9 @@ from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
+from skidnav.agents import kinematic_planning as kp
+from skidnav.agents.config import KinematicModelFields, check
+from skidnav.agents.geometry import geometry_from_json, geometry_from_task, geometry_json
 from skidnav.agents.linear.config import (
     MAX_LINEAR_PLANNING_STEPS,
     LinearConfig,
@@ -52,14 +55,10 @@ from skidnav.agents.linear.kinematic_planning import (
     kinematic_planning,
     observe_pose,
 )
-from skidnav.agents.tabular import kinematic_planning as kp
-from skidnav.agents.tabular.config import KinematicModelFields, _check
-from skidnav.agents.tabular.model_based import (
+from skidnav.agents.planner_learning import planner_observe
+from skidnav.agents.planner_state import (
     check_planner_counters,
     check_planner_map,
-    geometry_from_json,
-    geometry_from_task,
-    geometry_json,
     hold_kinematic_model,
     true_kinematics_from_json,
 )
@@ -76,7 +75,7 @@ MAX_CELLS = 2**22
 @dataclass(frozen=True)
 class LinearDynaKinematicConfig(LinearDynaConfig, KinematicModelFields):
     """Linear Dyna plus kinematic-model planning from perturbed visited poses
-    (:class:`~skidnav.agents.tabular.config.KinematicModelFields` for the kinematic model, as
+    (:class:`~skidnav.agents.config.KinematicModelFields` for the kinematic model, as
     ``dyna-kinematic``)."""
 
     kinematic_steps: int = 10
@@ -90,7 +89,7 @@ class LinearDynaKinematicConfig(LinearDynaConfig, KinematicModelFields):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        _check(
+        check(
             isinstance(self.kinematic_steps, int)
             and not isinstance(self.kinematic_steps, bool)
             and 0 <= self.kinematic_steps <= MAX_LINEAR_PLANNING_STEPS,
@@ -99,7 +98,7 @@ class LinearDynaKinematicConfig(LinearDynaConfig, KinematicModelFields):
         )
         for name in ("kinematic_position_std", "kinematic_heading_std"):
             value = getattr(self, name)
-            _check(
+            check(
                 isinstance(value, int | float) and math.isfinite(value) and value >= 0,
                 f"a finite {name} >= 0",
                 value,
@@ -327,7 +326,7 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
         state = grid.state(*self.pose_of(self._observation))
         next_pose = np.array(self.pose_of(self._next_observation))
         next_state = grid.state(*next_pose)
-        kp.planner_observe(
+        planner_observe(
             self.planner, state, action, reward, next_state, terminated,
             bool(info.get("collision", False)), next_pose, self.kernel_robot, self.kernel_grid,
         )  # fmt: skip

@@ -2,7 +2,7 @@
 continuous poses imagined near visited ones and moved by the learned kinematic model.
 
 The thesis's kinematic-model planning (Alhawary (2020), ch. 7;
-:mod:`skidnav.agents.tabular.kinematic_planning` for the tabular agents) carried to tile-coded
+:mod:`skidnav.agents.kinematic_planning` for the tabular agents) carried to tile-coded
 continuous observations (docs/agents/linear-dyna.md). One planning update
 (:func:`kinematic_planning`):
 
@@ -16,8 +16,8 @@ continuous observations (docs/agents/linear-dyna.md). One planning update
    body velocities: integrated over the action with the robot's scheme, blocked by known walls as
    the MDP blocks a collision, a known goal cell ending the action a predicted arrival;
 4. the reward is the learned mean reward of that outcome (the row of the tabular planner's
-   ``reward_stats``, :func:`~skidnav.agents.tabular.kinematic_planning.reward_row`, and its mean,
-   :func:`~skidnav.agents.tabular.kinematic_planning.mean_rewards`): goal arrivals, collisions, or
+   ``reward_stats``, :func:`~skidnav.agents.kinematic_planning.reward_row`, and its mean,
+   :func:`~skidnav.agents.kinematic_planning.mean_rewards`): goal arrivals, collisions, or
    free steps by the slip region of the next state's cell;
 5. both poses become the env's observation (:func:`observe_pose`: the ``"pose"`` vector, or the
    ``"features"`` vector of :func:`skidnav.sim.features.fill_features`) and their active tiles,
@@ -32,9 +32,9 @@ from typing import NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
+from skidnav.agents.kinematic_planning import mean_rewards, reward_row
 from skidnav.agents.linear.tile_coding import active_tiles
 from skidnav.agents.linear.updates import q_learning_update
-from skidnav.agents.tabular.kinematic_planning import mean_rewards, reward_row
 from skidnav.models.kinematic_prediction import PREDICT_GOAL, predict_action
 from skidnav.robot.kinematics import wrap_angle
 from skidnav.robot.params import KinematicConstants

@@ -23,9 +23,9 @@ from gymnasium import spaces
 
 from skidnav.agents.linear.agent import SAVE_FORMAT, SAVE_VERSION, LinearAgent
 from skidnav.agents.linear.config import LinearConfig
-from skidnav.agents.tabular.agent import save_paths
+from skidnav.agents.saving import save_paths
 from skidnav.errors import CorruptFileError, UserError, first_line, shown
-from skidnav.savedfile import ArraySpec, SavedArchive, loading, read_json
+from skidnav.files.saved import ArraySpec, SavedArchive, loading, read_json
 
 CONTINUOUS_AGENT_MODULES: dict[str, str] = {
     "linear-q": "skidnav.agents.linear.q_learning",

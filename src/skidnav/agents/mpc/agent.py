@@ -15,7 +15,7 @@ MPPIPlanner`) and returns the wheel speeds; :meth:`MPPIKinematicAgent.observe` f
 kinematic log to the model (refitted on its schedule, then the sampled dynamics updated) and its
 path and collision to the map evidence (the cost-to-go recomputed when the map changed);
 :meth:`MPPIKinematicAgent.end_episode` forgets the plan. :meth:`MPPIKinematicAgent.policy` hands
-out a frozen copy, a :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`.
+out a frozen copy, a :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from skidnav.agents.geometry import geometry_json
 from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.costmap import CostMap, MapCosts
 from skidnav.agents.mpc.dynamics import (
@@ -40,11 +41,10 @@ from skidnav.agents.mpc.dynamics import (
 )
 from skidnav.agents.mpc.evidence import MapEvidence
 from skidnav.agents.mpc.planner import MPPIPlanner
-from skidnav.agents.tabular.agent import generator_state, save_paths
-from skidnav.agents.tabular.model_based import geometry_json
-from skidnav.atomicfile import write_atomic, write_npz_atomic
+from skidnav.agents.saving import generator_state, save_paths
 from skidnav.envs.navigation import with_control_period
 from skidnav.errors import UserError, first_line
+from skidnav.files.atomic import write_atomic, write_npz_atomic
 from skidnav.models.kinematic import KinematicModel
 from skidnav.robot.params import KinematicConstants, RobotParams
 from skidnav.sim.features import check_lidar
@@ -89,7 +89,8 @@ class MPPIKinematicAgent:
         rng: the source of every random draw (default: a fresh one).
         true_coefficients: only for ``kinematic_model = "true"`` — tests and references: the
             simulator's own coefficients per slip region, float64 (n_regions, 8) (columns of
-            :data:`~skidnav.models.kinematic.N_COEFFICIENTS`), planned with and never learned.
+            :data:`~skidnav.models.kinematic_regression.N_COEFFICIENTS`), planned with and never
+            learned.
         lidar_rays, lidar_range: the range readings of the feature observations its frozen
             policy may be given (read past: only the pose is used).
     """
@@ -278,7 +279,7 @@ class MPPIKinematicAgent:
 
 class MPPIPolicy:
     """A frozen ``mppi-kinematic`` planner: a
-    :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`.
+    :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`.
 
     MPPI is a controller with a state (its plan, warm-started from step to step) and samples
     from its own Generator: the wheel speeds depend on the observation, the plan and the draws,

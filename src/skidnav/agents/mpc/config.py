@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from skidnav.agents.tabular.config import KinematicModelFields
+from skidnav.agents.config import KinematicModelFields
 from skidnav.checks import check_integer, check_number
 from skidnav.errors import shown
 

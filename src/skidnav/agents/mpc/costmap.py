@@ -1,6 +1,6 @@
 """The learned occupancy as costs: wall evidence per cell, and a cost-to-go over the cells.
 
-**Evidence (ours, as ``dyna-kinematic``'s,** :func:`skidnav.agents.tabular.kinematic_planning.
+**Evidence (ours, as ``dyna-kinematic``'s,** :func:`skidnav.agents.planner_learning.
 weigh_cell` **).** The env says that an action collided, not which cell it hit; slip makes a guess
 wrong now and then, so a collision is evidence, not a verdict. Every cell (i, j) counts ``hits``
 h, the collisions whose guessed wall cell it was, and ``passes`` f, the free sub-steps that

@@ -14,10 +14,11 @@ prediction at inputs x is then w·x + b + (L z)·(x − x̄), x̄ the inputs' ce
 with an intercept (0 without), which keeps the intercept's posterior mean at the inputs' centre.
 
 Before a region has a fit (no posterior since construction), its slopes are the model's current
-coefficients (the nominal robot, :func:`~skidnav.models.kinematic.nominal_coefficients`, before
-any fit) with a diagonal factor of ``prior_spread`` × |nominal slope| and no noise: the stated
-prior of the agent. With a model held at given coefficients (``kinematic_model = "true"``) the
-factors and the noise are 0.
+coefficients (the nominal robot,
+:func:`~skidnav.models.kinematic_regression.nominal_coefficients`, before any fit) with a
+diagonal factor of ``prior_spread`` × |nominal slope| and no noise: the stated prior of the
+agent. With a model held at given coefficients (``kinematic_model = "true"``) the factors and the
+noise are 0.
 """
 
 from __future__ import annotations
@@ -29,7 +30,8 @@ import numpy as np
 
 from skidnav._jit import inline_jit
 from skidnav.models.bayesian_ridge import RidgePosterior
-from skidnav.models.kinematic import N_COEFFICIENTS, KinematicModel, nominal_coefficients
+from skidnav.models.kinematic import KinematicModel
+from skidnav.models.kinematic_regression import N_COEFFICIENTS, nominal_coefficients
 from skidnav.robot.params import RobotParams
 
 N_FACTORS = 7
@@ -47,7 +49,7 @@ class SampledDynamics(NamedTuple):
     Attributes:
         mean: float64 (n_regions, 8) posterior-mean coefficients
             ``[vx_wl, vx_wr, vx_b, yaw_wl, yaw_wr, yaw_b, vy_yaw, vy_b]``
-            (:data:`~skidnav.models.kinematic.N_COEFFICIENTS`).
+            (:data:`~skidnav.models.kinematic_regression.N_COEFFICIENTS`).
         factors: float64 (n_regions, 7) Cholesky factors of the slope covariances
             (:data:`N_FACTORS`) [m/rad for v_x, 1 for the yaw rate and v_y's slope in m].
         offsets: float64 (n_regions, 5) the centres x̄ of the regressions' inputs (zeros without

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from skidnav.agents.geometry import geometry_from_json
 from skidnav.agents.mpc.agent import (
     AGENT_NAME,
     SAVE_FORMAT,
@@ -27,11 +28,11 @@ from skidnav.agents.mpc.agent import (
 )
 from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.dynamics import SampledDynamics
-from skidnav.agents.tabular.agent import generator_from_state, save_paths
-from skidnav.agents.tabular.model_based import geometry_from_json
+from skidnav.agents.saving import generator_from_state, save_paths
 from skidnav.errors import UserError, shown
-from skidnav.models.kinematic import N_COEFFICIENTS, KinematicModel
-from skidnav.savedfile import ArraySpec, SavedArchive, loading, read_json
+from skidnav.files.saved import ArraySpec, SavedArchive, loading, read_json
+from skidnav.models.kinematic import KinematicModel
+from skidnav.models.kinematic_regression import N_COEFFICIENTS
 
 MAX_AGENT_JSON_BYTES = 2**20
 """Largest ``.json`` of a saved agent [bytes]."""
@@ -119,6 +120,6 @@ def restore_arrays(agent: MPPIKinematicAgent, arrays: Mapping[str, np.ndarray]) 
 def policy_from_file(json_path: Path, meta: Mapping[str, Any]) -> MPPIPolicy:
     """The frozen planner of the agent saved at ``json_path`` (``meta``: its parsed JSON, read
     again by the agent's loader), its Generator seeded 0: a loader for
-    :data:`skidnav.agents.policies.loading.POLICY_LOADERS` (format ``"skidnav-mppi-agent"``)."""
+    the mpc family (:mod:`skidnav.agents.mpc.family`, format ``"skidnav-mppi-agent"``)."""
     del meta  # the agent's own loader reads and checks the file
     return load_mppi_agent(json_path).policy(seed=0)

@@ -4,7 +4,7 @@ The goal tracker reads only the goal's distance d [m] and bearing β (cos β, si
 ``"features"`` observation (:mod:`skidnav.sim.features`) and ignores the lidar ranges: like the
 discrete goal-seeker of :mod:`skidnav.studies.generalisation`, what it achieves on a map measures
 how open the straight line from start to goal is, not what a policy can learn. It meets
-:class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`, so it runs wherever a learned
+:class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`, so it runs wherever a learned
 continuous policy does (the continuous env, ``skidnav robot run --policy goal-tracker``).
 
 The control law, a proportional point-stabilising controller in the spirit of the kinematic
@@ -45,11 +45,14 @@ and with 0.1 s ones (tests/agents/test_goal_tracker.py tests a few).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from skidnav.checks import check_number
+from skidnav.files.configtables import build_dataclass
 from skidnav.robot.params import RobotParams
 from skidnav.sim.features import POSE_GOAL_NAMES, check_lidar
 
@@ -83,10 +86,16 @@ class GoalTrackerConfig:
             check_number(name, getattr(self, name), 0.0)
         check_lidar(self.lidar_rays, self.lidar_range)
 
+    @classmethod
+    def from_mapping(cls, values: Mapping[str, Any]) -> GoalTrackerConfig:
+        """The config of a mapping of its fields (a TOML table, a saved tracker's JSON);
+        ValueError in one line for an unknown key or a bad value."""
+        return build_dataclass(cls, values, "goal-tracker")
+
 
 class GoalTracker:
     """The goal-tracking controller of the module doc, a
-    :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`.
+    :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`.
 
     Args:
         config: gains and observation layout (defaults: :class:`GoalTrackerConfig`).

@@ -5,7 +5,8 @@ An agent owns a Q table ``q`` (float64, shape (n_states, n_actions)), a ``numpy.
 (:mod:`skidnav.agents.learning`). What one real transition teaches it is one compiled kernel,
 registered for the class of its :meth:`TabularAgent.learning_arrays` and given the scalars of
 :meth:`TabularAgent.learning_settings`; the step-by-step :meth:`TabularAgent.observe`
-and the fused trainer (:mod:`skidnav.agents.fast_training`) both call it, so there is one learning
+and the fused trainer (:mod:`skidnav.agents.tabular.fast_training`) both call it, so there is one
+learning
 step per agent. Subclasses keeping more state also implement :meth:`TabularAgent.reserve` (room
 the kernel cannot allocate) and :meth:`TabularAgent._state_arrays` /
 :meth:`TabularAgent._restore_state_arrays`.
@@ -24,10 +25,12 @@ import json
 import logging
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Generic
 
 import numpy as np
+from typing_extensions import TypeVar
 
+from skidnav.agents.config import QLearningConfig
 from skidnav.agents.learning import (
     N_COUNTERS,
     PLANNING_UPDATES,
@@ -35,9 +38,9 @@ from skidnav.agents.learning import (
     experience_from_info,
     learn,
 )
-from skidnav.agents.tabular.config import QLearningConfig
-from skidnav.atomicfile import write_atomic, write_npz_atomic
+from skidnav.agents.saving import generator_from_state, generator_state, save_paths
 from skidnav.errors import CorruptFileError, shown
+from skidnav.files.atomic import write_atomic, write_npz_atomic
 from skidnav.sim.q_values import epsilon_at, epsilon_greedy, greedy_first
 
 logger = logging.getLogger(__name__)
@@ -48,41 +51,20 @@ SAVE_VERSION = 3
 3: a model-based agent's planner keeps the wall and free evidence of every cell."""
 
 
-def save_paths(path: str | Path) -> tuple[Path, Path]:
-    """The ``.npz`` and ``.json`` files of a saved agent; a ``.npz``/``.json`` suffix is dropped."""
-    base = Path(path)
-    if base.suffix in (".npz", ".json"):
-        base = base.with_suffix("")
-    return base.with_name(base.name + ".npz"), base.with_name(base.name + ".json")
+# The defaults (PEP 696) make a bare ``TabularAgent`` any tabular agent.
+ArraysT = TypeVar("ArraysT", bound=tuple[Any, ...], default=tuple[Any, ...])
+"""The NamedTuple of arrays an agent's learning step learns into
+(:meth:`TabularAgent.learning_arrays`)."""
+SettingsT = TypeVar("SettingsT", bound=tuple[Any, ...], default=tuple[Any, ...])
+"""The NamedTuple of scalars an agent's learning step reads
+(:meth:`TabularAgent.learning_settings`)."""
 
 
-def generator_state(rng: np.random.Generator) -> dict[str, Any]:
-    """The generator's bit-generator state as a JSON-able dict."""
-    return dict(rng.bit_generator.state)
+class TabularAgent(Generic[ArraysT, SettingsT]):
+    """Base of every tabular agent: Q table, ε-greedy behaviour, counters, save/load.
 
-
-def generator_from_state(state: Mapping[str, Any]) -> np.random.Generator:
-    """A generator restored from :func:`generator_state`; ValueError if unusable (the message
-    quotes at most :data:`~skidnav.errors.EXCERPT_CHARS` characters of the saved state)."""
-    name = state.get("bit_generator")
-    bit_generator_class = getattr(np.random, str(name), None)
-    if not isinstance(bit_generator_class, type) or not issubclass(
-        bit_generator_class, np.random.BitGenerator
-    ):
-        raise ValueError(f"unknown bit generator {shown(name)}")
-    bit_generator = bit_generator_class()
-    try:
-        bit_generator.state = dict(state)
-    except (ValueError, TypeError, OverflowError, IndexError) as error:
-        # NumPy's messages may quote the saved values whole: name only the kind of problem.
-        raise ValueError(
-            f"unusable {bit_generator_class.__name__} state ({type(error).__name__})"
-        ) from None
-    return np.random.Generator(bit_generator)
-
-
-class TabularAgent:
-    """Base of every tabular agent: Q table, ε-greedy behaviour, counters, save/load."""
+    Generic in the NamedTuples its learning step takes: a concrete agent subclasses
+    ``TabularAgent[ItsArrays, ItsSettings]`` (a bare ``TabularAgent`` is any agent)."""
 
     name: ClassVar[str] = "tabular"
     """Registry name of the agent (e.g. ``"dyna-q"``)."""
@@ -176,13 +158,13 @@ class TabularAgent:
         arrays, settings = self.learning_arrays(), self.learning_settings()
         learn(arrays, settings, self.counters, experience, self.rng)
 
-    def learning_arrays(self) -> tuple[Any, ...]:
+    def learning_arrays(self) -> ArraysT:
         """The NamedTuple of arrays the agent's learning step learns into (its class chooses the
         kernel: :func:`~skidnav.agents.learning.learning_step`); views, never copies, to be
         asked again after :meth:`reserve`, which may reallocate. Subclasses override."""
         raise NotImplementedError
 
-    def learning_settings(self) -> tuple[Any, ...]:
+    def learning_settings(self) -> SettingsT:
         """The NamedTuple of scalars the agent's learning step reads. Subclasses override."""
         raise NotImplementedError
 
@@ -214,8 +196,8 @@ class TabularAgent:
 
     def save(self, path: str | Path) -> tuple[Path, Path]:
         """Write ``path.npz`` (Q and model arrays) and ``path.json`` (name, config, counters,
-        generator state), each atomically (:func:`~skidnav.atomicfile.write_npz_atomic`,
-        :func:`~skidnav.atomicfile.write_atomic`): a failure or a kill leaves the old file, never
+        generator state), each atomically (:func:`~skidnav.files.atomic.write_npz_atomic`,
+        :func:`~skidnav.files.atomic.write_atomic`): a failure or a kill leaves the old file, never
         a torn one. Returns both paths."""
         npz_path, json_path = save_paths(path)
         npz_path.parent.mkdir(parents=True, exist_ok=True)

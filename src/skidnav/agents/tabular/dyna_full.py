@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from skidnav.agents.tabular.config import QLearningConfig
+from skidnav.agents.config import QLearningConfig
 from skidnav.agents.tabular.dyna_kinematic import DynaKinematicConfig
 from skidnav.agents.tabular.model_based import ModelBasedAgent
 from skidnav.agents.tabular.trajectory_prioritized import TrajectoryPrioritizedConfig

@@ -12,7 +12,7 @@ After each real step (s, a, r, s′) with the env's ``info``:
    *frontier*: a visited pair drawn uniformly, a random action predicted from its state, and a
    random action at the predicted state; otherwise to a uniformly drawn visited pair (Dyna-Q).
    Pairs visited are answered by the multinomial model, pairs never visited by the kinematic
-   table (see :mod:`skidnav.agents.tabular.kinematic_planning`).
+   table (see :mod:`skidnav.agents.kinematic_planning`).
 
 At the end of each episode the kinematic model refits on its schedule and, if it did, the whole
 prediction table ``pred_next[s, a]`` is recomputed. See docs/agents/dyna-kinematic.md.
@@ -23,13 +23,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from skidnav.agents.tabular.config import (
-    MODEL_BASED_PLANNING_MODE,
-    DynaQConfig,
-    KinematicModelFields,
-    QLearningConfig,
-    _check,
-)
+from skidnav.agents.config import KinematicModelFields, QLearningConfig, check
+from skidnav.agents.tabular.config import MODEL_BASED_PLANNING_MODE, DynaQConfig
 from skidnav.agents.tabular.model_based import ModelBasedAgent
 
 
@@ -46,9 +41,7 @@ class DynaKinematicConfig(DynaQConfig, KinematicModelFields):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        _check(
-            0.0 <= self.kinematic_share <= 1.0, "kinematic_share in [0, 1]", self.kinematic_share
-        )
+        check(0.0 <= self.kinematic_share <= 1.0, "kinematic_share in [0, 1]", self.kinematic_share)
         self.kinematic_config()  # validates the kinematic fields
 
 

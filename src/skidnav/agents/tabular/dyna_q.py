@@ -18,9 +18,10 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
+from skidnav.agents.config import QLearningConfig
 from skidnav.agents.learning import PLANNING_UPDATES, Experience, learning_step
-from skidnav.agents.tabular.agent import TabularAgent
-from skidnav.agents.tabular.config import DynaQConfig, QLearningConfig
+from skidnav.agents.tabular.agent import ArraysT, SettingsT, TabularAgent
+from skidnav.agents.tabular.config import DynaQConfig
 from skidnav.agents.tabular.planning import dyna_planning
 from skidnav.models.multinomial import MultinomialModel
 from skidnav.models.multinomial_kernels import MultinomialArrays, model_observe
@@ -72,10 +73,12 @@ def dyna_q_step(
         )
 
 
-class DynaQAgent(TabularAgent):
-    """Dyna-Q: Q-learning plus uniform replay of visited pairs through a learned model."""
+class DynaAgent(TabularAgent[ArraysT, SettingsT]):
+    """Base of the agents that count every real step in a :class:`MultinomialModel` (Dyna-Q and
+    its variants): the model, its room and its saving. Generic in the NamedTuples of the agent's
+    learning step, which a subclass names and builds (:meth:`learning_arrays`,
+    :meth:`learning_settings`)."""
 
-    name: ClassVar[str] = "dyna-q"
     config_class: ClassVar[type[QLearningConfig]] = DynaQConfig
     config: DynaQConfig
 
@@ -93,16 +96,6 @@ class DynaQAgent(TabularAgent):
     def reserve(self, n_steps: int) -> None:
         self.model.reserve(n_steps)
 
-    def learning_arrays(self) -> DynaArrays:
-        return DynaArrays(self.q, self.model.arrays, self.visits)
-
-    def learning_settings(self) -> PlanningSettings:
-        config = self.config
-        return PlanningSettings(
-            float(config.alpha), float(config.gamma), int(config.planning_steps),
-            int(config.planning_mode_code), float(config.alpha_visit_exponent),
-        )  # fmt: skip
-
     def _state_arrays(self) -> dict[str, np.ndarray]:
         return {**super()._state_arrays(), **self.model.to_arrays()}
 
@@ -119,6 +112,23 @@ class DynaQAgent(TabularAgent):
             next_states.size and (next_states.min() < 0 or next_states.max() >= self.n_states)
         ):
             raise ValueError("model refers to states outside the Q table")
+
+
+class DynaQAgent(DynaAgent[DynaArrays, PlanningSettings]):
+    """Dyna-Q: Q-learning plus uniform replay of visited pairs through a learned model."""
+
+    name: ClassVar[str] = "dyna-q"
+    config_class: ClassVar[type[QLearningConfig]] = DynaQConfig
+
+    def learning_arrays(self) -> DynaArrays:
+        return DynaArrays(self.q, self.model.arrays, self.visits)
+
+    def learning_settings(self) -> PlanningSettings:
+        config = self.config
+        return PlanningSettings(
+            float(config.alpha), float(config.gamma), int(config.planning_steps),
+            int(config.planning_mode_code), float(config.alpha_visit_exponent),
+        )  # fmt: skip
 
 
 AGENT_NAME = "dyna-q"

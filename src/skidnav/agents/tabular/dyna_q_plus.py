@@ -15,9 +15,10 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
+from skidnav.agents.config import QLearningConfig
 from skidnav.agents.learning import PLANNING_UPDATES, STEPS, Experience, learning_step
-from skidnav.agents.tabular.config import DynaQPlusConfig, QLearningConfig
-from skidnav.agents.tabular.dyna_q import DynaQAgent
+from skidnav.agents.tabular.config import DynaQPlusConfig
+from skidnav.agents.tabular.dyna_q import DynaAgent
 from skidnav.agents.tabular.planning import dyna_plus_planning
 from skidnav.models.multinomial_kernels import MultinomialArrays, model_observe
 from skidnav.sim.q_values import td_update, visit_step_size
@@ -81,7 +82,7 @@ def dyna_q_plus_step(
         )  # fmt: skip
 
 
-class DynaQPlusAgent(DynaQAgent):
+class DynaQPlusAgent(DynaAgent[DynaPlusArrays, BonusSettings]):
     """Dyna-Q+ (bonus κ·√τ on planning rewards)."""
 
     name: ClassVar[str] = "dyna-q-plus"
@@ -107,13 +108,13 @@ class DynaQPlusAgent(DynaQAgent):
         """States seen as the start of a real step, in order of first visit, int64 (n,)."""
         return self._visited[: self._n_visited[0]].copy()
 
-    def learning_arrays(self) -> DynaPlusArrays:  # type: ignore[override]
+    def learning_arrays(self) -> DynaPlusArrays:
         return DynaPlusArrays(
             self.q, self.model.arrays, self.last_tried, self._visited, self._n_visited,
             self._is_visited, self.visits,
         )  # fmt: skip
 
-    def learning_settings(self) -> BonusSettings:  # type: ignore[override]
+    def learning_settings(self) -> BonusSettings:
         config = self.config
         return BonusSettings(
             float(config.alpha), float(config.gamma), int(config.planning_steps),

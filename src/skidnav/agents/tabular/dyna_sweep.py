@@ -24,8 +24,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from skidnav.agents.tabular import kinematic_planning as kp
-from skidnav.agents.tabular.config import QLearningConfig, _check
+from skidnav.agents import kinematic_planning as kp
+from skidnav.agents.config import QLearningConfig, check
 from skidnav.agents.tabular.dyna_full import DynaFullConfig
 from skidnav.agents.tabular.model_based import ModelBasedAgent
 from skidnav.agents.tabular.model_sweep import model_value_iteration
@@ -42,12 +42,12 @@ class DynaSweepConfig(DynaFullConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        _check(
+        check(
             isinstance(self.max_sweeps, int) and 1 <= self.max_sweeps <= 100_000,
             "an integer max_sweeps in [1, 100000]",
             self.max_sweeps,
         )
-        _check(self.sweep_tolerance > 0.0, "sweep_tolerance > 0", self.sweep_tolerance)
+        check(self.sweep_tolerance > 0.0, "sweep_tolerance > 0", self.sweep_tolerance)
 
 
 class DynaSweepAgent(ModelBasedAgent):

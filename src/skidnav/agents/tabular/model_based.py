@@ -14,42 +14,32 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Mapping
-from dataclasses import asdict, fields
 from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
 from skidnav._jit import jit
+from skidnav.agents import kinematic_planning as kp
+from skidnav.agents.config import KinematicModelFields, QLearningConfig
+from skidnav.agents.geometry import geometry_from_task, geometry_json
 from skidnav.agents.learning import PLANNING_UPDATES, Experience, learning_step
-from skidnav.agents.tabular import kinematic_planning as kp
-from skidnav.agents.tabular.config import KinematicModelFields, QLearningConfig
-from skidnav.agents.tabular.dyna_q import DynaQAgent
-from skidnav.errors import shown
+from skidnav.agents.planner_learning import feed_log, planner_observe, refresh_stale
+from skidnav.agents.planner_state import (
+    MAP_ARRAYS,
+    check_planner_counters,
+    check_planner_map,
+    hold_kinematic_model,
+)
+from skidnav.agents.tabular.dyna_q import DynaAgent
+from skidnav.agents.trajectory_keys import loop_erase, neighbourhood_keys
 from skidnav.models.kinematic import KinematicModel
 from skidnav.models.multinomial_kernels import MultinomialArrays, model_observe
-from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import KinematicConstants, RobotParams
 from skidnav.sim.navigation import NavigationTask
 from skidnav.sim.q_values import td_update, visit_step_size
 from skidnav.world.discretization import Discretization, GridShape
 
 logger = logging.getLogger(__name__)
-
-
-def geometry_from_task(task: NavigationTask) -> tuple[RobotParams, Discretization]:
-    """Robot and discretization of a navigation task. The robot keeps the *nominal* x_ICR of
-    :class:`RobotParams` (the agent's prior), never the slip field's true values."""
-    kc, grid = task.robot, task.grid
-    robot = RobotParams(
-        wheel_radius=kc.wheel_radius, half_track=kc.half_track, wheel_speed=kc.wheel_speed,
-        dt=kc.dt, substeps=kc.substeps, arena_width=kc.arena_width,
-        arena_height=kc.arena_height, integrator="exact" if kc.exact_integration else "euler",
-    )  # fmt: skip
-    discretization = Discretization(
-        n_x=grid.n_x, n_y=grid.n_y, n_headings=grid.n_headings, regions_x=grid.regions_x,
-        regions_y=grid.regions_y, arena_width=grid.arena_width, arena_height=grid.arena_height,
-    )  # fmt: skip
-    return robot, discretization
 
 
 _NO_GRID = GridShape(2, 2, 1, 2, 2, 1.0, 1.0)
@@ -109,20 +99,20 @@ def model_based_step(
     logged = s.has_kinematic and step.n_logged >= 0
     if logged:  # kinematic planning starts with the first step that brings samples
         a.planner.counters[kp.USE_KINEMATIC] = 1
-    kp.planner_observe(
+    planner_observe(
         a.planner, step.state, step.action, step.reward, step.next_state, step.terminated,
         step.collided, pose, s.robot, s.grid,
     )  # fmt: skip
     if logged:
         n_regions = a.kinematic_counts.shape[0]
-        kp.feed_log(a.kinematic_data, a.kinematic_counts, step.log, step.n_logged, n_regions)
+        feed_log(a.kinematic_data, a.kinematic_counts, step.log, step.n_logged, n_regions)
     if s.shares.n_steps > 0:
         counters[PLANNING_UPDATES] += kp.combined_planning(
             a.q, a.model, a.planner, s.shares, s.grid, rng
         )
 
 
-class ModelBasedAgent(DynaQAgent):
+class ModelBasedAgent(DynaAgent[ModelBasedArrays, ModelBasedSettings]):
     """Shared machinery of ``dyna-kinematic``, ``trajectory-prioritized``, ``dyna-full`` and
     ``dyna-sweep``: multinomial model, optional kinematic model, optional best-trajectory sweeps.
 
@@ -227,13 +217,13 @@ class ModelBasedAgent(DynaQAgent):
         super().reserve(n_steps)
         self.reserve_episode(n_steps)
 
-    def learning_arrays(self) -> ModelBasedArrays:  # type: ignore[override]
+    def learning_arrays(self) -> ModelBasedArrays:
         data, counts = (
             (self.kinematic.data, self.kinematic.counts) if self.kinematic else _NO_KINEMATIC
         )
         return ModelBasedArrays(self.q, self.model.arrays, self.planner, data, counts, self.visits)
 
-    def learning_settings(self) -> ModelBasedSettings:  # type: ignore[override]
+    def learning_settings(self) -> ModelBasedSettings:
         return ModelBasedSettings(
             self.shares, self.kernel_robot, self.kernel_grid, self.discretization is not None,
             self.kinematic is not None, float(self.config.alpha_visit_exponent),
@@ -244,13 +234,13 @@ class ModelBasedAgent(DynaQAgent):
         counters = self.planner.counters
         if self.uses_trajectories and counters[kp.EPISODE_TERMINATED]:
             keys = self.planner.episode_keys[: counters[kp.EPISODE_LENGTH]]
-            self._offer_trajectory(kp.loop_erase(keys, self.n_actions, self.n_states))
+            self._offer_trajectory(loop_erase(keys, self.n_actions, self.n_states))
         counters[kp.EPISODE_LENGTH] = 0
         counters[kp.EPISODE_TERMINATED] = 0
         if self.kinematic is not None and self.kinematic.maybe_refit():
             self._refresh_table()
         elif self.kinematic is not None and self.planner.stale.any():
-            kp.refresh_stale(self.planner, self.kernel_robot, self.kernel_grid)
+            refresh_stale(self.planner, self.kernel_robot, self.kernel_grid)
         self.planner.stale[:] = False
         super().end_episode()
 
@@ -274,7 +264,7 @@ class ModelBasedAgent(DynaQAgent):
         backward = _first_occurrences(np.concatenate([t[::-1] for t in self.trajectories]))
         spatial = self.discretization is not None
         around = np.concatenate([
-            kp.neighbourhood_keys(t, self.planner.walls, self.kernel_grid, self.n_actions, spatial)
+            neighbourhood_keys(t, self.planner.walls, self.kernel_grid, self.n_actions, spatial)
             for t in self.trajectories
         ])  # fmt: skip
         around = _first_occurrences(around)
@@ -370,39 +360,6 @@ class ModelBasedAgent(DynaQAgent):
             self._refresh_table()
 
 
-def hold_kinematic_model(
-    model: KinematicModel, source: str, true_kinematics: np.ndarray | None
-) -> None:
-    """Make ``model`` the one an agent's ``kinematic_model`` names
-    (:class:`~skidnav.agents.tabular.config.KinematicModelFields`): "learned" leaves it learning,
-    "prior" holds the prior, "true" holds ``true_kinematics`` (float64 (n_regions, 4, 3), the
-    simulator's expected body velocities; ValueError when there are none, as on a physics or real
-    robot)."""
-    if source == "prior":
-        model.hold()
-    elif source == "true":
-        if true_kinematics is None:
-            raise ValueError(
-                "expected the simulator's true_kinematics for kinematic_model 'true' (only the "
-                "kinematic env has them), got none"
-            )
-        model.hold(true_kinematics)
-
-
-def true_kinematics_from_json(value: Any, n_regions: int) -> np.ndarray:
-    """The ``true_kinematics`` a "true" agent saved in its JSON, float64 (n_regions, 4, 3);
-    ValueError unless it is exactly that, finite."""
-    try:
-        table = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        table = np.zeros(0)
-    if table.shape != (n_regions, N_ACTIONS, 3) or not np.isfinite(table).all():
-        raise ValueError(
-            f"expected true_kinematics of {n_regions} × {N_ACTIONS} × 3 finite numbers"
-        )
-    return table
-
-
 def _saved_keys(arrays: Mapping[str, np.ndarray], name: str, n_keys: int) -> np.ndarray:
     """Saved pair keys ``arrays[name]`` as int64; ValueError unless each is in [0, n_keys)."""
     keys = np.asarray(arrays[name])
@@ -414,41 +371,6 @@ def _saved_keys(arrays: Mapping[str, np.ndarray], name: str, n_keys: int) -> np.
     return keys
 
 
-MAP_ARRAYS = ("walls", "goals", "stale", "wall_evidence", "free_evidence")
-"""The planner's map (:class:`~skidnav.agents.tabular.kinematic_planning.PlannerArrays`), saved as
-``planner_<name>``."""
-
-
-def check_planner_map(planner: kp.PlannerArrays) -> None:
-    """ValueError unless the planner's map evidence are counts and its walls are the cells the
-    evidence make walls (:func:`~skidnav.agents.tabular.kinematic_planning.weigh_cell`)."""
-    if (planner.wall_evidence < 0).any() or (planner.free_evidence < 0).any():
-        raise ValueError("saved planner wall or free evidence are not counts")
-    weighed = (planner.wall_evidence > planner.free_evidence) & ~planner.goals
-    if not np.array_equal(planner.walls, weighed):
-        raise ValueError("saved planner walls disagree with their evidence")
-
-
-def check_planner_counters(counters: np.ndarray, sizes: list[int], has_kinematic: bool) -> None:
-    """ValueError unless the planner counters agree with the saved sweep and episode lists
-    (``sizes``: trajectory, neighbour, episode keys): the compiled planner indexes by them."""
-    n_trajectory, n_neighbours, n_episode = sizes
-    expected = {
-        "N_TRAJECTORY": counters[kp.N_TRAJECTORY] == n_trajectory,
-        "TRAJECTORY_CURSOR": 0 <= counters[kp.TRAJECTORY_CURSOR] < max(n_trajectory, 1),
-        "N_NEIGHBOURS": counters[kp.N_NEIGHBOURS] == n_neighbours,
-        "NEIGHBOUR_CURSOR": 0 <= counters[kp.NEIGHBOUR_CURSOR] < max(n_neighbours, 1),
-        "EPISODE_LENGTH": counters[kp.EPISODE_LENGTH] == n_episode,
-        "REFRESH_RADIUS": counters[kp.REFRESH_RADIUS] >= 0,
-        "USE_KINEMATIC": counters[kp.USE_KINEMATIC] in ((0, 1) if has_kinematic else (0,)),
-        "EPISODE_TERMINATED": counters[kp.EPISODE_TERMINATED] in (0, 1),
-        "MAP_CHANGES": counters[kp.MAP_CHANGES] >= 0,
-    }
-    wrong = [name for name, ok in expected.items() if not ok]
-    if wrong:
-        raise ValueError(f"saved planner counters inconsistent with its arrays: {', '.join(wrong)}")
-
-
 def _first_occurrences(keys: np.ndarray) -> np.ndarray:
     """``keys`` without repeats, each kept at its first position."""
     _, first = np.unique(keys, return_index=True)
@@ -458,43 +380,3 @@ def _first_occurrences(keys: np.ndarray) -> np.ndarray:
 def _at_least_one(keys: np.ndarray) -> np.ndarray:
     keys = np.asarray(keys, dtype=np.int64)
     return keys.copy() if keys.size else np.zeros(1, dtype=np.int64)
-
-
-def geometry_json(robot: RobotParams, grid: Discretization | None) -> dict[str, Any]:
-    """The robot and discretization (None: no geometry) as saved in an agent's JSON: every
-    field of :class:`RobotParams` and :class:`Discretization` by name."""
-    return {"robot": asdict(robot), "discretization": None if grid is None else asdict(grid)}
-
-
-def geometry_from_json(value: Any) -> tuple[RobotParams, Discretization | None]:
-    """The robot and discretization of :func:`geometry_json`; ValueError (one line, quoting at
-    most an excerpt) unless it is exactly that: the two tables with every field, of its type,
-    finite, and valid for the dataclasses."""
-    if not isinstance(value, Mapping) or set(value) != {"robot", "discretization"}:
-        raise ValueError("expected a geometry with 'robot' and 'discretization'")
-    robot = _dataclass_from_json(RobotParams, value["robot"], "robot")
-    grid = value["discretization"]
-    if grid is None:
-        return robot, None
-    return robot, _dataclass_from_json(Discretization, grid, "discretization")
-
-
-def _dataclass_from_json(cls: Any, value: Any, where: str) -> Any:
-    """``cls(**value)`` once ``value`` has exactly ``cls``'s fields, each of its default's type
-    (an int where an int is, a finite number where a float is)."""
-    defaults = {field.name: field.default for field in fields(cls)}
-    if not isinstance(value, Mapping) or set(value) != set(defaults):
-        raise ValueError(f"expected the {where} fields {sorted(defaults)}")
-    for name, default in defaults.items():
-        item = value[name]
-        if isinstance(default, bool) or isinstance(item, bool):
-            ok = type(item) is type(default)
-        elif isinstance(default, int):
-            ok = isinstance(item, int)
-        elif isinstance(default, float):
-            ok = isinstance(item, (int, float)) and math.isfinite(item)
-        else:
-            ok = isinstance(item, type(default))
-        if not ok:
-            raise ValueError(f"expected {where}.{name} like {default!r}, got {shown(item)}")
-    return cls(**value)

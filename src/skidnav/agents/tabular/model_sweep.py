@@ -4,9 +4,9 @@ One sweep updates every pair (s, a) of every state outside the known wall cells,
 (Gauss–Seidel), to its model target with step 1 (a full backup, Sutton & Barto (2018) §4.4):
 
 * a pair seen in reality: the multinomial model's expected target Σ p(s′|s, a)(r̄ + γ (1 − β)
-  max_a′ Q(s′, a′)) (:func:`skidnav.models.multinomial_kernels.expected_target`);
+  max_a′ Q(s′, a′)) (:func:`skidnav.models.multinomial_targets.expected_target`);
 * a pair never seen: the kinematic table's predicted outcome with the learned mean rewards
-  (:func:`skidnav.agents.tabular.kinematic_planning.kinematic_value`), walls found by collisions
+  (:func:`skidnav.agents.kinematic_planning.kinematic_value`), walls found by collisions
   respected — the optimistic "unknown cells are free" model that makes the agent try the
   shortest predicted path and learn the walls it meets.
 
@@ -18,13 +18,14 @@ from __future__ import annotations
 import numpy as np
 
 from skidnav._jit import jit
-from skidnav.agents.tabular.kinematic_planning import (
+from skidnav.agents.kinematic_planning import (
     USE_KINEMATIC,
     PlannerArrays,
     kinematic_value,
     mean_rewards,
 )
-from skidnav.models.multinomial_kernels import MultinomialArrays, expected_target
+from skidnav.models.multinomial_kernels import MultinomialArrays
+from skidnav.models.multinomial_targets import expected_target
 from skidnav.world.discretization import GridShape
 
 

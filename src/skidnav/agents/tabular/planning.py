@@ -1,7 +1,7 @@
 """Compiled planning loops over the multinomial model (Sutton & Barto (2018) ch. 8).
 
 Each loop applies the one update rule of :mod:`skidnav.sim.q_values` (``update_toward``) to targets
-computed by :func:`skidnav.models.multinomial_kernels.model_target`, and returns the number of value
+computed by :func:`skidnav.models.multinomial_targets.model_target`, and returns the number of value
 updates it made. All draws are ``rng.random()``. Prioritized sweeping of a most-probable model
 averages a tie over its tied outcomes instead of drawing it (:func:`sweep`).
 """
@@ -15,24 +15,26 @@ import numpy as np
 from skidnav._jit import inline_jit, jit
 from skidnav.agents.tabular.priority_queue import HeapArrays, heap_pop, heap_push, pop, push
 from skidnav.models.multinomial_kernels import (
-    EXPECTED,
-    MOST_PROBABLE,
-    SAMPLE,
     MultinomialArrays,
-    entry_target,
-    expected_target,
     find_pair,
     first_predecessor,
     hash_find,
     model_observe,
-    model_target,
-    most_probable_entry,
     observe_pair,
     pair_state_action,
-    sample_entry,
     split_key,
-    tied_mean_target,
     unsigned_index,
+)
+from skidnav.models.multinomial_targets import (
+    EXPECTED,
+    MOST_PROBABLE,
+    SAMPLE,
+    entry_target,
+    expected_target,
+    model_target,
+    most_probable_entry,
+    sample_entry,
+    tied_mean_target,
 )
 from skidnav.sim.q_values import td_target, update_toward
 
@@ -51,7 +53,7 @@ def dyna_planning(
     through the model and update ``q`` (C-contiguous) toward its target. Returns the number of
     updates.
 
-    Same numbers as :func:`skidnav.models.multinomial_kernels.model_target` + ``update_toward`` per
+    Same numbers as :func:`skidnav.models.multinomial_targets.model_target` + ``update_toward`` per
     step, but the model's arrays are bound once, out of the loop (see ``entry_target``), and the
     updated value is addressed by the pair key in a (n_states · n_actions, 1) view of ``q`` (no
     integer division per update)."""

@@ -29,12 +29,14 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
+from skidnav.agents.config import QLearningConfig
 from skidnav.agents.learning import PLANNING_UPDATES, Experience, learning_step
-from skidnav.agents.tabular.config import PrioritizedSweepingConfig, QLearningConfig
-from skidnav.agents.tabular.dyna_q import DynaQAgent
+from skidnav.agents.tabular.config import PrioritizedSweepingConfig
+from skidnav.agents.tabular.dyna_q import DynaAgent
 from skidnav.agents.tabular.planning import sampled_sweep_step, sweep_step
 from skidnav.agents.tabular.priority_queue import HeapArrays, heap_push, make_heap
-from skidnav.models.multinomial_kernels import MOST_PROBABLE, MultinomialArrays
+from skidnav.models.multinomial_kernels import MultinomialArrays
+from skidnav.models.multinomial_targets import MOST_PROBABLE
 
 
 class SweepArrays(NamedTuple):
@@ -82,7 +84,7 @@ def prioritized_sweeping_step(
     counters[PLANNING_UPDATES] += updates
 
 
-class PrioritizedSweepingAgent(DynaQAgent):
+class PrioritizedSweepingAgent(DynaAgent[SweepArrays, SweepSettings]):
     """Prioritized sweeping over the multinomial model."""
 
     name: ClassVar[str] = "prioritized-sweeping"
@@ -100,10 +102,10 @@ class PrioritizedSweepingAgent(DynaQAgent):
         self.queue = make_heap(n_states * n_actions)
         """Pairs s·n_actions + a waiting for an update, by priority (24 bytes per pair)."""
 
-    def learning_arrays(self) -> SweepArrays:  # type: ignore[override]
+    def learning_arrays(self) -> SweepArrays:
         return SweepArrays(self.q, self.model.arrays, self.queue)
 
-    def learning_settings(self) -> SweepSettings:  # type: ignore[override]
+    def learning_settings(self) -> SweepSettings:
         config = self.config
         return SweepSettings(
             float(config.alpha), float(config.gamma), int(config.planning_steps),

@@ -11,9 +11,9 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from skidnav._jit import jit
+from skidnav.agents.config import QLearningConfig
 from skidnav.agents.learning import Experience, learning_step
 from skidnav.agents.tabular.agent import TabularAgent
-from skidnav.agents.tabular.config import QLearningConfig
 from skidnav.sim.q_values import td_update, visit_step_size
 
 
@@ -52,7 +52,7 @@ def q_learning_step(
     )  # fmt: skip
 
 
-class QLearningAgent(TabularAgent):
+class QLearningAgent(TabularAgent[QArrays, TDSettings]):
     """Tabular one-step Q-learning with ε-greedy behaviour."""
 
     name: ClassVar[str] = "q-learning"

@@ -20,10 +20,11 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from skidnav.agents.tabular.agent import SAVE_FORMAT, SAVE_VERSION, TabularAgent, save_paths
-from skidnav.agents.tabular.config import KinematicModelFields, QLearningConfig
+from skidnav.agents.config import KinematicModelFields, QLearningConfig
+from skidnav.agents.saving import save_paths
+from skidnav.agents.tabular.agent import SAVE_FORMAT, SAVE_VERSION, TabularAgent
 from skidnav.errors import CorruptFileError, UserError, shown
-from skidnav.savedfile import READ_ERRORS, ArraySpec, SavedArchive, loading, read_json, up_to
+from skidnav.files.saved import READ_ERRORS, ArraySpec, SavedArchive, loading, read_json, up_to
 
 AGENT_MODULES: dict[str, str] = {
     "q-learning": "skidnav.agents.tabular.q_learning",
@@ -195,11 +196,9 @@ def _saved_geometry(
     the agent built from them allocates no more than its metadata declare: its states those of
     the Q table, no more slip regions than cells along each axis, a kinematic model within
     bounds, a true-kinematics table of its regions."""
-    from skidnav.agents.tabular.model_based import (
-        ModelBasedAgent,
-        geometry_from_json,
-        true_kinematics_from_json,
-    )
+    from skidnav.agents.geometry import geometry_from_json
+    from skidnav.agents.planner_state import true_kinematics_from_json
+    from skidnav.agents.tabular.model_based import ModelBasedAgent
     from skidnav.models.kinematic import KinematicModel
 
     if not issubclass(cls, ModelBasedAgent):

@@ -25,12 +25,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from skidnav.agents.tabular.config import (
-    MODEL_BASED_PLANNING_MODE,
-    DynaQConfig,
-    QLearningConfig,
-    _check,
-)
+from skidnav.agents.config import QLearningConfig, check
+from skidnav.agents.tabular.config import MODEL_BASED_PLANNING_MODE, DynaQConfig
 from skidnav.agents.tabular.model_based import ModelBasedAgent
 
 
@@ -49,12 +45,12 @@ class TrajectoryPrioritizedConfig(DynaQConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        _check(
+        check(
             isinstance(self.n_trajectories, int) and self.n_trajectories >= 1,
             "an integer n_trajectories >= 1",
             self.n_trajectories,
         )
-        _check(
+        check(
             0.0 <= self.trajectory_share <= 1.0, "trajectory_share in [0, 1]", self.trajectory_share
         )
 

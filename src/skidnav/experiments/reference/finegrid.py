@@ -23,7 +23,6 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
-import gymnasium
 import numpy as np
 
 from skidnav.agents.catalog import CatalogEntry
@@ -77,32 +76,6 @@ def goal_states(grid: Discretization, grid_map: GridMap) -> np.ndarray:
     return mask
 
 
-class FineStates(gymnasium.ObservationWrapper[int, int, np.ndarray]):
-    """A skid-steer env with ``observation="pose"`` whose observation is the flat state of the
-    pose on ``grid`` (``Discrete(grid.n_states)``); rewards, termination and info are the env's.
-
-    Args:
-        env: the skid-steer env (``observation="pose"``, unwrapped or not).
-        grid: the finer state grid (same arena as the env's).
-    """
-
-    def __init__(self, env: gymnasium.Env[np.ndarray, int], grid: Discretization) -> None:
-        super().__init__(env)
-        if getattr(env.unwrapped, "observation_kind", None) != "pose":
-            raise ValueError("expected a skid-steer env with observation='pose'")
-        self.discretization = grid
-        self.observation_space = gymnasium.spaces.Discrete(grid.n_states)  # type: ignore[assignment]
-
-    def observation(self, observation: np.ndarray) -> int:
-        """Flat state on the fine grid of a pose (x [m], y [m], heading [rad])."""
-        return self.discretization.state(observation[0], observation[1], observation[2])
-
-
-def fine_grid(env: Any) -> Discretization | None:
-    """The finer grid of a :class:`FineStates` env, None for any other env."""
-    return env.discretization if isinstance(env, FineStates) else None
-
-
 class TablePolicy:
     """The greedy policy of a Q table (n_states, n_actions): the lowest action among the maxima,
     as :meth:`skidnav.agents.tabular.agent.TabularAgent.greedy_action`."""
@@ -135,7 +108,7 @@ def check_grids(
             continue
         if config.env_id != DEFAULT_ENV_ID:
             raise UserError(f"{what}: a discretization needs the {DEFAULT_ENV_ID} environment")
-        if described is not None and described.family != "tabular":
+        if described is not None and described.family.name != "tabular":
             raise UserError(f"{what}: only tabular agents take a discretization")
         try:
             refine_map(grid_map, (levels[0], levels[1]))

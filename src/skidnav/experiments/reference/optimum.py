@@ -35,12 +35,13 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from skidnav.agents.training import greedy_path
+from skidnav.envs.wrappers import FineStates
 from skidnav.errors import CorruptFileError
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.metrics import path_length
-from skidnav.experiments.reference.finegrid import FineStates, TablePolicy, state_grid
+from skidnav.experiments.reference.finegrid import TablePolicy, state_grid
 from skidnav.experiments.reference.oracle import _key, cache_dir, solve, write_cache
-from skidnav.savedfile import ArraySpec, SavedArchive
+from skidnav.files.saved import ArraySpec, SavedArchive
 from skidnav.seeding import seed_int
 
 logger = logging.getLogger(__name__)
@@ -153,7 +154,7 @@ def world_optima(
 ) -> dict[str, float]:
     """The summary columns of the continuous optimum of a run's world on each of ``config``'s
     ``optimum_grids`` (module docs): ``env`` is the run's skid-steer env on poses
-    (:func:`skidnav.experiments.trial.make_env` with ``observation="pose"``), the seeds are drawn
+    (:func:`skidnav.experiments.trial.trial_env` with ``observation="pose"``), the seeds are drawn
     from the world's oracle ``stream`` (its children: the sampling seed, then one per rollout), so
     they are the same for every agent of a world."""
     seeds = [seed_int(child) for child in stream.spawn(1 + config.optimum_rollouts)]

@@ -20,7 +20,8 @@ For a skid-steer world (map, slip field, robot, discretization) the oracle
    C* > L*, and the cheapest path may take more actions than the shortest;
 4. for information, rolls each objective's greedy policy out in the simulator from the start,
    once per evaluation seed — the evaluation every agent gets after each of its episodes
-   (:func:`skidnav.agents.fast_training.evaluate_q_fast`). A greedy policy over cells can loop
+   (:func:`skidnav.agents.tabular.fast_training.evaluate_q_fast`). A greedy policy over cells can
+   loop
    from one exact pose (an action that works on average over a cell fails from that point), so
    these rollouts are a diagnostic, not the reference.
 
@@ -56,12 +57,13 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from skidnav.agents.fast_training import evaluate_q_fast
+from skidnav.agents.tabular.fast_training import evaluate_q_fast
 from skidnav.agents.training import greedy_run
-from skidnav.atomicfile import remove_stale_temporaries, write_npz_atomic
+from skidnav.envs.wrappers import fine_grid
 from skidnav.errors import CorruptFileError
-from skidnav.experiments.reference.finegrid import TablePolicy, fine_grid, goal_states, refined_task
-from skidnav.savedfile import ArraySpec, SavedArchive
+from skidnav.experiments.reference.finegrid import TablePolicy, goal_states, refined_task
+from skidnav.files.atomic import remove_stale_temporaries, write_npz_atomic
+from skidnav.files.saved import ArraySpec, SavedArchive
 from skidnav.sim.navigation import NavigationTask
 from skidnav.sim.value_iteration import (
     GOAL_STATE,
@@ -231,7 +233,7 @@ def compute_oracle(
 
     Args:
         env: a ``skidnav/SkidSteerNav-v0`` env (wrapped or not) with discrete observations, or a
-            :class:`~skidnav.experiments.reference.finegrid.FineStates` view of one (the oracle on
+            :class:`~skidnav.envs.wrappers.FineStates` view of one (the oracle on
             its finer grid); its evaluation resets are used for the rollouts.
         n_samples: sampled poses per state (each tries every action), ≥ 1.
         seed: seed of the sampling generator.

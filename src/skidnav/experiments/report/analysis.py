@@ -1,7 +1,7 @@
 """Aggregates over seeds and the comparisons behind the thesis claims (Alhawary (2020), ch. 7;
 docs/experiments.md, "Statistics").
 
-Every interval is a seeded percentile bootstrap (:mod:`skidnav.stats`); each table
+Every interval is a seeded percentile bootstrap (:mod:`skidnav.statistics.intervals`); each table
 cell gets its own generator keyed by the root seed and the cell's labels, so the numbers do not
 depend on the order in which they are computed. Agents are compared *paired by seed*: all agents
 of a (map, preset) cell meet the same maps and floors (see :mod:`skidnav.experiments.runs`).
@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from skidnav.experiments.config import ExperimentConfig
-from skidnav.stats import (
+from skidnav.statistics.intervals import (
     Interval,
     bootstrap_interval,
     difference_interval,
@@ -30,7 +30,7 @@ from skidnav.stats import (
     rowwise_iqm,
     rowwise_mean,
 )
-from skidnav.survival import (
+from skidnav.statistics.survival import (
     SpeedupInterval,
     median_interval,
     probability_of_improvement,
@@ -157,7 +157,8 @@ def compare_to_baseline(summaries: pd.DataFrame, config: ExperimentConfig) -> pd
     """Each agent against the baseline, per (map, preset), paired by seed.
 
     Columns: ``speedup`` (Kaplan–Meier median convergence episode of the baseline / of the agent;
-    > 1 = faster) and ``speedup_bound`` (:data:`~skidnav.survival.SPEEDUP_BOUNDS`: "lower" when
+    > 1 = faster) and ``speedup_bound`` (:data:`~skidnav.statistics.survival.SPEEDUP_BOUNDS`:
+    "lower" when
     more than half of the baseline's runs are censored, its largest censoring time standing in
     for its median, so the speed-up is at least the value shown; "upper" when the agent's are;
     "unknown" when both are), the same in real actions (``speedup_steps``,

@@ -19,12 +19,12 @@ from skidnav.experiments.report import maps, plots
 from skidnav.experiments.report.analysis import METRICS
 from skidnav.experiments.report.page import gif_image, image, interval_text, table
 from skidnav.experiments.store import ResultStore, TrialResult
-from skidnav.formatting import plural
 from skidnav.physics.materials import region_materials
 from skidnav.physics.render import Arena, animate, describe
 from skidnav.robot.floors import PRESET_FLOORS
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField
+from skidnav.statistics.formatting import plural
 
 Part = tuple[str, Callable[[], str]]
 """A step of the report: (what it draws, the function drawing its HTML)."""

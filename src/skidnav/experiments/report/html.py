@@ -9,7 +9,8 @@ rough vs slippery floor), aggregate tables, per-cell figures (greedy path length
 oracle, learning curves, per-seed metrics, final greedy trajectories and one of them animated
 (:mod:`skidnav.physics.render`), value maps with preferred headings, greedy-policy maps),
 provenance (config, versions, sessions with their code versions). The numbers are what was
-measured, rounded for people (:mod:`skidnav.formatting`). Building it shows a progress bar on
+measured, rounded for people (:mod:`skidnav.statistics.formatting`). Building it shows a progress
+bar on
 stderr when asked (``skidnav report``).
 
 The page shell is shared with the studies' reports (:mod:`skidnav.experiments.report.page`). An
@@ -59,8 +60,8 @@ from skidnav.experiments.report.page import (
 from skidnav.experiments.report.reproduction import reproduction_section
 from skidnav.experiments.report.verdict import verdict_html, verdict_text
 from skidnav.experiments.store import ResultStore
-from skidnav.formatting import MIN_INTERVAL_SEEDS, plural
-from skidnav.survival import performance_profile, profile_band
+from skidnav.statistics.formatting import MIN_INTERVAL_SEEDS, plural
+from skidnav.statistics.survival import performance_profile, profile_band
 
 logger = logging.getLogger(__name__)
 

@@ -25,7 +25,7 @@ from matplotlib.patches import Patch, Rectangle
 
 from skidnav.experiments.report.plots import to_png
 from skidnav.experiments.store import TrialResult
-from skidnav.formatting import plural
+from skidnav.statistics.formatting import plural
 from skidnav.world.colours import LANDMARKS, TRAIL, unit_rgb
 
 ARENA = (0.62, 0.505)

@@ -19,11 +19,11 @@ from typing import Any
 
 import pandas as pd
 
-from skidnav.atomicfile import remove_stale_temporaries, write_atomic
 from skidnav.errors import UserError
 from skidnav.experiments.provenance import CODE_KEYS, describe_code
 from skidnav.experiments.store import ResultStore, RunLayout
-from skidnav.formatting import interval
+from skidnav.files.atomic import remove_stale_temporaries, write_atomic
+from skidnav.statistics.formatting import interval
 
 STYLE = """
 body{font-family:system-ui,sans-serif;max-width:1250px;margin:1.2em auto;padding:0 1em;color:#222}
@@ -54,7 +54,8 @@ INTERVAL = re.compile(r"([\[(][^\[\]()<>\s]{1,40}), ([^\[\]()<>\s]{1,40}[\])])")
 
 
 def interval_text(mean: float, low: float, high: float, digits: int | None = None) -> str:
-    """``"12.3 [10.1, 14.2]"`` (:func:`skidnav.formatting.interval`: rounded for people, or to
+    """``"12.3 [10.1, 14.2]"`` (:func:`skidnav.statistics.formatting.interval`: rounded for people,
+    or to
     ``digits`` decimals); the estimate alone when the interval is undefined (one seed); "n/a"
     when the estimate is.
 

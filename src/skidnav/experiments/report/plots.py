@@ -25,7 +25,7 @@ from matplotlib.figure import Figure
 
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.metrics import moving_average
-from skidnav.stats import curve_band
+from skidnav.statistics.intervals import curve_band
 
 DPI = 90
 
@@ -35,7 +35,7 @@ def to_png(figure: Figure, dpi: int = DPI, *, crop: bool = True) -> bytes:
     with a small margin (no label cut off; ``crop=False``: at the figure's own size, for a
     picture of a promised size drawn with a constrained layout), and close it (also when
     rendering fails); returns the PNG bytes. Nothing here writes a file: callers write the bytes
-    with :func:`~skidnav.atomicfile.write_atomic` (the report embeds them)."""
+    with :func:`~skidnav.files.atomic.write_atomic` (the report embeds them)."""
     buffer = io.BytesIO()
     try:
         if crop:
@@ -290,7 +290,8 @@ def performance_profiles(
 
     Args:
         profiles: agent label → (episodes, share, low, high), shape (k,) each, e.g. from
-            :func:`skidnav.survival.performance_profile` and :func:`~skidnav.survival.profile_band`.
+            :func:`skidnav.statistics.survival.performance_profile` and
+            :func:`~skidnav.statistics.survival.profile_band`.
         horizon: the last episode of the runs (the dashed line; censored runs stop there).
         title: figure title.
     """

@@ -15,7 +15,7 @@ import pandas as pd
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.report.analysis import speedup_of
 from skidnav.experiments.report.page import table
-from skidnav.formatting import NOT_AVAILABLE, interval, plural
+from skidnav.statistics.formatting import NOT_AVAILABLE, interval, plural
 
 MIN_PAIRS = 10
 """Fewer paired seeds than this make a "no difference" verdict inconclusive."""
@@ -36,7 +36,7 @@ THESIS = {
 
 def _ci(row: pd.Series, name: str, scale: float = 1.0, unit: str = "") -> str:
     """``name`` of a comparison row with its interval, times ``scale``, ``unit`` after the
-    estimate (:func:`skidnav.formatting.interval`: "n/a" when undefined)."""
+    estimate (:func:`skidnav.statistics.formatting.interval`: "n/a" when undefined)."""
     estimate, low, high = (float(row[key]) * scale for key in (name, f"{name}_low", f"{name}_high"))
     return _unit(interval(estimate, low, high), unit)
 
@@ -47,7 +47,8 @@ def _ratio(ratio: object, low: object, high: object) -> str:
 
 
 def _unit(text: str, unit: str) -> str:
-    """``unit`` after the estimate of an :func:`~skidnav.formatting.interval` text (none after
+    """``unit`` after the estimate of an :func:`~skidnav.statistics.formatting.interval` text (none
+    after
     "n/a")."""
     if text == NOT_AVAILABLE:
         return text

@@ -7,7 +7,8 @@ the Kaplan–Meier median convergence episode of the baseline over the agent's, 
 percentile-bootstrap interval over seeds, paired by seed (docs/experiments.md, "Statistics").
 The headline is the largest speed-up of any agent in any map × preset cell, then how many of the
 comparisons were significantly faster (interval above 1). Over fewer than
-:data:`~skidnav.formatting.MIN_INTERVAL_SEEDS` seeds the interval is replaced by a caveat.
+:data:`~skidnav.statistics.formatting.MIN_INTERVAL_SEEDS` seeds the interval is replaced by a
+caveat.
 """
 
 from __future__ import annotations
@@ -21,8 +22,8 @@ import pandas as pd
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.report.analysis import compare_to_baseline, speedup_of
 from skidnav.experiments.store import ResultStore
-from skidnav.formatting import MIN_INTERVAL_SEEDS, plural, readable, seeds_caveat
-from skidnav.survival import SpeedupInterval
+from skidnav.statistics.formatting import MIN_INTERVAL_SEEDS, plural, readable, seeds_caveat
+from skidnav.statistics.survival import SpeedupInterval
 
 PREFIX = "Verdict: "
 
@@ -38,7 +39,8 @@ def _seeds(summaries: pd.DataFrame, row: pd.Series) -> int:
 
 def speedup_words(speedup: SpeedupInterval, seeds: int, confidence: float) -> tuple[str, str]:
     """(the estimate, what backs it): ``("5.2×", "95% interval [3.1, 9.8], 6 seeds")``; ≥ / ≤
-    for a bound (:class:`~skidnav.survival.SpeedupInterval`), the caveat instead of the interval
+    for a bound (:class:`~skidnav.statistics.survival.SpeedupInterval`), the caveat instead of the
+    interval
     over too few seeds.
 
     >>> speedup_words(SpeedupInterval(5.23, 3.1, 9.8), 6, 0.95)

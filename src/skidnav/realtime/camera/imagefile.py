@@ -2,7 +2,7 @@
 
 A decoder allocates the image its header announces, so a file of a few bytes claiming
 60000 × 60000 px would ask for 10 GB. :func:`read_image` reads the file (a regular file of at most
-:data:`MAX_IMAGE_BYTES`, :func:`skidnav.userfile.read_limited`), reads its size with
+:data:`MAX_IMAGE_BYTES`, :func:`skidnav.files.user.read_limited`), reads its size with
 :func:`image_size` — PNG: the ``IHDR`` chunk; JPEG: the first frame header (``SOF0``–``SOF15`` but
 for the ``DHT``, ``JPG`` and ``DAC`` markers); BMP: the DIB header; TIFF: the first image
 directory's ``ImageWidth`` and ``ImageLength`` — refuses more than :data:`MAX_IMAGE_PIXELS`, and
@@ -21,8 +21,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from skidnav.errors import UserError
+from skidnav.files.user import read_limited
 from skidnav.realtime.camera.opencv import cv2, native_stderr_quiet
-from skidnav.userfile import read_limited
 
 MAX_IMAGE_BYTES = 256 * 2**20
 """Largest image file read [bytes]."""

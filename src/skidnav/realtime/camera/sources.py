@@ -20,11 +20,11 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from skidnav.atomicfile import write_atomic
 from skidnav.errors import UserError
+from skidnav.files.atomic import write_atomic
+from skidnav.files.saved import read_json
 from skidnav.realtime.camera.imagefile import read_image
 from skidnav.realtime.camera.opencv import cv2
-from skidnav.savedfile import read_json
 
 LOGGER = logging.getLogger(__name__)
 
@@ -170,7 +170,7 @@ def read_images(paths: Sequence[str | Path]) -> list[tuple[str, NDArray[np.uint8
 
 
 def read_json_file(path: str | Path, what: str) -> dict[str, Any]:
-    """The JSON object in the file ``path``, read by :func:`skidnav.savedfile.read_json` (size
+    """The JSON object in the file ``path``, read by :func:`skidnav.files.saved.read_json` (size
     and nesting limits, no NaN or Infinity); ``what`` names the kind of file in errors.
 
     Raises:

@@ -7,11 +7,11 @@ Layout under ``OUT/checkpoints/``::
     ep-00004/loop.json               the loop state (episode results, wheel-speed statistics, …)
     latest.json                      {"episode": 4, "directory": "ep-00004"}
 
-Every file is written with :func:`~skidnav.atomicfile.write_atomic` and a checkpoint directory
+Every file is written with :func:`~skidnav.files.atomic.write_atomic` and a checkpoint directory
 is complete before ``latest.json`` points to it; the newest ``keep`` directories are kept, and
 the temporaries of a writer that was killed are removed at the next checkpoint.
 
-Reading trusts neither JSON file (:func:`~skidnav.savedfile.read_json`: size, nesting, no
+Reading trusts neither JSON file (:func:`~skidnav.files.saved.read_json`: size, nesting, no
 ``NaN``): ``latest.json`` must name the checkpoint directory of its episode (nothing outside
 ``checkpoints/``), and ``loop.json`` hold episode results and statistics the loop can restore.
 """
@@ -27,10 +27,10 @@ from typing import Any
 import numpy as np
 
 from skidnav.agents.tabular.agent import TabularAgent
-from skidnav.atomicfile import remove_stale_temporaries, write_atomic
 from skidnav.errors import CorruptFileError, first_line, shown
+from skidnav.files.atomic import remove_stale_temporaries, write_atomic
+from skidnav.files.saved import read_json
 from skidnav.realtime.control.records import EpisodeResult
-from skidnav.savedfile import read_json
 
 log = logging.getLogger(__name__)
 

@@ -1,10 +1,10 @@
 """The real-time loop of a frozen continuous policy (docs/realtime.md, "Continuous policies").
 
-A :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy` chooses both wheel speeds from the
+A :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy` chooses both wheel speeds from the
 env's ``"features"`` observation. Each action, the loop computes that observation from the
 newest tracked pose (:class:`~skidnav.sim.features.PoseFeatures` of the run's map, with the
 policy's ``lidar_rays`` and ``lidar_range``), asks the policy for (ω_L, ω_R), clips them to
-± ``robot.wheel_speed`` (:func:`~skidnav.envs.navigation.clipped_wheel_speeds`, the env's rule)
+± ``robot.wheel_speed`` (:func:`~skidnav.robot.kinematics.clipped_wheel_speeds`, the env's rule)
 and holds them for ``substeps`` control periods — one action of the continuous env with
 ``control_period = substeps · period`` — through the same periods, virtual bumper, watchdog and
 lockstep as a tabular agent (:mod:`.periods`). A frozen policy does not learn: nothing is
@@ -31,15 +31,15 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
 from skidnav.agents.training import start_rollout
-from skidnav.envs.navigation import clipped_wheel_speeds
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import first_line
 from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.control.episodes import EpisodeLoop
 from skidnav.realtime.control.periods import Aborted
 from skidnav.realtime.control.records import EpisodeResult
 from skidnav.realtime.link.interface import Pose, RobotDriver
+from skidnav.robot.kinematics import clipped_wheel_speeds
 from skidnav.robot.params import RobotParams
 from skidnav.sim.features import PoseFeatures
 from skidnav.sim.navigation import is_forward_drive

@@ -2,9 +2,9 @@
 the sim server's event log (docs/realtime.md, "Files written").
 
 The two logs are append-only, the one exception to writing files atomically
-(:mod:`skidnav.atomicfile`): a log grows for the whole run, so each record is one line, written
+(:mod:`skidnav.files.atomic`): a log grows for the whole run, so each record is one line, written
 and flushed at once, and a kill can cut only the last line (a reader should skip a torn one).
-Checkpoints are written with :func:`~skidnav.atomicfile.write_atomic`."""
+Checkpoints are written with :func:`~skidnav.files.atomic.write_atomic`."""
 
 from __future__ import annotations
 

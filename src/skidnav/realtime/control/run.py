@@ -22,11 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from skidnav.atomicfile import write_user_file
 from skidnav.envs.step_info import step_info
 from skidnav.errors import UserError, first_line, shown
-from skidnav.formatting import plural
-from skidnav.outputs import make_output_dir
+from skidnav.files.atomic import write_user_file
+from skidnav.files.outputs import make_output_dir
 from skidnav.realtime.arena import arena_map, seed_streams
 from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
 from skidnav.realtime.control.checkpoint import Checkpoints
@@ -38,6 +37,7 @@ from skidnav.realtime.drivers import DRIVERS, make_driver, require_driver_extras
 from skidnav.realtime.policies import check_policy, select_policy
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
+from skidnav.statistics.formatting import plural
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 
@@ -86,12 +86,27 @@ class RobotRunSettings:
             )
 
 
+def online_agent_class(name: str) -> type[Any]:
+    """The class of agent ``name`` if it learns online on the robot (the tabular family, the
+    one whose agents the real-time loop trains step by step); UserError in one line naming
+    those agents otherwise, or for an unknown name."""
+    from skidnav.agents.catalog import entry, family
+
+    described = entry(name)
+    if described.family.name != "tabular":
+        online = ", ".join(family("tabular").agents)
+        raise UserError(
+            f"agent {name!r} ({described.family.name} family) does not learn online on the "
+            f"robot: expected one of {online} (a saved wheel-speed policy runs with "
+            "--policy-file)"
+        )
+    return described.agent_class
+
+
 def agent_context(name: str, robot: RobotParams, grid: Discretization) -> dict[str, Any]:
     """Extra constructor arguments of agent ``name``: the model-based agents take the robot
     geometry and discretization (``robot``, ``discretization``) for their kinematic model."""
-    from skidnav.agents.tabular.registry import agent_class
-
-    parameters = inspect.signature(agent_class(name).__init__).parameters
+    parameters = inspect.signature(online_agent_class(name).__init__).parameters
     context: dict[str, Any] = {}
     if "robot" in parameters:
         context["robot"] = robot
@@ -261,7 +276,7 @@ def drive(
     restored first, if any), SIGINT and SIGTERM tripping its safety monitor, and shut the driver
     down, the loop's scoring kernels compiled before connecting; returns (exit code of
     :meth:`EpisodeLoop.run`, the loop). With a ``policy_name``, ``agent`` is a frozen continuous
-    policy (:class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`) run by
+    policy (:class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`) run by
     :class:`PolicyLoop`; else a tabular agent run by :class:`RealtimeLoop`.
 
     Raises:

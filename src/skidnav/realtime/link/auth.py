@@ -28,8 +28,8 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from skidnav.errors import UserError
+from skidnav.files.user import read_limited
 from skidnav.realtime.link.protocol import MAX_LINE_BYTES, NONCE_BYTES, ProtocolError
-from skidnav.userfile import read_limited
 
 SECRET_ENV = "SKIDNAV_LINK_SECRET"
 """The environment variable holding the link secret when no secret file is named."""

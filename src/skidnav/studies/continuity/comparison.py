@@ -44,13 +44,15 @@ from typing import Any, NamedTuple
 import gymnasium
 import numpy as np
 
+from skidnav.agents.catalog import entry
 from skidnav.agents.policies.goal_tracker import GoalTracker
+from skidnav.agents.training import Evaluation
 from skidnav.checks import check_integer
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import first_line, shown
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.extras import require
-from skidnav.seeding import RUN_ROLES, child, seed_int, streams
+from skidnav.seeding import RUN_ROLES, child, child_sequences, seed_int
 from skidnav.studies.continuity.traces import (
     Policy,
     Trace,
@@ -245,20 +247,17 @@ def first_learned(greedy_lengths: np.ndarray) -> float:
 
 
 def train_learner(config: ComparisonConfig, learner: str, seed: int) -> LearnerRun:
-    """Train ``learner`` with run seed ``seed`` and roll its final policy out."""
+    """Train ``learner`` with run seed ``seed`` and roll its final policy out, as its family
+    (the catalog's :func:`~skidnav.agents.catalog.entry`) is trained here
+    (:data:`FAMILY_TRAINERS`)."""
     start = time.perf_counter()
     env = gymnasium.make(ENV_ID, **config.env_kwargs(learner not in DISCRETE_PARAMS))
-    policy, used, learned = _TRAINERS[_kind(learner)](config, learner, seed, env)
+    trainer = FAMILY_TRAINERS[entry(learner).family.name]
+    policy, used, learned = trainer(config, learner, seed, env)
     wall = time.perf_counter() - start
     traces = tuple(record_rollout(env, policy, seed=s) for s in evaluation_seeds(config))
     env.close()
     return LearnerRun(learner, seed, traces, used, learned, wall)
-
-
-def _kind(learner: str) -> str:
-    if learner in DISCRETE_PARAMS:
-        return "discrete"
-    return learner if learner in ("cmaes", MODEL_LEARNER, REFERENCE) else "deep"
 
 
 def mppi_params(config: ComparisonConfig) -> dict[str, Any]:
@@ -267,36 +266,34 @@ def mppi_params(config: ComparisonConfig) -> dict[str, Any]:
     return {"horizon": max(1, round(MPPI_LOOKAHEAD / config.control_period))}
 
 
-def _train_discrete(
+def _evaluation(config: ComparisonConfig, wheel_speeds: bool) -> Evaluation:
+    """The greedy evaluation after every episode: the comparison's rollout seeds on a twin of
+    the learner's env, each cut at ``max_steps``."""
+    checks = gymnasium.make(ENV_ID, **config.env_kwargs(wheel_speeds))
+    return Evaluation(checks, evaluation_seeds(config), config.max_steps)
+
+
+def _train_by_family(
     config: ComparisonConfig, learner: str, seed: int, env: Any
 ) -> tuple[Policy, int, float]:
-    from skidnav.agents.fast_training import train_agent_fast
-    from skidnav.agents.tabular.registry import make_agent
-
-    nav = env.unwrapped
-    context = {} if learner == "q-learning" else {"task": nav.task}
-    agent = make_agent(learner, nav.discretization.n_states, 4, DISCRETE_PARAMS[learner],
-                       streams(seed, RUN_ROLES)["agent"], **context)  # fmt: skip
-    # (the env's episodes are reset from ``seed`` itself: an agent on default_rng(seed) drew the
-    # very numbers of the env's slip noise)
-    checks = gymnasium.make(ENV_ID, **config.env_kwargs(False))
-    log = train_agent_fast(agent, env, config.episodes, greedy_eval_env=checks,
-                           greedy_max_steps=config.max_steps,
-                           greedy_seeds=evaluation_seeds(config), seed=seed)  # fmt: skip
+    """A learner made and trained as its family makes and trains it (tabular, mpc): drawing from
+    the run's ``agent`` stream, its first episode reset from ``seed`` itself (an agent on
+    default_rng(seed) would draw the very numbers of the env's slip noise)."""
+    described = entry(learner)
+    params = DISCRETE_PARAMS.get(learner) or mppi_params(config)
+    agent_seed = child_sequences(seed, RUN_ROLES)["agent"]
+    agent = described.build(env.unwrapped, params, agent_seed, config.max_steps).agent
+    evaluation = _evaluation(config, learner not in DISCRETE_PARAMS)
+    log = described.family.train(agent, env, config.episodes, evaluation=evaluation, seed=seed)
     return tabular_policy(agent), config.episodes, first_learned(log.greedy_lengths)
 
 
 def _train_deep(
     config: ComparisonConfig, learner: str, seed: int, env: Any
 ) -> tuple[Policy, int, float]:
-    from skidnav.agents.deep.ppo import PPOAgent
-    from skidnav.agents.deep.sac import SACAgent
-
-    agent = (PPOAgent if learner == "ppo" else SACAgent)(env, seed=seed)
-    checks = gymnasium.make(ENV_ID, **config.env_kwargs(True))
-    log = agent.train_episodes(config.episodes, greedy_eval_env=checks,
-                               greedy_seeds=evaluation_seeds(config),
-                               greedy_max_steps=config.max_steps)  # fmt: skip
+    """PPO or SAC on the env, seeded with the run seed itself (what Stable-Baselines3 takes)."""
+    agent = entry(learner).agent_class(env, seed=seed)
+    log = agent.train_episodes(config.episodes, evaluation=_evaluation(config, True))
     return (
         wheel_speed_policy(agent.policy(), env),
         config.episodes,
@@ -304,23 +301,14 @@ def _train_deep(
     )
 
 
-def _train_mppi(
+def _train_policy(
     config: ComparisonConfig, learner: str, seed: int, env: Any
 ) -> tuple[Policy, int, float]:
-    from skidnav.agents.mpc.agent import make_mppi_agent
-    from skidnav.agents.mpc.training import train_mppi
-
-    agent = make_mppi_agent(env, mppi_params(config), streams(seed, RUN_ROLES)["agent"])
-    checks = gymnasium.make(ENV_ID, **config.env_kwargs(True))
-    log = train_mppi(agent, env, config.episodes, greedy_eval_env=checks,
-                     greedy_max_steps=config.max_steps, greedy_seeds=evaluation_seeds(config),
-                     seed=seed)  # fmt: skip
-    return tabular_policy(agent), config.episodes, first_learned(log.greedy_lengths)
-
-
-def _train_cmaes(
-    config: ComparisonConfig, learner: str, seed: int, env: Any
-) -> tuple[Policy, int, float]:
+    """CMA-ES's search of the comparison's population and generations (its curve's first
+    generation whose mean reached the goal from every evaluation start), or the goal tracker,
+    which learns nothing."""
+    if learner == REFERENCE:
+        return wheel_speed_policy(GoalTracker(robot=env.unwrapped.robot), env), 0, math.nan
     from skidnav.agents.policies.search.cmaes import run_search
 
     result = run_search(search_config(config, seed))
@@ -329,19 +317,15 @@ def _train_cmaes(
     return wheel_speed_policy(result.policy, env), result.records[-1].episodes, first
 
 
-def _reference(
-    config: ComparisonConfig, learner: str, seed: int, env: Any
-) -> tuple[Policy, int, float]:
-    return wheel_speed_policy(GoalTracker(robot=env.unwrapped.robot), env), 0, math.nan
-
-
-_TRAINERS = {
-    "discrete": _train_discrete,
+FAMILY_TRAINERS = {
+    "tabular": _train_by_family,
+    "mpc": _train_by_family,
     "deep": _train_deep,
-    "cmaes": _train_cmaes,
-    MODEL_LEARNER: _train_mppi,
-    "goal-tracker": _reference,
+    "policies": _train_policy,
 }
+"""A learner's family (:attr:`~skidnav.agents.family.Family.name`) → how the comparison trains
+it: the family's own make and train where the comparison's seeds fit them; PPO and SAC take
+the run seed as an integer, and CMA-ES runs the comparison's search."""
 
 
 def run_comparison(config: ComparisonConfig, progress: Any = None) -> list[LearnerRun]:

@@ -21,11 +21,11 @@ import gymnasium
 import numpy as np
 import pandas as pd
 
-from skidnav.atomicfile import write_user_file
 from skidnav.envs.registration import ENV_ID
 from skidnav.errors import UserError
 from skidnav.experiments.report.page import image, markdown_html, table
 from skidnav.experiments.store import ResultStore
+from skidnav.files.atomic import write_user_file
 from skidnav.studies.continuity.comparison import REFERENCE, ComparisonConfig
 from skidnav.studies.continuity.runfile import CONTINUITY_LAYOUT, traces_of
 from skidnav.studies.continuity.traces import Trace, comparison_table

@@ -24,7 +24,7 @@ import numpy as np
 
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import RunLayout, TrialResult
-from skidnav.savedfile import ArraySpec, up_to
+from skidnav.files.saved import ArraySpec, up_to
 from skidnav.studies.continuity.comparison import (
     ComparisonConfig,
     LearnerRun,

@@ -29,10 +29,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from skidnav.configtables import build_dataclass, check_keys, table, toml_value
 from skidnav.experiments.runner import TrialFunction
 from skidnav.experiments.runs import Grid, RunSpec
 from skidnav.experiments.store import TrialResult
+from skidnav.files.configtables import build_dataclass, check_keys, table, toml_value
 from skidnav.studies.continuity.comparison import (
     ComparisonConfig,
     comparison_to_dict,

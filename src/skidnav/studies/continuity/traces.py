@@ -4,10 +4,11 @@ The thesis's future work asks for continuous wheel speeds because its four discr
 trajectories that jerk between full-speed commands. This module measures that on any policy:
 :func:`record_rollout` runs one episode of a policy (a callable observation → action; adapters
 :func:`tabular_policy` for a tabular agent's greedy action, :func:`wheel_speed_policy` for a
-:class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy` on ``action="continuous"``) and
+:class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy` on ``action="continuous"``) and
 returns a :class:`Trace`; :func:`trace_metrics` turns a trace into the numbers below;
 :func:`aggregate` and :func:`comparison_table` average them over many traces with bootstrap
-intervals (:mod:`skidnav.stats`). Definitions, T being the number of actions of the trace, Δt its
+intervals (:mod:`skidnav.statistics.intervals`). Definitions, T being the number of actions of the
+trace, Δt its
 control period [s], p_t = (x_t, y_t, ψ_t) its poses (t = 0 … T) and ω_t = (ω_L,t, ω_R,t) its
 commanded wheel speeds (t = 0 … T − 1); docs/continuity.md says why each one.
 
@@ -47,10 +48,10 @@ import gymnasium
 import numpy as np
 import pandas as pd
 
-from skidnav.agents.policies.wheel_policy import WheelSpeedPolicy
 from skidnav.agents.training import Greedy, as_state, start_rollout
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.experiments.metrics import path_length
-from skidnav.stats import Interval, bootstrap_interval
+from skidnav.statistics.intervals import Interval, bootstrap_interval
 
 Policy = Callable[[Any], Any]
 """A deterministic policy: the env's observation → an action of the env's action space."""
@@ -167,7 +168,7 @@ def wheel_speed_policy(policy: WheelSpeedPolicy, env: gymnasium.Env[Any, Any]) -
 
 
 class WheelSpeeds:
-    """A :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy` as a :data:`Policy`
+    """A :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy` as a :data:`Policy`
     (:func:`wheel_speed_policy`); a policy with a state of its own within a rollout forgets it
     when :func:`record_rollout` starts one."""
 
@@ -321,7 +322,8 @@ def aggregate(
     reversal_threshold: float = REVERSAL_THRESHOLD,
 ) -> dict[str, Interval]:
     """Mean of each metric over ``traces`` with its percentile-bootstrap interval
-    (:func:`~skidnav.stats.bootstrap_interval`, traces resampled, resamples drawn from ``rng``).
+    (:func:`~skidnav.statistics.intervals.bootstrap_interval`, traces resampled, resamples drawn
+    from ``rng``).
     A metric's NaN values are left out (time to goal: the mean over successes)."""
     rows = metric_rows(traces, reversal_threshold=reversal_threshold)
     return _intervals(rows, rng, confidence)

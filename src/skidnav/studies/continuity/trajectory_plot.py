@@ -20,10 +20,10 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt
 
-from skidnav.atomicfile import write_user_file
 from skidnav.experiments.report.maps import draw_cells
 from skidnav.experiments.report.plots import DPI, to_png
-from skidnav.formatting import plural
+from skidnav.files.atomic import write_user_file
+from skidnav.statistics.formatting import plural
 from skidnav.studies.continuity.traces import Trace
 from skidnav.world.grid import GridMap
 
@@ -77,6 +77,6 @@ def save_trajectory_picture(
     dpi: int = DPI,
 ) -> None:
     """Write :func:`trajectory_picture` to ``path`` all-or-nothing
-    (:func:`~skidnav.atomicfile.write_user_file`: UserError when it cannot be written)."""
+    (:func:`~skidnav.files.atomic.write_user_file`: UserError when it cannot be written)."""
     png = trajectory_picture(grid_map, traces, title=title, dpi=dpi)
     write_user_file(path, png, "picture")

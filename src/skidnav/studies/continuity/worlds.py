@@ -9,7 +9,8 @@ learner given different budgets in different studies stays two rows. Per learner
   alike: one counts);
 * **success** [%]: the share of its final policy's rollouts that reached the goal, the mean over
   the worlds of each world's share, with a 95 % percentile-bootstrap interval over the worlds
-  (:func:`skidnav.stats.bootstrap_interval`; the worlds are the units, the rollouts of one world
+  (:func:`skidnav.statistics.intervals.bootstrap_interval`; the worlds are the units, the rollouts
+  of one world
   share its walls);
 * **worlds ≥ 90 %**: the worlds where its rollouts reached the goal in at least 90 %;
 * **real episodes to learn**: the runs whose checks all reached the goal within the budget, and
@@ -29,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from skidnav.stats import bootstrap_interval
+from skidnav.statistics.intervals import bootstrap_interval
 from skidnav.studies.continuity.results import read_results
 
 GOOD_WORLD = 0.9

@@ -248,9 +248,7 @@ def generalisation_run(
     agent = built.agent
     limited = TimeLimit(env, max_steps)
     limited.reset(seed=seed_int(streams["episodes"]))
-    log = built.train(
-        limited, episodes, max_steps=max_steps, greedy_eval_env=None, greedy_seeds=None
-    )
+    log = built.train(limited, episodes, max_steps=max_steps)
     successes = np.asarray(log.successes, dtype=float)
     sides = [
         evaluate_on(agent, worlds, split.evaluation, max_steps, epsilon, **options)

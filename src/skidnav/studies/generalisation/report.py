@@ -2,7 +2,8 @@
 
 Per agent and policy (greedy, ε-greedy): success on the training and on the held-out maps and
 their paired difference (held-out − training), and the greedy path length on held-out maps,
-means over runs with 95 % bootstrap intervals (:mod:`skidnav.stats`, one generator seeded 0,
+means over runs with 95 % bootstrap intervals (:mod:`skidnav.statistics.intervals`, one generator
+seeded 0,
 drawn in table order); the reference policies on the same split; one row per run.
 ``skidnav study generalise`` prints them as text, ``skidnav report`` shows them as HTML
 (:func:`report_section`).
@@ -18,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from skidnav.stats import bootstrap_interval, difference_interval
+from skidnav.statistics.intervals import bootstrap_interval, difference_interval
 from skidnav.studies.agent_grid import html_table, interval_cell, results_table, study_results
 from skidnav.studies.generalisation.evaluation import (
     GeneralisationResult,

@@ -15,9 +15,9 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from skidnav.configtables import build_dataclass
 from skidnav.errors import UserError, shown
 from skidnav.experiments.config import MAX_EPISODES, MAX_SEEDS, AgentSpec, MapSpec
+from skidnav.files.configtables import build_dataclass
 from skidnav.realtime.arena import arena_map
 from skidnav.realtime.config import (
     RealtimeConfig,

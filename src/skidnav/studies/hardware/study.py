@@ -39,17 +39,17 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from skidnav.atomicfile import write_user_file
-from skidnav.configtables import resolve_path, table, toml_value
 from skidnav.errors import UserError, first_line, shown
 from skidnav.experiments.configfile import parse_tables
 from skidnav.experiments.report.page import markdown_html
 from skidnav.experiments.runner import TrialFunction, run_experiment
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import ResultStore, RunLayout
+from skidnav.files.atomic import write_user_file
+from skidnav.files.configtables import resolve_path, table, toml_value
+from skidnav.files.saved import ArraySpec, read_config_text, up_to
 from skidnav.realtime.config import read_tables, resolve_map_paths
 from skidnav.realtime.control.loop import EXIT_INTERRUPTED
-from skidnav.savedfile import ArraySpec, read_config_text, up_to
 from skidnav.studies.hardware.grid import (
     StudyGrid,
     build_grid,

@@ -26,7 +26,6 @@ import numpy as np
 
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import TrialResult
-from skidnav.formatting import readable
 from skidnav.realtime.arena import arena_map
 from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.control.loop import EXIT_INTERRUPTED
@@ -34,6 +33,7 @@ from skidnav.realtime.control.records import EpisodeResult
 from skidnav.realtime.control.run import agent_context, drive, new_agent, warm_up_agent
 from skidnav.robot.params import RobotParams
 from skidnav.seeding import RUN_ROLES, child_sequences, seed_int
+from skidnav.statistics.formatting import readable
 from skidnav.studies.hardware.grid import StudyGrid
 from skidnav.world.discretization import Discretization
 

@@ -33,14 +33,14 @@ from pathlib import Path
 from typing import Any
 
 from skidnav.checks import check_integer, check_number
-from skidnav.configtables import build_dataclass, check_keys, toml_value
 from skidnav.errors import shown
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.experiments.store import RunLayout
 from skidnav.extras import require
+from skidnav.files.configtables import build_dataclass, check_keys, toml_value
+from skidnav.files.saved import ArraySpec
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SLIP_PRESETS
-from skidnav.savedfile import ArraySpec
 
 KIND = "kinematic-models"
 """The ``kind`` of a comparison config."""

@@ -1,5 +1,6 @@
 """The table of a kinematic-model comparison: per model and output, each metric's mean over
-seeds with its 95 % percentile-bootstrap interval (:func:`skidnav.stats.bootstrap_interval`),
+seeds with its 95 % percentile-bootstrap interval
+(:func:`skidnav.statistics.intervals.bootstrap_interval`),
 as text (``skidnav study kinematic compare``) and as the report's HTML section.
 
 The intervals are drawn from one generator seeded 0, model by model, output by output, metric
@@ -16,9 +17,9 @@ import numpy as np
 import pandas as pd
 
 from skidnav.experiments.store import ResultStore
-from skidnav.formatting import MIN_INTERVAL_SEEDS, interval, plural, seeds_caveat
 from skidnav.robot.params import RobotParams
-from skidnav.stats import bootstrap_interval
+from skidnav.statistics.formatting import MIN_INTERVAL_SEEDS, interval, plural, seeds_caveat
+from skidnav.statistics.intervals import bootstrap_interval
 from skidnav.studies.kinematic_models.grid import LAYOUT, OUTPUTS, ModelComparison
 
 HEADER = ("RMSE [mm/s | mrad/s]", "90 % coverage", "width [mm/s | mrad/s]", "fit [s]")
@@ -62,9 +63,11 @@ def table_rows(comparison: ModelComparison, summaries: pd.DataFrame) -> list[lis
 
 
 def _cell(bounds: tuple[float, float, float], digits: int) -> str:
-    """``estimate [low, high]`` (:func:`skidnav.formatting.interval`: "n/a" when undefined, the
+    """``estimate [low, high]`` (:func:`skidnav.statistics.formatting.interval`: "n/a" when
+    undefined, the
     estimate alone over one seed; over fewer than
-    :data:`~skidnav.formatting.MIN_INTERVAL_SEEDS` seeds :func:`describe` says the intervals
+    :data:`~skidnav.statistics.formatting.MIN_INTERVAL_SEEDS` seeds :func:`describe` says the
+    intervals
     mean little)."""
     return interval(*bounds, digits)
 

@@ -99,7 +99,8 @@ def fit_model(model: str, train: np.ndarray, window: int) -> tuple[Predictor, fl
     """(predictor, fit time [s]) of ``model`` ("ridge" or "gp") fitted once on the log rows
     ``train`` (n, 6), keeping ``window`` samples per region."""
     from skidnav.models.gp_kinematic import GaussianProcessConfig, GaussianProcessKinematicModel
-    from skidnav.models.kinematic import KinematicModel, KinematicModelConfig
+    from skidnav.models.kinematic import KinematicModel
+    from skidnav.models.kinematic_config import KinematicModelConfig
     from skidnav.robot.params import RobotParams
     from skidnav.world.discretization import Discretization
 

@@ -15,8 +15,8 @@ from typing import Any
 
 from skidnav.agents.policies.search.curve import record_rows
 from skidnav.agents.policies.search.policy_file import save_policy
-from skidnav.atomicfile import write_user_file, writing
 from skidnav.experiments.store import ResultStore
+from skidnav.files.atomic import write_user_file, writing
 from skidnav.studies.policy_search.grid import LAYOUT
 from skidnav.studies.policy_search.trial import policy_of_run, records_of_run
 

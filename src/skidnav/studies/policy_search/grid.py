@@ -36,12 +36,12 @@ from typing import Any
 from skidnav.agents.policies.search.config import MAX_SEED, SearchConfig
 from skidnav.agents.policies.search.curve import COUNTS, GenerationRecord
 from skidnav.checks import check_integer
-from skidnav.configtables import check_keys, table, toml_value
 from skidnav.errors import UserError, shown
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.experiments.store import RunLayout
+from skidnav.files.configtables import check_keys, table, toml_value
+from skidnav.files.saved import ArraySpec
 from skidnav.robot.slip import SLIP_PRESETS
-from skidnav.savedfile import ArraySpec
 from skidnav.seeding import SeedKey, seed_int
 
 KIND = "policy-search"
@@ -139,7 +139,7 @@ def grid_to_dict(grid: PolicySearchGrid) -> dict[str, Any]:
 def grid_from_dict(values: dict[str, Any]) -> PolicySearchGrid:
     """The grid of :func:`grid_to_dict` (KeyError, TypeError or ValueError if invalid)."""
     presets = tuple(values["presets"])
-    search = SearchConfig.from_dict({**values["search"], "slip": presets[0], "seed": 0})
+    search = SearchConfig.from_mapping({**values["search"], "slip": presets[0], "seed": 0})
     return PolicySearchGrid(search, presets, values["seeds"], values["root_seed"], values["name"])
 
 

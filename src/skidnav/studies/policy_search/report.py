@@ -1,7 +1,7 @@
 """The report section of a policy-search study: per slip preset the learning curves (the mean
 policy's evaluation return per generation, one line per seed) and the final scores of every
 search, with their means over seeds and 95 % percentile-bootstrap intervals
-(:func:`skidnav.stats.bootstrap_interval`, from one generator seeded 0)."""
+(:func:`skidnav.statistics.intervals.bootstrap_interval`, from one generator seeded 0)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import pandas as pd
 
 from skidnav.experiments.report.page import image, interval_text
 from skidnav.experiments.store import ResultStore
-from skidnav.stats import bootstrap_interval
+from skidnav.statistics.intervals import bootstrap_interval
 from skidnav.studies.policy_search.grid import LAYOUT, PolicySearchGrid
 
 FINAL_COLUMNS = {

@@ -28,7 +28,7 @@ import numpy as np
 
 from skidnav.agents.policies.search.curve import COUNTS, GenerationRecord
 from skidnav.agents.policies.search.tanh_policy import PolicyLayout, TanhPolicy
-from skidnav.agents.tabular.agent import save_paths
+from skidnav.agents.saving import save_paths
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import TrialResult
 from skidnav.studies.policy_search.grid import EPISODE_COLUMNS, PolicySearchGrid, run_search_config

@@ -41,11 +41,11 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from skidnav.checks import check_integer
-from skidnav.configtables import build_dataclass, check_keys, toml_value
 from skidnav.errors import shown
 from skidnav.experiments.config import AgentSpec, MapSpec, Params
 from skidnav.experiments.store import RunLayout
-from skidnav.savedfile import ArraySpec, up_to
+from skidnav.files.configtables import build_dataclass, check_keys, toml_value
+from skidnav.files.saved import ArraySpec, up_to
 
 KIND = "sutton-barto-checks"
 """The ``kind`` of a textbook-checks config (``configs/sutton-barto.toml`` is an ordinary

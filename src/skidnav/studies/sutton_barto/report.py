@@ -24,8 +24,8 @@ from typing import NamedTuple
 import numpy as np
 import pandas as pd
 
-from skidnav.atomicfile import write_user_file
 from skidnav.experiments.report.page import image, table
+from skidnav.files.atomic import write_user_file
 from skidnav.studies.sutton_barto.grid import CHANGING_MAZES, SWEEP_AGENTS
 from skidnav.studies.sutton_barto.results import (
     NEAR_OPTIMAL,

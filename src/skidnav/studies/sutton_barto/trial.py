@@ -1,6 +1,6 @@
 """One run of the textbook checks: one agent of one check (:class:`~skidnav.studies.sutton_barto.
 grid.Check`) trained once on its maze, with the fused compiled maze trainers
-(:mod:`skidnav.agents.fast_training`; the same numbers as the plain Gymnasium loop).
+(:mod:`skidnav.agents.tabular.fast_training`; the same numbers as the plain Gymnasium loop).
 
 Its randomness: the agent's generator (ε-greedy, planning samples) is the ``"agent"`` child of the
 run's stream ``RunSpec.run_seed`` and the env's first ``reset`` seed its ``"episodes"`` child
@@ -25,9 +25,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from skidnav.agents.fast_training import train_agent_fast, train_for_steps_fast
+from skidnav.agents.catalog import entry
 from skidnav.agents.tabular.agent import TabularAgent
-from skidnav.agents.tabular.registry import make_agent
+from skidnav.agents.tabular.fast_training import train_agent_fast, train_for_steps_fast
+from skidnav.agents.training import Evaluation
 from skidnav.envs.mazes import GridMazeEnv, blocking_maze, dyna_maze, shortcut_maze
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import TrialResult
@@ -45,6 +46,8 @@ PATH_TOLERANCE = 1.2
 ε-greedy exploration from zero values an agent may never try the pairs of the one optimal path."""
 N_ACTIONS = 4
 """Up, down, left, right."""
+_NO_LIMIT = 10**9
+"""Actions per episode a family may cut at when building an agent: the mazes limit their own."""
 
 
 class RunEpisodes(NamedTuple):
@@ -61,27 +64,31 @@ def checks_trial(spec: RunSpec[TextbookChecks]) -> TrialResult:
     (module doc)."""
     check = spec.config.check(spec.agent.label)
     streams = child_sequences(spec.run_seed.sequence(), RUN_ROLES)
-    rng = np.random.default_rng(streams["agent"])
+    agent_seed = streams["agent"]
     reset_seed = seed_int(streams["episodes"])
     if check.example == "dyna-maze":
-        run = dyna_maze_run(check, rng, reset_seed)
+        run = dyna_maze_run(check, agent_seed, reset_seed)
     elif check.example == "prioritized-sweeping":
-        run = sweeping_run(check, rng, reset_seed)
+        run = sweeping_run(check, agent_seed, reset_seed)
     else:
-        run = changing_maze_run(check, rng, reset_seed)
+        run = changing_maze_run(check, agent_seed, reset_seed)
     episodes = {"steps": run.steps.astype(np.int64), "reward": run.reward.astype(np.float64)}
     return TrialResult(spec.run_id, spec.coordinates, episodes, run.summary, {})
 
 
-def _agent(check: Check, env: GridMazeEnv, rng: np.random.Generator) -> TabularAgent:
-    return make_agent(check.agent, env.n_rows * env.n_cols, N_ACTIONS, dict(check.params), rng)
+def _agent(check: Check, env: GridMazeEnv, seed: np.random.SeedSequence) -> TabularAgent:
+    """A new agent of the check, made as its family makes one (the catalog), drawing from
+    ``seed``."""
+    built = entry(check.agent).build(env, dict(check.params), seed, _NO_LIMIT)
+    agent: TabularAgent = built.agent
+    return agent
 
 
-def dyna_maze_run(check: Check, rng: np.random.Generator, reset_seed: int) -> RunEpisodes:
+def dyna_maze_run(check: Check, agent_seed: np.random.SeedSequence, reset_seed: int) -> RunEpisodes:
     """Example 8.1: :data:`DYNA_MAZE_EPISODES` episodes of Dyna-Q (the check's n) on the Dyna
     Maze; the summary holds n and the mean actions of the last 10 episodes."""
     env = dyna_maze()
-    log = train_agent_fast(_agent(check, env, rng), env, DYNA_MAZE_EPISODES, seed=reset_seed)
+    log = train_agent_fast(_agent(check, env, agent_seed), env, DYNA_MAZE_EPISODES, seed=reset_seed)
     summary = {
         "planning_steps": float(check.planning_steps),
         "last_10_steps": float(log.lengths[-10:].mean()),
@@ -89,13 +96,15 @@ def dyna_maze_run(check: Check, rng: np.random.Generator, reset_seed: int) -> Ru
     return RunEpisodes(log.lengths, log.returns, summary)
 
 
-def changing_maze_run(check: Check, rng: np.random.Generator, reset_seed: int) -> RunEpisodes:
+def changing_maze_run(
+    check: Check, agent_seed: np.random.SeedSequence, reset_seed: int
+) -> RunEpisodes:
     """Examples 8.2/8.3: the check's time steps on its maze (:data:`CHANGING_MAZES`); the
     summary holds the reward gathered before and after the change."""
     n_steps, change = CHANGING_MAZES[check.example]
     make_maze = blocking_maze if check.example == "blocking-maze" else shortcut_maze
     env = make_maze(change_after=change)
-    gathered = train_for_steps_fast(_agent(check, env, rng), env, n_steps, seed=reset_seed)
+    gathered = train_for_steps_fast(_agent(check, env, agent_seed), env, n_steps, seed=reset_seed)
     steps, reward = episodes_of(gathered)
     summary = {
         "change_step": float(change),
@@ -129,13 +138,13 @@ def cumulative_reward(steps: np.ndarray, reward: np.ndarray) -> np.ndarray:
     return np.cumsum(gained)
 
 
-def sweeping_run(check: Check, rng: np.random.Generator, reset_seed: int) -> RunEpisodes:
+def sweeping_run(check: Check, agent_seed: np.random.SeedSequence, reset_seed: int) -> RunEpisodes:
     """Example 8.4: the check's agent on the Dyna Maze of its scale, an episode at a time until
     its greedy path is near-optimal (:func:`updates_until_near_optimal`); the summary holds the
     scale, the states, the shortest path [actions] and the value updates (NaN: not within
     :data:`MAX_SWEEP_EPISODES` episodes)."""
     env = dyna_maze(check.scale)
-    agent = _agent(check, env, rng)
+    agent = _agent(check, env, agent_seed)
     steps, reward, updates = updates_until_near_optimal(agent, check.scale, reset_seed)
     summary = {
         "scale": float(check.scale),
@@ -158,7 +167,7 @@ def updates_until_near_optimal(
     steps, reward = [], []
     for episode in range(MAX_SWEEP_EPISODES):
         log = train_agent_fast(
-            agent, env, 1, greedy_eval_env=dyna_maze(scale), greedy_max_steps=4 * shortest,
+            agent, env, 1, evaluation=Evaluation(dyna_maze(scale), max_steps=4 * shortest),
             seed=reset_seed if episode == 0 else None,
         )  # fmt: skip
         steps.append(int(log.lengths[0]))

@@ -19,8 +19,7 @@ import numpy as np
 
 import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents.catalog import entry
-from skidnav.agents.fast_training import train_agent_fast
-from skidnav.agents.tabular.registry import make_agent
+from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.training import TrainingLog, greedy_evaluation, rollout_summary
 from skidnav.seeding import seed_int
 
@@ -67,11 +66,11 @@ def transfer_run(
     common = {"world_seed": seed_int(world), "max_episode_steps": max_steps, **options}
     kinematic = gymnasium.make(ENV_ID, **common)
     physical = gymnasium.make(ENV_ID, dynamics="mujoco", floor=floor, **common)
-    n_states = int(kinematic.observation_space.n)  # type: ignore[attr-defined]
-    agent = make_agent(
-        agent_name, n_states, 4, dict(params or {}), np.random.default_rng(agent_stream),
-        **entry(agent_name).context(kinematic.unwrapped),
-    )  # fmt: skip
+    agent = (
+        entry(agent_name)
+        .build(kinematic.unwrapped, dict(params or {}), agent_stream, max_steps)
+        .agent
+    )
     log = train_agent_fast(
         agent, kinematic, episodes, max_steps=max_steps, seed=seed_int(episode_stream)
     )

@@ -30,9 +30,9 @@ from typing import Any
 
 from skidnav.experiments.config import MapSpec
 from skidnav.experiments.store import RunLayout
+from skidnav.files.saved import ArraySpec
 from skidnav.physics.materials import MATERIALS
 from skidnav.robot.slip import SLIP_PRESETS
-from skidnav.savedfile import ArraySpec
 from skidnav.studies.agent_grid import (
     TRAINING_COLUMNS,
     AgentSeedGrid,

@@ -2,7 +2,8 @@
 
 Per agent: the share of greedy rollouts reaching the goal and their mean length [actions], on the
 kinematic simulator and on the MuJoCo robot, means over seeds with 95 % bootstrap intervals
-(:mod:`skidnav.stats`, one generator seeded 0, drawn in table order); and one row per run.
+(:mod:`skidnav.statistics.intervals`, one generator seeded 0, drawn in table order); and one row
+per run.
 ``skidnav study transfer`` prints it as text, ``skidnav report`` shows it as HTML
 (:func:`report_section`).
 """
@@ -16,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from skidnav.stats import bootstrap_interval
+from skidnav.statistics.intervals import bootstrap_interval
 from skidnav.studies.agent_grid import html_table, interval_cell, results_table, study_results
 from skidnav.studies.transfer.evaluation import TransferResult
 from skidnav.studies.transfer.grid import LAYOUT

@@ -12,7 +12,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from skidnav.agents.tabular.registry import available_agents, make_config
+from skidnav.agents.catalog import entry, family
 from skidnav.errors import UserError
 from skidnav.experiments.runner import TrialFunction
 from skidnav.experiments.runs import RunSpec
@@ -61,7 +61,7 @@ class TransferStudy:
             UserError: one line naming ``path`` and the key or agent.
         """
         grid = read_grid(TransferGrid, document, path, KIND)
-        known = available_agents()
+        known = family("tabular").agents
         for agent in grid.agents:
             if agent.name not in known:
                 raise UserError(
@@ -69,7 +69,7 @@ class TransferStudy:
                     f"got {agent.name!r}"
                 )
             try:
-                make_config(agent.name, agent.params_dict())
+                entry(agent.name).config(agent.params_dict())
             except UserError as error:
                 raise UserError(f"{path}: [[agents]] {error}") from None
         return grid

@@ -35,14 +35,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from skidnav.configtables import check_keys, table, table_array
 from skidnav.errors import UserError, shown
 from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec, _check_range
 
 # The [[maps]] schema lives in configfile; reusing it keeps [[tune.maps]] and [[maps]] one schema,
 # with the same messages.
 from skidnav.experiments.configfile import config_from_tables, parse_tables, read_map
-from skidnav.savedfile import read_config_text
+from skidnav.files.configtables import check_keys, table, table_array
+from skidnav.files.saved import read_config_text
 
 if TYPE_CHECKING:
     import optuna

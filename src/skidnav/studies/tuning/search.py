@@ -1,7 +1,8 @@
 """Hyperparameter search with Optuna: one resumable study per agent, on tuning worlds that are
 never evaluation worlds (docs/tuning.md).
 
-* **Objective** (minimized): the interquartile mean (:func:`skidnav.stats.iqm`) over a trial's
+* **Objective** (minimized): the interquartile mean (:func:`skidnav.statistics.intervals.iqm`) over
+a trial's
   tuning runs (tuning maps × slip presets × ``seeds``) of the summary's ``convergence_episode``;
   a run that never converged counts at its censoring time, which is the penalty.
 * **Pruning**: runs are submitted seed-major; whenever every run of the first k seeds has
@@ -13,10 +14,11 @@ never evaluation worlds (docs/tuning.md).
   process backend's pool is one for the whole search
   (:func:`~skidnav.experiments.runner.process_pool`): its workers start once, not at every trial.
 * **Seeds**: a tuning run's world and run streams are those of the evaluation grid with the
-  spawn key prefixed by :data:`TUNE_STREAM`: ``SeedSequence(root_seed).spawn(3)[2]`` takes the
-  place of the root, whose children 0 and 1 are the evaluation world and run roots. Every trial
-  of every agent meets the same tuning worlds (paired comparisons); :func:`check_separation`
-  checks that no tuning map equals an evaluation map. The sampler of each trial is seeded from
+  spawn key prefixed by :data:`~skidnav.studies.tuning.runs.TUNE_STREAM`:
+  ``SeedSequence(root_seed).spawn(3)[2]`` takes the place of the root, whose children 0 and 1
+  are the evaluation world and run roots. Every trial of every agent meets the same tuning
+  worlds (paired comparisons); :func:`~skidnav.studies.tuning.runs.check_separation` checks
+  that no tuning map equals an evaluation map. The sampler of each trial is seeded from
   the root seed, the agent label and the number of trials finished before it, so a study
   interrupted and resumed proposes what an uninterrupted one would have.
 * **Storage**: Optuna's ``JournalStorage`` on one JSON-lines file, ``DIR/journal.log``; study
@@ -34,8 +36,6 @@ import json
 import logging
 import math
 import time
-import warnings
-import zlib
 from collections.abc import Callable, Generator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -45,17 +45,14 @@ import numpy as np
 import optuna
 from optuna.trial import FrozenTrial, TrialState
 
-from skidnav.atomicfile import remove_stale_temporaries, write_atomic
-from skidnav.errors import CorruptFileError, RunsFailedError, UserError
+from skidnav.errors import RunsFailedError, UserError
 from skidnav.experiments.config import (
-    DEFAULT_ENV_ID,
     AgentSpec,
     ExperimentConfig,
     config_to_dict,
-    freeze_params,
 )
 from skidnav.experiments.failures import RunFailure
-from skidnav.experiments.journalfile import check_journal
+from skidnav.experiments.lock import directory_lock
 from skidnav.experiments.runner import (
     TrialFunction,
     _check_backend,
@@ -64,23 +61,19 @@ from skidnav.experiments.runner import (
     process_pool,
 )
 from skidnav.experiments.runner import execute as execute_runs
-from skidnav.experiments.runs import expand_runs
-from skidnav.experiments.store import TrialResult, directory_lock
-from skidnav.seeding import ROOT_ROLES, WORLD_ROLES, SeedKey, child_sequences
-from skidnav.stats import iqm
+from skidnav.experiments.store import TrialResult
+from skidnav.files.atomic import remove_stale_temporaries, write_atomic
+from skidnav.statistics.intervals import iqm
 from skidnav.studies.tuning.config import ParamRange, TuneConfig, check_tuning, default_point
+from skidnav.studies.tuning.optuna_setup import make_pruner, make_sampler, open_storage
+from skidnav.studies.tuning.runs import check_separation, trial_config, tuning_runs
 from skidnav.studies.tuning.tuned_file import write_tuned
-from skidnav.world.grid import GridMap
 
 if TYPE_CHECKING:
     from skidnav.experiments.trial import ExperimentRun
 
 logger = logging.getLogger(__name__)
 
-TUNE_STREAM = ROOT_ROLES.index("tuning")
-"""Child of ``SeedSequence(root_seed)`` that roots every tuning stream (0, 1: evaluation)."""
-SAMPLER_STREAM = 2
-"""Child of the tuning root that seeds the samplers (0, 1: tuning worlds and runs)."""
 OBJECTIVE_KEY = "convergence_episode"
 CONVERGED_KEY = "converged"
 JOURNAL = "journal.log"
@@ -124,77 +117,6 @@ class _Context:
     """The process backend's pool, shared by every trial (its workers start once)."""
 
 
-def tuning_key(key: SeedKey) -> SeedKey:
-    """The tuning counterpart of an evaluation seed key: the same key under :data:`TUNE_STREAM`."""
-    assert key.spawn_key[:1] in ((0,), (1,)), "expected an evaluation world or run key"
-    return SeedKey(key.entropy, (TUNE_STREAM, *key.spawn_key))
-
-
-def trial_config(
-    config: ExperimentConfig, tune: TuneConfig, agent: AgentSpec, params: dict[str, Any], label: str
-) -> ExperimentConfig:
-    """The experiment of one trial: ``agent`` with ``params`` over its own params, on the tuning
-    maps with the tuning seeds; ``label`` (e.g. the trial number) goes into the description, so
-    every trial has its own fingerprint (the Dask keys of its runs)."""
-    tuned = AgentSpec(agent.name, agent.label, freeze_params({**agent.params_dict(), **params}))
-    return dataclasses.replace(
-        config,
-        agents=(tuned,),
-        maps=tune.maps,
-        seeds=tune.seeds,
-        baseline=agent.label,
-        description=f"tuning {agent.label} {label}".rstrip(),
-    )
-
-
-def tuning_runs(config: ExperimentConfig) -> list[ExperimentRun]:
-    """The runs of a :func:`trial_config`, on the tuning streams, seed-major."""
-    runs = [
-        dataclasses.replace(
-            spec, world_seed=tuning_key(spec.world_seed), run_seed=tuning_key(spec.run_seed)
-        )
-        for spec in expand_runs(config)
-    ]
-    return sorted(runs, key=lambda spec: (spec.seed, spec.index))
-
-
-def run_map(spec: ExperimentRun) -> GridMap:
-    """The map run ``spec`` trains on (drawn as :func:`skidnav.experiments.trial.measure_trial`
-    draws it: from the first child of the world stream)."""
-    from skidnav.experiments.trial import config_map
-
-    map_seed = child_sequences(spec.world_seed.sequence(), WORLD_ROLES)["map"]
-    return config_map(spec.map, np.random.default_rng(map_seed))
-
-
-def _map_key(grid_map: GridMap) -> tuple[Any, ...]:
-    return (grid_map.occupancy.shape, grid_map.occupancy.tobytes(), grid_map.start, grid_map.goal)
-
-
-def check_separation(config: ExperimentConfig, tune: TuneConfig) -> int:
-    """Check that no tuning map equals an evaluation map of ``config`` (its ``[[maps]]`` ×
-    presets × seeds); returns the number of evaluation maps compared (0 for an environment that
-    brings its own world, where there is nothing to separate).
-
-    Raises:
-        UserError: a tuning map equals an evaluation map (e.g. the same map file).
-    """
-    if config.env_id != DEFAULT_ENV_ID:
-        return 0
-    first = config.agents[0]
-    evaluation = dataclasses.replace(config, agents=(first,), baseline=first.label)
-    seen = {_map_key(run_map(spec)): spec for spec in expand_runs(evaluation)}
-    template = trial_config(config, tune, first, {}, "")
-    for spec in tuning_runs(template):
-        twin = seen.get(_map_key(run_map(spec)))
-        if twin is not None:
-            raise UserError(
-                f"tuning map {spec.map.label!r} (seed {spec.seed}) equals evaluation map "
-                f"{twin.map.label!r} (seed {twin.seed}); give [[tune.maps]] maps of their own"
-            )
-    return len(seen)
-
-
 def _plans(config: ExperimentConfig, tune: TuneConfig) -> list[_Plan]:
     plans = []
     for agent in config.agents:
@@ -208,30 +130,6 @@ def _plans(config: ExperimentConfig, tune: TuneConfig) -> list[_Plan]:
         name = f"{config.name}/{agent.label}"
         plans.append(_Plan(agent, space, name, fingerprint, default_point(agent, space)))
     return plans
-
-
-def open_storage(journal: Path, repair: bool = True) -> optuna.storages.JournalStorage:
-    """The journal storage on ``journal`` (created if missing), checked first
-    (:func:`~skidnav.experiments.journalfile.check_journal`). With ``repair``, a last line cut
-    short by a kill during a write is then dropped, so appending to the file stays valid (a
-    reader leaves it: Optuna skips it).
-
-    Raises:
-        CorruptFileError: the journal is not one (nothing is changed then).
-    """
-    from optuna.storages.journal import JournalFileBackend, JournalFileOpenLock
-
-    if journal.exists():
-        check = check_journal(journal)
-        if repair and check.torn_bytes:
-            logger.warning("%s: dropping a last line cut short by an interruption", journal)
-            with open(journal, "r+b") as handle:
-                handle.truncate(check.complete_bytes)
-    try:
-        backend = JournalFileBackend(str(journal), lock_obj=JournalFileOpenLock(str(journal)))
-        return optuna.storages.JournalStorage(backend)
-    except (ValueError, KeyError, TypeError) as error:
-        raise CorruptFileError(f"{journal}: not an Optuna journal ({error})") from None
 
 
 def _study(storage: optuna.storages.JournalStorage, plan: _Plan, create: bool) -> Any:
@@ -260,31 +158,6 @@ def _study(storage: optuna.storages.JournalStorage, plan: _Plan, create: bool) -
 def finished_count(study: optuna.Study) -> int:
     """Trials that count towards the budget: complete and pruned ones."""
     return len(study.get_trials(deepcopy=False, states=FINISHED))
-
-
-def make_sampler(
-    tune: TuneConfig, root_seed: int, label: str, finished: int
-) -> optuna.samplers.BaseSampler:
-    """The sampler of the next trial of ``label``'s study, seeded from the root seed, the label
-    and the trials finished before it (module docs)."""
-    key = (TUNE_STREAM, SAMPLER_STREAM, zlib.crc32(label.encode()), finished)
-    seed = int(np.random.SeedSequence(root_seed, spawn_key=key).generate_state(1)[0])
-    if tune.sampler == "random":
-        return optuna.samplers.RandomSampler(seed=seed)
-    with warnings.catch_warnings():  # experimental in Optuna 4, the default in Optuna 5
-        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-        return optuna.samplers.TPESampler(
-            seed=seed, n_startup_trials=tune.startup_trials, multivariate=True
-        )
-
-
-def make_pruner(tune: TuneConfig) -> optuna.pruners.BasePruner:
-    """The pruner of every study: MedianPruner over seed steps, or none."""
-    if tune.pruner == "none":
-        return optuna.pruners.NopPruner()
-    return optuna.pruners.MedianPruner(
-        n_startup_trials=tune.pruner_startup_trials, n_warmup_steps=tune.pruner_warmup_seeds
-    )
 
 
 def _results(

@@ -17,8 +17,6 @@ from typing import Any
 import optuna
 from optuna.trial import TrialState
 
-from skidnav.atomicfile import write_atomic
-from skidnav.configtables import toml_key, toml_value
 from skidnav.experiments.config import (
     DEFAULT_ENV_ID,
     AgentSpec,
@@ -29,6 +27,8 @@ from skidnav.experiments.config import (
 )
 from skidnav.experiments.configfile import EXPERIMENT_KEYS
 from skidnav.experiments.provenance import code_version
+from skidnav.files.atomic import write_atomic
+from skidnav.files.configtables import toml_key, toml_value
 from skidnav.studies.tuning.config import TuneConfig
 
 TUNED = "tuned.toml"
@@ -141,7 +141,7 @@ def write_tuned(
 ) -> Path:
     """Write ``out/tuned.toml`` atomically from the ``studies`` (by agent label) kept in
     ``journal``; ``compared``: evaluation maps
-    :func:`~skidnav.studies.tuning.search.check_separation`
+    :func:`~skidnav.studies.tuning.runs.check_separation`
     compared the tuning maps with. Returns the path."""
     agents: list[tuple[AgentSpec, Sequence[str]]] = []
     for agent in config.agents:

@@ -43,11 +43,11 @@ from skidnav.agents.policies.search.curve import (
     records_from_table,
     records_table,
 )
-from skidnav.agents.tabular.agent import save_paths
-from skidnav.atomicfile import write_atomic, write_npz_atomic
+from skidnav.agents.saving import save_paths
 from skidnav.checks import check_integer, check_magnitude, check_number
 from skidnav.errors import CorruptFileError, first_line
-from skidnav.savedfile import ArraySpec, SavedArchive, parse_json, read_json, up_to
+from skidnav.files.atomic import write_atomic, write_npz_atomic
+from skidnav.files.saved import ArraySpec, SavedArchive, parse_json, read_json, up_to
 
 logger = logging.getLogger(__name__)
 
@@ -166,7 +166,7 @@ def _settings(meta: dict[str, Any], where: Path) -> tuple[SearchConfig, float, i
     try:
         if not isinstance(meta.get("config"), dict):
             raise ValueError("expected the config to be an object")
-        config = SearchConfig.from_dict(meta["config"])
+        config = SearchConfig.from_mapping(meta["config"])
         sigma = check_number("sigma", meta.get("sigma"), 0.0, MAX_SIGMA)
         generation = meta.get("generation")
         check_integer("generation", generation, 1, MAX_GENERATIONS)

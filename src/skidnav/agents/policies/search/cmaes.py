@@ -49,9 +49,9 @@ from skidnav.agents.policies.search.config import MAX_PARAMETER, SearchConfig
 from skidnav.agents.policies.search.curve import GenerationRecord as GenerationRecord
 from skidnav.agents.policies.search.curve import record_rows as record_rows
 from skidnav.agents.policies.search.curve import scheduled
-from skidnav.agents.policies.search.rollouts import PopulationRollouts
+from skidnav.agents.policies.search.rollouts import EpisodeBatch, PopulationRollouts
 from skidnav.agents.policies.search.tanh_policy import TanhPolicy
-from skidnav.agents.tabular.agent import save_paths
+from skidnav.agents.saving import save_paths
 from skidnav.errors import UserError, first_line
 from skidnav.seeding import child, child_sequences
 
@@ -167,7 +167,7 @@ class CMAESSearch:
         while self.generation < self.config.generations:
             if unreported:  # another generation follows: that record is final
                 report(self.records[-1])
-            scores = self._generation()
+            scores = self.advance().mean_returns
             self._record(start, float(scores.max()), float(scores.mean()))
             unreported = True
             if self.checkpoint is not None:
@@ -180,10 +180,11 @@ class CMAESSearch:
             report(records[-1])
         return SearchResult(self.mean_policy(), tuple(records), self.config)
 
-    def _generation(self) -> np.ndarray:
-        """One ask / score / tell; the λ scores, float64 (λ,). UserError when a candidate
-        reaches :data:`~skidnav.agents.policies.search.config.MAX_PARAMETER` (the search
-        diverged)."""
+    def advance(self) -> EpisodeBatch:
+        """One generation more: ask / score / tell, not recorded (:meth:`run` records it); the
+        batch of its λ × E episodes, whose ``mean_returns`` are the λ scores. UserError when a
+        candidate reaches :data:`~skidnav.agents.policies.search.config.MAX_PARAMETER` (the
+        search diverged)."""
         generation = self.generation + 1
         self.optimizer.reseed_rng(sampler_seed(self.config, generation))
         candidates = np.array([self.optimizer.ask() for _ in range(self.config.population)])
@@ -198,7 +199,7 @@ class CMAESSearch:
         )
         fitness = batch.mean_returns + self.config.progress_weight * batch.progress.mean(axis=1)
         self.optimizer.tell([(x, -float(f)) for x, f in zip(candidates, fitness, strict=True)])
-        return batch.mean_returns
+        return batch
 
     def _record(self, start: float, best: float, population_mean: float) -> None:
         """Append the record of the generation just done (``start``: the clock's zero [s]), with

@@ -11,6 +11,7 @@ ValueError: expected population to be an integer in [2, 10000], got 1
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -166,11 +167,11 @@ class SearchConfig:
         }
 
     def to_dict(self) -> dict[str, Any]:
-        """The fields as a JSON-able dict (read back by :meth:`from_dict`)."""
+        """The fields as a JSON-able dict (read back by :meth:`from_mapping`)."""
         return {field.name: getattr(self, field.name) for field in fields(self)}
 
     @classmethod
-    def from_dict(cls, values: dict[str, Any]) -> SearchConfig:
+    def from_mapping(cls, values: Mapping[str, Any]) -> SearchConfig:
         """A config from a mapping of its fields; ValueError naming an unknown key."""
         known = [field.name for field in fields(cls)]
         unknown = sorted(set(values) - set(known))

@@ -5,7 +5,7 @@ The archive holds three float64 arrays: ``parameters`` (n,), ``observation_low``
 (``hidden``, ``lidar_rays``, ``lidar_range`` [m], ``wheel_speed`` [rad/s]) and free ``provenance``
 (the search's config and counters). Loading reads the JSON first (size and nesting limited), derives
 n and d from it, and checks every array's name, dtype and shape against them before any data is read
-(:class:`skidnav.savedfile.SavedArchive`), then every parameter below
+(:class:`skidnav.files.saved.SavedArchive`), then every parameter below
 :data:`~skidnav.agents.policies.search.config.MAX_PARAMETER` in magnitude (as a search keeps them);
 a bad file is one :class:`~skidnav.errors.CorruptFileError` line naming it.
 
@@ -35,11 +35,11 @@ from skidnav.agents.policies.search.tanh_policy import (
     TanhPolicy,
     parameter_count,
 )
-from skidnav.agents.tabular.agent import save_paths
-from skidnav.atomicfile import write_atomic, write_npz_atomic
+from skidnav.agents.saving import save_paths
 from skidnav.checks import check_magnitude, check_number
 from skidnav.errors import CorruptFileError, first_line, shown
-from skidnav.savedfile import ArraySpec, SavedArchive, read_json
+from skidnav.files.atomic import write_atomic, write_npz_atomic
+from skidnav.files.saved import ArraySpec, SavedArchive, read_json
 
 SAVE_FORMAT = "skidnav-tanh-policy"
 SAVE_VERSION = 1
@@ -86,7 +86,7 @@ def load_policy(path: str | Path) -> TanhPolicy:
 def policy_from_file(json_path: Path, meta: Mapping[str, Any]) -> TanhPolicy:
     """The policy of the JSON file ``json_path`` already parsed as ``meta``, its arrays read from
     the ``.npz`` beside it (the ``function(path, content)`` a registry of policy formats such as
-    ``skidnav.agents.policies.loading`` calls); CorruptFileError as :func:`load_policy`."""
+    :mod:`skidnav.agents.policies.family` calls); CorruptFileError as :func:`load_policy`."""
     npz_path = save_paths(json_path)[0]
     if meta.get("format") != SAVE_FORMAT or meta.get("version") != SAVE_VERSION:
         raise CorruptFileError(

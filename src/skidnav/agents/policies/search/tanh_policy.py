@@ -160,7 +160,7 @@ def parameter_count(n_inputs: int, hidden: int) -> int:
 
 class TanhPolicy:
     """One parameter vector of a :class:`PolicyLayout`: a
-    :class:`~skidnav.agents.policies.wheel_policy.WheelSpeedPolicy`.
+    :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`.
 
     Args:
         layout: the meaning of the parameters.

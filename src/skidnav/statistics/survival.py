@@ -37,7 +37,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from skidnav.stats import NAN_INTERVAL, ArrayLike, Interval
+from skidnav.statistics.intervals import NAN_INTERVAL, ArrayLike, Interval
 
 HALF = 0.5 + 1e-9
 """S(t) ≤ 0.5 test with a rounding margin: a per-run product such as 3/4 · 2/3 must count as 0.5."""
@@ -66,7 +66,8 @@ class SpeedupInterval(NamedTuple):
 
     @property
     def interval(self) -> Interval:
-        """The same numbers as a plain :class:`~skidnav.stats.Interval` (bound dropped)."""
+        """The same numbers as a plain :class:`~skidnav.statistics.intervals.Interval` (bound
+        dropped)."""
         return Interval(self.estimate, self.low, self.high)
 
     def words(self, digits: int = 2) -> str:

@@ -1,5 +1,5 @@
 """Files a user names, opened and read without trusting them (the opening half of
-:mod:`skidnav.savedfile`).
+:mod:`skidnav.files.saved`).
 
 Every file skidnav reads on a user's word (a config, a map, an action script, a saved agent,
 policy, checkpoint or run file, a tune journal, an image) is opened by :func:`open_user_file`,

@@ -3,13 +3,15 @@
 (:class:`skidnav.envs.mazes.GridMazeEnv`), and :func:`train_for_steps_fast`, a drop-in for
 :func:`skidnav.agents.training.train_for_steps` on the same envs.
 
-Episodes run in compiled stretches (:func:`skidnav.agents.fused_loop.learn_stretch`, at most
-:data:`STRETCH` steps each): the env's compiled step (:mod:`skidnav.agents.env_steps`), ε-greedy,
+Episodes run in compiled stretches (:func:`skidnav.agents.tabular.fused_loop.learn_stretch`, at most
+:data:`STRETCH` steps each): the env's compiled step (:mod:`skidnav.agents.tabular.env_steps`),
+ε-greedy,
 and the agent's own learning step — the very kernel its ``observe`` calls, so there is one learning
 step per agent. Between stretches Python makes room in the agent's buffers (``reserve``); between
 episodes it does what the agent does in ``end_episode`` (ε decay, trajectory bookkeeping, kinematic
 refits by the compiled Bayesian ridge) and the greedy evaluation rollouts (also compiled). Same
-signature, same output, and the same numbers as the plain loop for the same seed (tested), except
+signature, the same loop (:func:`skidnav.agents.training.train_episodes`: seeds, evaluations,
+log), and the same numbers as the plain loop for the same seed (tested), except
 ``wall_time``. Other envs (the navigation env with ``dynamics="mujoco"`` among them: its physics is
 not compiled), or agents that are not a :class:`~skidnav.agents.tabular.agent.TabularAgent`, fall
 back to the plain loop. The navigation env's ``trail`` (for rendering) is not recorded.
@@ -18,24 +20,26 @@ back to the plain loop. The navigation env's ``trail`` (for rendering) is not re
 from __future__ import annotations
 
 import logging
-import time
 from collections.abc import Sequence
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from skidnav.agents import env_steps, fused_loop
-from skidnav.agents.fused_loop import ELAPSED, ENDED, LENGTH, Limits
 from skidnav.agents.learning import NO_LOG_ROWS, NO_POSE
+from skidnav.agents.tabular import env_steps, fused_loop
 from skidnav.agents.tabular.agent import TabularAgent
+from skidnav.agents.tabular.fused_loop import ELAPSED, ENDED, LENGTH, Limits
 from skidnav.agents.training import (
-    NOT_REACHED,
+    NO_EVALUATION,
+    Episode,
+    EpisodeFunction,
+    Evaluation,
+    EvaluationFunction,
     Rollout,
     TrainingLog,
-    log_from_rows,
-    record_evaluation,
     train_agent,
+    train_episodes,
     train_for_steps,
 )
 
@@ -61,7 +65,7 @@ def _unwrapped(env: gym.Env[Any, Any]) -> tuple[Any, int]:
 class FusedEnv:
     """An unwrapped env the compiled loop drives, with the smallest step limit along its
     wrappers; subclasses convert the env's state to and from the loop's
-    (:mod:`skidnav.agents.env_steps`)."""
+    (:mod:`skidnav.agents.tabular.env_steps`)."""
 
     def __init__(self, env: Any, limit: int) -> None:
         self.env, self.limit = env, limit
@@ -144,19 +148,35 @@ def _learn(
     return float(total), int(state), tally
 
 
-def _episode(
-    agent: TabularAgent, fused: FusedEnv, max_steps: int, seed: int | None
-) -> tuple[float, int, bool, int, int]:
-    """Reset the env, run one episode, finish it in Python; returns (return, length,
-    terminated, collisions, planning updates)."""
-    planned_before = agent.planning_updates
-    steps = (max_steps, max_steps)
-    total, _, tally = _learn(agent, fused, fused.reset(seed), steps, _NO_REWARDS)
-    agent.end_episode()  # may plan too (dyna-sweep): counted with the episode, as the plain loop
-    return (
-        total, int(tally[LENGTH]), bool(tally[fused_loop.TERMINATED]),
-        int(tally[fused_loop.COLLISIONS]), agent.planning_updates - planned_before,
-    )  # fmt: skip
+def _episodes(agent: TabularAgent, fused: FusedEnv, max_steps: int | None) -> EpisodeFunction:
+    """The compiled :data:`~skidnav.agents.training.EpisodeFunction`: reset the env, run one
+    episode in compiled stretches, finish it in Python."""
+
+    def episode(seed: int | None) -> Episode:
+        planned_before = agent.planning_updates
+        steps = (max_steps or _BIG, max_steps or _BIG)
+        total, _, tally = _learn(agent, fused, fused.reset(seed), steps, _NO_REWARDS)
+        agent.end_episode()  # may plan (dyna-sweep): counted with the episode, as in the plain loop
+        return Episode(
+            total, int(tally[LENGTH]), bool(tally[fused_loop.TERMINATED]),
+            int(tally[fused_loop.COLLISIONS]), agent.planning_updates - planned_before,
+        )  # fmt: skip
+
+    return episode
+
+
+def _evaluations(
+    agent: TabularAgent, fused: FusedEnv | None, seeds: Sequence[int] | None
+) -> EvaluationFunction:
+    """The compiled :data:`~skidnav.agents.training.EvaluationFunction`: a :func:`_greedy`
+    rollout on ``fused`` (the evaluation env) per seed, else one continuing its generator."""
+
+    def evaluate(limit: int) -> list[Rollout]:
+        assert fused is not None  # the loop evaluates only with an env
+        each: Sequence[int | None] = [None] if seeds is None else list(seeds)
+        return [_greedy(agent.q, fused, limit, seed) for seed in each]
+
+    return evaluate
 
 
 def _greedy(q: np.ndarray, fused: FusedEnv, max_steps: int, seed: int | None) -> Rollout:
@@ -175,7 +195,7 @@ _NO_REWARDS = np.zeros(0)
 
 
 def _fused_envs(
-    agent: Any, env: gym.Env[Any, Any], greedy_eval_env: gym.Env[Any, Any] | None
+    agent: Any, env: gym.Env[Any, Any], evaluation_env: gym.Env[Any, Any] | None
 ) -> tuple[FusedEnv, FusedEnv | None] | None:
     """The fused views of the training and evaluation envs, or None if the plain loop must run
     (an agent that is not a TabularAgent, an env the loop cannot drive, a Q table of another
@@ -185,56 +205,36 @@ def _fused_envs(
         return None
     if agent.n_states != fused.env.observation_space.n:
         return None
-    if greedy_eval_env is None:
+    if evaluation_env is None:
         return fused, None
-    evaluation = FusedEnv.find(greedy_eval_env)
+    evaluation = FusedEnv.find(evaluation_env)
     return None if evaluation is None else (fused, evaluation)
 
 
 def train_agent_fast(
     agent: TabularAgent,
     env: gym.Env[Any, Any],
-    n_episodes: int,
+    episodes: int,
+    /,
     *,
     max_steps: int | None = None,
-    greedy_eval_env: gym.Env[Any, Any] | None = None,
-    greedy_max_steps: int | None = None,
-    greedy_seeds: Sequence[int] | None = None,
+    evaluation: Evaluation = NO_EVALUATION,
     seed: int | None = None,
 ) -> TrainingLog:
-    """As :func:`skidnav.agents.training.train_agent`, with compiled episodes (see module doc)."""
-    fused = _fused_envs(agent, env, greedy_eval_env)
+    """As :func:`skidnav.agents.training.train_agent`: the one loop
+    (:func:`~skidnav.agents.training.train_episodes`) with compiled episodes and evaluations
+    (see module doc)."""
+    fused = _fused_envs(agent, env, evaluation.env)
     if fused is None:
         logger.info("train_agent_fast: falling back to train_agent for %s", agent.name)
         return train_agent(
-            agent, env, n_episodes, max_steps=max_steps, greedy_eval_env=greedy_eval_env,
-            greedy_max_steps=greedy_max_steps, greedy_seeds=greedy_seeds, seed=seed,
-        )  # fmt: skip
-    if n_episodes < 0 or (max_steps is not None and max_steps < 1):
-        raise ValueError(
-            f"expected n_episodes >= 0 and max_steps >= 1, got {n_episodes}, {max_steps}"
+            agent, env, episodes, max_steps=max_steps, evaluation=evaluation, seed=seed
         )
-    training, evaluation = fused
-    limit = greedy_max_steps or max_steps or 10_000
-    seeds: Sequence[int | None] = [None] if greedy_seeds is None else list(greedy_seeds)
-    columns: dict[str, list[Any]] = {name: [] for name in TrainingLog._fields}
-    for episode in range(n_episodes):
-        start = time.perf_counter()
-        result = _episode(agent, training, max_steps or _BIG, seed if episode == 0 else None)
-        columns["wall_time"].append(time.perf_counter() - start)
-        for name, value in zip(_EPISODE_FIELDS, result, strict=True):
-            columns[name].append(value)
-        greedy = [NOT_REACHED] * len(seeds)
-        if evaluation is not None:
-            if episode == 0 and seed is not None and greedy_seeds is None:
-                evaluation.reset(seed + 1)
-            greedy = [_greedy(agent.q, evaluation, limit, s) for s in seeds]
-        record_evaluation(columns, greedy)
-    return log_from_rows(columns, len(seeds))
-
-
-_EPISODE_FIELDS = ("returns", "lengths", "successes", "collisions", "planning_updates")
-"""TrainingLog fields of an episode function's result, in order."""
+    training, greedy = fused
+    return train_episodes(
+        _episodes(agent, training, max_steps), _evaluations(agent, greedy, evaluation.seeds),
+        episodes, max_steps=max_steps, evaluation=evaluation, seed=seed,
+    )  # fmt: skip
 
 
 def evaluate_q_fast(

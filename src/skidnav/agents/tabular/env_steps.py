@@ -1,4 +1,4 @@
-"""The env steps the fused loop (:mod:`skidnav.agents.fused_loop`) drives: compiled twins of
+"""The env steps the fused loop (:mod:`skidnav.agents.tabular.fused_loop`) drives: compiled twins of
 ``env.step`` that draw the same numbers and change the same state.
 
 An env step is

@@ -1,6 +1,6 @@
 """How deeply a JSON text nests, found before it is parsed, in memory linear in its length.
 
-:func:`json_depth` is the nesting pre-check of :func:`skidnav.savedfile.parse_json`: a document
+:func:`json_depth` is the nesting pre-check of :func:`skidnav.files.saved.parse_json`: a document
 nested thousands of levels deep is refused before Python's parser recurses into it. It scans the
 UTF-8 bytes in blocks of :data:`BLOCK_BYTES` with a small state machine vectorised over each
 block — inside a string or not, whether the previous byte was an unfinished escape, the current

@@ -1,4 +1,4 @@
-"""Files written all-or-nothing (the writing half of :mod:`skidnav.savedfile`).
+"""Files written all-or-nothing (the writing half of :mod:`skidnav.files.saved`).
 
 :func:`write_atomic` writes a temporary file beside the target, fsyncs it and moves it into
 place with ``os.replace``: a reader, or a kill at any moment, sees the old file or the new one.

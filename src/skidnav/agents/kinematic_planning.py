@@ -28,21 +28,15 @@ from skidnav._jit import inline_jit, jit
 from skidnav.models.kinematic_prediction import (
     PREDICT_COLLISION,
     PREDICT_GOAL,
-    collision_wall_cell,
-    feed_rows,
-    predict_action,
 )
-from skidnav.models.multinomial_kernels import (
+from skidnav.models.multinomial_kernels import MultinomialArrays, hash_find, split_key
+from skidnav.models.multinomial_targets import (
     MOST_PROBABLE,
-    MultinomialArrays,
-    hash_find,
     model_target_call,
     most_probable_target,
-    split_key,
 )
-from skidnav.robot.params import KinematicConstants
 from skidnav.sim.q_values import td_target, update_toward
-from skidnav.world.discretization import GridShape, region_of, state_of
+from skidnav.world.discretization import GridShape, region_of
 
 # counters columns
 N_TRAJECTORY = 0
@@ -68,7 +62,8 @@ class PlannerArrays(NamedTuple):
             (:func:`reward_row`), derived from the two above wherever they are written.
         velocities: (n_regions, n_actions, 3) predicted body velocities [m/s, m/s, rad/s].
         walls: bool (n_x, n_y), cells the agent treats as walls: those whose wall evidence
-            outweighs their free evidence (:func:`weigh_cell`), never a known goal.
+            outweighs their free evidence
+            (:func:`~skidnav.agents.planner_learning.weigh_cell`), never a known goal.
         goals: bool (n_x, n_y), cells known to be goals.
         stale: bool (n_x, n_y), cells that became or stopped being walls, and goals found, since
             the table was last refreshed.
@@ -261,217 +256,3 @@ def combined_planning(
         update_toward(cells, key, 0, target, shares.alpha)
         updates += 1
     return updates
-
-
-@jit
-def _refresh_cell(
-    planner: PlannerArrays, i: int, j: int, robot: KinematicConstants, grid: GridShape
-) -> None:
-    """Recompute the kinematic table and its reward rows for every state of cell (i, j) (as
-    :func:`~skidnav.models.kinematic_prediction.prediction_table`)."""
-    x0 = (i + 0.5) * grid.arena_width / (grid.n_x - 1)
-    y0 = (j + 0.5) * grid.arena_height / (grid.n_y - 1)
-    n_actions = planner.pred_next.shape[1]
-    n_regions = planner.reward_stats.shape[0] - 2
-    for h in range(grid.n_headings):
-        state = (i * grid.n_y + j) * grid.n_headings + h
-        heading = -np.pi + (h + 0.5) * 2.0 * np.pi / grid.n_headings
-        for action in range(n_actions):
-            next_state, code = state, PREDICT_COLLISION
-            if not planner.walls[i, j]:
-                x, y, end_heading, code = predict_action(
-                    x0, y0, heading, action, planner.velocities, planner.walls, planner.goals,
-                    robot, grid,
-                )  # fmt: skip
-                next_state = state_of(x, y, end_heading, grid)
-            planner.pred_next[state, action] = next_state
-            planner.pred_outcome[state, action] = code
-            planner.pred_row[state, action] = reward_row(next_state, code, n_regions, grid)
-
-
-@jit
-def refresh_stale(planner: PlannerArrays, robot: KinematicConstants, grid: GridShape) -> int:
-    """Recompute the table for every cell within ``REFRESH_RADIUS`` cells of a stale cell (a goal
-    found, a cell that became or stopped being a wall since the last refresh), then clear
-    ``stale``. Returns the cells redone."""
-    radius = planner.counters[REFRESH_RADIUS]
-    affected = np.zeros(planner.stale.shape, dtype=np.bool_)
-    for ci in range(grid.n_x):
-        for cj in range(grid.n_y):
-            if planner.stale[ci, cj]:
-                i0, i1 = max(ci - radius, 0), min(ci + radius + 1, grid.n_x)
-                j0, j1 = max(cj - radius, 0), min(cj + radius + 1, grid.n_y)
-                affected[i0:i1, j0:j1] = True
-    redone = 0
-    for i in range(grid.n_x):
-        for j in range(grid.n_y):
-            if affected[i, j]:
-                _refresh_cell(planner, i, j, robot, grid)
-                redone += 1
-    planner.stale[:, :] = False
-    return redone
-
-
-@jit
-def weigh_cell(planner: PlannerArrays, i: int, j: int, wall: int, free: int) -> None:
-    """Add ``wall`` collisions and ``free`` sightings of the robot to cell (i, j)'s evidence and
-    weigh it: the cell is a wall while its wall evidence exceeds its free evidence (a goal cell
-    never is). A cell that changes side is marked stale (the table around it is redone at the
-    end of the episode, :func:`refresh_stale`).
-
-    The robot is never inside a wall cell, so one sighting outweighs one wrong guess: a free cell
-    guessed as a wall is cleared when the robot is next seen in it, while a real wall's evidence
-    only grows. A guess is only a guess: it replays the *expected* motion of the action
-    (:func:`~skidnav.models.kinematic_prediction.collision_wall_cell`), and on a slippery floor
-    the colliding sub-step's random wheel-speed loss can send the robot into a neighbouring cell.
-    """
-    planner.wall_evidence[i, j] += wall
-    planner.free_evidence[i, j] += free
-    evidence = planner.wall_evidence[i, j] > planner.free_evidence[i, j]
-    is_wall = evidence and not planner.goals[i, j]
-    if is_wall != planner.walls[i, j]:
-        planner.walls[i, j] = is_wall
-        planner.stale[i, j] = True
-        planner.counters[MAP_CHANGES] += 1
-
-
-@jit
-def _learn_map(
-    planner: PlannerArrays,
-    action: int,
-    next_state: int,
-    terminated: bool,
-    collided: bool,
-    pose: np.ndarray,
-    robot: KinematicConstants,
-    grid: GridShape,
-) -> None:
-    """Learn the map from one real step: a discovered goal cell; the cell the robot ended in as
-    free evidence; the guessed wall cell of a collision as wall evidence (:func:`weigh_cell`)."""
-    cell = next_state // grid.n_headings
-    i, j = cell // grid.n_y, cell % grid.n_y
-    if terminated and not planner.goals[i, j]:
-        planner.goals[i, j] = True
-        planner.stale[i, j] = True
-        planner.counters[MAP_CHANGES] += 1
-    weigh_cell(planner, i, j, 0, 1)
-    if collided and planner.counters[USE_KINEMATIC] != 0:
-        wi, wj = collision_wall_cell(
-            pose[0], pose[1], pose[2], action, planner.velocities, robot, grid
-        )
-        if wi >= 0:
-            weigh_cell(planner, wi, wj, 1, 0)
-
-
-@jit
-def planner_observe(
-    planner: PlannerArrays,
-    state: int,
-    action: int,
-    reward: float,
-    next_state: int,
-    terminated: bool,
-    collided: bool,
-    pose: np.ndarray,
-    robot: KinematicConstants,
-    grid: GridShape,
-) -> None:
-    """Learn from one real step what the planner needs: reward statistics, the episode's pairs,
-    and (with pose information, ``pose[0] >= 0``) the map: goal cells, and the evidence of wall
-    and free cells (:func:`_learn_map`).
-
-    Args:
-        pose: float64 (3,) pose after the step [m, m, rad], or negative x when unknown.
-        Others: the real transition; ``collided`` from the env's info.
-    """
-    n_regions = planner.reward_stats.shape[0] - 2
-    if terminated:
-        row = n_regions + 1
-    elif collided:
-        row = n_regions
-    else:
-        row = state_region(next_state, grid)
-    planner.reward_stats[row, 0] += reward
-    planner.reward_stats[row, 1] += 1.0
-    length = planner.counters[EPISODE_LENGTH]
-    planner.episode_keys[length] = state * planner.pred_next.shape[1] + action
-    planner.counters[EPISODE_LENGTH] = length + 1
-    planner.counters[EPISODE_TERMINATED] = 1 if terminated else 0
-    if pose[0] >= 0.0:
-        _learn_map(planner, action, next_state, terminated, collided, pose, robot, grid)
-
-
-@jit
-def feed_log(
-    data: np.ndarray, counts: np.ndarray, log: np.ndarray, n_rows: int, n_regions: int
-) -> int:
-    """Feed the first ``n_rows`` rows of a kinematic log to the model buffers."""
-    return feed_rows(data, counts, log[:n_rows], n_regions)
-
-
-@jit
-def loop_erase(keys: np.ndarray, n_actions: int, n_states: int) -> np.ndarray:
-    """Loop-erased copy of an episode's pairs (keys s·n_actions + a, in order).
-
-    Whenever a state recurs, the pairs since its earlier visit (a loop) are dropped, so every
-    state appears once and each kept pair still led, in reality, to the next kept state.
-    """
-    position = np.full(n_states, -1, dtype=np.int64)
-    out = np.empty(keys.shape[0], dtype=np.int64)
-    length = 0
-    for key in keys:
-        state = split_key(key, n_actions)[0]
-        earlier = position[state]
-        if earlier >= 0:
-            for k in range(earlier, length):
-                position[split_key(out[k], n_actions)[0]] = -1
-            length = earlier
-        position[state] = length
-        out[length] = key
-        length += 1
-    return out[:length].copy()
-
-
-@jit
-def _spatial_neighbours(
-    out: np.ndarray, length: int, state: int, walls: np.ndarray, grid: GridShape, n_actions: int
-) -> int:
-    """Append every action at the states one cell (same heading bin) or one heading bin (same
-    cell) away from ``state``, skipping known wall cells; returns the new length."""
-    cell, h = state // grid.n_headings, state % grid.n_headings
-    i, j = cell // grid.n_y, cell % grid.n_y
-    for di in range(-1, 2):
-        for dj in range(-1, 2):
-            for dh in range(-1, 2):
-                same_cell = di == 0 and dj == 0
-                if (same_cell and dh == 0) or (not same_cell and dh != 0):
-                    continue
-                ni, nj = i + di, j + dj
-                if ni < 0 or nj < 0 or ni >= grid.n_x or nj >= grid.n_y or walls[ni, nj]:
-                    continue
-                neighbour = (ni * grid.n_y + nj) * grid.n_headings + (h + dh) % grid.n_headings
-                for action in range(n_actions):
-                    out[length] = neighbour * n_actions + action
-                    length += 1
-    return length
-
-
-@jit
-def neighbourhood_keys(
-    trajectory: np.ndarray, walls: np.ndarray, grid: GridShape, n_actions: int, spatial: bool
-) -> np.ndarray:
-    """Pairs around a trajectory, walked backward from its last pair: first the other actions at
-    each trajectory state, then (if ``spatial``: the states are skid-steer poses) every action at
-    the states one cell (8-neighbourhood, same heading bin) or one heading bin away; states in
-    known wall cells are left out. May repeat."""
-    out = np.empty(trajectory.shape[0] * n_actions * 27, dtype=np.int64)
-    length = 0
-    for k in range(trajectory.shape[0] - 1, -1, -1):
-        state, taken = split_key(trajectory[k], n_actions)
-        for action in range(n_actions):
-            if action != taken:
-                out[length] = state * n_actions + action
-                length += 1
-        if spatial:
-            length = _spatial_neighbours(out, length, state, walls, grid, n_actions)
-    return out[:length].copy()

@@ -1,8 +1,8 @@
 """The fused compiled loop: whole stretches of an episode in one numba call (used by
-:mod:`skidnav.agents.fast_training`).
+:mod:`skidnav.agents.tabular.fast_training`).
 
 The loop knows how an episode goes, and nothing of the agent or of the env: it calls the env's
-step through :func:`skidnav.agents.env_steps.env_step` and the agent's learning step through
+step through :func:`skidnav.agents.tabular.env_steps.env_step` and the agent's learning step through
 :func:`skidnav.agents.learning.learn`, both chosen while compiling by the type of the env's
 state and of the agent's arrays (numba compiles and caches the loop once per such pair). Each
 step does what the plain Python loop (:func:`skidnav.agents.training.run_episode` driving
@@ -22,8 +22,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from skidnav._jit import jit, uncached
-from skidnav.agents.env_steps import env_step
 from skidnav.agents.learning import STEPS, Experience, learn
+from skidnav.agents.tabular.env_steps import env_step
 from skidnav.sim.q_values import epsilon_greedy, greedy_first
 
 # columns of the int64 ``tally`` array of one episode
@@ -57,7 +57,7 @@ def learn_stretch(
 ) -> tuple[float, int]:
     """Learn from ``state`` until the episode ends or ``tally[LENGTH]`` reaches ``limits.stop``.
 
-    :func:`~skidnav.agents.env_steps.env_step` moves ``env`` (whose ``pose`` and ``log`` the
+    :func:`~skidnav.agents.tabular.env_steps.env_step` moves ``env`` (whose ``pose`` and ``log`` the
     experience carries); :func:`~skidnav.agents.learning.learn` teaches the agent whose
     ``arrays``, ``settings`` and ``counters`` these are. ``returns`` is (the return so
     far, float64 rewards array: reward of step k at ``[tally[LENGTH]]`` unless it is empty);

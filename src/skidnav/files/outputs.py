@@ -6,7 +6,7 @@ line, not after the work. :func:`check_output_file` and :func:`check_output_dir`
 as the writer will meet it (``os.access`` for the permission, which also refuses a read-only file
 system) and create nothing; :func:`make_output_dir` then creates a results directory. A full
 disk shows only when writing: writers report it in one line and keep what was written before
-(:mod:`skidnav.atomicfile`).
+(:mod:`skidnav.files.atomic`).
 """
 
 from __future__ import annotations

@@ -6,11 +6,12 @@ line (a config: one :class:`~skidnav.errors.UserError` line), never in a traceba
 MemoryError, a RecursionError, an OverflowError or a hang, so nothing in a file is used before
 it is checked against what the reader expects:
 
-* every file is opened by :func:`skidnav.userfile.open_user_file` (a regular file; a FIFO, a
-  device or a socket refused without blocking) and read by :func:`~skidnav.userfile.read_limited`
+* every file is opened by :func:`skidnav.files.user.open_user_file` (a regular file; a FIFO, a
+  device or a socket refused without blocking) and read by :func:`~skidnav.files.user.read_limited`
   (at most a given number of bytes);
 * :func:`parse_json` / :func:`read_json`: a size limit, a nesting limit checked before parsing
-  (:func:`skidnav.jsondepth.json_depth`, in memory linear in the text), no ``NaN``/``Infinity``
+  (:func:`skidnav.files.jsondepth.json_depth`, in memory linear in the text), no
+  ``NaN``/``Infinity``
   or overflowing numbers unless asked for, a JSON object;
 * :func:`read_config_text` / :func:`parse_toml`: the same limits for a TOML config (which may
   come through a pipe);
@@ -24,7 +25,7 @@ it is checked against what the reader expects:
   uncompressed size in the zip directory against the header, and the total against a byte
   budget: only then is data read, exactly the bytes the header announced (no zip bomb).
 
-Writing is :mod:`skidnav.atomicfile`.
+Writing is :mod:`skidnav.files.atomic`.
 """
 
 from __future__ import annotations
@@ -48,8 +49,8 @@ import numpy as np
 from numpy.lib import format as npy_format
 
 from skidnav.errors import CorruptFileError, UserError, excerpt, first_line
-from skidnav.jsondepth import json_depth
-from skidnav.userfile import open_user_file, read_limited
+from skidnav.files.jsondepth import json_depth
+from skidnav.files.user import open_user_file, read_limited
 
 MAX_JSON_BYTES = 64 * 2**20
 """Largest JSON file read [bytes] (an agent's is a few kilobytes, metadata a few megabytes)."""
@@ -171,7 +172,7 @@ def nesting_depth(value: object) -> int:
 def read_config_text(path: Path | str) -> str:
     """The text of a config file of at most :data:`MAX_CONFIG_BYTES` bytes, a regular file or a
     pipe (read up to that limit instead of filling the memory, its writer given
-    :data:`~skidnav.userfile.PIPE_TIMEOUT_S` to finish); UserError naming the file otherwise (a
+    :data:`~skidnav.files.user.PIPE_TIMEOUT_S` to finish); UserError naming the file otherwise (a
     device, a directory, a socket)."""
     data = read_limited(path, MAX_CONFIG_BYTES, "config file", UserError, pipes=True)
     try:

@@ -1,0 +1,1 @@
+"""Statistics: intervals over seeds, survival of runs, numbers for people."""
