@@ -5,6 +5,8 @@ A page marks where a generated part goes with an HTML comment on a line of its o
 
 * ``<!-- generated: cli -->``: every command of ``skidnav``, its ``--help`` as argparse prints it
   (:func:`skidnav.cli.build_parser`), one section per command, groups first;
+* ``<!-- generated: prior-gap -->``: how far every floor is from the robot's datasheet
+  (``skidnav world floors prior``);
 * ``<!-- generated: configs -->``: one row per file of ``configs/``: its kind, the command that
   runs it and the header comment that says what it is;
 * ``<!-- generated: agents -->``: every agent family in catalog order
@@ -292,7 +294,20 @@ def agents_reference() -> str:
     return "\n".join(map(family_section, families(), FAMILY_MODULES))
 
 
-GENERATORS = {"cli": cli_reference, "configs": configs_reference, "agents": agents_reference}
+def prior_gap_reference() -> str:
+    """How far every floor is from the robot's datasheet (``skidnav world floors prior``)."""
+    import_source()
+    from skidnav.commands.floors import prior_gap_table
+
+    return prior_gap_table()
+
+
+GENERATORS = {
+    "cli": cli_reference,
+    "configs": configs_reference,
+    "agents": agents_reference,
+    "prior-gap": prior_gap_reference,
+}
 
 
 def on_page_markdown(markdown: str, **kwargs: Any) -> str:

@@ -21,8 +21,10 @@ from skidnav.world.discretization import Discretization
 
 
 def geometry_from_task(task: NavigationTask) -> tuple[RobotParams, Discretization]:
-    """Robot and discretization of a navigation task. The robot keeps the *nominal* x_ICR of
-    :class:`RobotParams` (the agent's prior), never the slip field's true values."""
+    """Robot and discretization of a navigation task. The robot is the task robot's datasheet
+    (:class:`~skidnav.robot.datasheet.Datasheet`: wheel radius, half track, top wheel speed and
+    the x_ICR its geometry states, with the task's timing and arena), the prior of every
+    kinematic learner; never the floor's truth (its slip field, effective r and c, x_ICR)."""
     kc, grid = task.robot, task.grid
     robot = RobotParams(
         wheel_radius=kc.wheel_radius, half_track=kc.half_track, wheel_speed=kc.wheel_speed,

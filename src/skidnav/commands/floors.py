@@ -1,5 +1,7 @@
 """``skidnav world floors calibrate``: fit the ICR model to the MuJoCo robot on each floor material
-(:mod:`skidnav.physics.calibration`), print the table and optionally write it as JSON."""
+(:mod:`skidnav.physics.calibration`), print the table and optionally write it as JSON;
+``skidnav world floors prior``: how far every floor is from the robot's datasheet, the prior of
+every kinematic learner (:mod:`skidnav.robot.datasheet`)."""
 
 from __future__ import annotations
 
@@ -14,6 +16,10 @@ from skidnav.files.atomic import write_user_file
 from skidnav.files.outputs import check_output_file
 from skidnav.physics.backend import PhysicsUnavailable
 from skidnav.physics.materials import MATERIALS
+from skidnav.robot.datasheet import Datasheet, PriorGap, floor_gap, material_gap
+from skidnav.robot.floors import calibrated_floors
+from skidnav.robot.params import RobotParams
+from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.statistics import formatting
 
 MAX_SEGMENTS = 10_000
@@ -34,6 +40,39 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     calibrate.add_argument("--seed", type=int, default=0, help="excitation and interval seed")
     calibrate.add_argument("--out", type=Path, help="JSON file to write the fits to")
     calibrate.set_defaults(func=_calibrate)
+    prior = actions.add_parser(
+        "prior",
+        help="how far each floor's true forward speed, turn rate and ICR are from the datasheet",
+    )
+    prior.set_defaults(func=_prior)
+
+
+def prior_gap_rows() -> list[tuple[str, str, PriorGap]]:
+    """(floor, where it is, its gap) for every slip preset of the kinematic simulator and every
+    calibrated material of the MuJoCo robot, against the thesis robot's datasheet."""
+    rows = [(preset, "kinematic simulator", floor_gap(preset)) for preset in SLIP_PRESETS]
+    rows += [(m, "MuJoCo robot", material_gap(m)) for m in calibrated_floors()]
+    return rows
+
+
+def prior_gap_table() -> str:
+    """:func:`prior_gap_rows` as a Markdown table (the documentation shows it)."""
+    sheet = Datasheet.of(RobotParams())
+    lines = [
+        f"| floor | robot | forward speed, truth / datasheet | turn rate, truth / datasheet | "
+        f"x_ICR [mm] (datasheet {sheet.x_icr * 1000:g}) |",
+        "|---|---|---|---|---|",
+    ]
+    for floor, where, gap in prior_gap_rows():
+        lines.append(
+            f"| `{floor}` | {where} | {gap.forward:.3f} | {gap.turn:.3f} | {round(gap.x_icr * 1000, 1) + 0.0:.1f} |"
+        )
+    return "\n".join(lines)
+
+
+def _prior(args: argparse.Namespace) -> int:
+    print(prior_gap_table())
+    return 0
 
 
 def _calibrate(args: argparse.Namespace) -> int:
