@@ -3,6 +3,7 @@ the window) and its incremental refits (the same fit as the rebuild from the win
 
 from __future__ import annotations
 
+import itertools
 import sys
 from pathlib import Path
 
@@ -106,7 +107,7 @@ def test_incremental_refits_equal_the_rebuild_from_the_window(name: str) -> None
     # uneven batches: some regions get more than a window between refits, some a few samples
     # (the rebuild after REBUILD_WINDOWS windows of updates is crossed too)
     bounds = [0, 7, 40, 400, 430, 1600, 1620, 3000]
-    for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
+    for start, stop in itertools.pairwise(bounds):
         for model in models:
             model.feed(log[start:stop])
             model.refit()
