@@ -212,6 +212,20 @@ def _precisions(
 
 
 @jit
+def _moment_error(
+    gram: np.ndarray, projected: np.ndarray, target_ss: float, coef: np.ndarray
+) -> float:
+    """E = yᵀy − 2wᵀXᵀy + wᵀXᵀXw from the moments (XᵀX, Xᵀy, yᵀy), at least 0 (rounding
+    can make the difference of nearly equal sums negative)."""
+    error = target_ss
+    for i in range(coef.shape[0]):
+        error -= 2.0 * coef[i] * projected[i]
+        for j in range(coef.shape[0]):
+            error += coef[i] * gram[i, j] * coef[j]
+    return max(error, 0.0)
+
+
+@jit
 def _evidence_iterations(
     inputs: np.ndarray,
     target: np.ndarray,
@@ -222,11 +236,32 @@ def _evidence_iterations(
 ) -> tuple[np.ndarray, np.ndarray, float, float, int]:
     """The evidence loop of the module docstring on prepared data: ``inputs`` (n, k) and
     ``target`` (n,) already centred if need be and multiplied by √w; ``weight_sum`` = Σ w.
-    With A = XᵀX + (λ/α) I: w = A⁻¹Xᵀy, γ = k − (λ/α) · trace(A⁻¹) (the eigenvalue sum of
-    the module docstring), Σ = A⁻¹ / α, each guarded as the module docstring says. Returns
-    (coef (k,), covariance (k, k), α, λ, iterations)."""
-    k = inputs.shape[1]
+    Returns (coef (k,), covariance (k, k), α, λ, iterations) of :func:`_evidence_loop`."""
     gram, projected = _gram(inputs, target)
+    return _evidence_loop(
+        gram, projected, 0.0, inputs, target, weight_sum, target_variance, max_iter, tol
+    )
+
+
+@jit
+def _evidence_loop(
+    gram: np.ndarray,
+    projected: np.ndarray,
+    target_ss: float,
+    inputs: np.ndarray,
+    target: np.ndarray,
+    weight_sum: float,
+    target_variance: float,
+    max_iter: int,
+    tol: float,
+) -> tuple[np.ndarray, np.ndarray, float, float, int]:
+    """The evidence loop on the Gram matrix ``gram`` (k, k) and ``projected`` = Xᵀy (k,):
+    the squared error E from the data ``inputs`` (n, k), ``target`` (n,) when n > 0, else from
+    the moments with ``target_ss`` = yᵀy (:func:`_moment_error`). With A = XᵀX + (λ/α) I:
+    w = A⁻¹Xᵀy, γ = k − (λ/α) · trace(A⁻¹) (the eigenvalue sum of the module docstring),
+    Σ = A⁻¹ / α, each guarded as the module docstring says. Returns (coef (k,), covariance
+    (k, k), α, λ, iterations)."""
+    k = gram.shape[0]
     largest = 0.0
     for i in range(k):
         largest = max(largest, gram[i, i])
@@ -238,7 +273,10 @@ def _evidence_iterations(
         shift = _shift(lam, alpha, largest)
         inverse = _inverse_shifted(gram, shift)
         coef = _times(inverse, projected)
-        error = _squared_error(inputs, target, coef)
+        if inputs.shape[0] > 0:
+            error = _squared_error(inputs, target, coef)
+        else:
+            error = _moment_error(gram, projected, target_ss, coef)
         lam, alpha = _precisions(inverse, shift, coef, error, weight_sum)
         moved = 0.0
         for i in range(k):
@@ -286,6 +324,47 @@ def fit_bayesian_ridge(
     coef, covariance, alpha, lam, iterations = _evidence_iterations(
         inputs * root[:, None], target * root, weight_sum, target_variance, max_iter, tol
     )
+    intercept = target_mean - float(offset @ coef) if fit_intercept else 0.0
+    return RidgePosterior(coef, intercept, covariance, float(alpha), float(lam), offset, iterations)
+
+
+def fit_bayesian_ridge_moments(
+    moments: np.ndarray,
+    fit_intercept: bool,
+    max_iter: int = 300,
+    tol: float = 1e-3,
+) -> RidgePosterior:
+    """:func:`fit_bayesian_ridge` from the weighted moments of the data instead of the data:
+    equal to it up to floating-point rounding (the squared error E comes from
+    yᵀy − 2wᵀXᵀy + wᵀXᵀXw rather than from a pass over the samples), at a cost that does not
+    grow with the number of samples.
+
+    Args:
+        moments: float64 (k + 2, k + 2), Σᵢ wᵢ zᵢ zᵢᵀ over the samples with
+            zᵢ = (xᵢ (k,), 1, yᵢ): the weighted Gram matrix of the inputs, a column of ones and
+            the target; its entry (k, k) (Σ w) must be > 0.
+        fit_intercept, max_iter, tol: as :func:`fit_bayesian_ridge`.
+    """
+    k = moments.shape[0] - 2
+    weight_sum = float(moments[k, k])
+    if not weight_sum > 0.0:
+        raise ValueError(f"expected a positive weight sum, got {weight_sum:g}")
+    gram, projected = moments[:k, :k], moments[:k, k + 1]
+    input_sum, target_sum, target_ss = moments[:k, k], moments[k, k + 1], moments[k + 1, k + 1]
+    target_mean = float(target_sum) / weight_sum
+    target_variance = max(float(target_ss) / weight_sum - target_mean * target_mean, 0.0)
+    if fit_intercept:
+        offset = input_sum / weight_sum
+        gram = gram - np.outer(input_sum, offset)
+        projected = projected - input_sum * target_mean
+        target_ss = max(float(target_ss) - target_sum * target_mean, 0.0)
+    else:
+        offset = np.zeros(k)
+    empty = np.zeros((0, k))
+    coef, covariance, alpha, lam, iterations = _evidence_loop(
+        np.ascontiguousarray(gram), np.ascontiguousarray(projected), float(target_ss),
+        empty, np.zeros(0), weight_sum, target_variance, max_iter, tol,
+    )  # fmt: skip
     intercept = target_mean - float(offset @ coef) if fit_intercept else 0.0
     return RidgePosterior(coef, intercept, covariance, float(alpha), float(lam), offset, iterations)
 

@@ -50,6 +50,7 @@ from skidnav.errors import CorruptFileError, first_line
 from skidnav.files.atomic import write_atomic, write_npz_atomic
 from skidnav.files.saved import MAX_ARCHIVE_BYTES, READ_ERRORS, ArraySpec, SavedArchive, read_json
 from skidnav.models.kinematic_config import KinematicModelConfig, window_slots
+from skidnav.models.kinematic_moments import RingMoments, feed_rows_stratified, newest_moments
 from skidnav.models.kinematic_prediction import (
     action_velocities,
     feed_rows,
@@ -59,6 +60,7 @@ from skidnav.models.kinematic_prediction import (
 from skidnav.models.kinematic_regression import (
     Posterior,
     fit_coefficients,
+    fit_from_moments,
     icr_parameters,
     nominal_coefficients,
     twist_std,
@@ -100,6 +102,11 @@ class KinematicModel:
         self.fitted_counts = np.zeros(n_regions, dtype=np.int64)
         self.coefficients = np.tile(nominal_coefficients(robot), (n_regions, 1))
         self.velocities = np.zeros((n_regions, N_ACTIONS, 3))
+        strata = self.config.speed_strata
+        self.stratum_counts = np.zeros((n_regions, strata), dtype=np.int64)
+        """Samples ever fed per region and speed stratum (with one stratum: unused, ``counts``
+        is the ring's count)."""
+        self._moments = RingMoments(self.data.shape, strata, self.config.incremental)
         self.refits = 0
         self._pooled_fitted = 0
         self._posteriors: list[Posterior | None] = [None] * n_regions
@@ -144,7 +151,20 @@ class KinematicModel:
     def feed(self, log: np.ndarray) -> int:
         """Store kinematic-log rows ``(n, 6)``; returns how many were stored (no refit)."""
         rows = np.ascontiguousarray(log, dtype=np.float64).reshape(-1, 6)
-        return int(feed_rows(self.data, self.counts, rows, self.grid.n_regions))
+        if self.config.speed_strata == 1:
+            return int(feed_rows(self.data, self.counts, rows, self.grid.n_regions))
+        return int(
+            feed_rows_stratified(
+                self.data, self.counts, self.stratum_counts, rows, self.grid.n_regions,
+                self.robot.wheel_speed,
+            )
+        )  # fmt: skip
+
+    def ring_counts(self) -> np.ndarray:
+        """Samples ever fed per region and ring, int64 (n_regions, speed_strata)."""
+        if self.config.speed_strata == 1:
+            return self.counts[:, None]
+        return self.stratum_counts
 
     @property
     def new_samples(self) -> int:
@@ -168,6 +188,8 @@ class KinematicModel:
         """Refit the pooled model and every region with at least ``min_samples`` new samples (or
         none fitted yet), then the velocity table."""
         prior = nominal_coefficients(self.robot)
+        if self.config.incremental:
+            self._moments.sync(self.data, self.ring_counts(), self.config.forgetting, prior)
         pooled, pooled_posterior = self._fit_pooled(prior)
         fresh = self.counts - self.fitted_counts
         minimum = self.config.min_samples
@@ -176,8 +198,7 @@ class KinematicModel:
                 self.coefficients[region] = pooled
                 self._posteriors[region] = pooled_posterior
             elif fresh[region] >= minimum or self.fitted_counts[region] < minimum:
-                x, w = self._region_samples(region)
-                fit = fit_coefficients(x, w, pooled, self.config.fit_intercept)
+                fit = self._fit_region(region, pooled, prior)
                 self.coefficients[region], self._posteriors[region] = fit
                 self.fitted_counts[region] = self.counts[region]
         self.refits += 1
@@ -185,22 +206,50 @@ class KinematicModel:
         self._update_velocities()
         logger.debug("kinematic refit %d", self.refits)
 
-    def _region_samples(self, region: int) -> tuple[np.ndarray, np.ndarray]:
-        """Kept samples of a region (n, 5) and their forgetting weights (n,)."""
-        slots = window_slots(int(self.counts[region]), self.config.window)
-        age = np.arange(slots.size - 1, -1, -1, dtype=np.float64)
-        return self.data[region, slots], self.config.forgetting**age
+    def _fit_region(
+        self, region: int, pooled: np.ndarray, prior: np.ndarray
+    ) -> tuple[np.ndarray, Posterior]:
+        """A region's fit on the residual of the pooled coefficients: from its rings' moments,
+        or from its kept samples."""
+        if self.config.incremental:
+            moments = self._moments.region(region)
+            return fit_from_moments(moments, pooled, prior, self.config.fit_intercept)
+        x, w = self._region_samples(region)
+        return fit_coefficients(x, w, pooled, self.config.fit_intercept)
+
+    def _region_samples(
+        self, region: int, share: int | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Kept samples of a region (n, 5) and their forgetting weights (n,), ring by ring
+        (the newest ``share`` of each ring, or all)."""
+        capacity = self.config.window // self.config.speed_strata
+        samples, weights = [], []
+        for stratum, count in enumerate(self.ring_counts()[region]):
+            slots = stratum * capacity + window_slots(int(count), capacity)
+            age = np.arange(slots.size - 1, -1, -1, dtype=np.float64)
+            newest = slots.size if share is None else min(share, slots.size)
+            samples.append(self.data[region, slots[slots.size - newest :]])
+            weights.append(self.config.forgetting ** age[age.size - newest :])
+        if len(samples) == 1:
+            return samples[0], weights[0]
+        return np.concatenate(samples), np.concatenate(weights)
 
     def _fit_pooled(self, prior: np.ndarray) -> tuple[np.ndarray, Posterior | None]:
-        """Fit on the newest ``window / n_active`` samples of each active region (so a pooled
-        fit costs no more than a regional one)."""
+        """Fit on the newest ``window / (strata × n_active)`` samples of each active region's
+        rings (so a pooled fit costs no more than a regional one)."""
         active = np.flatnonzero(self.counts)
         if int(self.counts.sum()) < self.config.min_samples:
             return prior, None
-        share = -(-self.config.window // active.size)
-        parts = [self._region_samples(int(r)) for r in active]
-        x = np.concatenate([p[0][-share:] for p in parts])
-        w = np.concatenate([p[1][-share:] for p in parts])
+        capacity = self.config.window // self.config.speed_strata
+        share = -(-capacity // active.size)
+        if self.config.incremental:
+            moments = newest_moments(
+                self.data, self.ring_counts(), share, self.config.forgetting, prior
+            )
+            return fit_from_moments(moments, prior, prior, self.config.fit_intercept)
+        parts = [self._region_samples(int(r), share) for r in active]
+        x = np.concatenate([p[0] for p in parts])
+        w = np.concatenate([p[1] for p in parts])
         return fit_coefficients(x, w, prior, self.config.fit_intercept)
 
     # -- prediction ------------------------------------------------------------------------
@@ -313,11 +362,19 @@ class KinematicModel:
             f"{prefix}fitted_counts": self.fitted_counts,
             f"{prefix}coefficients": self.coefficients,
             f"{prefix}refits": np.array([self.refits, self._pooled_fitted]),
+            **(
+                {f"{prefix}stratum_counts": self.stratum_counts}
+                if self.config.speed_strata > 1
+                else {}
+            ),
         }
 
     def load_arrays(self, arrays: dict[str, np.ndarray], prefix: str = "kinematic_") -> None:
         """Restore :meth:`state_arrays` output (shapes are checked)."""
-        for name in ("data", "counts", "fitted_counts", "coefficients"):
+        names: tuple[str, ...] = ("data", "counts", "fitted_counts", "coefficients")
+        if self.config.speed_strata > 1:
+            names = (*names, "stratum_counts")
+        for name in names:
             value = np.asarray(arrays[f"{prefix}{name}"])
             if value.shape != getattr(self, name).shape:
                 raise CorruptFileError(f"kinematic model {name}: unexpected shape {value.shape}")
@@ -329,11 +386,14 @@ class KinematicModel:
             raise CorruptFileError(f"kinematic model refits: unexpected shape {refits.shape}")
         self.refits, self._pooled_fitted = (int(v) for v in refits)
         self._posteriors = [None] * self.grid.n_regions
+        self._moments.reset()
         if (
             (self.fitted_counts < 0).any()
             or (self.fitted_counts > self.counts).any()
             or self.refits < 0
             or not 0 <= self._pooled_fitted <= int(self.counts.sum())
+            or (self.config.speed_strata > 1 and (self.stratum_counts.sum(1) != self.counts).any())
+            or (self.stratum_counts < 0).any()
         ):
             raise CorruptFileError("kinematic model sample counts are inconsistent")
         self._update_velocities()
@@ -353,7 +413,7 @@ class KinematicModel:
         no more slip regions than cells, and its arrays (per region the ``window × 5`` samples,
         2 counts, 8 coefficients, 12 velocities, float64 or int64) within
         :data:`~skidnav.files.saved.MAX_ARCHIVE_BYTES`. Checked before a loader allocates one."""
-        n_bytes = grid.n_regions * (config.window * 5 + 22) * 8
+        n_bytes = grid.n_regions * (config.window * 5 + 22 + config.speed_strata) * 8
         if grid.n_regions > grid.n_x * grid.n_y or n_bytes > MAX_ARCHIVE_BYTES:
             raise ValueError(
                 f"a kinematic model of {grid.n_regions:,} slip regions on {grid.n_x} × "

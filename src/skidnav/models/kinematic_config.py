@@ -20,6 +20,15 @@ class KinematicModelConfig:
         window: samples kept per region (sliding window) [sub-steps].
         forgetting: per-sample weight decay in (0, 1]; 1 weighs all kept samples equally.
         fit_intercept: fit the intercepts vx_b, yaw_b, vy_b.
+        speed_strata: the window of a region is split into this many rings of
+            ``window // speed_strata`` samples, one per equal bin of commanded speed
+            ``max(|ω_L|, |ω_R|) / wheel_speed`` (:mod:`skidnav.models.kinematic_moments`), so
+            that a long run of slow commands cannot push the fast samples out of the window
+            (1: the plain sliding window). Samples must then be fed through
+            :meth:`~skidnav.models.kinematic.KinematicModel.feed`.
+        incremental: refit from per-ring moments kept up to date sample by sample (equal to
+            the refit from the raw window up to floating-point rounding); False: rebuild every
+            fit from the window.
     """
 
     min_samples: int = 20
@@ -28,9 +37,11 @@ class KinematicModelConfig:
     window: int = 500
     forgetting: float = 1.0
     fit_intercept: bool = False
+    speed_strata: int = 1
+    incremental: bool = True
 
     def __post_init__(self) -> None:
-        for name in ("min_samples", "refit_every", "window"):
+        for name in ("min_samples", "refit_every", "window", "speed_strata"):
             value = getattr(self, name)
             if not (isinstance(value, int) and value >= 1):
                 raise ValueError(f"expected {name} to be an integer >= 1, got {value!r}")
@@ -38,6 +49,13 @@ class KinematicModelConfig:
             raise ValueError(f"expected refit_growth >= 0, got {self.refit_growth}")
         if not 0 < self.forgetting <= 1:
             raise ValueError(f"expected forgetting in (0, 1], got {self.forgetting}")
+        if self.speed_strata > self.window:
+            raise ValueError(
+                f"expected speed_strata <= window ({self.window}), got {self.speed_strata}"
+            )
+        for name in ("fit_intercept", "incremental"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"expected {name} to be a bool, got {getattr(self, name)!r}")
 
 
 def window_slots(count: int, window: int) -> np.ndarray:

@@ -13,7 +13,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from skidnav.models.bayesian_ridge import RidgePosterior, fit_bayesian_ridge
+from skidnav.models.bayesian_ridge import (
+    RidgePosterior,
+    fit_bayesian_ridge,
+    fit_bayesian_ridge_moments,
+)
 from skidnav.robot.params import RobotParams
 
 N_COEFFICIENTS = 8
@@ -81,6 +85,10 @@ def fit_coefficients(
     return out, (vx_fit, yaw_fit, vy_fit)
 
 
+EXACT_RESIDUAL = 1e-15
+"""A residual of at most this (in the output's unit) is rounding: nothing to fit."""
+
+
 def _ridge(
     inputs: np.ndarray,
     target: np.ndarray,
@@ -92,11 +100,54 @@ def _ridge(
     the regression (None when the residual is zero: nothing to fit)."""
     slopes, intercept = base[:-1], base[-1]
     residual = target - inputs @ slopes - intercept
-    if not np.any(np.abs(residual) > 1e-15):
+    if not np.any(np.abs(residual) > EXACT_RESIDUAL):
         return base.copy(), None
     regression = fit_bayesian_ridge(inputs, residual, weights, fit_intercept)
     coefficients: np.ndarray = base + np.append(regression.coef, regression.intercept)
     return coefficients, regression
+
+
+_MOMENT_REGRESSIONS = (((0, 1), 4, slice(0, 3)), ((0, 1), 6, slice(3, 6)), ((3,), 5, slice(6, 8)))
+"""Per regression (v_x, yaw_rate, v_y): its input columns and target column among
+:data:`~skidnav.models.kinematic_moments.MOMENT_COLUMNS`, and its coefficients."""
+
+
+def fit_from_moments(
+    moments: np.ndarray, base: np.ndarray, prior: np.ndarray, fit_intercept: bool
+) -> tuple[np.ndarray, Posterior]:
+    """:func:`fit_coefficients` from the moments of the samples
+    (:mod:`skidnav.models.kinematic_moments`, taken against ``prior``) instead of the samples:
+    the same fit up to floating-point rounding, at a cost independent of their number.
+
+    Args:
+        moments: float64 (7, 7), Σ w z zᵀ over the samples (columns
+            :data:`~skidnav.models.kinematic_moments.MOMENT_COLUMNS`).
+        base: the parent's coefficients (8,). prior: the coefficients the moments' residual
+            columns are taken against (8,). fit_intercept: fit the intercepts.
+
+    Returns:
+        The coefficients (8,) and the fitted regressions (v_x, yaw_rate, v_y). A regression
+        counts as exact (None) when its residual's weighted mean square is at most
+        :data:`EXACT_RESIDUAL`², where :func:`fit_coefficients` asks every residual to be at
+        most :data:`EXACT_RESIDUAL` (the same verdict on a floor equal to the parent, up to
+        the rounding of the moments).
+    """
+    out = base.copy()
+    fits: list[RidgePosterior | None] = []
+    for inputs, target, coefficients in _MOMENT_REGRESSIONS:
+        k = len(inputs)
+        columns = [*inputs, 2, target]
+        # (x, 1, y − prior) ↦ (x, 1, y − base): the residual of the parent, a linear map
+        to_residual = np.eye(k + 2)
+        to_residual[k + 1, : k + 1] = -(base[coefficients] - prior[coefficients])
+        residual = to_residual @ moments[np.ix_(columns, columns)] @ to_residual.T
+        if not residual[k + 1, k + 1] > EXACT_RESIDUAL**2 * residual[k, k]:
+            fits.append(None)
+            continue
+        regression = fit_bayesian_ridge_moments(residual, fit_intercept)
+        out[coefficients] = base[coefficients] + np.append(regression.coef, regression.intercept)
+        fits.append(regression)
+    return out, (fits[0], fits[1], fits[2])
 
 
 def _spread(regression: RidgePosterior | None, inputs: np.ndarray) -> np.ndarray:

@@ -67,20 +67,24 @@ def comparison_trial(spec: RunSpec[ModelComparison]) -> TrialResult:
     return TrialResult(spec.run_id, spec.coordinates, episodes, summary, {})
 
 
-def drive_log(seed: int, samples: int, slip: str, drift: float, period: float) -> np.ndarray:
+def drive_log(
+    seed: int, samples: int, slip: str, drift: float, period: float, dynamics: str = "kinematic"
+) -> np.ndarray:
     """The first ``samples`` free sub-steps (rows of ``LOG_COLUMNS``), shape (samples, 6), of
     uniformly random actions in the world of ``seed`` (map and floor as the env's
     ``world_seed``; the env's reset seed and the actions from the ARENA_ROLES "robot" and
     "agent" children). Episodes ending at the goal or the time limit restart without a seed,
-    so the slip clock runs on."""
+    so the slip clock runs on. ``dynamics``: the env's ("kinematic", or "mujoco": the MuJoCo
+    robot on that floor)."""
     import gymnasium
 
     from skidnav.envs.registration import ENV_ID, register_envs
 
     register_envs()
     env = gymnasium.make(
-        ENV_ID, world_seed=seed, slip=slip, drift_amplitude=drift, drift_period=period
-    )
+        ENV_ID, world_seed=seed, slip=slip, drift_amplitude=drift, drift_period=period,
+        dynamics=dynamics,
+    )  # fmt: skip
     children = child_sequences(seed, ARENA_ROLES)
     actions = np.random.default_rng(children["agent"])
     env.reset(seed=seed_int(children["robot"]))
