@@ -100,6 +100,10 @@ class KinematicModelFields:
     """Samples kept per region (sliding window)."""
     kinematic_forgetting: float = 1.0
     """Per-sample weight decay of older samples, in (0, 1]."""
+    kinematic_speed_strata: int = 1
+    """Rings of commanded speed each region's window is split into (1: one window), so that slow
+    samples cannot crowd fast ones out (:class:`~skidnav.models.kinematic.KinematicModelConfig`'s
+    ``speed_strata``); the discrete actions all command one speed."""
     kinematic_model: str = "learned"
     """Which kinematic model the agent plans with: "learned" (the thesis: refitted online from
     the kinematic log), "prior" (the nominal robot, the regression's prior, never refitted: the
@@ -121,4 +125,5 @@ class KinematicModelFields:
             refit_growth=self.kinematic_refit_growth,
             window=self.kinematic_window,
             forgetting=self.kinematic_forgetting,
+            speed_strata=self.kinematic_speed_strata,
         )
