@@ -75,6 +75,12 @@ class MPPIConfig(KinematicModelFields):
     """f₀ ≥ 0, pseudo-passes of free evidence every cell starts with: a cell of h collisions
     and f passes has wall probability h / (h + f + f₀) and is blocked while h > f + f₀
     (f₀ = 0: the rule of ``dyna-kinematic``, one collision blocks an unvisited cell)."""
+    ray_weight: float = 2.0
+    """w ≥ 0, the wall evidence of one lidar reading that ends in a cell, in collisions: a cell
+    of h collisions, e reading ends, f passes and r crossing rays has wall probability
+    W / (W + F), W = h + w e, F = f + r + f₀, and is blocked while W > F (the inverse sensor
+    model of :mod:`skidnav.agents.mpc.laser`). 2: one reading blocks a cell nothing crossed
+    (f₀ = 1); 0 ignores the readings' ends."""
     cost_to_go: str = "states"
     """The terminal value: "states", the heading-aware value over the discrete states through
     the model's predictions (:mod:`skidnav.agents.mpc.lattice`), or "cells", the shortest
@@ -118,6 +124,7 @@ class MPPIConfig(KinematicModelFields):
             "collision_cost",
             "blocked_cost",
             "free_prior",
+            "ray_weight",
             "heading_weight",
         ):
             check_number(name, getattr(self, name), 0.0, MAX_COST, closed=True)
