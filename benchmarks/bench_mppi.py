@@ -44,13 +44,16 @@ def median_seconds(call: Callable[[], Any], repeats: int = REPEATS) -> float:
     return statistics.median(times)
 
 
-def driven_agent(samples: int, horizon: int) -> tuple[MPPIKinematicAgent, np.ndarray]:
-    """An agent that drove 150 actions on world 3's obstacles arena, and its pose."""
+def driven_agent(
+    samples: int, horizon: int, **options: Any
+) -> tuple[MPPIKinematicAgent, np.ndarray]:
+    """An agent (config ``options`` besides K and H) that drove 150 actions on world 3's
+    obstacles arena over its default observation (the features), and its pose."""
     env = gymnasium.make(
         "skidnav/SkidSteerNav-v0", map_kind="obstacles", world_seed=3, slip="slippery",
-        action="continuous", observation="pose", control_period=CONTROL_PERIOD,
+        action="continuous", observation="features", control_period=CONTROL_PERIOD,
     )  # fmt: skip
-    config = MPPIConfig(samples=samples, horizon=horizon)
+    config = MPPIConfig(samples=samples, horizon=horizon, **options)
     agent = MPPIKinematicAgent.from_env(env, config, np.random.default_rng(0))
     observation, _ = env.reset(seed=0)
     run_episode(agent, env, observation, 150)
@@ -67,8 +70,8 @@ def batch(agent: MPPIKinematicAgent) -> tuple[np.ndarray, RolloutDraws]:
 
 def kernel_costs(agent: MPPIKinematicAgent, pose: np.ndarray, controls: np.ndarray,
                  draws: RolloutDraws) -> np.ndarray:  # fmt: skip
-    """The compiled batch's costs."""
-    out = np.zeros(controls.shape[0])
+    """The compiled batch's costs, one per rollout (M per sequence)."""
+    out = np.zeros(controls.shape[0] * draws.per_sequence)
     rollout_costs(
         pose, controls, draws, agent.dynamics, agent.evidence.cost_map, agent.costs,
         agent.kernel_robot, agent.kernel_grid, out,
@@ -87,6 +90,7 @@ def numpy_rollout_costs(
         agent.costs,
         agent.evidence.cost_map,
     )
+    controls = np.repeat(controls, draws.per_sequence, axis=0)  # rollout r: sequence r // M
     n = controls.shape[0]
     x, y, heading = np.full(n, pose[0]), np.full(n, pose[1]), np.full(n, pose[2])
     ci, cj = cells(x, y, grid)

@@ -62,11 +62,13 @@ def nav_env(
     max_steps: int = 600,
     discretization: Discretization | None = None,
     world_seed: int = 0,
+    observation: str = "pose",
 ) -> gymnasium.Env[Any, Any]:
-    """The continuous navigation env of 0.1-s actions on the map ``text``, pose observations."""
+    """The continuous navigation env of 0.1-s actions on the map ``text``, pose observations
+    (or ``observation="features"``: pose, goal and 8 lidar ranges of at most 0.3 m)."""
     return gymnasium.make(
         "skidnav/SkidSteerNav-v0", grid_map=parse_map(text), slip=slip, world_seed=world_seed,
-        action="continuous", observation="pose", control_period=0.1,
+        action="continuous", observation=observation, control_period=0.1,
         max_episode_steps=max_steps, discretization=discretization,
     )  # fmt: skip
 
@@ -122,4 +124,5 @@ def agent_for(
     return MPPIKinematicAgent(
         nav.robot, nav.discretization, nav.grid_map.goal, MPPIConfig(**settings),
         np.random.default_rng(seed), true_coefficients=coefficients,
+        lidar_rays=nav.features.lidar_rays, lidar_range=nav.features.lidar_range,
     )  # fmt: skip

@@ -152,7 +152,9 @@ def test_bad_settings_are_one_line_errors() -> None:
         ({"cost_to_go": "roads"}, "cost_to_go"),
         ({"lattice_durations": [0.05]}, "lattice duration"),
         ({"kinematic_model": "true"}, "true coefficients"),
-        ({"samples": 65_536, "horizon": 1000}, "samples × horizon"),
+        ({"samples": 65_536, "horizon": 1000}, "samples × horizon × model_draws"),
+        ({"model_draws": 0}, "model_draws"),
+        ({"risk": "hope"}, "risk"),
         ({"colour": "red"}, "unknown"),
     ]:
         with pytest.raises(UserError, match=expected) as caught:

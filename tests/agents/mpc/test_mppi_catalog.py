@@ -39,7 +39,7 @@ def test_its_entry_describes_the_family_observation_and_config() -> None:
     described = entry("mppi-kinematic")
     assert "mppi-kinematic" in agent_names()
     assert (described.family.name, described.observation) == ("mpc", "box")
-    assert described.env_observation(None) == "pose"  # its default Box observation
+    assert described.env_observation(None) == "features"  # its default: pose, goal, ranges
     assert described.env_observation("features") == "features"
     assert described.config_class is MPPIConfig
     assert described.config({"samples": 8}) == MPPIConfig(samples=8)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from skidnav.agents.mpc.agent import MPPIKinematicAgent
 from skidnav.agents.mpc.costmap import interpolated_state_value
@@ -19,7 +20,7 @@ def costs_of(agent: MPPIKinematicAgent, pose: np.ndarray, controls: np.ndarray) 
     """The rollout costs of ``controls`` (K, H, 2) from ``pose`` through the mean model."""
     k, h = controls.shape[:2]
     out = np.zeros(k)
-    draws = RolloutDraws(np.zeros((k, 5)), np.zeros((k, h, 3)), 0.0)
+    draws = RolloutDraws(np.zeros((k, 5)), np.zeros((k, h, 3)), 0.0, 1)
     rollout_costs(
         pose, controls, draws, agent.dynamics, agent.evidence.cost_map, agent.costs,
         agent.kernel_robot, agent.kernel_grid, out,
@@ -129,3 +130,16 @@ def test_the_interpolated_value_is_the_state_value_at_a_state_centre() -> None:
         assert (
             interpolated_state_value(x, y, heading, cost_map, grid) == (cost_map.state_value[state])
         )
+
+
+@pytest.mark.parametrize("risk", ["mean", "worst"])
+def test_a_sequence_costs_the_mean_or_the_worst_of_its_model_draws(risk: str) -> None:
+    """With M = 3 draws per sequence each sequence's cost is the mean (or the largest) of its
+    three rollouts' costs, and the draws of one sequence differ (the model is uncertain)."""
+    env = nav_env()
+    agent = agent_for(env, seed=0, model_draws=3, risk=risk, samples=16, horizon=20)
+    agent.act(np.array([0.1, 0.25, 0.0]))
+    draws = agent.planner.draw_costs.reshape(16, 3)
+    expected = draws.max(axis=1) if risk == "worst" else draws.mean(axis=1)
+    assert agent.planner.costs == pytest.approx(expected, rel=1e-12)
+    assert (draws.max(axis=1) > draws.min(axis=1)).any()

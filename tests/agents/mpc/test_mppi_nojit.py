@@ -1,5 +1,6 @@
 """mppi-kinematic gives the same actions and numbers with and without numba
-(NUMBA_DISABLE_JIT=1): the rollouts, the cost maps, the lattice, the model's refits."""
+(NUMBA_DISABLE_JIT=1): the rollouts (two model draws per sequence in one mode), the cost maps,
+the lattice, the model's refits, the lidar's evidence."""
 
 from __future__ import annotations
 
@@ -34,19 +35,21 @@ map
 '''
 grid = Discretization(n_x=9, n_y=7, n_headings=8, regions_x=3, regions_y=3)
 results = {}
-for mode in ("states", "cells"):
+for mode, draws in (("states", 2), ("cells", 1)):
     env = gymnasium.make(
         "skidnav/SkidSteerNav-v0", grid_map=parse_map(MAP), discretization=grid,
-        slip="slippery", world_seed=1, action="continuous", observation="pose",
+        slip="slippery", world_seed=1, action="continuous",
+        observation="features" if mode == "states" else "pose",
         control_period=0.1,
     )
     nav = env.unwrapped
     config = MPPIConfig(
         samples=16, horizon=15, cost_to_go=mode, lattice_durations=(2.0,),
-        kinematic_min_samples=5, kinematic_refit_every=20,
+        kinematic_min_samples=5, kinematic_refit_every=20, model_draws=draws, risk="worst",
     )
     agent = MPPIKinematicAgent(
-        nav.robot, nav.discretization, nav.grid_map.goal, config, np.random.default_rng(4)
+        nav.robot, nav.discretization, nav.grid_map.goal, config, np.random.default_rng(4),
+        lidar_rays=nav.features.lidar_rays, lidar_range=nav.features.lidar_range,
     )
     observation, _ = env.reset(seed=4)
     actions = []
@@ -82,5 +85,7 @@ def test_same_actions_and_numbers_without_jit(tmp_path: Path) -> None:
         assert compiled[key].tobytes() == interpreted[key].tobytes(), key
     for mode in ("states", "cells"):
         refits, hits = compiled[f"{mode}_refits"]
-        assert refits >= 2 and hits >= 1  # the ridge refits ran, the robot ran into the wall
+        assert refits >= 2  # the ridge refits ran
+        # the robot ran into the wall (over poses) or saw it (over features)
+        assert hits >= 1 or compiled[f"{mode}_ray_ends"].sum() >= 1
         assert np.abs(compiled[f"{mode}_actions"]).max() > 0.5  # it drove

@@ -52,6 +52,30 @@ def test_a_loaded_agent_plans_and_learns_on_as_the_saved_one(
         assert array.tobytes() == loaded.state_arrays()[name].tobytes(), name
 
 
+def test_its_laser_map_is_saved_and_learned_on_after_loading(tmp_path: Path) -> None:
+    """On feature observations: the readings' evidence and the episode's step count come back,
+    and the loaded agent maps on as the saved one."""
+    env = nav_env(observation="features")
+    agent = agent_for(env, seed=5)
+    observation, _ = env.reset(seed=5)
+    for _ in range(40):
+        action = agent.act(observation)
+        next_observation, reward, terminated, truncated, info = env.step(action)
+        agent.observe(observation, action, reward, next_observation, terminated, truncated, info)
+        observation = next_observation
+    assert agent.evidence.ray_ends.sum() > 0 and agent.episode_steps == 40
+    agent.save(tmp_path / "mppi")
+    loaded = load_mppi_agent(tmp_path / "mppi")
+    assert loaded.episode_steps == 40
+    assert loaded.evidence.cost_map.blocked.tobytes() == agent.evidence.cost_map.blocked.tobytes()
+    for each in (agent, loaded):
+        env = nav_env(observation="features")
+        start, _ = env.reset(seed=6)
+        run_episode(each, env, start, 30)
+    for name, array in agent.state_arrays().items():
+        assert array.tobytes() == loaded.state_arrays()[name].tobytes(), name
+
+
 def test_its_saved_planner_loads_as_a_wheel_speed_policy(
     trained: tuple[MPPIKinematicAgent, Path],
 ) -> None:
@@ -90,6 +114,9 @@ def damaged_copy(path: Path, folder: Path, edit_json: Any = None, edit_arrays: A
         (lambda m: m["geometry"]["discretization"].update(n_x=2001, n_y=2001), None, "states"),
         (None, lambda a: a.update(hits=np.zeros((3, 3), np.int64)), "hits"),
         (None, lambda a: a.update(passes=-a["passes"] - 1), "passes are not counts"),
+        (None, lambda a: a.update(ray_ends=-a["ray_ends"] - 1), "ray_ends are not counts"),
+        (None, lambda a: a.pop("ray_crossings"), "ray_crossings"),
+        (lambda m: m["counters"].update(episode_steps=1.5), None, "counter episode_steps"),
         (None, lambda a: a.update(plan=a["plan"] * 0 + 9.0), "plan"),
         (None, lambda a: a.update(dynamics_mean=a["dynamics_mean"] * np.nan), "not finite"),
         (None, lambda a: a.pop("kinematic_counts"), "kinematic_counts"),

@@ -6,14 +6,16 @@ What the agent knows is what every agent of the navigation env gets: the observa
 or the features whose first four entries hold it), the goal cell, the arena and its
 discretization (cells, headings, slip regions), the wheel-speed bound, the control period and
 the nominal robot (:class:`~skidnav.robot.params.RobotParams`: the datasheet's wheel radius,
-half track and x_ICR, the prior of the kinematic model, as ``dyna-kinematic``'s). It never reads
-the map's walls or the floor's slip: it learns the robot's kinematics from ``info
-["kinematic_log"]`` and the walls from ``info["collision"]``.
+half track and x_ICR, the prior of the kinematic model, as ``dyna-kinematic``'s) and the lidar's
+layout (rays and range limit). It never reads the map's walls or the floor's slip: it learns the
+robot's kinematics from ``info["kinematic_log"]`` and the walls from ``info["collision"]`` and,
+with feature observations, from the lidar ranges they hold (:mod:`skidnav.agents.mpc.laser`).
 
 Per real step: :meth:`MPPIKinematicAgent.act` plans (:class:`~skidnav.agents.mpc.planner.
 MPPIPlanner`) and returns the wheel speeds; :meth:`MPPIKinematicAgent.observe` feeds the step's
-kinematic log to the model (refitted on its schedule, then the sampled dynamics updated) and its
-path and collision to the map evidence (the cost-to-go recomputed when the map changed);
+kinematic log to the model (refitted on its schedule, then the sampled dynamics updated), its
+path and collision and the lidar readings of the observations to the map evidence (the
+cost-to-go recomputed when the map changed);
 :meth:`MPPIKinematicAgent.end_episode` forgets the plan. :meth:`MPPIKinematicAgent.policy` hands
 out a frozen copy, a :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`.
 """
@@ -53,7 +55,7 @@ from skidnav.world.discretization import Discretization
 AGENT_NAME = "mppi-kinematic"
 SAVE_FORMAT = "skidnav-mppi-agent"
 """The ``"format"`` of a saved agent's JSON (also a policy file: the frozen planner)."""
-SAVE_VERSION = 1
+SAVE_VERSION = 2
 GREEDY_SEED = 0
 """The seed of the frozen planner :meth:`MPPIKinematicAgent.greedy_action` rolls out: every
 greedy rollout draws the same numbers, none of the agent's."""
@@ -77,6 +79,15 @@ def pose_of(observation: Any, lidar_rays: int) -> np.ndarray:
     return pose
 
 
+def ranges_of(observation: Any, lidar_rays: int) -> np.ndarray:
+    """The lidar readings [m] float64 (``lidar_rays``,) of a feature observation (its entries
+    7 onwards), or (0,) for a pose observation (which holds none)."""
+    values = np.asarray(observation, dtype=np.float64)
+    if values.shape == (7 + lidar_rays,):
+        return np.ascontiguousarray(values[7:])
+    return np.zeros(0)
+
+
 class MPPIKinematicAgent:
     """The model-based wheel-speed agent (module doc).
 
@@ -91,8 +102,9 @@ class MPPIKinematicAgent:
             simulator's own coefficients per slip region, float64 (n_regions, 8) (columns of
             :data:`~skidnav.models.kinematic_regression.N_COEFFICIENTS`), planned with and never
             learned.
-        lidar_rays, lidar_range: the range readings of the feature observations its frozen
-            policy may be given (read past: only the pose is used).
+        lidar_rays, lidar_range: the layout of the feature observations' range readings: rays
+            spread evenly over a full turn from the heading, readings of at most
+            ``lidar_range`` [m] (:mod:`skidnav.sim.lidar`).
     """
 
     name: ClassVar[str] = AGENT_NAME
@@ -130,6 +142,9 @@ class MPPIKinematicAgent:
         self.planner = MPPIPlanner(self.config, self.kernel_robot, self.kernel_grid, self.rng)
         self.steps = 0
         """Real steps observed."""
+        self.episode_steps = 0
+        """Real steps observed in the current episode (its first observation's readings are
+        learned with its first step)."""
         self.episodes = 0
         """Episodes ended (:meth:`end_episode`)."""
         self.rollouts = 0
@@ -209,14 +224,16 @@ class MPPIKinematicAgent:
         info: Mapping[str, Any],
     ) -> None:
         """Learn from one real step: the kinematic log to the model (refit on its schedule),
-        the path and a collision to the map evidence. ``reward``, ``next_observation``,
-        ``terminated`` and ``truncated`` teach nothing here (the goal cell is known; costs are
-        the agent's own)."""
+        the path and a collision to the map evidence, and the lidar readings of
+        ``next_observation`` (and of ``observation`` at an episode's first step) when they are
+        features. ``reward``, ``terminated`` and ``truncated`` teach nothing here (the goal cell
+        is known; costs are the agent's own)."""
         pose = pose_of(observation, self.lidar_rays)
         commands = _commands(action, self.robot.wheel_speed)
         log = np.asarray(info.get("kinematic_log", np.zeros((0, 6))), dtype=np.float64)
         log = log.reshape(-1, 6)
         self.steps += 1
+        self.episode_steps += 1
         self._greedy = None  # the frozen planner no longer is the agent's
         self.model.feed(log)
         if self.model.maybe_refit():
@@ -224,11 +241,18 @@ class MPPIKinematicAgent:
             self.evidence.reweigh(self.dynamics.mean, model_changed=True)
         collided = bool(info.get("collision", False))
         self.evidence.record_step(pose, commands, log, collided, self.dynamics)
+        seen = [next_observation] if self.episode_steps > 1 else [observation, next_observation]
+        for each in seen:
+            self.evidence.record_readings(
+                pose_of(each, self.lidar_rays), ranges_of(each, self.lidar_rays),
+                self.lidar_range, self.dynamics,
+            )  # fmt: skip
 
     def end_episode(self) -> None:
         """Forget the plan (the next episode starts from rest)."""
         self.planner.reset()
         self.episodes += 1
+        self.episode_steps = 0
         self._greedy = None
 
     def policy(self, seed: int = 0) -> MPPIPolicy:
@@ -247,6 +271,8 @@ class MPPIKinematicAgent:
             **dynamics,
             "hits": self.evidence.hits,
             "passes": self.evidence.passes,
+            "ray_ends": self.evidence.ray_ends,
+            "ray_crossings": self.evidence.ray_crossings,
             "plan": self.planner.plan,
         }
 
@@ -262,7 +288,12 @@ class MPPIKinematicAgent:
             "goal": list(self.goal),
             "lidar_rays": self.lidar_rays,
             "lidar_range": self.lidar_range,
-            "counters": {"steps": self.steps, "episodes": self.episodes, "rollouts": self.rollouts},
+            "counters": {
+                "steps": self.steps,
+                "episodes": self.episodes,
+                "rollouts": self.rollouts,
+                "episode_steps": self.episode_steps,
+            },
             "rng": generator_state(self.rng),
         }
 
@@ -321,7 +352,8 @@ def map_costs(config: MPPIConfig, robot: RobotParams, goal: tuple[int, int]) -> 
     period = robot.action_duration
     return MapCosts(
         goal[0], goal[1], speed * period, yaw_rate * period, float(config.collision_cost),
-        float(config.blocked_cost), float(config.free_prior), float(config.heading_weight),
+        float(config.blocked_cost), float(config.free_prior), float(config.ray_weight),
+        float(config.heading_weight),
         float(config.lookahead), config.cost_to_go == "states",
     )  # fmt: skip
 

@@ -24,7 +24,11 @@ MAX_SAMPLES = 65_536
 MAX_HORIZON = 10_000
 """Longest horizon H [control steps]."""
 MAX_ROLLOUT_STEPS = 10_000_000
-"""Most K · H per control step: the pre-drawn normals take 7 · 8 bytes each (about 0.5 GB)."""
+"""Most K · M · H per control step: the pre-drawn normals take 7 · 8 bytes each (about 0.5 GB)."""
+MAX_MODEL_DRAWS = 64
+"""Most model draws M per sequence."""
+RISKS = ("mean", "worst")
+"""Values of :attr:`MPPIConfig.risk`."""
 MAX_DURATIONS = 8
 """Most lattice durations."""
 COST_TO_GO = ("states", "cells")
@@ -75,6 +79,12 @@ class MPPIConfig(KinematicModelFields):
     """f₀ ≥ 0, pseudo-passes of free evidence every cell starts with: a cell of h collisions
     and f passes has wall probability h / (h + f + f₀) and is blocked while h > f + f₀
     (f₀ = 0: the rule of ``dyna-kinematic``, one collision blocks an unvisited cell)."""
+    ray_weight: float = 2.0
+    """w ≥ 0, the wall evidence of one lidar reading that ends in a cell, in collisions: a cell
+    of h collisions, e reading ends, f passes and r crossing rays has wall probability
+    W / (W + F), W = h + w e, F = f + r + f₀, and is blocked while W > F (the inverse sensor
+    model of :mod:`skidnav.agents.mpc.laser`). 2: one reading blocks a cell nothing crossed
+    (f₀ = 1); 0 ignores the readings' ends."""
     cost_to_go: str = "states"
     """The terminal value: "states", the heading-aware value over the discrete states through
     the model's predictions (:mod:`skidnav.agents.mpc.lattice`), or "cells", the shortest
@@ -92,6 +102,13 @@ class MPPIConfig(KinematicModelFields):
     prior_spread: float = 0.2
     """Relative standard deviation ≥ 0 of each nominal slope of the kinematic model in a
     region with no fit yet (the prior's spread, sampled per sequence like a posterior)."""
+    model_draws: int = 1
+    """M, draws of the model each sequence is rolled out through, in [1, 64] (K · M · H ≤
+    10⁷): its cost is their mean or worst (``risk``); 1: one draw per sequence, the role of one
+    ensemble member in PETS (Chua et al. 2018)."""
+    risk: str = "mean"
+    """How a sequence's M costs become one: "mean" (the expected cost under the model's
+    uncertainty) or "worst" (their largest)."""
     sample_uncertainty: bool = True
     """Draw the model per sequence (posterior weights and sub-step noise); False plans every
     sequence with the posterior mean."""
@@ -101,11 +118,15 @@ class MPPIConfig(KinematicModelFields):
     def __post_init__(self) -> None:
         check_integer("samples", self.samples, 2, MAX_SAMPLES)
         check_integer("horizon", self.horizon, 1, MAX_HORIZON)
-        if self.samples * self.horizon > MAX_ROLLOUT_STEPS:
+        check_integer("model_draws", self.model_draws, 1, MAX_MODEL_DRAWS)
+        rollout_steps = self.samples * self.horizon * self.model_draws
+        if rollout_steps > MAX_ROLLOUT_STEPS:
             raise ValueError(
-                f"expected samples × horizon at most {MAX_ROLLOUT_STEPS:,}, got "
-                f"{self.samples * self.horizon:,}"
+                f"expected samples × horizon × model_draws at most {MAX_ROLLOUT_STEPS:,}, got "
+                f"{rollout_steps:,}"
             )
+        if self.risk not in RISKS:
+            raise ValueError(f"expected risk in {RISKS}, got {shown(self.risk)}")
         check_number("temperature", self.temperature, 0.0, MAX_COST)
         check_number("noise_std", self.noise_std, 0.0, MAX_COST)
         correlation = self.noise_correlation
@@ -118,6 +139,7 @@ class MPPIConfig(KinematicModelFields):
             "collision_cost",
             "blocked_cost",
             "free_prior",
+            "ray_weight",
             "heading_weight",
         ):
             check_number(name, getattr(self, name), 0.0, MAX_COST, closed=True)

@@ -1,13 +1,17 @@
 """The learned occupancy as costs: wall evidence per cell, and a cost-to-go over the cells.
 
 **Evidence (ours, as ``dyna-kinematic``'s,** :func:`skidnav.agents.planner_learning.
-weigh_cell` **).** The env says that an action collided, not which cell it hit; slip makes a guess
-wrong now and then, so a collision is evidence, not a verdict. Every cell (i, j) counts ``hits``
-h, the collisions whose guessed wall cell it was, and ``passes`` f, the free sub-steps that
-ended in it. With f₀ pseudo-passes (``free_prior``) its wall probability is
-p = h / (h + f + f₀) (0 for a cell never hit: optimism), and it is *blocked* while
-h > f + f₀. A real wall's evidence only grows (the robot is never inside it); one pass undoes
-one wrong guess. The goal cell is known free: never blocked, p = 0.
+weigh_cell` **, with the lidar's).** The env says that an action collided, not which cell it hit;
+slip makes a guess wrong now and then, so a collision is evidence, not a verdict. Every cell
+(i, j) counts ``hits`` h, the collisions whose guessed wall cell it was, and ``passes`` f, the free
+sub-steps that ended in it; with feature observations also ``ray_ends`` e, the lidar readings
+that ended in it, and ``ray_crossings`` r, the rays that crossed it (the inverse sensor model of
+:mod:`skidnav.agents.mpc.laser`). Its wall evidence is W = h + w e (w = ``ray_weight``), its free
+evidence F = f + r + f₀ (f₀ pseudo-passes, ``free_prior``); its wall probability is
+p = W / (W + F), the mean of a Beta(W, F) posterior (0 for a cell without wall evidence:
+optimism for cells never seen), and it is *blocked* while W > F. A real wall's evidence only
+grows (the robot is never inside it and no ray crosses it); a pass or a crossing ray undoes a
+wrong guess. The goal cell is known free: never blocked, p = 0.
 
 **Cost-to-go.** Dijkstra's algorithm (Dijkstra 1959) from the goal cell over the 8-connected
 cells, a diagonal move only between two cells that are not blocked: entering cell c from a
@@ -73,7 +77,8 @@ class MapCosts(NamedTuple):
         step_length: the nominal robot's distance in one control step at top speed [m].
         turn_step: its turn in one control step at top yaw rate [rad].
         collision_cost: C [cost units]. blocked_cost: extra cost of a blocked cell.
-        free_prior: f₀ [passes]. heading_weight: weight of the terminal turn time.
+        free_prior: f₀ [passes]. ray_weight: w, the wall evidence of one lidar reading's end
+            [collisions]. heading_weight: weight of the terminal turn time.
         lookahead: how far along the route the terminal value aims [m].
         use_states: the terminal value is the states' (:mod:`skidnav.agents.mpc.lattice`),
             else the cells'.
@@ -86,6 +91,7 @@ class MapCosts(NamedTuple):
     collision_cost: float
     blocked_cost: float
     free_prior: float
+    ray_weight: float
     heading_weight: float
     lookahead: float
     use_states: bool
@@ -102,13 +108,21 @@ def empty_cost_map(n_x: int, n_y: int, state_value: np.ndarray) -> CostMap:
 
 @jit
 def weigh_map(
-    hits: np.ndarray, passes: np.ndarray, costs: MapCosts, grid: GridShape, cost_map: CostMap
+    hits: np.ndarray,
+    passes: np.ndarray,
+    ray_ends: np.ndarray,
+    ray_crossings: np.ndarray,
+    costs: MapCosts,
+    grid: GridShape,
+    cost_map: CostMap,
 ) -> None:
-    """Fill ``cost_map`` from the evidence ``hits`` and ``passes`` (int64 (n_x, n_y)): the wall
-    probabilities, the blocked cells, then the cost-to-go and waypoints (module doc)."""
+    """Fill ``cost_map`` from the evidence ``hits``, ``passes``, ``ray_ends`` and
+    ``ray_crossings`` (int64 (n_x, n_y)): the wall probabilities, the blocked cells, then the
+    cost-to-go and waypoints (module doc)."""
     for i in range(hits.shape[0]):
         for j in range(hits.shape[1]):
-            wall, free = float(hits[i, j]), float(passes[i, j]) + costs.free_prior
+            wall = float(hits[i, j]) + costs.ray_weight * float(ray_ends[i, j])
+            free = float(passes[i, j]) + float(ray_crossings[i, j]) + costs.free_prior
             goal = i == costs.goal_i and j == costs.goal_j
             known = wall > 0.0 and not goal
             cost_map.wall_probability[i, j] = wall / (wall + free) if known else 0.0

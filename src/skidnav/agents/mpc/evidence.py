@@ -1,4 +1,5 @@
-"""What one real step teaches the map: the free sub-steps' cells and a collision's wall cell.
+"""What one real step teaches the map: the free sub-steps' cells, a collision's wall cell and,
+with feature observations, the lidar's readings (:mod:`skidnav.agents.mpc.laser`).
 
 The kinematic log of a step holds the body twist (v_x, v_y, yaw_rate) the robot really had in
 each free sub-step, so integrating it from the pose before the step with the robot's own scheme
@@ -17,6 +18,7 @@ import numpy as np
 from skidnav._jit import jit
 from skidnav.agents.mpc.costmap import CostMap, MapCosts, empty_cost_map, weigh_map
 from skidnav.agents.mpc.dynamics import SampledDynamics, sampled_twist
+from skidnav.agents.mpc.laser import record_rays
 from skidnav.agents.mpc.lattice import (
     cells_near,
     empty_lattice,
@@ -42,19 +44,20 @@ def retrace_free_substeps(
     robot: KinematicConstants,
     grid: GridShape,
     hits: np.ndarray,
+    ray_ends: np.ndarray,
     passes: np.ndarray,
 ) -> tuple[float, float, float, bool]:
     """Integrate the logged twists (columns 3–5 of ``log``, float64 (n, 6)) from ``pose``
     (x [m], y [m], heading [rad]) and add a pass to the cell of each sub-step (int64 ``passes``,
-    in place). Returns the last pose and whether a cell with hits got a pass (its wall
-    probability changed)."""
+    in place). Returns the last pose and whether a cell with wall evidence (``hits`` or
+    ``ray_ends``) got a pass (its wall probability changed)."""
     x, y, heading = pose[0], pose[1], pose[2]
     changed = False
     for k in range(log.shape[0]):
         x, y, heading = integrate(robot, x, y, heading, (log[k, 3], log[k, 4], log[k, 5]))
         i, j = cell_of(x, y, grid)
         passes[i, j] += 1
-        if hits[i, j] > 0:
+        if hits[i, j] > 0 or ray_ends[i, j] > 0:
             changed = True
     return x, y, heading, changed
 
@@ -69,7 +72,7 @@ def mean_twist(
 
 
 class MapEvidence:
-    """Hits and passes of every cell and the cost map weighed from them
+    """Hits, passes, ray ends and ray crossings of every cell and the cost map weighed from them
     (:mod:`skidnav.agents.mpc.costmap`), with the heading-aware lattice
     (:mod:`skidnav.agents.mpc.lattice`) when the terminal value is the states'.
 
@@ -95,6 +98,11 @@ class MapEvidence:
         """int64 (n_x, n_y): collisions whose guessed wall cell was each cell."""
         self.passes = np.zeros((grid.n_x, grid.n_y), dtype=np.int64)
         """int64 (n_x, n_y): free sub-steps that ended in each cell."""
+        self.ray_ends = np.zeros((grid.n_x, grid.n_y), dtype=np.int64)
+        """int64 (n_x, n_y): lidar readings shorter than the range limit that ended in each
+        cell (:mod:`skidnav.agents.mpc.laser`)."""
+        self.ray_crossings = np.zeros((grid.n_x, grid.n_y), dtype=np.int64)
+        """int64 (n_x, n_y): lidar rays that crossed each cell before their reading."""
         n_states = grid.n_x * grid.n_y * grid.n_headings
         n_regions = coefficients.shape[0]
         steps = [lattice.substeps / robot.substeps for lattice in lattice_robots]
@@ -112,7 +120,10 @@ class MapEvidence:
         and, with a lattice, its predictions (when the blocked cells or, ``model_changed``, the
         model's ``coefficients`` changed) and its values."""
         blocked_before = self.cost_map.blocked.copy()
-        weigh_map(self.hits, self.passes, self.costs, self.grid, self.cost_map)
+        weigh_map(
+            self.hits, self.passes, self.ray_ends, self.ray_crossings, self.costs, self.grid,
+            self.cost_map,
+        )  # fmt: skip
         self.reweighs += 1
         if not self.lattice_robots:
             return
@@ -147,13 +158,29 @@ class MapEvidence:
         ``commands`` (ω_L, ω_R) [rad/s]: its free sub-steps ``log`` (n, 6) and whether it
         collided (module doc); the cost map is recomputed if the evidence changed it."""
         x, y, heading, changed = retrace_free_substeps(
-            pose, log, self.robot, self.grid, self.hits, self.passes
+            pose, log, self.robot, self.grid, self.hits, self.ray_ends, self.passes
         )
         if collided:
             wall = self.guess_wall(x, y, heading, commands, dynamics)
             if wall is not None:
                 self.hits[wall] += 1
                 changed = True
+        if changed:
+            self.reweigh(dynamics.mean)
+
+    def record_readings(
+        self, pose: np.ndarray, ranges: np.ndarray, max_range: float, dynamics: SampledDynamics
+    ) -> None:
+        """Learn from the lidar readings ``ranges`` float64 (k,) [m] (range limit ``max_range``
+        [m]) taken at ``pose`` (x [m], y [m], heading [rad]): the inverse sensor model of
+        :mod:`skidnav.agents.mpc.laser`; the cost map is recomputed if a wall probability
+        changed."""
+        if ranges.shape[0] == 0:
+            return
+        changed = record_rays(
+            pose[0], pose[1], pose[2], ranges, max_range, self.grid, self.ray_ends,
+            self.ray_crossings, self.hits,
+        )  # fmt: skip
         if changed:
             self.reweigh(dynamics.mean)
 

@@ -1,9 +1,10 @@
 """The model-predictive family: ``mppi-kinematic``, MPPI through the learned kinematic model.
 
 It drives the two wheel speeds (the env's ``action="continuous"``) over a ``Box`` observation
-(the pose by default), learning its model and its map step by step in the plain loop
-(:func:`~skidnav.agents.mpc.training.train_mppi`); its saved file also runs on the robot as the
-frozen planner.
+(the features by default: the pose, the goal and the lidar ranges, whose readings build its
+map; over the pose alone it maps from collisions only), learning its model and its map step by
+step in the plain loop (:func:`~skidnav.agents.mpc.training.train_mppi`); its saved file also
+runs on the robot as the frozen planner.
 """
 
 from __future__ import annotations
@@ -53,7 +54,7 @@ def _load(json_path: Path, meta: Mapping[str, Any], env: Env | None) -> MPPIKine
 FAMILY: Family[MPPIKinematicAgent] = Family(
     name="mpc",
     summary="model predictive control of the two wheel speeds (MPPI) through the learned "
-    "kinematic model, with a map built from collisions",
+    "kinematic model, with a map built from its lidar and its collisions",
     agents=(AGENT_NAME,),
     observation="box",
     actions="wheel-speeds",
@@ -64,6 +65,6 @@ FAMILY: Family[MPPIKinematicAgent] = Family(
     save_formats=(SAVE_FORMAT,),
     load=_load,
     policy=policy_from_file,
-    box_observation="pose",
+    box_observation="features",
 )
 """The model-predictive family (:class:`~skidnav.agents.family.Family`)."""

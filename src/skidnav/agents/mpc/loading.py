@@ -83,7 +83,7 @@ def _fresh_agent(meta: Mapping[str, Any]) -> MPPIKinematicAgent:
     counters, rng_state = meta["counters"], meta["rng"]
     if not isinstance(counters, Mapping) or not isinstance(rng_state, Mapping):
         raise ValueError("expected counters and rng to be JSON objects")
-    for name in ("steps", "episodes", "rollouts"):
+    for name in ("steps", "episodes", "rollouts", "episode_steps"):
         value = counters[name]
         if type(value) is not int or value < 0:
             raise ValueError(f"expected counter {name} to be an integer >= 0, got {shown(value)}")
@@ -105,7 +105,7 @@ def restore_arrays(agent: MPPIKinematicAgent, arrays: Mapping[str, np.ndarray]) 
         raise ValueError("saved dynamics are not finite (or a noise is negative)")
     for saved, own in zip(dynamics, agent.dynamics, strict=True):
         own[...] = saved
-    for name in ("hits", "passes"):
+    for name in ("hits", "passes", "ray_ends", "ray_crossings"):
         counts = np.asarray(arrays[name])
         if (counts < 0).any():
             raise ValueError(f"saved {name} are not counts")

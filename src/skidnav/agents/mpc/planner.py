@@ -8,8 +8,11 @@ Each control step, from the robot's pose and the plan U (H, 2) [rad/s] kept from
    sequence 0 is the plan itself (ε = 0);
 2. clip U + ε to the wheel-speed bounds ± Ω and keep the clipped perturbation
    ε ← clip(U + ε) − U (the sequence the robot could drive);
-3. roll every sequence out through its own draw of the learned model and cost it
-   (:func:`~skidnav.agents.mpc.rollouts.rollout_costs`), S_k, and add the control cost
+3. roll every sequence out through each of its M draws of the learned model and cost it
+   (:func:`~skidnav.agents.mpc.rollouts.rollout_costs`); its cost S_k is the mean of the M
+   costs (``risk = "mean"``, the expected cost under the model's uncertainty, as the particles
+   of PETS, Chua et al. 2018) or their largest (``risk = "worst"``, the worst case over the
+   draws); add the control cost
    γ Σ_t U_tᵀ Σ⁻¹ ε_t, Σ = σ² I (Williams et al. 2017, with γ = λ there; a parameter here,
    0 by default: :attr:`~skidnav.agents.mpc.config.MPPIConfig.control_cost`);
 4. weigh the sequences w_k ∝ exp(−(S_k − min S) / λ) and move the plan: U ← U + Σ_k w_k ε_k;
@@ -57,6 +60,8 @@ class MPPIPlanner:
         """float64 (H, 2): the wheel speeds (ω_L, ω_R) [rad/s] planned for the next H steps."""
         self.costs = np.zeros(config.samples)
         """float64 (K,): the last batch's sequence costs, control cost included."""
+        self.draw_costs = np.zeros(config.samples * config.model_draws)
+        """float64 (K · M,): the last batch's cost of each sequence under each model draw."""
         self.weights = np.zeros(config.samples)
         """float64 (K,): the last batch's weights (summing to 1)."""
         self._zero_draws: RolloutDraws | None = None
@@ -82,16 +87,18 @@ class MPPIPlanner:
         """The model draws and noise of a batch (standard normals), or zeros when the model
         is not sampled."""
         config = self.config
+        rollouts = config.samples * config.model_draws
         if not config.sample_uncertainty:
             if self._zero_draws is None:  # allocated once, at the first plan
-                shape = (config.samples, config.horizon, 3)
+                shape = (rollouts, config.horizon, 3)
                 self._zero_draws = RolloutDraws(
-                    np.zeros((config.samples, N_DRAWS)), np.zeros(shape), 0.0
+                    np.zeros((rollouts, N_DRAWS)), np.zeros(shape), 0.0, config.model_draws
                 )
             return self._zero_draws
-        model = self.rng.standard_normal((config.samples, N_DRAWS))
-        noise = self.rng.standard_normal((config.samples, config.horizon, 3))
-        return RolloutDraws(model, noise, 1.0 / math.sqrt(self.robot.substeps))
+        model = self.rng.standard_normal((rollouts, N_DRAWS))
+        noise = self.rng.standard_normal((rollouts, config.horizon, 3))
+        scale = 1.0 / math.sqrt(self.robot.substeps)
+        return RolloutDraws(model, noise, scale, config.model_draws)
 
     def step(
         self,
@@ -107,8 +114,13 @@ class MPPIPlanner:
         perturbation = controls - self.plan
         rollout_costs(
             np.asarray(pose, dtype=np.float64), controls, self.draws(), dynamics, cost_map,
-            costs, self.robot, self.grid, self.costs,
+            costs, self.robot, self.grid, self.draw_costs,
         )  # fmt: skip
+        per_sequence = self.draw_costs.reshape(config.samples, config.model_draws)
+        if config.risk == "worst":
+            per_sequence.max(axis=1, out=self.costs)
+        else:
+            per_sequence.mean(axis=1, out=self.costs)
         if config.control_cost > 0.0:
             control_cost = np.einsum("ha,kha->k", self.plan, perturbation)
             self.costs += config.control_cost / config.noise_std**2 * control_cost

@@ -1,18 +1,20 @@
 """The K × H rollouts of one MPPI step in one compiled batch: the cost of every sampled
-wheel-speed sequence through its own draw of the learned kinematic model.
+wheel-speed sequence through each of its M draws of the learned kinematic model.
 
-Sequence k starts at the robot's pose and, for each control step t, holds the wheel speeds
-``controls[k, t]`` (already within the action bounds) for ``robot.substeps`` sub-steps of
-``robot.dt``. Each sub-step reads the slip region under the robot, takes the twist of the
-sequence's model draw (:func:`~skidnav.agents.mpc.dynamics.sampled_twist`), integrates it with
-the robot's scheme (explicit Euler or the exact constant-twist step, the pose clipped to the
-arena: :func:`skidnav.sim.navigation.integrate`, as the simulator) and, on entering another
-cell, pays the collision cost C · p of its wall probability; a blocked cell stops the motion
-for the rest of the control step, as a wall stops the simulated robot (position of the last
-free sub-step, heading of the colliding one). Each control step costs 1 (time); a control step
-ending in the goal cell ends the sequence (the episode would terminate) with no further cost.
-A sequence that does not reach the goal adds the terminal value of its last pose
-(:func:`~skidnav.agents.mpc.costmap.terminal_value`).
+Rollout r (of K · M) drives sequence k = r // M through its own model draw. It starts at the
+robot's pose and, for each control step t, holds the wheel speeds ``controls[k, t]`` (already
+within the action bounds) for ``robot.substeps`` sub-steps of ``robot.dt``. Each sub-step reads
+the slip region under the robot, takes the twist of the rollout's model draw
+(:func:`~skidnav.agents.mpc.dynamics.sampled_twist`), integrates it with the robot's scheme
+(explicit Euler or the exact constant-twist step, the pose clipped to the arena:
+:func:`skidnav.sim.navigation.integrate`, as the simulator) and, on entering another cell, pays
+the collision cost C · p of its wall probability; a blocked cell stops the motion for the rest
+of the control step, as a wall stops the simulated robot (position of the last free sub-step,
+heading of the colliding one). Each control step costs 1 (time); a control step ending in the
+goal cell ends the rollout (the episode would terminate) with no further cost. A rollout that
+does not reach the goal adds the terminal value of its last pose
+(:func:`~skidnav.agents.mpc.costmap.terminal_value`). The planner reduces the M costs of a
+sequence to one (their mean or their worst: :mod:`skidnav.agents.mpc.planner`).
 
 The kernel draws nothing: the sequences' standard normals are drawn beforehand from the
 agent's Generator (:mod:`skidnav.agents.mpc.planner`), so it gives the same numbers compiled
@@ -37,15 +39,18 @@ class RolloutDraws(NamedTuple):
     """The pre-drawn standard normals of one batch.
 
     Attributes:
-        model: float64 (K, 5), each sequence's draw of the model's slopes.
-        noise: float64 (K, H, 3), each control step's draw of the model's noise (v_x, v_y,
+        model: float64 (K · M, 5), each rollout's draw of the model's slopes (rollout r drives
+            sequence r // M).
+        noise: float64 (K · M, H, 3), each control step's draw of the model's noise (v_x, v_y,
             yaw rate).
         noise_scale: 1/√(sub-steps per control step); 0: no noise.
+        per_sequence: M ≥ 1, the model draws of each sequence.
     """
 
     model: np.ndarray
     noise: np.ndarray
     noise_scale: float
+    per_sequence: int
 
 
 @jit
@@ -60,25 +65,25 @@ def rollout_costs(
     grid: GridShape,
     out: np.ndarray,
 ) -> None:
-    """The cost of every sequence (module doc).
+    """The cost of every rollout (module doc).
 
     Args:
         pose: float64 (3,) the start (x [m], y [m], heading [rad]).
         controls: float64 (K, H, 2) wheel speeds (ω_L, ω_R) [rad/s] of each control step.
-        draws: the sequences' standard normals. dynamics: the model's arrays.
+        draws: the rollouts' standard normals. dynamics: the model's arrays.
         cost_map, costs: the learned map and the costs' scalars.
         robot, grid: the robot's timing, arena and scheme; the discretization.
-        out: float64 (K,) receives the costs [control steps].
+        out: float64 (K · M,) receives the costs [control steps], M per sequence in a row.
     """
-    for k in range(controls.shape[0]):
-        out[k] = sequence_cost(pose, controls, k, draws, dynamics, cost_map, costs, robot, grid)
+    for r in range(out.shape[0]):
+        out[r] = sequence_cost(pose, controls, r, draws, dynamics, cost_map, costs, robot, grid)
 
 
 @jit
 def sequence_cost(
     pose: np.ndarray,
     controls: np.ndarray,
-    k: int,
+    r: int,
     draws: RolloutDraws,
     dynamics: SampledDynamics,
     cost_map: CostMap,
@@ -86,14 +91,16 @@ def sequence_cost(
     robot: KinematicConstants,
     grid: GridShape,
 ) -> float:
-    """The cost of sequence ``k`` (arguments as :func:`rollout_costs`)."""
+    """The cost of rollout ``r``: sequence r // M through model draw r (arguments as
+    :func:`rollout_costs`)."""
     x, y, heading = pose[0], pose[1], pose[2]
     ci, cj = cell_of(x, y, grid)
-    model = draws.model[k]
+    k = r // draws.per_sequence
+    model = draws.model[r]
     cost = 0.0
     for t in range(controls.shape[1]):
         left, right = controls[k, t, 0], controls[k, t, 1]
-        noise = draws.noise[k, t]
+        noise = draws.noise[r, t]
         for _ in range(robot.substeps):
             region = region_of(x, y, grid)
             twist = sampled_twist(dynamics, region, left, right, model, noise, draws.noise_scale)
