@@ -29,6 +29,7 @@ import pandas as pd
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.report.analysis import cells, paired_difference, stats_rng
 from skidnav.experiments.report.page import interval_text, table
+from skidnav.statistics.formatting import plural
 from skidnav.statistics.intervals import Interval, bootstrap_interval, rowwise_mean
 
 MODELS = ("learned", "prior", "true")
@@ -140,7 +141,7 @@ def _difference_cell(row: pd.Series) -> str:
     its interval contains 0."""
     text = interval_text(row["difference"], row["difference_low"], row["difference_high"])
     words = " — no difference measured" if row["no_difference"] else ""
-    return f"{text} ({row['pairs']} worlds){words}"
+    return f"{text} ({plural(int(row['pairs']), 'world')}){words}"
 
 
 def sentences(rows: pd.DataFrame) -> list[str]:
@@ -151,7 +152,7 @@ def sentences(rows: pd.DataFrame) -> list[str]:
     for _, row in value.iterrows():
         name = VALUE_METRICS[str(row["metric"])]
         if not np.isfinite(row["difference_low"]):
-            unmeasured.append(f"{name} ({row['pairs']} worlds)")
+            unmeasured.append(f"{name} ({plural(int(row['pairs']), 'world')})")
         elif row["no_difference"]:
             same.append(name)
         else:
