@@ -1,4 +1,4 @@
-"""Per-run metrics: convergence, trajectory length, success rate, returns.
+"""Per-run metrics: convergence, trajectory length, success rate, returns, seconds of driving.
 
 Episodes are numbered from 1. Definitions (also in docs/experiments.md and in every report):
 
@@ -31,6 +31,16 @@ Episodes are numbered from 1. Definitions (also in docs/experiments.md and in ev
   between consecutive poses) of one more greedy rollout after training, the trajectory drawn in
   the report; NaN when it does not reach the goal.
 * **Success rate**: share of training episodes that reach the goal (all, and the last 10 %).
+* **Seconds of driving**: what the robot pays for learning. One action lasts the robot's
+  ``dt × substeps`` seconds (``RobotParams.action_duration``: 1 s by default, 0.1 s with
+  ``control_period = 0.1``, the same on the MuJoCo robot); the driving time of episodes 1 … e is
+  Σ length × that duration. The greedy evaluations are measurement and are not counted.
+  **To first success**: episodes 1 … e, e the first training episode that reached the goal.
+  **To sustained greedy success**: episodes 1 … e, e the first episode whose greedy evaluation
+  had at least 90 % of its rollouts reach the goal (:data:`SUSTAINED_SUCCESS`; with 5 rollouts,
+  all 5) and every later evaluation too, with at least W evaluations of evidence — the
+  convergence rule above (:func:`convergence_episode`) at level 1 on "≥ 90 % reached" instead
+  of a pass. Either time is **censored** (NaN, "not reached") when the run never got there.
 """
 
 from __future__ import annotations
@@ -187,11 +197,26 @@ def last_share(values: np.ndarray) -> np.ndarray:
     return np.asarray(values[-count:])
 
 
+class DrivingClock(NamedTuple):
+    """How a run's actions turn into seconds of driving (module docs).
+
+    Attributes:
+        action_duration: seconds one action lasts, the robot's ``dt × substeps`` [s] (> 0), or
+            NaN for an env without a robot (the seconds columns NaN).
+        window: W ≥ 1, the least evaluations of evidence of sustained greedy success (the
+            experiment's ``convergence_window``).
+    """
+
+    action_duration: float = math.nan
+    window: int = 1
+
+
 def run_metrics(
     episodes: dict[str, np.ndarray],
     greedy_poses: np.ndarray,
     greedy_reached: bool,
     rule: ConvergenceRule | None,
+    clock: DrivingClock | None = None,
 ) -> dict[str, float]:
     """Every per-run metric, as one flat dict of floats.
 
@@ -203,6 +228,8 @@ def run_metrics(
         greedy_poses: the final greedy trajectory, shape (T, 3) [m, m, rad].
         greedy_reached: whether that trajectory reached the goal.
         rule: the convergence rule, or None when no oracle exists (convergence metrics NaN).
+        clock: the action duration and evidence window of the seconds columns
+            (:func:`driving_metrics`); None: no robot, the seconds NaN, a window of 1.
     """
     success = episodes["success"].astype(np.float64)
     n = len(success)
@@ -223,7 +250,67 @@ def run_metrics(
     }  # fmt: skip
     if rule is not None and n > 0 and math.isfinite(rule.reference):
         metrics.update(convergence_metrics(episodes, rule))
-    return metrics
+    return metrics | driving_metrics(episodes, clock or DrivingClock())
+
+
+SUSTAINED_SUCCESS = 0.9
+"""Share of an evaluation's rollouts that must reach the goal for sustained greedy success."""
+
+DRIVING_COLUMNS = (
+    "action_duration", "driving_seconds",
+    "episodes_to_first_success", "seconds_to_first_success",
+    "episodes_to_success90", "seconds_to_success90",
+)  # fmt: skip
+"""The summary columns of :func:`driving_metrics`."""
+
+
+def driving_seconds(lengths: np.ndarray, episode: float, action_duration: float) -> float:
+    """Seconds of driving in episodes 1 … ``episode`` (1-based): the sum of their ``lengths``
+    [actions] × ``action_duration`` [s]; NaN for a NaN episode (never reached).
+
+    >>> driving_seconds(np.array([30, 12, 9]), 2, 0.1)
+    4.2
+    >>> driving_seconds(np.array([30, 12, 9]), float("nan"), 1.0)
+    nan
+    """
+    if not math.isfinite(episode):
+        return math.nan
+    return float(np.sum(np.asarray(lengths, np.float64)[: int(episode)]) * action_duration)
+
+
+def sustained_success_episode(greedy_success: np.ndarray, window: int) -> float:
+    """The first 1-based episode from whose greedy evaluation on every evaluation had at
+    least :data:`SUSTAINED_SUCCESS` of its rollouts reach the goal, with at least ``window``
+    evaluations of evidence (:func:`convergence_episode` at level 1); NaN when none.
+
+    >>> sustained_success_episode(np.array([0.0, 1.0, 0.8, 1.0, 0.9, 1.0]), 2)
+    4.0
+    >>> sustained_success_episode(np.array([0.0, 1.0, 1.0, 1.0, 0.6]), 2)
+    nan
+    """
+    share = np.nan_to_num(np.asarray(greedy_success, np.float64), nan=0.0)
+    episode, reached = convergence_episode(share >= SUSTAINED_SUCCESS - SHARE_MARGIN, window)
+    return float(episode) if reached else math.nan
+
+
+def driving_metrics(episodes: dict[str, np.ndarray], clock: DrivingClock) -> dict[str, float]:
+    """The seconds-of-driving columns of a run (module docs) from its ``length``, ``success``
+    and ``greedy_success`` per episode, shape (N,) each: ``action_duration`` [s],
+    ``driving_seconds`` (the whole run), ``episodes_to_first_success`` and
+    ``seconds_to_first_success``, ``episodes_to_success90`` and ``seconds_to_success90`` (NaN
+    when not reached: censored)."""
+    lengths, duration = episodes["length"], float(clock.action_duration)
+    first = np.flatnonzero(np.asarray(episodes["success"]) > 0)
+    to_first = float(first[0] + 1) if first.size else math.nan
+    to_success90 = sustained_success_episode(episodes["greedy_success"], clock.window)
+    return {
+        "action_duration": duration,
+        "driving_seconds": driving_seconds(lengths, len(lengths), duration),
+        "episodes_to_first_success": to_first,
+        "seconds_to_first_success": driving_seconds(lengths, to_first, duration),
+        "episodes_to_success90": to_success90,
+        "seconds_to_success90": driving_seconds(lengths, to_success90, duration),
+    }
 
 
 CONVERGENCE_COLUMNS = (

@@ -44,6 +44,7 @@ from skidnav.errors import UserError
 from skidnav.experiments.config import CONVERGENCE_OBJECTIVES, ExperimentConfig, MapSpec
 from skidnav.experiments.metrics import (
     ConvergenceRule,
+    DrivingClock,
     evaluation_summary,
     run_metrics,
 )
@@ -141,6 +142,16 @@ def action_limit(env: gymnasium.Env[Any, Any]) -> int:
     (``env.spec.max_episode_steps``), or 10,000 for an env registered without one."""
     limit = env.spec.max_episode_steps if env.spec is not None else None
     return int(limit or 10_000)
+
+
+def action_duration(env: gymnasium.Env[Any, Any]) -> float:
+    """Seconds one action of ``env`` lasts: its robot's ``dt × substeps``
+    (:attr:`~skidnav.robot.params.RobotParams.action_duration`, after the env's
+    ``control_period``; the kinematic and the MuJoCo robot alike), NaN for an env without a
+    robot (e.g. a grid world)."""
+    robot = getattr(env.unwrapped, "robot", None)
+    duration = getattr(robot, "action_duration", None)
+    return float(duration) if isinstance(duration, int | float) else math.nan
 
 
 def value_maps(q: np.ndarray, grid_map: GridMap) -> tuple[np.ndarray, np.ndarray]:
@@ -354,7 +365,8 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
             optimum, config.convergence_tolerance, config.convergence_window,
             config.convergence_level, CONVERGENCE_OBJECTIVES[config.convergence_objective],
         )  # fmt: skip
-    summary = run_metrics(episodes, poses, reached, rule)
+    clock = DrivingClock(action_duration(env), config.convergence_window)
+    summary = run_metrics(episodes, poses, reached, rule, clock)
     summary["action_limit"] = float(max_steps)
     summary.update(world.summary_columns(rule))
     return TrialResult(spec.run_id, spec.coordinates, episodes, summary, arrays)

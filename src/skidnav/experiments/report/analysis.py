@@ -47,6 +47,9 @@ METRICS = {
     "optimality_gap": "optimality gap (last evaluations / oracle − 1)",
     "oracle_length": "oracle expected length L* [actions]",
     "first_success_episode": "first successful episode",
+    "seconds_to_first_success": "driving to the first success [s] (runs that got there)",
+    "seconds_to_success90": "driving to ≥ 90 % greedy success, sustained [s] (runs that got there)",
+    "driving_seconds": "driving in the whole run [s]",
     "final_length_actions": "final greedy length [actions]",
     "final_length_m": "final greedy length [m]",
     "success_rate": "success rate (all episodes)",
@@ -271,12 +274,13 @@ def _options(config: StatsSettings) -> dict[str, Any]:
     return {"n_resamples": config.bootstrap_samples, "confidence": config.confidence}
 
 
-def _difference(
+def paired_difference(
     rows: pd.DataFrame, agent: str, base: str, column: str, config: StatsSettings, *keys: str
 ) -> tuple[Interval, int, bool]:
     """(mean ``column`` of ``agent`` − of ``base`` with its interval, pairs or runs compared,
-    paired?): paired by (preset, seed) when both have the same runs, else unpaired; the
-    generator keyed by ``keys``."""
+    paired?) over ``rows`` (summaries): paired by (preset, seed) — by world — when both have
+    the same runs, else unpaired; pairs where either value is NaN (e.g. a censored time) are
+    left out. The generator is keyed by ``keys`` (:func:`stats_rng`)."""
     a, b, paired = _paired(rows, agent, base, column)
     interval = difference_interval(
         a, b, stats_rng(config, *keys), paired=paired, **_options(config)
@@ -301,7 +305,7 @@ def _comparisons(
         ("length_difference", "final_length_actions"),
         ("gap_difference", "optimality_gap"),
     ):
-        yield name, _difference(rows, agent, base, column, config, *cell, agent, name)[0]
+        yield name, paired_difference(rows, agent, base, column, config, *cell, agent, name)[0]
     a, b, paired = _paired(rows, agent, base, "success_rate")
     ratio = ratio_interval(
         a, b, stats_rng(config, *cell, agent, "relative"), paired=paired, **options
@@ -382,7 +386,9 @@ def baseline_differences(
                     continue
                 for metric in metrics:
                     keys = (str(map_label), group, agent, metric, "difference")
-                    interval, n, paired = _difference(selected, agent, base, metric, config, *keys)
+                    interval, n, paired = paired_difference(
+                        selected, agent, base, metric, config, *keys
+                    )
                     records.append({
                         "map": map_label, "group": group, "agent": agent, "metric": metric,
                         "difference": interval.estimate, "difference_low": interval.low,

@@ -3,15 +3,15 @@
 It leads with its point: the one-line verdict (``id="verdict"``, the headline speed-up with its
 interval, :mod:`skidnav.experiments.report.verdict`), a caveat when the seeds are too few for
 intervals, the convergence table with every agent's speed-up, the setup, then the metric
-definitions folded (:mod:`skidnav.experiments.report.definitions`). Then performance profiles,
-the planning budget, thesis reproduction (speed-up, success-rate gain, final-length difference,
-rough vs slippery floor), aggregate tables, per-cell figures (greedy path lengths against the
-oracle, learning curves, per-seed metrics, final greedy trajectories and one of them animated
-(:mod:`skidnav.physics.render`), value maps with preferred headings, greedy-policy maps),
-provenance (config, versions, sessions with their code versions). The numbers are what was
+definitions folded (:mod:`skidnav.experiments.report.definitions`). Then performance profiles, the
+planning budget, thesis reproduction (speed-up, success-rate gain, final-length difference, rough
+vs slippery floor), the value of learning the kinematic model where agents were run with several
+(:mod:`skidnav.experiments.report.learning_value`), aggregate tables, per-cell figures (greedy path
+lengths against the oracle, learning curves, per-seed metrics, final greedy trajectories and one of
+them animated (:mod:`skidnav.physics.render`), value maps with preferred headings, greedy-policy
+maps), provenance (config, versions, sessions with their code versions). The numbers are what was
 measured, rounded for people (:mod:`skidnav.statistics.formatting`). Building it shows a progress
-bar on
-stderr when asked (``skidnav report``).
+bar on stderr when asked (``skidnav report``).
 
 The page shell is shared with the studies' reports (:mod:`skidnav.experiments.report.page`). An
 experiment report takes extra sections from its caller (:data:`ExperimentSection`: the commands
@@ -48,6 +48,7 @@ from skidnav.experiments.report.analysis import (
 )
 from skidnav.experiments.report.cells import Part, cell_parts, figure
 from skidnav.experiments.report.definitions import definitions
+from skidnav.experiments.report.learning_value import learning_value_section
 from skidnav.experiments.report.page import (
     config_and_provenance,
     image,
@@ -258,6 +259,7 @@ def report_parts(
             "thesis reproduction",
             partial(reproduction_section, comparisons, tables.surfaces, summaries, config),
         ),
+        ("value of learning", partial(learning_value_section, summaries, config)),
     ]
     parts += [
         (f"study section {number}", partial(section, summaries, config))
