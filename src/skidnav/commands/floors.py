@@ -64,9 +64,8 @@ def prior_gap_table() -> str:
         "|---|---|---|---|---|",
     ]
     for floor, where, gap in prior_gap_rows():
-        lines.append(
-            f"| `{floor}` | {where} | {gap.forward:.3f} | {gap.turn:.3f} | {round(gap.x_icr * 1000, 1) + 0.0:.1f} |"
-        )
+        x_icr = round(gap.x_icr * 1000, 1) + 0.0  # no "-0.0"
+        lines.append(f"| `{floor}` | {where} | {gap.forward:.3f} | {gap.turn:.3f} | {x_icr:.1f} |")
     return "\n".join(lines)
 
 
