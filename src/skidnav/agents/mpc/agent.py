@@ -36,6 +36,7 @@ from skidnav.agents.mpc.costmap import CostMap, MapCosts
 from skidnav.agents.mpc.dynamics import (
     SampledDynamics,
     fixed_dynamics,
+    lattice_coefficients,
     nominal_speeds,
     prior_dynamics,
     true_coefficients_check,
@@ -137,8 +138,9 @@ class MPPIKinematicAgent:
                 lattice_robot(robot, duration) for duration in self.config.lattice_durations
             ]
         self.evidence = MapEvidence(
-            self.costs, self.kernel_robot, self.kernel_grid, lattice_robots, self.dynamics.mean
-        )
+            self.costs, self.kernel_robot, self.kernel_grid, lattice_robots,
+            lattice_coefficients(self.model, self.dynamics.mean),
+        )  # fmt: skip
         self.planner = MPPIPlanner(self.config, self.kernel_robot, self.kernel_grid, self.rng)
         self.steps = 0
         """Real steps observed."""
@@ -238,7 +240,8 @@ class MPPIKinematicAgent:
         self.model.feed(log)
         if self.model.maybe_refit():
             update_dynamics(self.dynamics, self.model)
-            self.evidence.reweigh(self.dynamics.mean, model_changed=True)
+            coefficients = lattice_coefficients(self.model, self.dynamics.mean)
+            self.evidence.reweigh(coefficients, model_changed=True)
         collided = bool(info.get("collision", False))
         self.evidence.record_step(pose, commands, log, collided, self.dynamics)
         seen = [next_observation] if self.episode_steps > 1 else [observation, next_observation]

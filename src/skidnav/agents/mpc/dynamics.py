@@ -89,6 +89,32 @@ def fixed_dynamics(coefficients: np.ndarray) -> SampledDynamics:
     )  # fmt: skip
 
 
+def lattice_coefficients(model: KinematicModel, mean: np.ndarray) -> np.ndarray:
+    """The coefficients (n_regions, 8) the cost-to-go's lattice predicts its full-speed actions
+    with: the model's ``mean`` in a region whose fit has seen fast commands — its own fastest
+    speed ring (:meth:`~skidnav.models.kinematic.KinematicModel.ring_counts`) holds
+    ``min_samples`` samples, or, for a region still on the pooled fit, all regions' fastest rings
+    together do — and the prior (the datasheet's robot) elsewhere.
+
+    Why: on a floor whose wheels lose speed below a threshold (the slippery floors' η), slow
+    commands barely move the robot, and a linear fit on them alone predicts a full-speed action a
+    fraction of its true length (measured on maze world 3: 10 mm/s against 35 mm/s forward,
+    0.07 rad/s against 0.58 rad/s turning, after one episode of mostly slow commands near walls).
+    A lattice of such actions never leaves its cells and heading bins, every state is unreached,
+    and the plan averages to standing still, which logs more slow samples. The datasheet is the
+    better guess at a speed never commanded; with one speed ring the fit cannot tell, and the
+    model's mean is used everywhere, as it is for a model that is held (not learned)."""
+    rings = model.ring_counts()
+    if rings.shape[1] == 1 or model.held:  # one ring, or a model held at the prior or the truth
+        return mean.copy()
+    needed = model.config.min_samples
+    fast = rings[:, -1]
+    own_fit = model.counts >= needed
+    informed = np.where(own_fit, fast >= needed, fast.sum() >= needed)
+    prior = nominal_coefficients(model.robot)
+    return np.where(informed[:, None], mean, prior[None, :])
+
+
 def update_dynamics(dynamics: SampledDynamics, model: KinematicModel) -> None:
     """After a refit: the model's coefficients as the mean, and the factors, centres and noise
     of every region that has a posterior (the others keep theirs: the prior's before their

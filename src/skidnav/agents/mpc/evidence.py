@@ -113,12 +113,16 @@ class MapEvidence:
         """Times the cost map was recomputed."""
         self.table_refreshes = 0
         """Times the lattice's predictions were recomputed."""
+        self.coefficients = coefficients
+        """The coefficients (n_regions, 8) the lattice predicts with, as of the last change."""
         self.reweigh(coefficients, model_changed=True)
 
     def reweigh(self, coefficients: np.ndarray, model_changed: bool = False) -> None:
         """Recompute the cost map from the evidence: the wall probabilities, the cells' routes
         and, with a lattice, its predictions (when the blocked cells or, ``model_changed``, the
-        model's ``coefficients`` changed) and its values."""
+        model's ``coefficients`` changed: kept as :attr:`coefficients`) and its values."""
+        if model_changed:
+            self.coefficients = coefficients
         blocked_before = self.cost_map.blocked.copy()
         weigh_map(
             self.hits, self.passes, self.ray_ends, self.ray_crossings, self.costs, self.grid,
@@ -166,7 +170,7 @@ class MapEvidence:
                 self.hits[wall] += 1
                 changed = True
         if changed:
-            self.reweigh(dynamics.mean)
+            self.reweigh(self.coefficients)
 
     def record_readings(
         self, pose: np.ndarray, ranges: np.ndarray, max_range: float, dynamics: SampledDynamics
@@ -182,7 +186,7 @@ class MapEvidence:
             self.ray_crossings, self.hits,
         )  # fmt: skip
         if changed:
-            self.reweigh(dynamics.mean)
+            self.reweigh(self.coefficients)
 
     def guess_wall(
         self,

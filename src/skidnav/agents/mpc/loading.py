@@ -27,7 +27,7 @@ from skidnav.agents.mpc.agent import (
     MPPIPolicy,
 )
 from skidnav.agents.mpc.config import MPPIConfig
-from skidnav.agents.mpc.dynamics import SampledDynamics
+from skidnav.agents.mpc.dynamics import SampledDynamics, lattice_coefficients
 from skidnav.agents.saving import generator_from_state, save_paths
 from skidnav.errors import UserError, shown
 from skidnav.files.saved import ArraySpec, SavedArchive, loading, read_json
@@ -114,7 +114,8 @@ def restore_arrays(agent: MPPIKinematicAgent, arrays: Mapping[str, np.ndarray]) 
     if not (np.abs(plan) <= agent.robot.wheel_speed).all():  # NaN fails too
         raise ValueError("saved plan holds wheel speeds beyond the bound")
     agent.planner.plan[...] = plan
-    agent.evidence.reweigh(agent.dynamics.mean, model_changed=True)
+    coefficients = lattice_coefficients(agent.model, agent.dynamics.mean)
+    agent.evidence.reweigh(coefficients, model_changed=True)
 
 
 def policy_from_file(json_path: Path, meta: Mapping[str, Any]) -> MPPIPolicy:
