@@ -403,13 +403,21 @@ def _check_config(config: ExperimentConfig) -> None:
 
 
 def _check_agents(config: ExperimentConfig) -> dict[str, CatalogEntry]:
-    """The catalog entry of each agent name of ``config``, asked once, its parameters and (on
-    the skid-steer env) the observation it would learn over checked; UserError otherwise."""
+    """The catalog entry of each agent name of ``config``, asked once, its parameters (a true
+    kinematic model only for an agent that takes the simulator's) and (on the skid-steer env)
+    the observation it would learn over checked; UserError otherwise."""
     entries: dict[str, CatalogEntry] = {}
     requested = dict(config.env_options).get("observation")
     for agent in config.agents:
         described = entries.setdefault(agent.name, entry(agent.name))
-        described.config(agent.params_dict())
+        params = agent.params_dict()
+        described.config(params)
+        if params.get("kinematic_model") == "true" and not described.asks_for("true_kinematics"):
+            raise UserError(
+                f"agent {agent.label!r}: kinematic_model 'true' plans with the simulator's "
+                f"expected velocities of the discrete actions, which {agent.name} cannot take "
+                "(expected 'learned' or 'prior')"
+            )
         if config.env_id == SKID_ENV_ID:
             described.env_observation(requested)
     return entries
