@@ -24,7 +24,7 @@ from typing import Any, Generic, Literal, Protocol, TypeAlias, TypeVar
 import gymnasium
 from numpy.random import SeedSequence
 
-from skidnav.agents.interface import Agent, AgentConfig
+from skidnav.agents.interface import Agent, AgentConfig, EpisodeTrainingAgent
 from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import UserError
@@ -181,3 +181,21 @@ def check_wheel_speed_env(env: Env) -> None:
             "expected an env observing the pose or the features (observation='pose' or "
             f"'features'), got {env.observation_space}"
         )
+
+
+def train_own_loop(
+    agent: EpisodeTrainingAgent,
+    env: Env,
+    episodes: int,
+    /,
+    *,
+    max_steps: int | None = None,
+    evaluation: Evaluation = NO_EVALUATION,
+    seed: int | None = None,
+) -> TrainingLog:
+    """The :class:`Trainer` of an agent that owns its loop (the deep agents through
+    Stable-Baselines3, CMA-ES by generations): its ``train_episodes`` on the env it was built
+    with (``env`` is that env, its episodes already cut at ``max_steps``, which also limits the
+    greedy rollouts, as in every trainer)."""
+    limited = evaluation._replace(max_steps=evaluation.limit(max_steps))
+    return agent.train_episodes(episodes, evaluation=limited, seed=seed)

@@ -19,9 +19,8 @@ import gymnasium
 from gymnasium.wrappers import TimeLimit
 from numpy.random import SeedSequence
 
-from skidnav.agents.family import Env, Family, Params, observation_space
+from skidnav.agents.family import Env, Family, Params, observation_space, train_own_loop
 from skidnav.agents.interface import AgentConfig, EpisodeTrainingAgent
-from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError, UserError
 from skidnav.extras import MissingExtraError, import_with, missing_message
@@ -74,22 +73,6 @@ def _make(
     return agent
 
 
-def _train(
-    agent: EpisodeTrainingAgent,
-    env: Env,
-    episodes: int,
-    /,
-    *,
-    max_steps: int | None = None,
-    evaluation: Evaluation = NO_EVALUATION,
-    seed: int | None = None,
-) -> TrainingLog:
-    """The agent's own loop, on the env it was built with (``env`` is that env, its episodes
-    already cut at ``max_steps``, which limits the rollouts as in every trainer)."""
-    limited = evaluation._replace(max_steps=evaluation.limit(max_steps))
-    return agent.train_episodes(episodes, evaluation=limited, seed=seed)
-
-
 def _saved_name(json_path: Path, meta: Mapping[str, Any]) -> str:
     name = FORMATS.get(str(meta.get("format")))
     if name is None:  # the door hands a family only its own formats
@@ -127,7 +110,7 @@ FAMILY: Family[EpisodeTrainingAgent] = Family(
     agent_class=_agent_class,
     config_class=_config_class,
     make=_make,
-    train=_train,
+    train=train_own_loop,
     save_formats=tuple(FORMATS),
     load=_load,
     policy=_policy,

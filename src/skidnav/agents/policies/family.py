@@ -17,7 +17,7 @@ from typing import Any
 
 from numpy.random import SeedSequence
 
-from skidnav.agents.family import Env, Family, Params, check_wheel_speed_env
+from skidnav.agents.family import Env, Family, Params, check_wheel_speed_env, train_own_loop
 from skidnav.agents.interface import Agent, AgentConfig, EpisodeTrainingAgent
 from skidnav.agents.policies.agent import (
     GOAL_TRACKER_FORMAT,
@@ -85,8 +85,9 @@ def _train(
     """CMA-ES by generations (:meth:`~skidnav.agents.policies.search.agent.CMAESAgent.
     train_episodes`); a frozen policy's episodes in the plain loop, learning nothing."""
     if isinstance(agent, EpisodeTrainingAgent):  # the search, by generations
-        limited = evaluation._replace(max_steps=evaluation.limit(max_steps))
-        return agent.train_episodes(episodes, evaluation=limited, seed=seed)
+        return train_own_loop(
+            agent, env, episodes, max_steps=max_steps, evaluation=evaluation, seed=seed
+        )
     assert isinstance(agent, PolicyAgent)
     return train_plain(agent, env, episodes, max_steps=max_steps, evaluation=evaluation, seed=seed)
 
