@@ -103,6 +103,7 @@ STUDY_MODULES: dict[str, str] = {
     EXPERIMENT_KIND: "skidnav.studies.experiment.study",
     "continuity": "skidnav.studies.continuity.study",
     "generalisation": "skidnav.studies.generalisation.study",
+    "kinematic-curve": "skidnav.studies.kinematic_models.curve_study",
     "kinematic-models": "skidnav.studies.kinematic_models.study",
     "policy-search": "skidnav.studies.policy_search.study",
     "robot-study": "skidnav.studies.hardware.study",

@@ -107,3 +107,22 @@ def learning_curve(
             mean, std = each.predict_twist(regions, wheels)
             curves[name].append(score_segment(mean, std, observed, dt))
     return curves
+
+
+PLATEAU_RATIO = 1.25
+"""A curve has reached its plateau at the first t whose 1-s error is within this factor of
+the error at the longest t (the least the drive shows)."""
+
+
+def plateau_seconds(driving_seconds: tuple[float, ...], one_second: np.ndarray) -> float:
+    """The first t of ``driving_seconds`` [s] from which the 1-s errors ``one_second`` (one per
+    t, same order) stay within :data:`PLATEAU_RATIO` of the last one.
+
+    >>> plateau_seconds((1.0, 2.0, 5.0, 10.0), np.array([20.0, 1.1, 1.2, 1.0]))
+    2.0
+    >>> plateau_seconds((1.0, 2.0, 5.0, 10.0), np.array([20.0, 1.1, 1.3, 1.0]))
+    10.0
+    """
+    within = np.asarray(one_second) <= PLATEAU_RATIO * one_second[-1]
+    outside = np.flatnonzero(~within)
+    return float(driving_seconds[0 if len(outside) == 0 else outside[-1] + 1])
