@@ -86,19 +86,20 @@ def _linear_agent(folder: Path) -> tuple[Path, list[Path]]:
 def _kinematic_model(folder: Path) -> tuple[Path, list[Path]]:
     from skidnav.models.kinematic import KinematicModel
     from skidnav.models.kinematic_config import KinematicModelConfig
+    from skidnav.models.kinematic_files import save_model
     from skidnav.robot.params import RobotParams
     from skidnav.world.discretization import Discretization
 
     grid = Discretization(n_x=6, n_y=5, n_headings=4, regions_x=2, regions_y=2)
     model = KinematicModel(RobotParams(), grid, KinematicModelConfig(window=8))
-    model.save(folder / "model")
+    save_model(model, folder / "model")
     return folder / "model", [folder / "model.json", folder / "model.npz"]
 
 
 def _load_kinematic_model(path: Path) -> Any:
-    from skidnav.models.kinematic import KinematicModel
+    from skidnav.models.kinematic_files import load_model
 
-    return KinematicModel.load(path)
+    return load_model(path)
 
 
 def _tanh_policy(folder: Path) -> tuple[Path, list[Path]]:

@@ -19,6 +19,7 @@ from skidnav.errors import CorruptFileError
 from skidnav.files.saved import SavedArchive
 from skidnav.models.kinematic import KinematicModel
 from skidnav.models.kinematic_config import KinematicModelConfig
+from skidnav.models.kinematic_files import load_model, save_model
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
 from tests.saved_file_support import (
@@ -219,23 +220,23 @@ def test_a_kinematic_model_file_is_checked_before_allocation(
     tmp_path: Path, section: str, key: str, value: Any, message: str
 ) -> None:
     model = KinematicModel(RobotParams(), Discretization(), KinematicModelConfig(window=16))
-    model.save(tmp_path / "kin")
-    assert KinematicModel.load(tmp_path / "kin").config.window == 16
+    save_model(model, tmp_path / "kin")
+    assert load_model(tmp_path / "kin").config.window == 16
     meta = json.loads((tmp_path / "kin.json").read_text())
     meta[section][key] = value
     (tmp_path / "kin.json").write_text(json.dumps(meta))
     with pytest.raises(CorruptFileError, match=message) as caught:
-        KinematicModel.load(tmp_path / "kin")
+        load_model(tmp_path / "kin")
     assert str(caught.value).startswith(str(tmp_path / "kin")) and "\n" not in str(caught.value)
 
 
 def test_a_kinematic_model_archive_with_a_stranger_is_refused(tmp_path: Path) -> None:
     model = KinematicModel(RobotParams(), Discretization(), KinematicModelConfig(window=16))
-    model.save(tmp_path / "kin")
+    save_model(model, tmp_path / "kin")
     members = arrays_of(tmp_path / "kin.npz")
     write_npz(tmp_path / "kin.npz", {**members, "extra": np.zeros(2)})
     with pytest.raises(CorruptFileError, match="unexpected array 'extra'"):
-        KinematicModel.load(tmp_path / "kin")
+        load_model(tmp_path / "kin")
     write_npz(tmp_path / "kin.npz", {**members, "kinematic_data": forged_npy((49, 10**9, 5))})
     with pytest.raises(CorruptFileError, match="kinematic_data' is float64 of shape"):
-        KinematicModel.load(tmp_path / "kin")
+        load_model(tmp_path / "kin")

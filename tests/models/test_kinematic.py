@@ -9,6 +9,7 @@ import pytest
 
 from skidnav.models.kinematic import KinematicModel
 from skidnav.models.kinematic_config import KinematicModelConfig
+from skidnav.models.kinematic_files import load_model, save_model
 from skidnav.models.kinematic_prediction import (
     PREDICT_COLLISION,
     PREDICT_FREE,
@@ -183,8 +184,8 @@ def test_save_load_round_trip(tmp_path: object) -> None:
     model.feed(_noise_free_log(np.random.default_rng(0), 100, 2, 0.03, 0.07, 0.01))
     model.refit()
     path = f"{tmp_path}/kin"
-    model.save(path)
-    loaded = KinematicModel.load(path)
+    save_model(model, path)
+    loaded = load_model(path)
     assert loaded.config == model.config
     np.testing.assert_array_equal(loaded.coefficients, model.coefficients)
     np.testing.assert_array_equal(loaded.velocities, model.velocities)

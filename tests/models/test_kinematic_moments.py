@@ -13,6 +13,7 @@ import pytest
 from skidnav._jit import jit_disabled
 from skidnav.models.kinematic import KinematicModel
 from skidnav.models.kinematic_config import KinematicModelConfig
+from skidnav.models.kinematic_files import load_model, save_model
 from skidnav.models.kinematic_moments import stratum_of
 from skidnav.robot.kinematics import apply_slip, body_velocities
 from skidnav.robot.params import RobotParams
@@ -126,8 +127,8 @@ def test_a_loaded_model_rebuilds_its_moments_and_keeps_its_strata(tmp_path: Path
     log = _random_drive(1500, seed=6)
     model.feed(log[:1000])
     model.refit()
-    model.save(tmp_path / "model")
-    loaded = KinematicModel.load(tmp_path / "model")
+    save_model(model, tmp_path / "model")
+    loaded = load_model(tmp_path / "model")
     np.testing.assert_array_equal(loaded.stratum_counts, model.stratum_counts)
     for each in (model, loaded):
         each.feed(log[1000:])

@@ -32,23 +32,17 @@ last ``window`` samples per region.
 Predictive distribution (:meth:`KinematicModel.predict_twist`): each regression's Gaussian
 posterior predictive (Bishop 2006 eqs. 3.58–3.59: noise variance plus parameter variance), with the
 parent fit held fixed; v_y given the commanded wheels propagates the yaw-rate prediction to first
-order. The fitted regressions are kept in memory only (not saved): a loaded model has no
-predictive spread until its next refit.
+order. Saved files: :mod:`skidnav.models.kinematic_files`; the fitted regressions are kept
+in memory only (not saved), so a loaded model has no predictive spread until its next refit.
 """
 
 from __future__ import annotations
 
-import json
 import logging
-from dataclasses import asdict
-from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from skidnav.errors import CorruptFileError, first_line
-from skidnav.files.atomic import write_atomic, write_npz_atomic
-from skidnav.files.saved import MAX_ARCHIVE_BYTES, READ_ERRORS, ArraySpec, SavedArchive, read_json
+from skidnav.errors import CorruptFileError
 from skidnav.models.kinematic_config import KinematicModelConfig, window_slots
 from skidnav.models.kinematic_moments import RingMoments, feed_rows_stratified, newest_moments
 from skidnav.models.kinematic_prediction import (
@@ -70,8 +64,6 @@ from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
 
 logger = logging.getLogger(__name__)
-
-_FORMAT_VERSION = 1
 
 
 class KinematicModel:
@@ -397,69 +389,3 @@ class KinematicModel:
         ):
             raise CorruptFileError("kinematic model sample counts are inconsistent")
         self._update_velocities()
-
-    def metadata(self) -> dict[str, object]:
-        """JSON-ready description: config, robot and discretization."""
-        return {
-            "format_version": _FORMAT_VERSION,
-            "config": asdict(self.config),
-            "robot": asdict(self.robot),
-            "grid": asdict(self.grid),
-        }
-
-    @staticmethod
-    def check_size(grid: Discretization, config: KinematicModelConfig) -> None:
-        """ValueError unless a model of ``grid`` and ``config`` is one a saved file may describe:
-        no more slip regions than cells, and its arrays (per region the ``window × 5`` samples,
-        2 counts, 8 coefficients, 12 velocities, float64 or int64) within
-        :data:`~skidnav.files.saved.MAX_ARCHIVE_BYTES`. Checked before a loader allocates one."""
-        n_bytes = grid.n_regions * (config.window * 5 + 22 + config.speed_strata) * 8
-        if grid.n_regions > grid.n_x * grid.n_y or n_bytes > MAX_ARCHIVE_BYTES:
-            raise ValueError(
-                f"a kinematic model of {grid.n_regions:,} slip regions on {grid.n_x} × "
-                f"{grid.n_y} cells with a window of {config.window:,} samples is too large"
-            )
-
-    def save(self, path: str | Path) -> None:
-        """Write ``<path>.npz`` (arrays) and ``<path>.json`` (config), each atomically; never
-        pickle."""
-        base = Path(path).with_suffix("")
-        write_npz_atomic(base.with_suffix(".npz"), self.state_arrays())
-        write_atomic(base.with_suffix(".json"), json.dumps(self.metadata(), indent=2).encode())
-
-    @classmethod
-    def load(cls, path: str | Path) -> KinematicModel:
-        """Read a model written by :meth:`save`; CorruptFileError (one line naming the file)
-        when a file is missing, damaged or inconsistent. The JSON is checked (size, nesting,
-        every field validated, :meth:`check_size`) before the model is allocated, the archive's
-        member names, dtypes and shapes against that model before any array is read."""
-        base = Path(path).with_suffix("")
-        meta = read_json(base.with_suffix(".json"), max_bytes=2**20, what="kinematic model file")
-        try:
-            if meta.get("format_version") != _FORMAT_VERSION:
-                raise ValueError("unsupported format version")
-            grid = Discretization(**_table(meta, "grid"))
-            config = KinematicModelConfig(**_table(meta, "config"))
-            cls.check_size(grid, config)
-            model = cls(RobotParams(**_table(meta, "robot")), grid, config)
-            specs = {
-                name: ArraySpec(array.shape, array.dtype.str)
-                for name, array in model.state_arrays().items()
-            }
-            with SavedArchive(base.with_suffix(".npz")) as archive:
-                model.load_arrays(archive.read_all(specs))
-        except (*READ_ERRORS, KeyError, CorruptFileError) as error:
-            if isinstance(error, CorruptFileError) and str(error).startswith(f"{base}."):
-                raise
-            raise CorruptFileError(
-                f"{base}: cannot load kinematic model ({first_line(error)})"
-            ) from None
-        return model
-
-
-def _table(meta: dict[str, Any], key: str) -> dict[str, Any]:
-    """``meta[key]`` if it is a JSON object (TypeError otherwise)."""
-    value = meta[key]
-    if not isinstance(value, dict):
-        raise TypeError(f"expected {key!r} to be a JSON object, got {type(value).__name__}")
-    return value

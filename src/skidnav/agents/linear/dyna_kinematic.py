@@ -64,6 +64,7 @@ from skidnav.agents.planner_state import (
 )
 from skidnav.errors import CorruptFileError, shown
 from skidnav.models.kinematic import KinematicModel
+from skidnav.models.kinematic_files import check_model_size
 from skidnav.robot.params import RobotParams
 from skidnav.sim.navigation import NavigationTask
 from skidnav.world.discretization import Discretization
@@ -415,7 +416,7 @@ class LinearDynaKinematicAgent(LinearDynaAgent):
             raise ValueError(f"expected a goal cell inside the grid, got {shown(goal)}")
         if grid.n_x * grid.n_y > MAX_CELLS:  # before the map is allocated
             raise ValueError(f"expected at most {MAX_CELLS:,} cells, got {grid.n_x * grid.n_y:,}")
-        KinematicModel.check_size(grid, config.kinematic_config())  # a model a file may describe
+        check_model_size(grid, config.kinematic_config())  # a model a file may describe
         truth = None
         if "true_kinematics" in keys:
             truth = true_kinematics_from_json(value["true_kinematics"], grid.n_regions)

@@ -31,7 +31,7 @@ from skidnav.agents.mpc.dynamics import SampledDynamics, lattice_coefficients
 from skidnav.agents.saving import generator_from_state, save_paths
 from skidnav.errors import UserError, shown
 from skidnav.files.saved import ArraySpec, SavedArchive, loading, read_json
-from skidnav.models.kinematic import KinematicModel
+from skidnav.models.kinematic_files import check_model_size
 from skidnav.models.kinematic_regression import N_COEFFICIENTS
 
 MAX_AGENT_JSON_BYTES = 2**20
@@ -73,7 +73,7 @@ def _fresh_agent(meta: Mapping[str, Any]) -> MPPIKinematicAgent:
     robot, grid = geometry_from_json(meta["geometry"])
     if grid is None or grid.n_states > MAX_STATES:
         raise ValueError(f"expected a discretization of at most {MAX_STATES:,} states")
-    KinematicModel.check_size(grid, config.kinematic_config())
+    check_model_size(grid, config.kinematic_config())
     placeholder = np.zeros((grid.n_regions, N_COEFFICIENTS))
     agent = MPPIKinematicAgent(
         robot, grid, meta["goal"], config,

@@ -199,7 +199,7 @@ def _saved_geometry(
     from skidnav.agents.geometry import geometry_from_json
     from skidnav.agents.planner_state import true_kinematics_from_json
     from skidnav.agents.tabular.model_based import ModelBasedAgent
-    from skidnav.models.kinematic import KinematicModel
+    from skidnav.models.kinematic_files import check_model_size
 
     if not issubclass(cls, ModelBasedAgent):
         return {}
@@ -215,7 +215,7 @@ def _saved_geometry(
         )
     geometry: dict[str, Any] = {"robot": robot, "discretization": grid}
     if isinstance(config, KinematicModelFields):
-        KinematicModel.check_size(grid, config.kinematic_config())
+        check_model_size(grid, config.kinematic_config())
         if config.kinematic_model == "true":
             geometry["true_kinematics"] = true_kinematics_from_json(
                 meta["true_kinematics"], grid.n_regions
