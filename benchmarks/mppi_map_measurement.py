@@ -6,8 +6,14 @@ is rolled out greedily on R evaluation seeds (``skidnav.train``). Prints one JSO
 (success, episodes and seconds of driving to the first success, collisions per episode, greedy
 successes) and a summary.
 
+``--goal-tracker`` also rolls the goal tracker (``goal-tracker``, the reference wheel-speed
+policy) out greedily from the same R evaluation starts (``skidnav.evaluate``, the seeds of the
+training's evaluations) and compares the seconds of driving to the goal of the frozen planner
+after the last episode with the tracker's, start by start.
+
     python benchmarks/mppi_map_measurement.py [--worlds maze:3 maze:100 obstacles:0-9]
         [--episodes 30] [--rollouts 2] [--slip slippery] [--set name=value ...]
+        [--goal-tracker]
 """
 
 from __future__ import annotations
@@ -48,9 +54,16 @@ def parsed(value: str) -> Any:
 
 
 def run(
-    kind: str, world: int, episodes: int, rollouts: int, slip: str, params: dict[str, Any]
+    kind: str,
+    world: int,
+    episodes: int,
+    rollouts: int,
+    slip: str,
+    params: dict[str, Any],
+    goal_tracker: bool = False,
 ) -> dict[str, Any]:
-    """One world's training run, seed 0, and what it measured."""
+    """One world's training run, seed 0, and what it measured (with ``goal_tracker``, also
+    :func:`against_goal_tracker`)."""
     env = skidnav.make_env(
         kind, seed=world, slip=slip, observation="features", action="continuous",
         control_period=CONTROL_PERIOD, max_episode_steps=MAX_STEPS,
@@ -58,6 +71,7 @@ def run(
     agent = skidnav.make_agent("mppi-kinematic", env, seed=0, horizon=HORIZON, **params)
     start = time.perf_counter()
     log = skidnav.train(agent, env, episodes, seed=0, max_steps=MAX_STEPS, rollouts=rollouts)
+    wall_time = time.perf_counter() - start
     successes = log.successes.astype(bool)
     first = int(np.argmax(successes)) if successes.any() else None
     reached = log.greedy_lengths > 0
@@ -72,8 +86,27 @@ def run(
         "greedy_success": round(float(reached.mean()), 3),
         "greedy_success_last": round(float(reached[-1].mean()), 3),
         "lengths": log.lengths.tolist(), "collisions": log.collisions.tolist(),
-        "wall_time": round(time.perf_counter() - start, 1),
+        "wall_time": round(wall_time, 1),
+        **(against_goal_tracker(env, log.greedy_lengths[-1], rollouts) if goal_tracker else {}),
     }  # fmt: skip
+
+
+def against_goal_tracker(env: Any, lengths: np.ndarray, rollouts: int) -> dict[str, Any]:
+    """The goal tracker's greedy rollouts from the evaluation starts of ``skidnav.train`` (seed
+    0, ``rollouts`` of them) against the trained planner's last ``lengths`` [actions] (−1: not
+    reached): both in seconds of driving, and the ratio of their means over the starts both
+    reached (NaN if none)."""
+    tracker = skidnav.make_agent("goal-tracker", env, seed=0)
+    reference = np.array(
+        [r.length for r in skidnav.evaluate(tracker, env, rollouts=rollouts, max_steps=MAX_STEPS)]
+    )
+    both = (lengths > 0) & (reference > 0)
+    ratio = lengths[both].mean() / reference[both].mean() if both.any() else float("nan")
+    return {
+        "greedy_seconds": (lengths * CONTROL_PERIOD).tolist(),
+        "goal_tracker_seconds": (reference * CONTROL_PERIOD).tolist(),
+        "time_ratio": round(float(ratio), 3),
+    }
 
 
 def summary(results: list[dict[str, Any]]) -> str:
@@ -97,14 +130,23 @@ def main() -> None:
     parser.add_argument("--rollouts", type=int, default=2)
     parser.add_argument("--slip", default="slippery")
     parser.add_argument("--set", nargs="*", default=[], metavar="NAME=VALUE")
+    parser.add_argument(
+        "--goal-tracker", action="store_true", help="compare the time to goal with goal-tracker"
+    )
     options = parser.parse_args()
     params = {name: parsed(value) for name, value in (each.split("=", 1) for each in options.set)}
     results = []
     for kind, world in worlds(options.worlds):
-        result = run(kind, world, options.episodes, options.rollouts, options.slip, params)
+        result = run(
+            kind, world, options.episodes, options.rollouts, options.slip, params,
+            options.goal_tracker,
+        )  # fmt: skip
         print(json.dumps(result), flush=True)
         results.append(result)
     print(summary(results))
+    ratios = [r["time_ratio"] for r in results if "time_ratio" in r]
+    if ratios:
+        print(f"time to goal against the goal tracker: {', '.join(map(str, ratios))}")
 
 
 if __name__ == "__main__":

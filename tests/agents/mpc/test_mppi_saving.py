@@ -102,6 +102,27 @@ def damaged_copy(path: Path, folder: Path, edit_json: Any = None, edit_arrays: A
     return copy
 
 
+def test_a_version_2_file_had_its_temperature_in_control_steps(
+    trained: tuple[MPPIKinematicAgent, Path], tmp_path: Path
+) -> None:
+    """Version 2 held λ in control steps (of 0.1 s here): read as λ × 0.1 s, so the loaded
+    agent plans as it did; anything but a number there is one line."""
+    original, path = trained
+
+    def version_2(meta: dict[str, Any]) -> None:
+        meta.update(version=2)
+        meta["config"].update(temperature=original.config.temperature / 0.1)
+
+    loaded = load_mppi_agent(damaged_copy(path, tmp_path, version_2))
+    assert loaded.planner.temperature == original.planner.temperature == 1.0
+    with pytest.raises(CorruptFileError, match="temperature"):
+        load_mppi_agent(
+            damaged_copy(
+                path, tmp_path, lambda m: (version_2(m), m["config"].update(temperature="1"))
+            )
+        )
+
+
 @pytest.mark.parametrize(
     ("edit_json", "edit_arrays", "expected"),
     [

@@ -56,7 +56,8 @@ from skidnav.world.discretization import Discretization
 AGENT_NAME = "mppi-kinematic"
 SAVE_FORMAT = "skidnav-mppi-agent"
 """The ``"format"`` of a saved agent's JSON (also a policy file: the frozen planner)."""
-SAVE_VERSION = 2
+SAVE_VERSION = 3
+"""3: ``temperature`` in seconds; version 2 held it in control steps (read by converting it)."""
 GREEDY_SEED = 0
 """The seed of the frozen planner :meth:`MPPIKinematicAgent.greedy_action` rolls out: every
 greedy rollout draws the same numbers, none of the agent's."""

@@ -54,8 +54,14 @@ class MPPIConfig(KinematicModelFields):
     horizon: int = 40
     """H, control steps each sequence looks ahead, in [1, 10,000] (40 × 0.1 s = 4 s: a
     quarter turn takes 2.5 s; measured against 20 and 60 in docs/agents/mppi-kinematic.md)."""
-    temperature: float = 1.0
-    """λ [cost units] of the sequence weights exp(−S/λ) (Williams et al. 2017), > 0."""
+    temperature: float = 0.1
+    """λ [s] of the sequence weights exp(−S T / λ) (Williams et al. 2017), > 0: S is a
+    sequence's cost in control steps of T seconds, so λ is a cost in seconds of driving and the
+    weights are as selective whatever the control period (0.1 s: λ = 1 control step). A
+    temperature fixed in control steps is ten times hotter at 1-s actions than at 0.1-s ones: a
+    4-s horizon of 1-s actions then gains 1.4–3 control steps over standing still, the weights
+    barely tell the sequences apart (effective sample size 240 of 256) and the plan averages to
+    standing still (docs/agents/mppi-kinematic.md, "The stall")."""
     control_cost: float = 0.0
     """γ [cost units] of MPPI's control-cost term γ Σ_t U_tᵀ Σ⁻¹ ε_t, ≥ 0. Williams et al.
     (2017) use γ = λ; it amounts to a quadratic cost ½ γ uᵀ Σ⁻¹ u on the wheel speeds, at

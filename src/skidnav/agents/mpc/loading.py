@@ -41,6 +41,10 @@ MAX_STATES = 4_000_000
 per state and duration)."""
 
 
+READ_VERSIONS = (2, SAVE_VERSION)
+"""The saved versions read: 2 held ``temperature`` in control steps (converted on reading)."""
+
+
 def load_mppi_agent(path: str | Path) -> MPPIKinematicAgent:
     """The agent saved at ``path`` (:meth:`MPPIKinematicAgent.save`); CorruptFileError in one
     line naming the file when either file is missing, damaged or inconsistent (module doc)."""
@@ -62,15 +66,21 @@ def load_mppi_agent(path: str | Path) -> MPPIKinematicAgent:
 def _fresh_agent(meta: Mapping[str, Any]) -> MPPIKinematicAgent:
     """A new agent of the saved config, geometry, goal and observation layout, its counters
     and Generator restored (its arrays not yet)."""
-    if meta.get("format") != SAVE_FORMAT or meta.get("version") != SAVE_VERSION:
+    version = meta.get("version")
+    if meta.get("format") != SAVE_FORMAT or version not in READ_VERSIONS:
         raise ValueError(f"not a skidnav {AGENT_NAME} agent file of version {SAVE_VERSION}")
     if meta["agent"] != AGENT_NAME:
         raise ValueError(f"expected agent {AGENT_NAME!r}, got {shown(meta['agent'])}")
     config_values = meta["config"]
     if not isinstance(config_values, Mapping):
         raise ValueError("expected config to be a JSON object")
-    config = MPPIConfig.from_mapping(config_values)
     robot, grid = geometry_from_json(meta["geometry"])
+    if version == 2 and "temperature" in config_values:  # then in control steps, now seconds
+        steps = config_values["temperature"]
+        if type(steps) not in (int, float):
+            raise ValueError(f"expected temperature to be a number, got {shown(steps)}")
+        config_values = {**config_values, "temperature": steps * robot.action_duration}
+    config = MPPIConfig.from_mapping(config_values)
     if grid is None or grid.n_states > MAX_STATES:
         raise ValueError(f"expected a discretization of at most {MAX_STATES:,} states")
     check_model_size(grid, config.kinematic_config())

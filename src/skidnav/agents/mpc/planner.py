@@ -15,7 +15,9 @@ Each control step, from the robot's pose and the plan U (H, 2) [rad/s] kept from
    draws); add the control cost
    γ Σ_t U_tᵀ Σ⁻¹ ε_t, Σ = σ² I (Williams et al. 2017, with γ = λ there; a parameter here,
    0 by default: :attr:`~skidnav.agents.mpc.config.MPPIConfig.control_cost`);
-4. weigh the sequences w_k ∝ exp(−(S_k − min S) / λ) and move the plan: U ← U + Σ_k w_k ε_k;
+4. weigh the sequences w_k ∝ exp(−(S_k − min S) T / λ), S in control steps of T seconds and
+   the temperature λ in seconds (so the weights do not depend on the control period), and move
+   the plan: U ← U + Σ_k w_k ε_k;
 5. command U_0, then shift the plan by one step for the next control step (warm start), the
    last step repeated.
 
@@ -65,6 +67,8 @@ class MPPIPlanner:
         self.weights = np.zeros(config.samples)
         """float64 (K,): the last batch's weights (summing to 1)."""
         self._zero_draws: RolloutDraws | None = None
+        self.temperature = config.temperature / (robot.dt * robot.substeps)
+        """λ / T: the temperature in control steps (the costs' unit)."""
 
     def reset(self) -> None:
         """Forget the plan (a new episode): the next step starts from U = 0."""
@@ -125,7 +129,7 @@ class MPPIPlanner:
             control_cost = np.einsum("ha,kha->k", self.plan, perturbation)
             self.costs += config.control_cost / config.noise_std**2 * control_cost
         shifted = self.costs - self.costs.min()
-        np.exp(-shifted / config.temperature, out=self.weights)
+        np.exp(-shifted / self.temperature, out=self.weights)
         self.weights /= self.weights.sum()
         self.plan += np.einsum("k,kha->ha", self.weights, perturbation)
         np.clip(self.plan, -limit, limit, out=self.plan)
