@@ -10,6 +10,9 @@ Prints (planning rates: best of three timings each):
 * per model-based agent, planning updates/s inside the fused trainer (``train_agent_fast``) on
   the 25 × 25 × 20 obstacles arena at a large planning budget (:data:`ARENA_BUDGETS` updates per
   real step, everything of the trainer timed: simulation, real steps, end-of-episode refits),
+  each agent with its default planning target (named on its line; the expected update of
+  ``dyna-kinematic``, ``trajectory-prioritized``, ``dyna-full`` and ``dyna-sweep``, whose lines
+  compare their rate at 1000 with the target of 10 M updates/s),
   against the identical kernels as plain Python (``NUMBA_DISABLE_JIT=1`` in a subprocess, on
   the budget :data:`PLAIN_ARENA` and a short episode), and for prioritized sweeping, whose
   queue empties before the budget, its updates per second of planning time alone
@@ -38,7 +41,7 @@ from plain_python import interpreted
 
 from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.planning import dyna_planning
-from skidnav.agents.tabular.registry import make_agent
+from skidnav.agents.tabular.registry import make_agent, make_config
 from skidnav.agents.training import train_agent
 from skidnav.envs.mazes import dyna_maze
 from skidnav.models.multinomial_targets import MOST_PROBABLE
@@ -54,6 +57,7 @@ ARENA_AGENTS = (
     "dyna-sweep",
 )  # fmt: skip
 ARENA_BUDGETS = (1000, 10_000)  # planning updates per real step
+EXPECTED_TARGET = 10e6  # expected planning updates/s at 1000 updates per real step
 ARENA_EPISODES = {1000: 6, 10_000: 2}  # timed, after 4 warm-up episodes at the same budget
 PLAIN_ARENA = (200, 40)  # plain Python: planning updates per real step, real steps
 MAZE_RUNS = 30
@@ -240,7 +244,8 @@ def plain_dyna_maze_seconds(runs: int) -> float:
 
 def arena_agent(name: str, budget: int, epsilon: float = 0.1) -> tuple[Any, Any]:
     """(agent ``name``, the obstacles arena it learns on): α 0.5, γ 0.95, θ 1e-6, ``budget``
-    planning updates per real step; the kernels of its first goal compiled beforehand."""
+    planning updates per real step, the agent's default planning target
+    (:func:`default_planning_mode`); the kernels of its first goal compiled beforehand."""
     import gymnasium as gym
 
     import skidnav.envs  # noqa: F401  (registers the env)
@@ -338,13 +343,29 @@ def plain_arena_rate(name: str) -> float:
     return interpreted("bench_agents", f"arena_planning_rate({name!r}, {budget}, 1, {steps})")
 
 
+def default_planning_mode(name: str) -> str:
+    """The planning target agent ``name`` plans with by default (``planning_mode``; "" for an
+    agent without a model)."""
+    return str(getattr(make_config(name, None), "planning_mode", ""))
+
+
+def expected_target_note(name: str, rate: float) -> str:
+    """For an agent that plans with the expected update by default, its rate at 1000 updates
+    per real step [updates/s] against the target of 10 M/s; nothing for the others."""
+    if default_planning_mode(name) != "expected":
+        return ""
+    verdict = "met" if rate >= EXPECTED_TARGET else "MISSED"
+    return f"; expected update at 1000 updates/step, target >= 10 M/s: {verdict}"
+
+
 def print_arena_rates() -> None:
-    """One line per model-based agent: fused-trainer planning rate per budget, and the ratio."""
+    """One line per model-based agent: its planning target, fused-trainer planning rate per
+    budget and the ratio to plain Python, and for the expected update the 10 M/s target."""
     budget, steps = PLAIN_ARENA
     print(
         "fused trainer, obstacles arena 25×25×20 (12,500 states × 4 actions), α 0.5, γ 0.95, "
-        f"ε 0.1; plain Python = same kernels, NUMBA_DISABLE_JIT=1, {budget} updates/step, "
-        f"{steps}-step episode (target >= 10 M/s)"
+        f"ε 0.1, each agent's default planning target; plain Python = same kernels, "
+        f"NUMBA_DISABLE_JIT=1, {budget} updates/step, {steps}-step episode"
     )
     for name in ARENA_AGENTS:
         plain = plain_arena_rate(name)
@@ -353,7 +374,12 @@ def print_arena_rates() -> None:
             f"{n} updates/step {rate / 1e6:6.2f} M/s ({rate / plain:6.0f} ×)"
             for n, rate in zip(ARENA_BUDGETS, rates, strict=True)
         )
-        print(f"  {name:24s} plain {plain / 1e3:6.1f} k/s; {figures}", flush=True)
+        note = expected_target_note(name, rates[ARENA_BUDGETS.index(1000)])
+        print(
+            f"  {name:24s} {default_planning_mode(name):13s} plain {plain / 1e3:6.1f} k/s; "
+            f"{figures}{note}",
+            flush=True,
+        )
     figures = []
     for n in ARENA_BUDGETS:
         rate, per_step = sweeping_planning_time_rate(n, ARENA_EPISODES[n])

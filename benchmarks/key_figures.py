@@ -1,5 +1,6 @@
 """The key ratios of ``make bench``: each compiled path's rate against its twin's (the same work
-as plain Python, or as a ``SyncVectorEnv`` of single envs), both measured in the same process,
+as plain Python, or as a ``SyncVectorEnv`` of single envs; for the expected planning update, the
+same planning loop with the most-probable target), both measured in the same process,
 one after the other, on one core. A ratio, not a time, is what is compared: both sides slow down
 alike on a loaded machine.
 
@@ -21,6 +22,7 @@ from typing import NamedTuple
 import bench_agents
 import bench_env
 import bench_mppi
+import bench_planning_targets
 import bench_sim
 import bench_training
 import bench_vector
@@ -105,6 +107,11 @@ FIGURES = {
     "dyna-q-planning": KeyFigure(
         "Dyna-Q planning kernel", "dict-based plain-Python Dyna-Q", "updates", 12.0,
         planning_rates,
+    ),
+    "expected-planning": KeyFigure(
+        "model-based planning loop, expected update (trajectory-prioritized, obstacles arena)",
+        "the same loop, most-probable update", "updates", 0.3,
+        bench_planning_targets.expected_and_most_probable,
     ),
     "fused-training": KeyFigure(
         "fused trainer, dyna-q, obstacles arena", "plain Python", "real steps", 10.0,

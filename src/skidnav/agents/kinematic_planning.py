@@ -31,7 +31,9 @@ from skidnav.models.kinematic_prediction import (
 )
 from skidnav.models.multinomial_kernels import MultinomialArrays, hash_find, split_key
 from skidnav.models.multinomial_targets import (
+    EXPECTED,
     MOST_PROBABLE,
+    expected_model_target,
     model_target_call,
     most_probable_target,
 )
@@ -213,7 +215,10 @@ def combined_planning(
     not in a known wall), other pairs are skipped. Written out over arrays bound once, with
     only helpers numba prunes the reference counting of (one exit each; see
     :mod:`skidnav.models.multinomial_kernels`): calling helpers that took the model and the planner
-    cost ~0.6 µs per update, 98 % of it."""
+    cost ~0.6 µs per update, 98 % of it. The most-probable and expected targets are inlined
+    (as a compiled call the expected one, the agents' default, made an update 3–11× slower:
+    docs/agents/fast-training.md); the sample target is the compiled call
+    :func:`model_target_call`."""
     n_pairs = model.counters[0]
     if n_pairs == 0:
         return 0
@@ -228,25 +233,29 @@ def combined_planning(
     updates = 0
     for _ in range(shares.n_steps):
         u = rng.random()
-        pair = -1
-        if u < share and (u < 0.5 * share or counters[N_NEIGHBOURS] == 0):
-            key = _next_sweep_key(trajectory_keys, counters, N_TRAJECTORY, TRAJECTORY_CURSOR)
-        elif u < share:
-            key = _next_sweep_key(neighbour_keys, counters, N_NEIGHBOURS, NEIGHBOUR_CURSOR)
-        else:
-            pair = int(rng.random() * n_pairs)
-            key = pair_key[pair]  # a visited pair: no need to look it up
-        state, action = split_key(key, n_actions)
-        if pair >= 0 and use_kinematic and (u - share) / (1.0 - share) < shares.kinematic_share:
-            state = pred_next[state, int(rng.random() * n_actions)]
-            action = int(rng.random() * n_actions)
-            key = state * n_actions + action  # a frontier pair, split without dividing
-            pair = -1
-        if pair < 0:
+        if u < share:  # the next key of a sweep list
+            if u < 0.5 * share or counters[N_NEIGHBOURS] == 0:
+                key = _next_sweep_key(trajectory_keys, counters, N_TRAJECTORY, TRAJECTORY_CURSOR)
+            else:
+                key = _next_sweep_key(neighbour_keys, counters, N_NEIGHBOURS, NEIGHBOUR_CURSOR)
             pair = hash_find(pair_table, pair_key, key)
+            state, action = split_key(key, n_actions)
+        elif use_kinematic and (u - share) / (1.0 - share) < shares.kinematic_share:  # frontier
+            origin, _ = split_key(pair_key[int(rng.random() * n_pairs)], n_actions)
+            state = pred_next[origin, int(rng.random() * n_actions)]
+            action = int(rng.random() * n_actions)
+            key = state * n_actions + action  # split without dividing
+            pair = hash_find(pair_table, pair_key, key)
+        else:  # replay of a visited pair: its slot is drawn, not looked up
+            pair = int(rng.random() * n_pairs)
+            key = pair_key[pair]
+            state, action = split_key(key, n_actions)
         if pair >= 0:
             if shares.mode == MOST_PROBABLE:
                 target = most_probable_target(q, model, pair, shares.gamma, rng.random())
+            elif shares.mode == EXPECTED:
+                rng.random()  # drawn, unused, as in every mode: one random stream for all modes
+                target = expected_model_target(q, model, pair, shares.gamma)
             else:
                 target = model_target_call(model, q, pair, shares.mode, shares.gamma, rng.random())
         elif use_kinematic and not walls_by_cell[state // grid.n_headings]:

@@ -183,6 +183,23 @@ def expected_target(
 
 
 @inline_jit
+def expected_model_target(
+    q: np.ndarray, model: MultinomialArrays, pair: int, gamma: float
+) -> float:
+    """:func:`expected_target` of ``pair`` read from the model's arrays: one path, every use of
+    the model's arrays on it, so that the model bound to it costs no reference counting in the
+    planning loops, as :func:`most_probable_target`. Through the compiled call
+    :func:`model_target_call` an expected update of
+    :func:`skidnav.agents.kinematic_planning.combined_planning` cost 120–160 ns more, against
+    ~7 ns for the target itself (trajectory-prioritized on the obstacles arena,
+    docs/agents/fast-training.md)."""
+    return expected_target(
+        q, model.pair_head, model.pair_total, model.entry_count, model.entry_reward_sum,
+        model.entry_terminal_count, model.entry_next_state, model.entry_sibling, pair, gamma,
+    )  # fmt: skip
+
+
+@inline_jit
 def model_target(
     model: MultinomialArrays,
     q: np.ndarray,

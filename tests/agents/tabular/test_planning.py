@@ -17,6 +17,7 @@ from skidnav.models.multinomial_targets import (
     EXPECTED,
     MOST_PROBABLE,
     SAMPLE,
+    expected_model_target,
     model_target,
     model_target_call,
     most_probable_target,
@@ -81,6 +82,8 @@ def test_the_compiled_call_and_the_inlined_target_equal_model_target(mode: int) 
             assert model_target_call(arrays, q, pair, mode, 0.9, uniform) == expected
             if mode == MOST_PROBABLE:
                 assert most_probable_target(q, arrays, pair, 0.9, uniform) == expected
+            if mode == EXPECTED:
+                assert expected_model_target(q, arrays, pair, 0.9) == expected
 
 
 def tie_expectation(arrays: Any, q: np.ndarray, pair: int) -> float:
