@@ -89,7 +89,8 @@ bench-compare: $(STAMP)
 # numba's on-disk cache does not notice edits to helpers inlined from another module:
 # after changing a kernel, clear it.
 clean-cache:
-	find src tests -name '*.nbi' -delete -o -name '*.nbc' -delete
+	find src tests -name "*.nbi" -delete -o -name "*.nbc" -delete
+	rm -rf "$${XDG_CACHE_HOME:-$$HOME/.cache}/skidnav/numba"
 
 clean: clean-cache
 	rm -rf $(VENV) runs site .pytest_cache .mypy_cache .ruff_cache

@@ -3,17 +3,60 @@
 Every compiled hot loop in skidnav is plain Python over NumPy arrays, decorated with :func:`jit`.
 With ``NUMBA_DISABLE_JIT=1`` in the environment numba leaves the functions as they are, so the
 same code runs interpreted and must give bit-identical results (the test suite checks it).
+
+The on-disk cache of compiled code is kept per version of the source: numba checks only the
+time stamp of the file of the function it loads, so a kernel whose callee, or a constant it
+froze, changed in another file would load its old machine code without a word. skidnav keeps
+the cache in ``NUMBA_CACHE_DIR`` (default ``$XDG_CACHE_HOME/skidnav/numba``, else
+``~/.cache/skidnav/numba``) under :func:`source_fingerprint`, so any change of any module
+compiles everything afresh once (``make clean-cache`` removes old versions).
 """
 
 from __future__ import annotations
 
+import hashlib
+import os
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, TypeVar
 
 import numba
 from numba.extending import overload
 
 F = TypeVar("F", bound=Callable[..., Any])
+PACKAGE = Path(__file__).resolve().parent
+"""The skidnav package's folder, whose modules :func:`source_fingerprint` reads."""
+
+
+def source_fingerprint(package: Path = PACKAGE) -> str:
+    """16 hex digits of the SHA-256 of every ``.py`` file under ``package`` (path relative to
+    it, then its bytes, in sorted path order): equal for equal sources wherever they lie."""
+    digest = hashlib.sha256()
+    for path in sorted(package.rglob("*.py")):
+        digest.update(path.relative_to(package).as_posix().encode() + b"\0")
+        digest.update(path.read_bytes() + b"\0")
+    return digest.hexdigest()[:16]
+
+
+def cache_folder(environment: dict[str, str], fingerprint: str) -> Path:
+    """Where numba caches the compiled code of the sources of ``fingerprint``: the folder of
+    that name under ``NUMBA_CACHE_DIR`` of ``environment`` (or that folder itself, as set for
+    a worker process by its parent), else under the user's cache folder."""
+    chosen = environment.get("NUMBA_CACHE_DIR")
+    if chosen:
+        return Path(chosen) if Path(chosen).name == fingerprint else Path(chosen) / fingerprint
+    base = environment.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "skidnav" / "numba" / fingerprint
+
+
+def _use_versioned_cache() -> None:
+    """Point numba's cache (this process's and its children's) at :func:`cache_folder`."""
+    folder = str(cache_folder(dict(os.environ), source_fingerprint()))
+    os.environ["NUMBA_CACHE_DIR"] = folder  # numba reads it again before each compilation
+    numba.config.CACHE_DIR = folder  # type: ignore[attr-defined]
+
+
+_use_versioned_cache()
 
 
 def jit(function: F) -> F:
