@@ -156,6 +156,22 @@ def test_the_section_says_plainly_where_no_difference_was_measured() -> None:
     assert learning_value_section(_summaries(), nothing) == ""
 
 
+def test_the_kaplan_meier_medians_count_the_runs_that_never_got_there() -> None:
+    summaries = _summaries()
+    summaries["driving_seconds"] = 1000.0
+    prior = summaries["agent"] == "dyna-full[kinematic_model=prior]"
+    summaries.loc[prior & (summaries["seed"] < 7), "seconds_to_success90"] = math.nan
+    text = learning_value_section(summaries, CONFIG)
+    row = text[text.index("driving to ≥ 90 % greedy success, Kaplan–Meier median [s]") :]
+    cells = [cell.split("<")[0] for cell in row.split("<td>")[1:6]]
+    learned, prior_cell = cells[0], cells[1]
+    assert prior_cell.startswith("∞")  # 7 of 12 never got there: more than half
+    assert not learned.startswith("∞") and cells[3:] == ["–", "–"]
+    assert "5/12 reached" in text  # the mean over the runs that got there hides the seven
+    del summaries["driving_seconds"]
+    assert "Kaplan–Meier" not in learning_value_section(summaries, CONFIG).split("</p>", 1)[1]
+
+
 def test_the_reduced_value_configs_run_the_first_worlds_of_the_full_ones() -> None:
     configs = Path(__file__).resolve().parents[2] / "configs"
     for name in ("kinematic-value-seconds", "kinematic-value-seconds-mppi"):

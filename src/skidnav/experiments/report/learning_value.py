@@ -15,7 +15,9 @@ success and to sustained greedy success (≥ 90 % of the evaluation rollouts, fr
 same in episodes, the success rate and the collisions per episode. A time is censored (NaN) in a
 run that never got there: an arm's mean is over the runs that got there (their count shown), a
 difference over the worlds where both arms did. Wherever the interval of learned − prior contains
-0, the text says so plainly: no difference measured.
+0, the text says so plainly: no difference measured. The driving times are also given as
+each arm's Kaplan–Meier median over all its runs (:data:`SURVIVAL_METRICS`), which counts the
+runs that never got there.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from skidnav.experiments.report.analysis import cells, paired_difference, stats_
 from skidnav.experiments.report.page import interval_text, table
 from skidnav.statistics.formatting import plural
 from skidnav.statistics.intervals import Interval, bootstrap_interval, rowwise_mean
+from skidnav.statistics.survival import median_interval
 
 MODELS = ("learned", "prior", "true")
 """The arms of a kinematic-model comparison, in table order."""
@@ -50,6 +53,14 @@ VALUE_METRICS = {
 
 CENSORED = frozenset(key for key in VALUE_METRICS if "_to_" in key)
 """The times among :data:`VALUE_METRICS`: NaN where the run never got there."""
+
+SURVIVAL_METRICS = {
+    "seconds_to_first_success": "driving to the first success, Kaplan–Meier median [s]",
+    "seconds_to_success90": "driving to ≥ 90 % greedy success, Kaplan–Meier median [s]",
+}
+"""The driving times also given as Kaplan–Meier medians over all of an arm's runs, a run that
+never got there censored at its whole driving time (``driving_seconds``): unlike the means over
+the runs that got there, they count the runs that did not (∞: more than half never did)."""
 
 
 class ModelArms(NamedTuple):
@@ -191,7 +202,9 @@ def learning_value_section(summaries: pd.DataFrame, config: ExperimentConfig) ->
         "to the first episode from which every greedy evaluation had ≥ 90 % of its rollouts "
         f"reach the goal (at least {config.convergence_window} evaluations of evidence). A "
         "run that never got there is censored: left out of its arm's mean, and of the "
-        "differences, which are over the worlds where both arms got there.</p>",
+        "differences, which are over the worlds where both arms got there; the Kaplan–Meier "
+        "medians count it, censored at its whole driving time (∞: more than half of the "
+        "runs never got there).</p>",
     ]
     for (map_label, preset, agent), rows in values.groupby(["map", "preset", "agent"], sort=False):
         arms = next(arms for arms in arms_list if arms.name == agent)
@@ -224,4 +237,26 @@ def _cell_frame(
         for _, row in mine.iterrows():
             record[str(row["comparison"])] = _difference_cell(row)
         records.append(record)
-    return pd.DataFrame.from_records(records)
+        if metric in SURVIVAL_METRICS and "driving_seconds" in cell.columns:
+            survival = {"metric": SURVIVAL_METRICS[metric]}
+            for model in MODELS:
+                if model in arms.labels:
+                    survival[model] = _survival_cell(
+                        cell, arms.labels[model], metric, config, *labels
+                    )
+            records.append(survival)
+    return pd.DataFrame.from_records(records).fillna("–")  # no paired difference of medians
+
+
+def _survival_cell(
+    rows: pd.DataFrame, label: str, metric: str, config: ExperimentConfig, *cell: str
+) -> str:
+    """An arm's Kaplan–Meier median of the driving time ``metric`` with its bootstrap interval
+    over its runs (:data:`SURVIVAL_METRICS`); the generator keyed by the ``cell``."""
+    runs = rows[rows["agent"] == label]
+    reached = runs[metric].notna().to_numpy()
+    times = np.where(reached, runs[metric], runs["driving_seconds"]).astype(np.float64)
+    rng = stats_rng(config, *cell, label, metric, "model arm survival")
+    median = median_interval(times, reached, rng, n_resamples=config.bootstrap_samples,
+                             confidence=config.confidence)  # fmt: skip
+    return interval_text(median.estimate, median.low, median.high)
