@@ -12,9 +12,10 @@ worlds and evaluation seeds), mean over worlds with the report's bootstrap inter
 
 Metrics (summary columns, :mod:`skidnav.experiments.metrics`): seconds of driving to the first
 success and to sustained greedy success (≥ 90 % of the evaluation rollouts, from then on), the
-same in episodes, the success rate and the collisions per episode. A time is censored (NaN) in a
-run that never got there: an arm's mean is over the runs that got there (their count shown), a
-difference over the worlds where both arms did. Wherever the interval of learned − prior contains
+same in episodes, the success rate, the driving over all the training episodes and the
+collisions per episode. A time is censored (NaN) in a run that never got there: an arm's mean
+is over the runs that got there (their count shown), a difference over the worlds where both
+arms did. Wherever the interval of learned − prior contains
 0, the text says so plainly: no difference measured. The driving times are also given as
 each arm's Kaplan–Meier median over all its runs (:data:`SURVIVAL_METRICS`), which counts the
 runs that never got there.
@@ -47,6 +48,7 @@ VALUE_METRICS = {
     "episodes_to_first_success": "episodes to the first success",
     "episodes_to_success90": "episodes to ≥ 90 % greedy success, sustained",
     "success_rate": "success rate (all episodes)",
+    "driving_seconds": "driving over all episodes [s]",
     "collisions_per_episode": "collisions per episode",
 }
 """Summary columns compared, with their display names."""
