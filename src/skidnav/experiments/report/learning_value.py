@@ -15,10 +15,9 @@ success and to sustained greedy success (≥ 90 % of the evaluation rollouts, fr
 same in episodes, the success rate, the driving over all the training episodes and the
 collisions per episode. A time is censored (NaN) in a run that never got there: an arm's mean
 is over the runs that got there (their count shown), a difference over the worlds where both
-arms did. Wherever the interval of learned − prior contains
-0, the text says so plainly: no difference measured. The driving times are also given as
-each arm's Kaplan–Meier median over all its runs (:data:`SURVIVAL_METRICS`), which counts the
-runs that never got there.
+arms did. Wherever the interval of learned − prior contains 0, the text says so plainly: no
+difference measured. The driving times are also given as each arm's Kaplan–Meier median over
+all its runs (:data:`SURVIVAL_METRICS`), which counts the runs that never got there.
 """
 
 from __future__ import annotations
