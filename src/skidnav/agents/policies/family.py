@@ -119,6 +119,5 @@ FAMILY: Family[Any] = Family(
     save_formats=(TANH_FORMAT, GOAL_TRACKER_FORMAT),
     load=_load,
     policy=_policy,
-    documentation={POLICY_NAME: "cmaes"},
 )
 """The policy family (:class:`~skidnav.agents.family.Family`)."""
