@@ -29,6 +29,7 @@ from skidnav.studies.sutton_barto.results import (
     sweeping_updates,
 )
 from skidnav.studies.sutton_barto.trial import cumulative_reward, episodes_of
+from tests.cli_support import exit_code
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 SMALL = 'kind = "sutton-barto-checks"\nruns = 10\n'
@@ -41,14 +42,6 @@ blocking maze in about half of the runs."""
 TINY = 'kind = "sutton-barto-checks"\nruns = 2\nplanning_steps = [5]\nscales = [1]\n'
 """Every example, 2 runs: 7 checks × 2 runs."""
 SHORTCUT = ["study", "reproduce", "sutton-barto", "--runs", "2", "--no-progress"]
-
-
-def exit_code(argv: list[str]) -> int:
-    """``main``'s exit code, argparse's exits included."""
-    try:
-        return main(argv)
-    except SystemExit as exit_:
-        return int(exit_.code or 0)
 
 
 def run_config(text: str, folder: Path, *options: str) -> Path:

@@ -16,6 +16,7 @@ from skidnav.experiments.store import ResultStore
 from skidnav.studies.kinematic_models.curve import PLATEAU_RATIO, plateau_seconds
 from skidnav.studies.kinematic_models.curve_grid import LAYOUT, KinematicCurve
 from skidnav.studies.kinematic_models.curve_table import markdown_table, report_section
+from tests.cli_support import exit_code
 
 TINY = """kind = "kinematic-curve"
 floors = ["thesis", "rough-physics"]
@@ -23,14 +24,6 @@ seeds = 2
 driving_seconds = [1, 5, 10]
 test_seconds = 5
 """
-
-
-def exit_code(argv: list[str]) -> int:
-    """``main``'s exit code, argparse's exits included."""
-    try:
-        return main(argv)
-    except SystemExit as exit_:
-        return int(exit_.code or 0)
 
 
 @pytest.fixture(scope="module")

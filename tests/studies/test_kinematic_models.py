@@ -14,6 +14,7 @@ from skidnav.cli import main
 from skidnav.experiments.store import ResultStore
 from skidnav.studies.kinematic_models.grid import LAYOUT, ModelComparison
 from skidnav.studies.kinematic_models.table import report_section, table_rows, text_table
+from tests.cli_support import exit_code
 
 TINY = """kind = "kinematic-models"
 seeds = 2
@@ -34,14 +35,6 @@ gp     yaw_rate      286.26 [47.86, 524.66]     0.530 [0.513, 0.547]    672.25 [
 the fit-time column (a wall time)."""
 NOT_MEASURED = "fit_seconds"
 """The one summary column that differs between two runs of the same config (a wall time)."""
-
-
-def exit_code(argv: list[str]) -> int:
-    """``main``'s exit code, argparse's exits included."""
-    try:
-        return main(argv)
-    except SystemExit as exit_:
-        return int(exit_.code or 0)
 
 
 @pytest.fixture(scope="module")

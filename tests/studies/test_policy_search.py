@@ -17,6 +17,7 @@ from skidnav.experiments.store import ResultStore
 from skidnav.studies.policy_search.export import export_search
 from skidnav.studies.policy_search.grid import LAYOUT
 from skidnav.studies.policy_search.report import report_section
+from tests.cli_support import exit_code
 
 SEARCH = """
 [search]
@@ -38,14 +39,6 @@ SHORTCUT = [
 """The same search as ``TINY``'s ``[search]`` on one preset and seed."""
 CLOCK = "wall_time"
 """The one column that differs between two runs of the same config."""
-
-
-def exit_code(argv: list[str]) -> int:
-    """``main``'s exit code, argparse's exits included."""
-    try:
-        return main(argv)
-    except SystemExit as exit_:
-        return int(exit_.code or 0)
 
 
 @pytest.fixture(scope="module")

@@ -14,19 +14,12 @@ import pytest
 from skidnav.agents.policies.search.curve import GenerationRecord
 from skidnav.agents.policies.search.policy_file import load_policy
 from skidnav.cli import main
+from tests.cli_support import exit_code
 
 TINY = [
     "study", "search", "--map", "free", "--world-seed", "3", "--max-steps", "20", "--hidden", "2",
     "--population", "6", "--generations", "2", "--episodes", "1", "--eval-episodes", "2",
 ]  # fmt: skip
-
-
-def exit_code(argv: list[str]) -> int:
-    """``main``'s exit code, argparse's exits included."""
-    try:
-        return main(argv)
-    except SystemExit as exit:
-        return int(exit.code or 0)
 
 
 def curve(out: Path) -> list[dict[str, str]]:
