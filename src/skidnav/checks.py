@@ -68,3 +68,17 @@ def check_magnitude(name: str, values: np.ndarray, bound: float) -> None:
         raise ValueError(
             f"array {name!r} holds a value that is NaN or not below {bound:g} in magnitude"
         )
+
+
+def check_names(name: str, values: object, known: tuple[str, ...]) -> None:
+    """ValueError ``"expected NAME to be distinct names among …, got …"`` unless ``values`` is a
+    non-empty tuple of distinct members of ``known``."""
+    if (
+        isinstance(values, tuple)
+        and values
+        and len(set(values)) == len(values)
+        and all(isinstance(value, str) and value in known for value in values)
+    ):
+        return
+    got = shown(list(values) if isinstance(values, tuple) else values)
+    raise ValueError(f"expected {name} to be distinct names among {', '.join(known)}, got {got}")

@@ -31,7 +31,7 @@ from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
-from skidnav.checks import check_integer, check_number
+from skidnav.checks import check_integer, check_names, check_number
 from skidnav.errors import shown
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.experiments.store import RunLayout
@@ -82,8 +82,8 @@ class KinematicCurve:
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name):
             raise ValueError(f"expected name to be a non-empty string, got {shown(self.name)}")
-        _check_names("floors", self.floors, tuple(SLIP_PRESETS))
-        _check_names("dynamics", self.dynamics, DYNAMICS)
+        check_names("floors", self.floors, tuple(SLIP_PRESETS))
+        check_names("dynamics", self.dynamics, DYNAMICS)
         check_integer("seeds", self.seeds, 1, MAX_SEEDS)
         seconds = self.driving_seconds
         if not (isinstance(seconds, tuple) and seconds):
@@ -138,20 +138,6 @@ class KinematicCurve:
         """SHA-256 of the canonical JSON of :func:`curve_to_dict`."""
         text = json.dumps(curve_to_dict(self), sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()
-
-
-def _check_names(key: str, names: object, known: tuple[str, ...]) -> None:
-    """ValueError unless ``names`` is a non-empty tuple of distinct members of ``known``."""
-    if not (
-        isinstance(names, tuple)
-        and names
-        and len(set(names)) == len(names)
-        and all(isinstance(name, str) and name in known for name in names)
-    ):
-        raise ValueError(
-            f"expected {key} to be distinct names among {', '.join(known)}, got "
-            f"{shown(list(names) if isinstance(names, tuple) else names)}"
-        )
 
 
 def curve_to_dict(curve: KinematicCurve) -> dict[str, Any]:

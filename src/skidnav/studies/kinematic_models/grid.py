@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from skidnav.checks import check_integer, check_number
+from skidnav.checks import check_integer, check_names, check_number
 from skidnav.errors import shown
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.experiments.store import RunLayout
@@ -94,17 +94,7 @@ class ModelComparison:
     def __post_init__(self) -> None:
         if not (isinstance(self.name, str) and self.name):
             raise ValueError(f"expected name to be a non-empty string, got {shown(self.name)}")
-        models = self.models
-        if not (
-            isinstance(models, tuple)
-            and models
-            and len(set(models)) == len(models)
-            and all(isinstance(model, str) and model in MODELS for model in models)
-        ):
-            raise ValueError(
-                f"expected models to be distinct names among {', '.join(MODELS)}, got "
-                f"{shown(list(models) if isinstance(models, tuple) else models)}"
-            )
+        check_names("models", self.models, MODELS)
         check_integer("seeds", self.seeds, 1, MAX_SEEDS)
         check_integer("samples", self.samples, MIN_SAMPLES, MAX_SAMPLES)
         if self.slip not in SLIP_PRESETS:
