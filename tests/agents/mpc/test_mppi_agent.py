@@ -130,7 +130,8 @@ def test_the_frozen_policy_is_a_wheel_speed_policy_on_features_and_poses() -> No
     policy = agent.policy(seed=4)
     assert isinstance(policy, WheelSpeedPolicy)
     pose = np.array([0.15, 0.25, 0.3])
-    features = np.concatenate([[0.15, 0.25, np.cos(0.3), np.sin(0.3)], np.zeros(3 + 8)])
+    clear = np.full(agent.lidar_rays, agent.lidar_range)  # every ray at its limit: no wall
+    features = np.concatenate([[0.15, 0.25, np.cos(0.3), np.sin(0.3)], np.zeros(3), clear])
     from_pose = policy.wheel_speeds(pose)
     policy.reset()
     policy.planner.rng = np.random.default_rng(4)
@@ -138,7 +139,7 @@ def test_the_frozen_policy_is_a_wheel_speed_policy_on_features_and_poses() -> No
     assert all(abs(w) <= 1.7 for w in from_pose)
     agent.evidence.hits[6, 5] = 5  # later learning does not reach a frozen policy
     agent.evidence.reweigh(agent.dynamics.mean)
-    assert not policy.cost_map.blocked[6, 5]
+    assert not policy.evidence.cost_map.blocked[6, 5]
     rollout = greedy_run(agent, SealedEnv(env), 5, seed=0)
     assert rollout.length == -1  # five actions do not reach the goal
 

@@ -8,6 +8,7 @@ import numpy as np
 
 from skidnav.agents.mpc.laser import record_rays
 from skidnav.agents.mpc.training import train_mppi
+from skidnav.agents.training import greedy_run
 from skidnav.sim.lidar import lidar_ranges
 from skidnav.world.discretization import Discretization
 from tests.agents.mpc.support import WALL_BETWEEN, SealedEnv, agent_for, nav_env
@@ -84,3 +85,24 @@ def test_crossing_rays_undo_a_wrong_collision_guess() -> None:
         observation = next_observation
     assert agent.evidence.ray_crossings[3, 5] >= 4
     assert not agent.evidence.cost_map.blocked[3, 5]
+
+
+def test_a_frozen_planner_sees_walls_it_never_learned_and_forgets_them_after_a_rollout() -> None:
+    """A planner frozen before any episode (the true model, an empty map) marks the wall from
+    its lidar during its rollout and drives around it to the goal, while the agent's own map
+    stays empty; the next rollout starts again from the frozen map. Over poses, with no
+    readings, the frozen map stays empty and the rollout runs into the wall until it ends."""
+    env = nav_env(WALL_BETWEEN, observation="features")
+    agent = agent_for(env, seed=0, true=True)
+    rollout = greedy_run(agent, SealedEnv(env), 600, seed=0)
+    assert rollout.length > 0  # reached the goal behind the wall
+    assert agent.evidence.ray_ends.sum() == 0 and agent.steps == 0  # nothing learned
+    policy = agent.policy(seed=0)
+    observation, _ = env.reset(seed=0)
+    policy.wheel_speeds(observation)
+    assert policy.evidence.ray_ends.sum() > 0
+    policy.reset()
+    assert policy.evidence.ray_ends.sum() == 0 and policy.evidence.ray_crossings.sum() == 0
+    blind = nav_env(WALL_BETWEEN, observation="pose")
+    blind_agent = agent_for(blind, seed=0, true=True)
+    assert greedy_run(blind_agent, SealedEnv(blind), 600, seed=0).length == -1

@@ -17,11 +17,14 @@ kinematic log to the model (refitted on its schedule, then the sampled dynamics 
 path and collision and the lidar readings of the observations to the map evidence (the
 cost-to-go recomputed when the map changed);
 :meth:`MPPIKinematicAgent.end_episode` forgets the plan. :meth:`MPPIKinematicAgent.policy` hands
-out a frozen copy, a :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`.
+out a frozen copy, a :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`: its model and what
+it knew of the map stay as they were, but within a rollout it still marks what its lidar reads
+(forgotten at the next rollout), as a navigator that does not learn still sees.
 """
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 from collections.abc import Mapping
@@ -32,7 +35,7 @@ import numpy as np
 
 from skidnav.agents.geometry import geometry_json
 from skidnav.agents.mpc.config import MPPIConfig
-from skidnav.agents.mpc.costmap import CostMap, MapCosts
+from skidnav.agents.mpc.costmap import MapCosts
 from skidnav.agents.mpc.dynamics import (
     SampledDynamics,
     fixed_dynamics,
@@ -328,25 +331,34 @@ class MPPIPolicy:
         self.control_period = agent.robot.action_duration
         """The duration [s] of one action it plans with: a run must hold each command as long."""
         self.dynamics = SampledDynamics(*(np.copy(array) for array in agent.dynamics))
-        self.cost_map = CostMap(*(np.copy(array) for array in agent.evidence.cost_map))
+        self._frozen_evidence = copy.deepcopy(agent.evidence)
+        self.evidence = copy.deepcopy(self._frozen_evidence)
+        """The map it plans on: the agent's as frozen, plus what its lidar has read since the
+        rollout started (:meth:`wheel_speeds`)."""
         self.costs = agent.costs
         self.planner = MPPIPlanner(
             agent.config, agent.kernel_robot, agent.kernel_grid, np.random.default_rng(seed)
         )
 
     def wheel_speeds(self, observation: np.ndarray) -> tuple[float, float]:
-        """(ω_L, ω_R) [rad/s] for a pose (3,) or feature observation (7 + k,)."""
+        """(ω_L, ω_R) [rad/s] for a pose (3,) or feature observation (7 + k,). The lidar
+        readings of a feature observation go into the rollout's map first, as the agent's own
+        steps put them into its map: a navigator sees the walls in front of it whether or not
+        it learns (the model stays frozen, and :meth:`reset` forgets the readings)."""
         pose = pose_of(observation, self.lidar_rays)
-        return self.planner.step(pose, self.dynamics, self.cost_map, self.costs)
+        ranges = ranges_of(observation, self.lidar_rays)
+        self.evidence.record_readings(pose, ranges, self.lidar_range, self.dynamics)
+        return self.planner.step(pose, self.dynamics, self.evidence.cost_map, self.costs)
 
     def reset(self) -> None:
-        """Forget the plan."""
+        """Forget the plan and what the lidar read since the policy was frozen."""
         self.planner.reset()
+        self.evidence = copy.deepcopy(self._frozen_evidence)
 
     def start_greedy_rollout(self) -> None:
-        """A rollout (an episode) starts: forget the plan
+        """A rollout (an episode) starts: :meth:`reset`
         (:class:`~skidnav.agents.training.RolloutState`)."""
-        self.planner.reset()
+        self.reset()
 
 
 def map_costs(config: MPPIConfig, robot: RobotParams, goal: tuple[int, int]) -> MapCosts:
