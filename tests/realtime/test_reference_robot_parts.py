@@ -28,7 +28,7 @@ from tests.realtime.test_link_auth import documented_example
 
 PACKAGE = Path(__file__).resolve().parents[2] / "src/skidnav/realtime/reference_robot"
 PORTABLE_IMPORTS = {"json", "time", "hashlib", "binascii", "math", "select", "socket", "sys", "os"}
-CPYTHON_ONLY = {"cli.py", "__main__.py", "serial_port.py"}
+CPYTHON_ONLY = {"cli.py", "__main__.py", "serial_port.py", "secret_file.py"}
 """The adapters and the command line, which a board does not run."""
 
 

@@ -16,6 +16,7 @@ Portable modules (only ``json``, ``time``, ``hashlib``, ``binascii``, ``math``, 
   :mod:`.simulated_base` (skid-steer kinematics in plain ``math``), :mod:`.tcp` (a TCP
   listener).
 
-CPython only: :mod:`.serial_port` (pyserial), :mod:`.cli` and ``__main__`` (``python -m
-skidnav.realtime.reference_robot --tcp 127.0.0.1:5757``).
+CPython only: :mod:`.serial_port` (pyserial), :mod:`.secret_file` (the link secret from a
+file or the environment, which skidnav's host reads with it too), :mod:`.cli` and
+``__main__`` (``python -m skidnav.realtime.reference_robot --tcp 127.0.0.1:5757``).
 """

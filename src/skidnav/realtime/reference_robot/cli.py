@@ -12,7 +12,6 @@ import argparse
 import ipaddress
 import json
 import math
-import os
 import signal
 import sys
 import time
@@ -21,38 +20,14 @@ from types import FrameType
 from typing import Any, NoReturn
 
 from skidnav.errors import UserError
-from skidnav.files.user import read_limited
-from skidnav.realtime.reference_robot.authentication import MIN_SECRET_BYTES
 from skidnav.realtime.reference_robot.interfaces import Transport
 from skidnav.realtime.reference_robot.loop import run
+from skidnav.realtime.reference_robot.rules import MAX_LEASE_LIMIT
+from skidnav.realtime.reference_robot.secret_file import load_secret
 from skidnav.realtime.reference_robot.simulated_base import SimulatedBase
 from skidnav.realtime.reference_robot.tcp import TcpTransport
 
 PROG = "reference-robot"
-MAX_LEASE_LIMIT = 5.0
-"""Largest lease the robot may grant [s] (docs/protocol.md)."""
-SECRET_ENV = "SKIDNAV_LINK_SECRET"
-"""Where the secret comes from without ``--secret-file``, as for skidnav's host."""
-
-
-def load_secret(path: str | None) -> bytes | None:
-    """The link secret as skidnav's host reads it (docs/protocol.md, "Authentication"): the
-    file ``path``, else :data:`SECRET_ENV`, else None; trailing whitespace is not part of it.
-    UserError in one line that never shows the secret. (The host's own reader lives in the
-    link layer, which imports this package's clock: the robot does not import it back.)"""
-    if path is not None:
-        where, raw = path, read_limited(path, 4096, "secret file", UserError)
-    elif os.environ.get(SECRET_ENV):
-        where, raw = SECRET_ENV, os.environ[SECRET_ENV].encode("utf-8", "surrogateescape")
-    else:
-        return None
-    secret = raw.rstrip()
-    if len(secret) < MIN_SECRET_BYTES:
-        raise UserError(
-            f"{where}: expected a link secret of at least {MIN_SECRET_BYTES} bytes, "
-            f"got {len(secret)}"
-        )
-    return secret
 
 
 class _Parser(argparse.ArgumentParser):

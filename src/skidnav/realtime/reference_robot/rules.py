@@ -29,6 +29,9 @@ while the robot is stalled.
 
 from .host_clock import HostClock
 
+MAX_LEASE_LIMIT = 5.0
+"""Largest lease a robot can be configured to grant [s wall]: however it is set, no command
+keeps the wheels turning longer than this after it arrived."""
 TYPE_CHECKING = False  # MicroPython has no typing module: its names are for the type checker
 if TYPE_CHECKING:
     from typing import Any
