@@ -73,7 +73,7 @@ class BarnWorld(NamedTuple):
     """One BARN world in the arena frame (SI units).
 
     Attributes:
-        index: the world's number, 0 … 299.
+        number: the world's number, 0 … 299.
         map: the map file: grid, cell size, start pose, goal point and radius, reference cells.
         discretization: the map's cells and arena (20 heading bins, 7 × 7 slip regions).
         start_pose: (x [m], y [m], heading [rad]).
@@ -83,7 +83,7 @@ class BarnWorld(NamedTuple):
         optimal_time: OT [s], the reference path's length over :data:`REFERENCE_SPEED`.
     """
 
-    index: int
+    number: int
     map: MapFile
     discretization: Discretization
     start_pose: tuple[float, float, float]
@@ -188,7 +188,7 @@ def barn_world(index: int, document: MapFile) -> BarnWorld:
         raise MapFileError(f"BARN world {index}: expected a map with start, goal and path")
     path = gazebo_reference_path(document.path)
     return BarnWorld(
-        index=index,
+        number=index,
         map=document,
         discretization=document.discretization(),
         start_pose=document.start_pose,
