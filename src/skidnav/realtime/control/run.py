@@ -26,6 +26,7 @@ from skidnav.envs.step_info import step_info
 from skidnav.errors import UserError, first_line, shown
 from skidnav.files.atomic import write_user_file
 from skidnav.files.outputs import make_output_dir
+from skidnav.realtime.agent_file import RunWorld, SavedPilot, check_loaded, open_agent_file
 from skidnav.realtime.arena import arena_map, seed_streams
 from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
 from skidnav.realtime.control.checkpoint import Checkpoints
@@ -45,7 +46,7 @@ from skidnav.world.grid import GridMap
 @dataclass(frozen=True)
 class RobotRunSettings:
     """What a real-time run is asked for (``skidnav robot run``, docs/realtime.md), validated on
-    construction: exactly one pilot (``agent``, ``policy`` or ``policy_file``).
+    construction: exactly one pilot (``agent``, ``policy``, ``policy_file`` or ``agent_file``).
 
     Attributes:
         out: the output directory (run log, checkpoints, summary).
@@ -53,6 +54,8 @@ class RobotRunSettings:
         agent: a tabular agent that learns online, by registry name; None with a policy.
         policy: a named continuous policy (frozen: it does not learn), or None.
         policy_file: a saved continuous policy (its JSON file), or None.
+        agent_file: a saved agent of any family (:mod:`skidnav.realtime.agent_file`): a
+            tabular agent or ``mppi-kinematic`` keeps learning, the others act frozen; or None.
         config: the real-time TOML config (None: the defaults).
         preset: a ``[presets.NAME]`` table of the config to apply, or None.
         episodes: episodes to run, overriding ``[run] episodes`` (None: the config's).
@@ -67,6 +70,7 @@ class RobotRunSettings:
     agent: str | None = None
     policy: str | None = None
     policy_file: Path | None = None
+    agent_file: Path | None = None
     config: Path | None = None
     preset: str | None = None
     episodes: int | None = None
@@ -75,10 +79,13 @@ class RobotRunSettings:
     resume: bool = False
 
     def __post_init__(self) -> None:
-        pilots = [p for p in (self.agent, self.policy, self.policy_file) if p is not None]
+        pilots = [
+            p for p in (self.agent, self.policy, self.policy_file, self.agent_file) if p is not None
+        ]
         if len(pilots) != 1:
             raise ValueError(
-                f"expected exactly one of agent, policy and policy_file, got {len(pilots)}"
+                "expected exactly one of agent, policy, policy_file and agent_file, got "
+                f"{len(pilots)}"
             )
         if self.driver not in DRIVERS:
             raise ValueError(
@@ -120,9 +127,12 @@ def _make_or_resume_agent(
     settings: RobotRunSettings,
     config: RealtimeConfig,
     context: dict[str, Any],
-    grid: Discretization,
+    world: RunWorld,
+    saved: SavedPilot | None = None,
 ) -> tuple[Any, int, dict[str, Any] | None]:
-    """(agent ``name``, first episode, loop state to restore or None)."""
+    """(agent ``name``, first episode, loop state to restore or None): from the newest
+    checkpoint when resuming, else the ``saved`` agent (``--agent-file``, checked against the
+    run's ``world``) or a new one."""
     from skidnav.agents.tabular.registry import load_agent
 
     if settings.resume:
@@ -138,7 +148,11 @@ def _make_or_resume_agent(
         if agent.name != name:
             raise UserError(f"{directory}: checkpoint holds agent {agent.name!r}, not {name!r}")
         return agent, episode + 1, state
-    agent = new_agent(name, config, context, grid, seed_streams(config.run.seed)["agent"])
+    if saved is not None:
+        agent = load_agent(saved.json_path.with_suffix(""), **context)
+        check_loaded(agent, saved.json_path, world)
+        return agent, 0, None
+    agent = new_agent(name, config, context, world.grid, seed_streams(config.run.seed)["agent"])
     return agent, 0, None
 
 
@@ -213,18 +227,8 @@ def run_robot(
     require_driver_extras(settings.driver, config)
     robot, grid = RobotParams(), Discretization()
     grid_map = arena_map(config.run.map, config.run.seed, grid)
-    policy_name: str | None = None
-    if settings.agent is None:
-        pilot, policy_name = select_policy(settings.policy, settings.policy_file, config, robot)
-        action_duration = config.run.period * config.run.substeps
-        check_policy(pilot, policy_name, grid_map, grid, action_duration)
-        first_episode, state = _resume_policy(settings, policy_name)
-    else:
-        context = agent_context(settings.agent, robot, grid)
-        pilot, first_episode, state = _make_or_resume_agent(
-            settings.agent, settings, config, context, grid
-        )
-        warm_up_agent(settings.agent, config, context, grid.n_states)
+    world = RunWorld(robot, grid, config.run.period * config.run.substeps, grid_map)
+    pilot, first_episode, state, policy_name = _pilot(settings, config, world)
     out = make_output_dir(settings.out)  # a refused resume has written nothing
     code, loop = drive(
         settings.driver,
@@ -240,6 +244,37 @@ def run_robot(
         policy_name=policy_name,
     )
     return code, _summarize(loop, out, code)
+
+
+def _pilot(
+    settings: RobotRunSettings, config: RealtimeConfig, world: RunWorld
+) -> tuple[Any, int, dict[str, Any] | None, str | None]:
+    """(pilot, first episode, loop state to restore or None, policy label or None) of the run:
+    an agent that learns online (by name or ``--agent-file``), warmed up, or a frozen policy
+    (by name, ``--policy-file``, or ``--agent-file`` of a family that does not learn here),
+    asked once at the start."""
+    name, saved = settings.agent, None
+    if settings.agent_file is not None:
+        saved = open_agent_file(settings.agent_file, world)
+        if saved.family == "mpc":
+            raise UserError(
+                f"{saved.json_path}: mppi-kinematic does not learn on the robot yet (run its "
+                "frozen planner with --policy-file)"
+            )
+        if saved.learns:
+            name = saved.name
+    if name is None:
+        policy_file = saved.json_path if saved is not None else settings.policy_file
+        pilot, policy_name = select_policy(settings.policy, policy_file, config, world.robot)
+        check_policy(pilot, policy_name, world.grid_map, world.grid, world.action_duration)
+        first_episode, state = _resume_policy(settings, policy_name)
+        return pilot, first_episode, state, policy_name
+    context = agent_context(name, world.robot, world.grid)
+    agent, first_episode, state = _make_or_resume_agent(
+        name, settings, config, context, world, saved
+    )
+    warm_up_agent(name, config, context, world.grid.n_states)
+    return agent, first_episode, state, None
 
 
 def _resume_policy(settings: RobotRunSettings, label: str) -> tuple[int, dict[str, Any] | None]:
