@@ -22,6 +22,9 @@ from typing import Any
 
 import numpy as np
 
+from skidnav.agents.mpc.agent import AGENT_NAME as MPPI_AGENT
+from skidnav.agents.mpc.agent import MPPIKinematicAgent
+from skidnav.agents.mpc.loading import load_mppi_agent
 from skidnav.envs.step_info import step_info
 from skidnav.errors import UserError, first_line, shown
 from skidnav.files.atomic import write_user_file
@@ -32,6 +35,8 @@ from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
 from skidnav.realtime.control.checkpoint import Checkpoints
 from skidnav.realtime.control.episodes import EpisodeLoop
 from skidnav.realtime.control.loop import RealtimeLoop
+from skidnav.realtime.control.mppi_agent import new_mppi_agent, warm_up_mppi
+from skidnav.realtime.control.mppi_loop import MPPILoop
 from skidnav.realtime.control.policy_loop import PolicyLoop
 from skidnav.realtime.control.transition import compile_scoring
 from skidnav.realtime.drivers import DRIVERS, make_driver, require_driver_extras
@@ -94,14 +99,15 @@ class RobotRunSettings:
 
 
 def online_agent_class(name: str) -> type[Any]:
-    """The class of agent ``name`` if it learns online on the robot (the tabular family, the
-    one whose agents the real-time loop trains step by step); UserError in one line naming
-    those agents otherwise, or for an unknown name."""
+    """The class of agent ``name`` if it learns online on the robot (the tabular family, whose
+    agents the real-time loop trains step by step, and ``mppi-kinematic``, which learns off the
+    control path: :mod:`.mppi_loop`); UserError in one line naming those agents otherwise, or
+    for an unknown name."""
     from skidnav.agents.catalog import entry, family
 
     described = entry(name)
-    if described.family.name != "tabular":
-        online = ", ".join(family("tabular").agents)
+    if described.family.name != "tabular" and name != MPPI_AGENT:
+        online = ", ".join((*family("tabular").agents, MPPI_AGENT))
         raise UserError(
             f"agent {name!r} ({described.family.name} family) does not learn online on the "
             f"robot: expected one of {online} (a saved wheel-speed policy runs with "
@@ -256,11 +262,6 @@ def _pilot(
     name, saved = settings.agent, None
     if settings.agent_file is not None:
         saved = open_agent_file(settings.agent_file, world)
-        if saved.family == "mpc":
-            raise UserError(
-                f"{saved.json_path}: mppi-kinematic does not learn on the robot yet (run its "
-                "frozen planner with --policy-file)"
-            )
         if saved.learns:
             name = saved.name
     if name is None:
@@ -269,12 +270,54 @@ def _pilot(
         check_policy(pilot, policy_name, world.grid_map, world.grid, world.action_duration)
         first_episode, state = _resume_policy(settings, policy_name)
         return pilot, first_episode, state, policy_name
+    if name == MPPI_AGENT:
+        mppi, first_episode, state = _mppi_agent(settings, config, world, saved)
+        warm_up_mppi(mppi, world.grid_map)
+        return mppi, first_episode, state, None
     context = agent_context(name, world.robot, world.grid)
     agent, first_episode, state = _make_or_resume_agent(
         name, settings, config, context, world, saved
     )
     warm_up_agent(name, config, context, world.grid.n_states)
     return agent, first_episode, state, None
+
+
+def _mppi_agent(
+    settings: RobotRunSettings, config: RealtimeConfig, world: RunWorld, saved: SavedPilot | None
+) -> tuple[MPPIKinematicAgent, int, dict[str, Any] | None]:
+    """(``mppi-kinematic``, first episode, loop state to restore or None): from the newest
+    checkpoint when resuming, else the ``saved`` agent (checked against the run's ``world``) or
+    a new one (:func:`~.mppi_agent.new_mppi_agent`)."""
+    if settings.resume:
+        episode, directory, state = _latest_agent_checkpoint(settings.out, MPPI_AGENT)
+        return _load_mppi(directory / "agent.json", world), episode + 1, state
+    if saved is not None:
+        return _load_mppi(saved.json_path, world), 0, None
+    rng = seed_streams(config.run.seed)["agent"]
+    table = config.agents.get(MPPI_AGENT, {})
+    agent = new_mppi_agent(
+        table, world.robot, world.grid, world.action_duration, world.grid_map, rng
+    )
+    return agent, 0, None
+
+
+def _load_mppi(json_path: Path, world: RunWorld) -> MPPIKinematicAgent:
+    agent = load_mppi_agent(json_path)
+    check_loaded(agent, json_path, world)
+    return agent
+
+
+def _latest_agent_checkpoint(out: Path, name: str) -> tuple[int, Path, dict[str, Any]]:
+    """(episode, directory, loop state) of the newest checkpoint in ``out``, which must hold
+    agent ``name`` (UserError otherwise)."""
+    latest = Checkpoints(out / "checkpoints").latest()
+    if latest is None:
+        raise UserError(f"{out}: no checkpoint to resume from")
+    episode, directory, state = latest
+    if "policy" in state or state.get("agent", name) != name:
+        holder = f"policy {shown(state['policy'])}" if "policy" in state else state.get("agent")
+        raise UserError(f"{directory}: checkpoint holds {holder}, not agent {name!r}")
+    return episode, directory, state
 
 
 def _resume_policy(settings: RobotRunSettings, label: str) -> tuple[int, dict[str, Any] | None]:
@@ -333,7 +376,9 @@ def drive(
             "wait_for_operator": wait_for_operator,
         }
         loop: EpisodeLoop
-        if policy_name is None:
+        if isinstance(agent, MPPIKinematicAgent):
+            loop = MPPILoop(driver, agent, grid_map, config, out, **common)
+        elif policy_name is None:
             loop = RealtimeLoop(driver, agent, grid_map, config, out, **common)
         else:
             loop = PolicyLoop(
@@ -358,6 +403,7 @@ def _summarize(loop: EpisodeLoop, out: Path, code: int) -> str:
         "aborted": sum(r.aborted for r in results),
         "actions": sum(r.actions for r in results),
         "last_abort_reason": next((r.reason for r in reversed(results) if r.aborted), None),
+        **loop.summary_fields(),
     }
     write_user_file(out / "summary.json", json.dumps(summary, indent=1).encode(), "run summary")
     return (
