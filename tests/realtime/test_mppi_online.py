@@ -11,11 +11,13 @@ import signal
 import time
 from pathlib import Path
 
+import gymnasium
 import numpy as np
 import pytest
 
-from skidnav.agents.mpc.agent import MPPIKinematicAgent
+from skidnav.agents.mpc.agent import MPPIKinematicAgent, make_mppi_agent
 from skidnav.agents.mpc.loading import load_mppi_agent
+from skidnav.agents.mpc.training import train_mppi
 from skidnav.cli import main
 from skidnav.models.kinematic import KinematicModel
 from skidnav.realtime.control.checkpoint import Checkpoints
@@ -175,3 +177,59 @@ def test_sigint_stops_the_wheels_and_ends_the_run_with_a_checkpoint(tmp_path: Pa
     latest = Checkpoints(out / "checkpoints").latest()
     assert latest is not None and latest[2]["results"][-1]["aborted"]
     assert agent_at(latest[1]).steps > 0
+
+
+@pytest.fixture(scope="module")
+def saved_mppi(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """An agent trained one episode of 0.1-s actions in the simulator on the run's world, saved
+    by itself (no world.json beside it)."""
+    env = gymnasium.make(
+        "skidnav/SkidSteerNav-v0", map_kind="free", world_seed=0, slip="rough",
+        action="continuous", observation="features", control_period=PERIOD, max_episode_steps=400,
+    )  # fmt: skip
+    agent = make_mppi_agent(env, {}, np.random.default_rng(0))
+    train_mppi(agent, env, 1, seed=0)
+    return agent.save(tmp_path_factory.mktemp("mppi") / "agent")[1]
+
+
+def test_a_saved_mppi_agent_keeps_learning_from_its_model_and_map(
+    saved_mppi: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "out"
+    path = config(tmp_path, max_actions=40, time_scale=5.0)
+    argv = ["robot", "run", "--quiet", "--config", str(path), "--out", str(out)]
+    assert main([*argv, "--agent-file", str(saved_mppi)]) == 0
+    saved, learned = load_mppi_agent(saved_mppi), agent_at(out / "checkpoints" / "ep-00000")
+    transitions = [e for e in read_events(out / "run.jsonl") if e["event"] == "transition"]
+    assert learned.steps == saved.steps + len(transitions)
+    assert learned.episodes == saved.episodes + 1
+    counts = saved.model.counts
+    for region in np.flatnonzero(counts):
+        np.testing.assert_array_equal(
+            learned.model.data[region, : counts[region]], saved.model.data[region, : counts[region]]
+        )
+    assert int(learned.model.counts.sum()) == int(counts.sum()) + sum(
+        t["log_rows"] for t in transitions
+    )
+
+
+@pytest.mark.parametrize(
+    ("run", "message"),
+    [
+        ({"substeps": 10}, "it was trained with actions of 0.1 s, the run's last 1 s"),
+        ({"map": '"obstacles"'}, "it was trained for the goal cell (6, 16), the run's map has"),
+    ],
+)
+def test_a_saved_mppi_agent_of_another_world_is_refused(
+    saved_mppi: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    run: dict[str, object],
+    message: str,
+) -> None:
+    path = config(tmp_path, **{"settle_periods": 1, **run} if "substeps" in run else run)
+    argv = ["robot", "run", "--config", str(path), "--out", str(tmp_path / "o")]
+    assert main([*argv, "--agent-file", str(saved_mppi)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0], lines
+    assert not (tmp_path / "o").exists()
