@@ -1,6 +1,6 @@
 """The world a saved agent was trained for, written beside it, and the check that a robot run
 is that world (``skidnav run`` with ``save_agents``, ``skidnav robot run --agent-file``;
-docs/realtime.md, "From simulation to the robot").
+docs/robot-learning.md).
 
 A saved agent's own files say what its family needs to rebuild it (:mod:`skidnav.agents.saved`),
 not always where it learned: a Q table is a table of states, whatever the robot or the goal.

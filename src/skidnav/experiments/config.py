@@ -224,7 +224,7 @@ class ExperimentConfig:
         save_agents: keep each run's trained agent, saved by its family's own ``save`` beside
             its run file (``runs/<run_id>/agent.npz`` + ``agent.json``, with ``world.json`` and
             ``map.txt``: the world it was trained for), for ``skidnav robot run --agent-file``
-            (docs/realtime.md, "From simulation to the robot"). Default false.
+            (docs/robot-learning.md). Default false.
         optimum_grids: state grids (n_x, n_y, n_headings), coarse to fine, at which the continuous
             optimum of every world is computed (:mod:`skidnav.experiments.reference.optimum`; the
             last is the reference, the one before it checks its convergence); () for none.

@@ -1,5 +1,5 @@
 """``skidnav robot run --agent-file PATH``: a saved agent of any family on the robot
-(docs/realtime.md, "From simulation to the robot").
+(docs/robot-learning.md).
 
 The file's ``"format"`` names its family (:func:`skidnav.agents.saved.saved_family`), and the
 family says what it does on the robot: a tabular agent keeps learning online from its saved

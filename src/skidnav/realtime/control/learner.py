@@ -1,6 +1,6 @@
 """Learning off the control path: a worker thread feeds each real step to an agent that plans on
 copies of what it learned (``mppi-kinematic`` on the robot, :mod:`.mppi_loop`;
-docs/realtime.md, "mppi-kinematic learns on the robot").
+docs/robot-learning.md).
 
 The control path never waits for learning. Each control period it reads :attr:`BackgroundLearner.
 view` (one attribute read: the newest published copy of the dynamics and the cost map) and

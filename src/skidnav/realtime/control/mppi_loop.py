@@ -1,5 +1,4 @@
-"""``mppi-kinematic`` learning online on the robot (docs/realtime.md, "mppi-kinematic learns on
-the robot").
+"""``mppi-kinematic`` learning online on the robot (docs/robot-learning.md).
 
 The loop is the frozen policy's (:class:`~skidnav.realtime.control.policy_loop.PolicyLoop`: one
 action per ``substeps`` control periods, the wheels not stopped between actions, the same
