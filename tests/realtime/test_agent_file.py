@@ -8,14 +8,20 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import gymnasium
 import numpy as np
 import pytest
 
+from skidnav.agents.linear.registry import make_linear_agent
+from skidnav.agents.policies.agent import GoalTrackerAgent
+from skidnav.agents.policies.goal_tracker import GoalTracker, GoalTrackerConfig
 from skidnav.agents.saved import load_saved_agent
 from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.agents.trained_world import read_trained_world
 from skidnav.cli import main
 from skidnav.experiments.store import ResultStore
+from skidnav.realtime.control.checkpoint import Checkpoints
+from skidnav.robot.params import RobotParams
 from skidnav.world.mapfile import load_map
 from tests.realtime.realtime_helpers import read_events, write_config
 
@@ -164,3 +170,33 @@ def test_an_agent_of_another_robot_or_grid_is_refused(
     )
     assert main([*argv, "--agent-file", str(copy / "agent.json")]) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_a_saved_frozen_policy_acts_and_a_linear_agent_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A family that does not learn on the robot drives frozen, as --policy-file runs it; one
+    that does not drive by wheel speeds is refused in one line."""
+    tracker = GoalTrackerAgent(GoalTracker(GoalTrackerConfig(), RobotParams()))
+    (tmp_path / "tracker").mkdir()
+    saved = tracker.save(tmp_path / "tracker" / "agent")[1]
+    out = tmp_path / "out"
+    config = write_config(
+        tmp_path,
+        "[run]\n"
+        + "".join(f"{key} = {value}\n" for key, value in RUN.items())
+        + 'map = "free"\n[sim]\nlatency = 0.0\ndrop = 0.0\n',
+    )
+    argv = ["robot", "run", "--quiet", "--config", str(config), "--out", str(out)]
+    assert main([*argv, "--agent-file", str(saved)]) == 0
+    latest = Checkpoints(out / "checkpoints").latest()
+    assert latest is not None and latest[2]["policy"] == f"file:{saved.resolve()}"
+    assert not (latest[1] / "agent.npz").exists()  # a frozen policy has nothing to save
+    env = gymnasium.make("skidnav/SkidSteerNav-v0", map_kind="free", observation="pose")
+    space = env.observation_space
+    assert isinstance(space, gymnasium.spaces.Box)
+    linear = make_linear_agent("linear-q", space, 4, {}, np.random.default_rng(0))
+    linear_file = linear.save(tmp_path / "linear" / "agent")[1]
+    assert main([*argv, "--agent-file", str(linear_file)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "a saved linear agent does not run on the robot" in lines[0], lines

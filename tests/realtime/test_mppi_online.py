@@ -2,7 +2,8 @@
 run off the control path (a refit made slower than three control periods leaves the period
 held), the learned model and map survive a SIGKILL and continue with ``--resume``, and the
 safety guarantees of the tabular loop hold for it (a lost pose trips, stops and the run goes on;
-SIGINT stops the wheels and ends the run)."""
+a robot frozen mid-action never resumes the old command; SIGINT stops the wheels and ends the
+run)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import json
 import signal
 import time
 from pathlib import Path
+from typing import Any
 
 import gymnasium
 import numpy as np
@@ -29,6 +31,7 @@ from tests.realtime.realtime_helpers import (
     write_config,
 )
 from tests.realtime.test_policy_run import inject_after_transitions
+from tests.realtime.test_stall import check_stall
 
 PERIOD = 0.1
 RUN = {
@@ -233,3 +236,21 @@ def test_a_saved_mppi_agent_of_another_world_is_refused(
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and message in lines[0], lines
     assert not (tmp_path / "o").exists()
+
+
+def test_a_robot_frozen_mid_action_never_resumes_the_old_command(
+    tmp_path: Path, server_process: Any
+) -> None:
+    """The tabular loop's stall test (tests/realtime/test_stall.py) with mppi-kinematic: the
+    server frozen (SIGSTOP) while its wheels turn; the host trips on the stale pose, its stop is
+    confirmed once the robot lives again, no command from before the trip runs, the run
+    reconnects."""
+    server = server_process("--time-scale", "5.0")
+    path = config(tmp_path, episodes=4, max_actions=100, time_scale=5.0)
+    path.write_text(path.read_text() + f"[tcp]\nport = {server.port}\n")
+    run = start_run(tmp_path, "--driver", "tcp", "--agent", "mppi-kinematic", "--config", str(path))
+    try:
+        check_stall(tmp_path / "out", run, server)
+    finally:
+        run.send_signal(signal.SIGINT)
+        run.communicate(timeout=30)
