@@ -214,11 +214,13 @@ class PeriodicControl:
             if self._would_collide(pose, command):
                 collided = True
                 break
+            previous = self._last_command
             self._command(*command)
             target = first + (k + 1) * period
             new, new_stamp = self._wait_for_stamp(target, self._pose_deadline(pose))
             region = self.grid.region(pose.x, pose.y)
-            row = log_row(pose, new, new_stamp - stamp, region, command)
+            in_effect = self._in_effect(previous, command, new_stamp - stamp)
+            row = log_row(pose, new, new_stamp - stamp, region, in_effect)
             if row is not None:
                 spans_one = self.late_pose is None or new_stamp - stamp <= 1.5 * period
                 if k >= self.settings.settle_periods and spans_one:
@@ -227,6 +229,21 @@ class PeriodicControl:
         if stop or collided:
             pose = self._stop_and_settle(stamp)
         return pose, np.array(rows, dtype=np.float64).reshape(-1, 6), collided
+
+    def _in_effect(
+        self, previous: tuple[float, float], command: tuple[float, float], elapsed: float
+    ) -> tuple[float, float]:
+        """The wheel command (ω_L, ω_R) [rad/s] in effect, on average, over the ``elapsed``
+        [s robot time] after ``command`` replaced ``previous``: the wheels ran ``previous`` for
+        ``[run] command_latency`` of it (all of it at most), ``command`` for the rest."""
+        latency = self.settings.command_latency
+        if latency <= 0.0 or not elapsed > 0.0 or previous == command:
+            return command
+        share = min(1.0, latency / elapsed)
+        return (
+            share * previous[0] + (1.0 - share) * command[0],
+            share * previous[1] + (1.0 - share) * command[1],
+        )
 
     def _pose_deadline(self, newest: Pose) -> float:
         """When (monotonic [s]) a period's wait for its pose ends whatever its stamp, the
