@@ -33,6 +33,7 @@ COMMANDS: dict[str, str | dict[str, str]] = {
         "map": "skidnav.commands.map",
         "simulate": "skidnav.commands.simulate",
         "floors": "skidnav.commands.floors",
+        "barn": "skidnav.commands.barn",
     },
     "robot": "skidnav.commands.robot",
     "camera": "skidnav.commands.camera",
@@ -41,7 +42,7 @@ COMMANDS: dict[str, str | dict[str, str]] = {
 → its verbs and their modules (``skidnav study continuity …``)."""
 GROUP_HELP = {
     "study": "questions asked of the runner: shortcuts that write a study config and run it",
-    "world": "maps, one simulated episode, floor presets",
+    "world": "maps, one simulated episode, floor presets, the BARN worlds",
 }
 """One line of help per group of :data:`COMMANDS`."""
 DISK_FULL = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})

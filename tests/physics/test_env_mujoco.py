@@ -167,7 +167,7 @@ def test_learning_on_physics_reaches_the_goal() -> None:
 def test_bad_options_are_one_line_errors() -> None:
     for options, words in (
         ({"dynamics": "rigid"}, "expected dynamics"),
-        ({"floor": "ice"}, "expected floor"),
+        ({"floor": "lava"}, "expected floor"),
         ({"dynamics": "kinematic", "floor": "laminate"}, "expected floor=None"),
     ):
         with pytest.raises(ValueError, match=words) as error:

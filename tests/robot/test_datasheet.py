@@ -23,7 +23,7 @@ def test_the_hand_set_floors_are_near_the_datasheet() -> None:
     assert 0.8 < slippery.forward < 0.95 and 0 < slippery.x_icr < RobotParams().x_icr
 
 
-@pytest.mark.parametrize("preset", sorted(CALIBRATED_PRESETS))
+@pytest.mark.parametrize("preset", [p for p in sorted(CALIBRATED_PRESETS) if p != "ice-physics"])
 def test_the_physical_floors_turn_at_half_the_datasheet_rate(preset: str) -> None:
     gap = floor_gap(preset)
     assert 0.95 < gap.forward < 1.0 and 0.45 < gap.turn < 0.6 and abs(gap.x_icr) < 1e-3
@@ -36,7 +36,8 @@ def test_the_physical_floors_turn_at_half_the_datasheet_rate(preset: str) -> Non
 
 def test_the_table_has_every_floor_of_both_robots() -> None:
     rows = prior_gap_rows()
-    assert [row[0] for row in rows][:5] == list(skidnav.robot.SLIP_PRESETS)
+    presets = list(skidnav.robot.SLIP_PRESETS)
+    assert [row[0] for row in rows][: len(presets)] == presets
     assert {row[1] for row in rows} == {"kinematic simulator", "MuJoCo robot"}
 
 

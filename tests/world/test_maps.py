@@ -67,7 +67,7 @@ def _broken(old: str, new: str) -> str:
 @pytest.mark.parametrize(
     ("text", "expected"),
     [
-        (_broken("skidnav-map 1", "skidnav-map 2"), "f.txt:1: expected first line"),
+        (_broken("skidnav-map 1", "skidnav-map 3"), "f.txt:1: expected first line"),
         (_broken("width 6", "width six"), "f.txt:3: expected an integer width"),
         (_broken("width 6", "width 2"), "f.txt:3: expected width between 3 and 1000"),
         (_broken("width 6\n", ""), "missing width before 'map'"),

@@ -19,6 +19,7 @@ from skidnav.physics.materials import MATERIALS
 from skidnav.robot.datasheet import Datasheet, PriorGap, floor_gap, material_gap
 from skidnav.robot.floors import calibrated_floors
 from skidnav.robot.params import RobotParams
+from skidnav.robot.presets import ROBOT_PRESETS, robot_preset
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.statistics import formatting
 
@@ -35,6 +36,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     )
     calibrate.add_argument(
         "--material", action="append", choices=sorted(MATERIALS), help="default: every one"
+    )
+    calibrate.add_argument(
+        "--robot", choices=sorted(ROBOT_PRESETS), default="thesis", help="the robot to drive"
     )
     calibrate.add_argument("--seconds", type=int, default=60, help="driving per material [s]")
     calibrate.add_argument("--seed", type=int, default=0, help="excitation and interval seed")
@@ -85,7 +89,12 @@ def _calibrate(args: argparse.Namespace) -> int:
 
     materials = args.material or list(MATERIALS)
     try:
-        fits = calibrate(materials, np.random.default_rng(args.seed), segments=args.seconds)
+        fits = calibrate(
+            materials,
+            np.random.default_rng(args.seed),
+            segments=args.seconds,
+            robot=robot_preset(args.robot),
+        )
     except PhysicsUnavailable as error:
         raise UserError(str(error)) from None
     print(
@@ -100,7 +109,12 @@ def _calibrate(args: argparse.Namespace) -> int:
             f"{fit.yaw_noise:18.4f} {fit.eta:12.3f}"
         )
     if args.out is not None:
-        document = {"seed": args.seed, "seconds": args.seconds, "fits": [f.as_dict() for f in fits]}
+        document = {
+            "robot": args.robot,
+            "seed": args.seed,
+            "seconds": args.seconds,
+            "fits": [f.as_dict() for f in fits],
+        }
         write_user_file(args.out, (json.dumps(document, indent=2) + "\n").encode(), "fits")
         print(f"wrote {args.out}")
     return 0

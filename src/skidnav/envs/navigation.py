@@ -20,6 +20,7 @@ from skidnav.robot.kinematics import (
     wrap_angle,
 )
 from skidnav.robot.params import RobotParams
+from skidnav.robot.presets import robot_preset
 from skidnav.robot.slip import SlipField, make_slip_field
 from skidnav.seeding import ARENA_ROLES, streams
 from skidnav.sim.features import PoseFeatures
@@ -97,10 +98,12 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     ## Arguments
     ``map_kind`` ("free", "obstacles", "maze") or ``map_file`` (plain-text map) or ``grid_map``;
     ``world_seed`` (draws the map and the slip field; the map does not change between episodes);
-    ``slip`` preset ("thesis", "slippery", "rough", "rough-physics", "slippery-physics") or
+    ``slip`` preset (:data:`skidnav.robot.slip.SLIP_PRESETS`: "thesis", "slippery", "rough",
+    "nominal", "rough-physics", "slippery-physics", "ice-physics") or
     ``slip_field``; ``drift_amplitude`` and ``drift_period`` [s] (non-stationary slip; the clock
     runs across episodes and restarts when ``reset`` is given a seed); ``robot``
-    (:class:`RobotParams`, e.g. ``integrator="exact"``); ``discretization``; ``observation``
+    (:class:`RobotParams`, e.g. ``integrator="exact"``, or a robot's name, "thesis" or
+    "jackal", :data:`skidnav.robot.presets.ROBOT_PRESETS`); ``discretization``; ``observation``
     ("discrete", "pose", "features"); ``lidar_rays`` (k ≥ 0, default 8) and ``lidar_range`` [m]
     (> 0, default 0.3) of the features; ``variance``; ``render_mode`` ("rgb_array" or "ansi");
     ``action`` ("discrete", the default, or "continuous"); ``control_period`` [s]: the duration of
@@ -150,7 +153,7 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         slip_field: SlipField | None = None,
         drift_amplitude: float = 0.0,
         drift_period: float = 600.0,
-        robot: RobotParams | None = None,
+        robot: RobotParams | str | None = None,
         discretization: Discretization | None = None,
         observation: str = "discrete",
         variance: str = "true",
@@ -163,6 +166,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     ) -> None:
         self._check_choices(render_mode, observation, variance, dynamics, action)
         self.render_mode = render_mode
+        if isinstance(robot, str):
+            robot = robot_preset(robot)
         self.robot = with_control_period(robot or RobotParams(), control_period)
         world = streams(world_seed, ARENA_ROLES)
         map_rng, slip_rng = world["map"], world["slip"]

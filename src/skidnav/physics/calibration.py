@@ -29,7 +29,7 @@ import numpy as np
 
 from skidnav.models.bayesian_ridge import fit_bayesian_ridge
 from skidnav.models.kinematic_regression import icr_parameters
-from skidnav.physics.mjcf import PhysicsParams, uniform_floor
+from skidnav.physics.mjcf import PhysicsParams, physics_for, uniform_floor
 from skidnav.physics.mujoco_robot import PhysicsRobot
 from skidnav.robot.kinematics import N_ACTIONS, commanded_wheel_speeds
 from skidnav.robot.params import RobotParams
@@ -148,6 +148,6 @@ def calibrate(
     """Fit every material in ``materials`` on the same seeded excitation (common random
     numbers: differences between materials are the floors', not the commands')."""
     robot = robot or RobotParams()
-    physics = physics or PhysicsParams()
+    physics = physics or physics_for(robot)
     commands = excitation(rng, segments, robot.wheel_speed)
     return [fit_floor(name, drive_log(name, commands, robot, physics), rng) for name in materials]

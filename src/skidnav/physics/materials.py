@@ -15,6 +15,9 @@ per newton). Values (typical figures, not measurements of the thesis arena):
 - ``wet-tile``: μ = 0.2, wet glazed ceramic tile, a floor that fails ANSI A326.3's wet dynamic
   coefficient of friction of 0.42 for level interior floors; torsional and rolling scaled down
   with μ.
+- ``ice``: μ = 0.05, of the order of rubber on wet ice (friction tables give a few hundredths
+  up to about 0.1 for tyres on ice); torsional and rolling scaled down with μ. A floor where
+  the wheels spin and skid: the "BARN on ice" of ``ice-physics`` (:mod:`skidnav.robot.floors`).
 
 Which region gets which material (:func:`region_materials`) follows the slip presets of
 :mod:`skidnav.robot.slip`: ``thesis`` laminate everywhere, ``rough`` rubber mat everywhere,
@@ -27,7 +30,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from skidnav.robot.floors import CALIBRATED_PRESETS, PRESET_FLOORS, calibrated_floor
+from skidnav.robot.floors import (
+    CALIBRATED_PRESETS,
+    PRESET_FLOORS,
+    calibrated_floor,
+    calibrated_robot,
+)
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField
 
@@ -71,6 +79,7 @@ MATERIALS: dict[str, Material] = {
         Material("rubber-mat", 1.0, 0.01, 5e-4, (0.25, 0.25, 0.28, 1.0)),
         Material("laminate", 0.5, 0.005, 2e-4, (0.72, 0.58, 0.40, 1.0)),
         Material("wet-tile", 0.2, 0.002, 1e-4, (0.62, 0.78, 0.86, 1.0)),
+        Material("ice", 0.05, 0.0005, 2.5e-5, (0.88, 0.94, 0.98, 1.0)),
     )
 }
 """The named materials (see the module docstring for values and sources)."""
@@ -109,7 +118,8 @@ def region_materials(preset: str, field: SlipField, robot: RobotParams | None = 
     floor, patch = PRESET_FLOORS[preset]
     names = np.full(field.shape, floor, dtype=object)
     if patch is not None and preset in CALIBRATED_PRESETS:
-        names[field.eta == calibrated_floor(patch).eta] = patch
+        fit = calibrated_floor(patch, robot)
+        names[field.eta == fit.simulated_eta(calibrated_robot(robot))] = patch
     elif patch is not None:
         names[field.eta >= (robot or RobotParams()).wheel_speed] = patch
     return names

@@ -1,9 +1,9 @@
-"""The thesis robot, its arena and its floor as an MJCF model (MuJoCo's XML format).
+"""A skid-steer robot, its arena and its floor as an MJCF model (MuJoCo's XML format).
 
 The robot (frame: x forward, y left, z up; its origin is the centre of mass, at wheel-axle
-height): a box chassis of ``body_length`` × 2c × ``body_height`` and four wheels, front axle at
-x = a, rear axle at x = −b, at y = ±c (:class:`~skidnav.robot.params.RobotParams`). Each wheel
-is a sphere of radius r on a hinge about the body's y axis, driven by a velocity servo
+height): a box chassis of ``body_length`` × ``body_width`` × ``body_height`` and four wheels,
+front axle at x = a, rear axle at x = −b, at y = ±c (:class:`~skidnav.robot.params.RobotParams`).
+Each wheel is a sphere of radius r on a hinge about the body's y axis, driven by a velocity servo
 (``<velocity>`` actuator: torque = k_v (ω_cmd − ω), clipped to the motor's limit), so the
 commanded ω_L, ω_R are set points, as on a robot whose motor controller closes a speed loop.
 A sphere touches the floor at one point: the cheapest wheel contact MuJoCo has, and with
@@ -19,6 +19,10 @@ collisions, as in the kinematic simulator.
 Assumed (not measured on the thesis robot; :class:`PhysicsParams`): the masses, the motor's
 gain, torque limit and reflected inertia, and the timestep, which the convergence test of
 ``tests/physics/test_integration.py`` chose (docs/physics.md).
+
+The same generator builds the Clearpath Jackal from its own numbers (:data:`JACKAL_PHYSICS`
+with :data:`skidnav.robot.presets.JACKAL`): :func:`physics_for` picks the physics of a robot's
+build.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ import numpy as np
 
 from skidnav.physics.materials import MATERIALS, Material
 from skidnav.robot.params import RobotParams
+from skidnav.robot.presets import robot_preset_name
 
 WHEELS = ("front_left", "rear_left", "front_right", "rear_right")
 """Wheel names, in actuator order: the two left wheels, then the two right ones."""
@@ -46,6 +51,8 @@ class PhysicsParams:
         motor_torque: motor torque limit per wheel [N·m] (a micro gear motor's stall torque).
         armature: reflected rotor inertia of motor and gearbox per wheel [kg·m²].
         timestep: physics timestep [s] (see the module docstring).
+        body_width: chassis width [m] (drawn, and the inertia of the box); None: 1.5 c, the
+            thesis robot's body between its wheels.
     """
 
     body_mass: float = 0.35
@@ -55,6 +62,7 @@ class PhysicsParams:
     motor_torque: float = 0.02
     armature: float = 1e-4
     timestep: float = 0.002
+    body_width: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("body_mass", "wheel_mass", "body_height", "motor_gain", "motor_torque"):
@@ -65,6 +73,37 @@ class PhysicsParams:
             raise ValueError(f"expected armature >= 0, got {self.armature}")
         if not (np.isfinite(self.timestep) and 0 < self.timestep <= 0.01):
             raise ValueError(f"expected timestep in (0, 0.01] s, got {self.timestep}")
+        if self.body_width is not None and not (
+            np.isfinite(self.body_width) and self.body_width > 0
+        ):
+            raise ValueError(f"expected body_width > 0 m or None, got {self.body_width}")
+
+
+JACKAL_PHYSICS = PhysicsParams(
+    body_mass=17.0 - 4 * 0.5,
+    wheel_mass=0.5,
+    body_height=0.18,
+    motor_gain=2.0,
+    motor_torque=6.0,
+    armature=5e-3,
+    timestep=0.002,
+    body_width=0.31,
+)
+"""The Jackal's physics: 17 kg in all (Clearpath), of which 0.5 kg per wheel (assumed), a
+0.42 m × 0.31 m chassis (Clearpath) 0.18 m high (drawn; assumed), and motors assumed strong
+enough for its published top speed and a brisk start: 6 N·m per wheel is 4 × 6 / 0.098 ≈ 245 N,
+about 1.5 g on 17 kg, so on a grippy floor the tyres, not the motors, limit the acceleration; the
+servo gain 2 N·m·s/rad tracks a set point within ~0.02 s (the wheel's share of the robot's
+inertia over the gain)."""
+
+PHYSICS_PRESETS = {"thesis": PhysicsParams(), "jackal": JACKAL_PHYSICS}
+"""Robot preset (:data:`skidnav.robot.presets.ROBOT_PRESETS`) → its physics."""
+
+
+def physics_for(robot: RobotParams) -> PhysicsParams:
+    """The physics of ``robot``'s build (:func:`~skidnav.robot.presets.robot_preset_name`); the
+    thesis robot's for a robot of another build."""
+    return PHYSICS_PRESETS.get(robot_preset_name(robot) or "thesis", PhysicsParams())
 
 
 def _numbers(*values: float) -> str:
@@ -160,7 +199,8 @@ def arena_mjcf(
     unknown = sorted({str(name) for name in materials.ravel()} - set(MATERIALS))
     if unknown:
         raise ValueError(f"expected floor materials in {', '.join(MATERIALS)}, got {unknown[0]!r}")
-    half = (robot.body_length / 2, robot.half_track * 0.75, physics.body_height / 2)
+    width = physics.body_width if physics.body_width is not None else robot.half_track * 1.5
+    half = (robot.body_length / 2, width / 2, physics.body_height / 2)
     actuators = "".join(
         f'<velocity name="{name}" joint="{name}" kv="{physics.motor_gain!r}" '
         f'forcerange="{_numbers(-physics.motor_torque, physics.motor_torque)}"/>'
@@ -193,4 +233,13 @@ def uniform_floor(name: str, regions: tuple[int, int] = (7, 7)) -> np.ndarray:
     return np.full(regions, name, dtype=object)
 
 
-__all__ = ["WHEELS", "Material", "PhysicsParams", "arena_mjcf", "uniform_floor"]
+__all__ = [
+    "JACKAL_PHYSICS",
+    "PHYSICS_PRESETS",
+    "WHEELS",
+    "Material",
+    "PhysicsParams",
+    "arena_mjcf",
+    "physics_for",
+    "uniform_floor",
+]

@@ -18,7 +18,7 @@ import numpy as np
 
 from skidnav.physics.backend import load_mujoco
 from skidnav.physics.materials import MATERIALS
-from skidnav.physics.mjcf import WHEELS, PhysicsParams, arena_mjcf
+from skidnav.physics.mjcf import WHEELS, PhysicsParams, arena_mjcf, physics_for
 from skidnav.robot.kinematics import apply_slip, wrap_angle
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import level_index
@@ -36,12 +36,13 @@ def quaternion_heading(quaternion: np.ndarray) -> float:
 
 
 class PhysicsRobot:
-    """The thesis robot on a MuJoCo floor.
+    """A skid-steer robot (the thesis robot, the Jackal) on a MuJoCo floor.
 
     Args:
         robot: geometry and arena size.
         materials: material name per slip region, shape (regions_x, regions_y).
-        physics: masses, motors and timestep (defaults: :class:`PhysicsParams`).
+        physics: masses, motors and timestep (default: those of ``robot``'s build,
+            :func:`~skidnav.physics.mjcf.physics_for`).
         occupancy: uint8 (n_x, n_y) wall map for a model to draw (walls and floor tiles), None
             for one only to simulate (:func:`~skidnav.physics.mjcf.arena_mjcf`).
     """
@@ -55,7 +56,7 @@ class PhysicsRobot:
     ) -> None:
         self.mujoco = load_mujoco()
         self.robot = robot
-        self.physics = physics or PhysicsParams()
+        self.physics = physics or physics_for(robot)
         self.materials = np.asarray(materials, dtype=object)
         self.mjcf = arena_mjcf(robot, self.physics, self.materials, occupancy)
         self.model = self.mujoco.MjModel.from_xml_string(self.mjcf)

@@ -22,6 +22,7 @@ from skidnav.files.saved import parse_toml, read_config_text
 from skidnav.physics.materials import MATERIALS
 from skidnav.realtime.link.auth import require_secret
 from skidnav.realtime.link.protocol import MAX_LINE_BYTES
+from skidnav.realtime.reference_robot.rules import MAX_LEASE_LIMIT
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.world.grid import MAP_KINDS
 
@@ -32,9 +33,6 @@ TOP_TABLES = ("run", "sim", *DRIVER_TABLES, "agents", "policies", "study")
 :mod:`skidnav.studies.hardware.study`)."""
 FAULTS = ("silence", "garbage", "oversized", "escape", "hangup")
 """Faults the sim server can inject for tests (realtime/robot_server/server.py)."""
-MAX_LEASE_LIMIT = 5.0
-"""Largest lease a robot can be configured to grant [s wall]: however it is set, no command
-keeps the wheels turning longer than this after it arrived."""
 
 
 @dataclass(frozen=True)

@@ -28,10 +28,11 @@ from typing import Any
 from skidnav.childprocess import child_environment, python_module_command
 from skidnav.errors import UserError
 from skidnav.extras import require
-from skidnav.realtime.config import MAX_LEASE_LIMIT, RealtimeConfig
+from skidnav.realtime.config import RealtimeConfig
 from skidnav.realtime.link.auth import load_secret
 from skidnav.realtime.link.interface import RobotDriver
 from skidnav.realtime.link.line_client import LineClient, SerialLink, TcpLink
+from skidnav.realtime.reference_robot.rules import MAX_LEASE_LIMIT
 
 log = logging.getLogger(__name__)
 

@@ -108,9 +108,10 @@ def floor_gap(preset: str, robot: RobotParams | None = None, worlds: int = GAP_W
 def material_gap(material: str, robot: RobotParams | None = None) -> PriorGap:
     """The gap of the MuJoCo robot on ``material``, from its calibration
     (:func:`~skidnav.robot.floors.calibrated_floor`: the ICR model fitted to the physical robot,
-    whose fitted r already holds the mean wheel-speed loss) against the datasheet of ``robot``."""
+    whose fitted r already holds the mean wheel-speed loss) against the datasheet of ``robot``
+    (the floors fitted on its build, :func:`~skidnav.robot.floors.calibrated_floors`)."""
     sheet = Datasheet.of(robot or RobotParams())
-    fit = calibrated_floor(material)
+    fit = calibrated_floor(material, robot)
     return PriorGap(
         fit.wheel_radius / sheet.wheel_radius,
         (fit.wheel_radius / fit.half_track) / (sheet.wheel_radius / sheet.half_track),

@@ -25,11 +25,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from skidnav._jit import jit
-from skidnav.robot.floors import CALIBRATED_PRESETS, PRESET_FLOORS, calibrated_floor
+from skidnav.robot.floors import (
+    CALIBRATED_PRESETS,
+    PRESET_FLOORS,
+    calibrated_floor,
+    calibrated_robot,
+)
 from skidnav.robot.kinematics import N_ACTIONS, commanded_wheel_speeds, expected_body_velocities
 from skidnav.robot.params import RobotParams
 
-SLIP_PRESETS = ("thesis", "slippery", "rough", *CALIBRATED_PRESETS)
+SLIP_PRESETS = ("thesis", "slippery", "rough", "nominal", *CALIBRATED_PRESETS)
 
 
 @dataclass(frozen=True, eq=False)
@@ -220,10 +225,14 @@ def make_slip_field(
         η = 1.7 rad/s (up to 100 %, on average 50 % of wheel speed lost there); x_ICR drawn
         per region in [0, b] (shifted towards the centre).
         ``rough``: high friction, η = 0.05 rad/s (at most 3 % loss), nominal x_ICR.
+        ``nominal``: the datasheet robot: η = 0 and the nominal x_ICR everywhere.
         ``rough-physics``, ``slippery-physics``: the floors of ``rough`` and ``slippery`` made of
         their materials (:data:`~skidnav.robot.floors.PRESET_FLOORS`: rubber mat; laminate with
         the same seeded wet-tile patches as ``slippery``), each region with its material's
-        calibrated η, x_ICR and effective r and c (:mod:`skidnav.robot.floors`).
+        calibrated η, x_ICR and effective r and c (:mod:`skidnav.robot.floors`);
+        ``ice-physics``: ice everywhere, calibrated likewise ("BARN on ice" for the Jackal). A
+        calibrated preset takes the floors fitted on ``robot``'s build (the Jackal's for the
+        Jackal, the thesis robot's otherwise).
 
     Args:
         preset: one of :data:`SLIP_PRESETS`.
@@ -244,8 +253,10 @@ def make_slip_field(
         x_icr = rng.uniform(0.0, robot.rear_axle, size=shape)
     elif preset == "rough":
         eta = np.full(shape, 0.05)
+    elif preset == "nominal":
+        eta = np.zeros(shape)
     elif preset in CALIBRATED_PRESETS:
-        return _calibrated_field(preset, rng, shape, drift_amplitude, drift_period)
+        return _calibrated_field(preset, rng, shape, (drift_amplitude, drift_period), robot)
     else:
         raise ValueError(f"expected slip preset one of {', '.join(SLIP_PRESETS)}, got {preset!r}")
     phase = rng.uniform(0.0, 2.0 * math.pi, size=shape)
@@ -268,22 +279,24 @@ def _calibrated_field(
     preset: str,
     rng: np.random.Generator,
     shape: tuple[int, int],
-    drift_amplitude: float,
-    drift_period: float,
+    drift: tuple[float, float],
+    robot: RobotParams,
 ) -> SlipField:
     """A field of :data:`~skidnav.robot.floors.CALIBRATED_PRESETS`: the preset's materials
-    (patches drawn as for ``slippery``), each region with its material's calibrated floor."""
+    (patches drawn as for ``slippery``), each region with its material's floor calibrated on
+    ``robot``'s build; ``drift`` = (amplitude, period [s])."""
     floor, patch = PRESET_FLOORS[preset]
     names = np.full(shape, floor, dtype=object)
     if patch is not None:
         names.ravel()[_patches(rng, shape)] = patch
-    fits = [calibrated_floor(str(name)) for name in names.flat]
-    scales = np.array([fit.scales() for fit in fits]).reshape(*shape, 2)
+    fits = [calibrated_floor(str(name), robot) for name in names.flat]
+    built = calibrated_robot(robot)
+    scales = np.array([fit.scales(built) for fit in fits]).reshape(*shape, 2)
     return SlipField(
-        eta=np.array([fit.eta for fit in fits]).reshape(shape),
+        eta=np.array([fit.simulated_eta(built) for fit in fits]).reshape(shape),
         x_icr=np.array([fit.x_icr for fit in fits]).reshape(shape),
-        drift_amplitude=drift_amplitude,
-        drift_period=drift_period,
+        drift_amplitude=drift[0],
+        drift_period=drift[1],
         drift_phase=rng.uniform(0.0, 2.0 * math.pi, size=shape),
         wheel_radius_scale=scales[..., 0],
         half_track_scale=scales[..., 1],

@@ -25,11 +25,15 @@ distance) it steps along both axes at once, into the cell diagonally beyond, whi
 >>> lidar_ranges(walls, 1.0, 1.0, 0.25, 0.6, 0.0, 2.0, ranges)
 >>> [round(float(r), 12) for r in ranges]  # ahead, left, behind, right
 [0.45, 0.4, 0.25, 0.6]
+
+A laser with a field of view narrower than a full turn (a Hokuyo UST-10 sees 270°) spreads its
+rays over that sector, both ends included: :class:`LaserSpec` and :func:`lidar_scan`.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -130,3 +134,89 @@ def lidar_ranges(
     for k in range(n_rays):
         angle = heading + 2.0 * math.pi * k / n_rays
         out[k] = cast_ray(occupancy, arena_width, arena_height, x, y, angle, max_range)
+
+
+@jit
+def lidar_scan(
+    occupancy: np.ndarray,
+    arena_width: float,
+    arena_height: float,
+    x: float,
+    y: float,
+    heading: float,
+    max_range: float,
+    field_of_view: float,
+    out: np.ndarray,
+) -> None:
+    """Fill ``out`` with the readings [m] of ``len(out)`` rays from (x, y) [m] over a sector of
+    ``field_of_view`` [rad] centred on ``heading`` [rad]: ray k along
+    heading − fov/2 + fov·k / (n − 1), clockwise edge first, both edges included (one ray:
+    along ``heading``). A field of view of 2π or more is a full turn, rays as
+    :func:`lidar_ranges` casts them. Other arguments as :func:`lidar_ranges`."""
+    n_rays = out.shape[0]
+    if field_of_view >= 2.0 * math.pi:
+        lidar_ranges(occupancy, arena_width, arena_height, x, y, heading, max_range, out)
+        return
+    for k in range(n_rays):
+        offset = 0.0 if n_rays == 1 else field_of_view * (k / (n_rays - 1) - 0.5)
+        angle = heading + offset
+        out[k] = cast_ray(occupancy, arena_width, arena_height, x, y, angle, max_range)
+
+
+@dataclass(frozen=True)
+class LaserSpec:
+    """A 2-D laser scanner, validated on construction.
+
+    Attributes:
+        rays: readings per scan, ≥ 1.
+        max_range: the greatest reading [m], > 0.
+        field_of_view: the swept sector [rad], in (0, 2π] (2π: a full turn).
+    """
+
+    rays: int
+    max_range: float
+    field_of_view: float = 2.0 * math.pi
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.rays, int) and self.rays >= 1):
+            raise ValueError(f"expected rays to be an integer >= 1, got {self.rays!r}")
+        if not (math.isfinite(self.max_range) and self.max_range > 0):
+            raise ValueError(f"expected max_range > 0 m, got {self.max_range}")
+        if not 0 < self.field_of_view <= 2.0 * math.pi:
+            raise ValueError(f"expected field_of_view in (0, 2π] rad, got {self.field_of_view}")
+
+    def angles(self, heading: float = 0.0) -> np.ndarray:
+        """float64 (rays,): each ray's direction [rad], as :func:`lidar_scan` casts them."""
+        k = np.arange(self.rays)
+        if self.field_of_view >= 2.0 * math.pi:
+            return heading + 2.0 * math.pi * k / self.rays
+        if self.rays == 1:
+            return np.array([heading])
+        return heading + self.field_of_view * (k / (self.rays - 1) - 0.5)
+
+    def scan(
+        self,
+        occupancy: np.ndarray,
+        arena: tuple[float, float],
+        pose: tuple[float, float, float],
+    ) -> np.ndarray:
+        """float64 (rays,) readings [m] from ``pose`` (x [m], y [m], heading [rad]) over the
+        uint8 wall grid ``occupancy`` (n_x, n_y) of an arena (W, H) [m]."""
+        out = np.empty(self.rays)
+        lidar_scan(
+            np.ascontiguousarray(occupancy, dtype=np.uint8),
+            float(arena[0]),
+            float(arena[1]),
+            float(pose[0]),
+            float(pose[1]),
+            float(pose[2]),
+            float(self.max_range),
+            float(self.field_of_view),
+            out,
+        )
+        return out
+
+
+HOKUYO_UST10 = LaserSpec(rays=1081, max_range=10.0, field_of_view=math.radians(270.0))
+"""The BARN Jackal's laser, a Hokuyo UST-10LX (Hokuyo's specifications): 270° field of view,
+10 m range, 0.25° steps (1081 rays)."""

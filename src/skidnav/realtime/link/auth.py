@@ -22,54 +22,32 @@ from __future__ import annotations
 
 import hashlib
 import hmac
-import os
 import secrets
-from collections.abc import Mapping
-from pathlib import Path
 
-from skidnav.errors import UserError
-from skidnav.files.user import read_limited
 from skidnav.realtime.link.protocol import MAX_LINE_BYTES, NONCE_BYTES, ProtocolError
+from skidnav.realtime.reference_robot.authentication import (
+    FROM_HOST,
+    FROM_ROBOT,
+    MAC_FIELD,
+    MAC_HEX_DIGITS,
+    MIN_SECRET_BYTES,
+)
+from skidnav.realtime.reference_robot.secret_file import (
+    MAX_SECRET_BYTES,
+    SECRET_ENV,
+    load_secret,
+    require_secret,
+)
 
-SECRET_ENV = "SKIDNAV_LINK_SECRET"
-"""The environment variable holding the link secret when no secret file is named."""
-MIN_SECRET_BYTES = 16
-"""Shortest accepted secret [bytes] (e.g. ``openssl rand -hex 32`` gives 64)."""
-MAX_SECRET_BYTES = 4096
-"""Longest secret file read [bytes]."""
-MAC_FIELD = b',"mac":"'
-MAC_HEX_DIGITS = 64
+__all__ = [
+    "MAX_SECRET_BYTES", "MIN_SECRET_BYTES", "SECRET_ENV", "Session", "load_secret", "mac",
+    "require_secret",
+]  # fmt: skip
+
 TRAILER_BYTES = len(MAC_FIELD) + MAC_HEX_DIGITS + len(b'"}')
 """Bytes of ``,"mac":"<64 hex digits>"}`` at the end of an authenticated line (newline aside)."""
-HOST, ROBOT = b"H", b"R"
+HOST, ROBOT = FROM_HOST, FROM_ROBOT
 """The direction bytes: what the host sends, what the robot sends."""
-
-
-def require_secret(secret: bytes) -> bytes:
-    """``secret`` if it is at least :data:`MIN_SECRET_BYTES` long; ValueError otherwise."""
-    if len(secret) < MIN_SECRET_BYTES:
-        raise ValueError(
-            f"expected a link secret of at least {MIN_SECRET_BYTES} bytes, got {len(secret)}"
-        )
-    return secret
-
-
-def load_secret(path: Path | str | None, environ: Mapping[str, str] = os.environ) -> bytes | None:
-    """The link secret: the contents of the file ``path`` if given, else the value of
-    :data:`SECRET_ENV`, else None (no authentication); trailing whitespace (a newline) is not
-    part of it. UserError, in one line that never shows the secret, if the file cannot be read
-    or the secret is shorter than :data:`MIN_SECRET_BYTES`."""
-    if path is not None:
-        where = str(path)
-        raw = read_limited(path, MAX_SECRET_BYTES, "secret file", UserError)
-    elif environ.get(SECRET_ENV):
-        where, raw = SECRET_ENV, environ[SECRET_ENV].encode("utf-8", errors="surrogateescape")
-    else:
-        return None
-    try:
-        return require_secret(raw.rstrip())
-    except ValueError as error:
-        raise UserError(f"{where}: {error}") from None
 
 
 def mac(secret: bytes, direction: bytes, host_nonce: bytes, robot_nonce: bytes, body: bytes) -> str:

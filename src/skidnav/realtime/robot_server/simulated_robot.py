@@ -19,8 +19,9 @@ The measured pose adds Gaussian noise (σ [m] on x and y, σ/0.1 [rad] on the he
 commands saturate at ±``RobotParams.wheel_speed`` (the motors' limit).
 
 :class:`Firmware` is the robot's side of the line protocol on one connection (docs/protocol.md,
-"What a robot must do"): the reference a microcontroller port follows, written against its
-own clock (the wall clock of the server, which keeps running while the process is stalled).
+"What a robot must do"): the rules of the reference robot (:mod:`skidnav.realtime.reference_robot`,
+which a microcontroller port runs) on the simulated robot, against its own clock (the wall clock
+of the server, which keeps running while the process is stalled).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ import math
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -37,6 +39,7 @@ from skidnav.realtime.arena import arena_map, seed_streams, start_pose
 from skidnav.realtime.config import ServerOptions
 from skidnav.realtime.control.records import EventLog
 from skidnav.realtime.link import protocol as pr
+from skidnav.realtime.reference_robot.rules import Rules
 from skidnav.realtime.robot_server.dynamics import (
     PHYSICS,
     Dynamics,
@@ -48,6 +51,9 @@ from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SlipField, make_slip_field
 from skidnav.sim.task import drive_substep, floor_task
 from skidnav.world.discretization import Discretization
+
+if TYPE_CHECKING:
+    from skidnav.realtime.reference_robot.rules import Effect
 
 
 @dataclass(frozen=True)
@@ -220,21 +226,23 @@ def warm_up(robot: SimRobot) -> None:
 
 
 class Firmware:
-    """The robot's side of the line protocol on one connection (docs/protocol.md).
+    """The robot's side of the line protocol on one connection (docs/protocol.md): the
+    reference robot's :class:`~skidnav.realtime.reference_robot.rules.Rules` (one
+    implementation of every rule for the sim server and for boards) carried out on a
+    :class:`SimRobot`, with the server's log.
 
     :meth:`receive` answers one batch of messages — everything read at once — and applies only
     its newest motion message (``cmd``, ``stop``, or a malformed line, which stops), so a robot
     that stalled never replays the commands that queued up meanwhile; every ``stop`` is
     answered. A message whose ``seq`` does not exceed the previous one's is refused
     (``replay``), a ``cmd`` beyond the wheel-speed limit too (``range``), and so is one older
-    than its ``ttl`` when read (``expired``: its ``stamp`` mapped onto the robot's clock by
-    :class:`~skidnav.realtime.link.protocol.HostClock`); each stops the wheels. A line that
-    fails authentication (``auth``) is refused too, and nothing more is taken from the
-    connection: :attr:`hang_up` says why it is to be closed. A command holds the wheels for
-    ``min(ttl, options.max_lease)`` after it was read, on the robot's own clock: no ``stamp``
-    or ``ttl`` can stretch that lease. :meth:`watch`, called every period, stops the wheels when
-    the lease ends or when no valid message came for ``link_timeout``, and declares the client
-    idle after ``idle_timeout``. Times are the robot's own clock [s].
+    than its ``ttl`` when read (``expired``); each stops the wheels. A line that fails
+    authentication (``auth``) is refused too, and nothing more is taken from the connection:
+    :attr:`hang_up` says why it is to be closed. A command holds the wheels for
+    ``min(ttl, options.max_lease)`` after it was read, on the robot's own clock. :meth:`watch`,
+    called every period, stops the wheels when the lease ends or when no valid message came for
+    ``link_timeout``, and declares the client idle after ``idle_timeout``. Times are the robot's
+    own clock [s]; the stamps the robot sends (``heartbeat``) are its simulated time.
 
     Args:
         robot: the robot. options: the timeouts and the robot's name. events: the log.
@@ -254,131 +262,73 @@ class Firmware:
         nonce: str = "",
     ) -> None:
         self.robot, self.options, self.events, self.reply = robot, options, events, reply
-        self.nonce = nonce
-        self.greeted = False
+        self.rules = Rules(
+            options.name,
+            robot.robot.dt,
+            robot.robot.wheel_speed,
+            now,
+            max_lease=options.max_lease,
+            link_timeout=options.link_timeout,
+            idle_timeout=options.idle_timeout,
+            nonce=nonce,
+        )
         self.closed = False  # the connection is gone: nothing more is applied
         self.hang_up: str | None = None  # why the connection is to be closed
-        self.clock = pr.HostClock()
-        self.last_valid = now
-        self.last_seq: int | None = None  # the newest seq taken from the host
-        self.lease: float | None = None
         self.applied = 0  # commands run so far (a lockstep server steps one period per command)
 
-    def stop(self) -> None:
-        """Zero the wheels and end the lease."""
-        self.robot.stop()
-        self.lease = None
-
-    def reject(self, code: str, text: str) -> None:
-        """Bad input: stop the wheels and report it with an ``error``."""
-        self.stop()
-        self.events.write("error", code=code, message=text)
-        self.reply(lambda seq: pr.Error(seq=seq, code=code, message=text[:200]))
+    @property
+    def greeted(self) -> bool:
+        """True once the client's ``hello`` was answered."""
+        return self.rules.greeted
 
     def receive(self, items: list[pr.Message | pr.ProtocolError], now: float) -> None:
         """Answer the messages (or line errors) read at ``now``, in order (see class doc)."""
-        motions = [i for i, item in enumerate(items) if isinstance(item, _MOTION)]
-        newest = motions[-1] if motions else -1
-        for index, item in enumerate(items):
-            if self.closed:
-                return
-            if isinstance(item, pr.ProtocolError):
-                self._refuse_line(item)
-            elif not self._in_order(item):
-                continue
-            elif isinstance(item, pr.Hello):
-                self._hello(item, now)
-            elif not self.greeted:
-                self.reject("state", f"{item.TYPE} before hello")
-            else:
-                self.last_valid = now
-                self._handle(item, now, superseded=index < newest)
-
-    def _refuse_line(self, error: pr.ProtocolError) -> None:
-        """A line that is no valid message; after a failed authentication, hang up."""
-        self.reject(error.code, str(error))
-        if error.code == "auth":
-            self.hang_up = f"authentication failed: {error}"
-            self.closed = True
-
-    def _in_order(self, message: pr.Message) -> bool:
-        """The seq rule: True if ``message`` comes after the last one taken, else refuse it."""
-        last = self.last_seq
-        if last is not None and message.seq <= last:
-            self.reject("replay", f"{message.TYPE} {message.seq} after {last}: seq must increase")
-            return False
-        self.last_seq = message.seq
-        return True
-
-    def _hello(self, message: pr.Hello, now: float) -> None:
-        self.greeted, self.last_valid = True, now
-        self.events.write("hello", name=message.name)
-        period, name, nonce = self.robot.robot.dt, self.options.name, self.nonce
-        self.reply(lambda seq: pr.Hello(seq=seq, name=name, period=period, nonce=nonce))
-
-    def _handle(self, message: pr.Message, now: float, superseded: bool) -> None:
-        if isinstance(message, pr.Command | pr.Heartbeat):
-            self.clock.observe(message.stamp, now)
-        if isinstance(message, pr.Command):
-            self._command(message, now, superseded)
-        elif isinstance(message, pr.Stop):
-            self.stop()
-            self.events.write("stop", seq=message.seq, robot_time=self.robot.time)
-            self.reply(lambda seq: pr.Stopped(seq=seq, ack=message.seq))
-        elif isinstance(message, pr.Heartbeat):
-            stamp = self.robot.time
-            self.reply(lambda seq: pr.Heartbeat(seq=seq, stamp=stamp))
-        elif isinstance(message, pr.Error):
-            self.events.write("peer_error", code=message.code, message=message.message)
-        else:
-            self.reject("state", f"unexpected {message.TYPE} from host")
-
-    def _command(self, message: pr.Command, now: float, superseded: bool) -> None:
-        """Apply a ``cmd`` unless superseded, beyond the limit or stale; its lease is
-        ``min(ttl, max_lease)`` from now."""
-        if superseded:
-            self.events.write("superseded", seq=message.seq, stamp=message.stamp)
-            return
-        limit = self.robot.robot.wheel_speed
-        if max(abs(message.omega_left), abs(message.omega_right)) > limit:
-            self.reject("range", f"cmd {message.seq}: a wheel speed beyond ±{limit} rad/s")
-            return
-        ttl = min(message.ttl, self.options.max_lease)
-        age = self.clock.age(message.stamp, now)
-        if age >= ttl:
-            self.reject("expired", f"cmd {message.seq} read {age - ttl:.3f} s after its deadline")
-            return
-        self.robot.command(message.omega_left, message.omega_right)
-        self.lease = now + ttl
-        self.applied += 1
-        self.events.write(
-            "cmd",
-            seq=message.seq,
-            omega_left=message.omega_left,
-            omega_right=message.omega_right,
-            stamp=message.stamp,
-            age=age,
-            lease=ttl,
-            robot_time=self.robot.time,
-        )
-        self.reply(lambda seq: pr.Ack(seq=seq, ack=message.seq))
+        batch = [item if isinstance(item, pr.ProtocolError) else _fields(item) for item in items]
+        hang_up = self._carry_out(self.rules.receive(batch, now))
+        if hang_up is not None:
+            self.hang_up, self.closed = hang_up, True
 
     def watch(self, now: float) -> str | None:
         """The robot's own safety at ``now``: the lease and the quiet link stop the wheels;
         returns why the client is idle (to be dropped), or None."""
-        if self.lease is not None and now >= self.lease:
-            if self.robot.moving:
-                self.events.write("lease", late=now - self.lease, robot_time=self.robot.time)
-            self.stop()
-        quiet = now - self.last_valid
-        if quiet > self.options.idle_timeout:
-            return f"no valid message for {quiet:.3f} s"
-        if quiet > self.options.link_timeout:
-            if self.robot.moving:
-                self.events.write("watchdog", robot_time=self.robot.time)
-            self.stop()
+        return self._carry_out(self.rules.watch(now))
+
+    def _carry_out(self, effects: list[Effect]) -> str | None:
+        """Apply the rules' effects in order until the connection closes; the reason to hang
+        up, if one came."""
+        for effect in effects:
+            if self.closed:
+                return None
+            kind = effect[0]
+            if kind == "send":
+                self._send(effect[1])
+            elif kind == "wheels":
+                self.robot.command(effect[1], effect[2])
+                self.applied += 1
+            elif kind == "stop":
+                self.robot.stop()
+            elif kind == "note":
+                self._note(effect[1], effect[2])
+            elif kind == "hang_up":
+                return str(effect[1])
         return None
 
+    def _send(self, fields: dict[str, Any]) -> None:
+        fields = dict(fields)
+        cls = pr.MESSAGE_TYPES[fields.pop("type")]
+        if cls is pr.Heartbeat:
+            fields["stamp"] = self.robot.time  # the robot's clock in its messages
+        self.reply(lambda seq: cls(seq=seq, **fields))
 
-_MOTION = (pr.Command, pr.Stop, pr.ProtocolError)
-"""What sets the wheels: a ``cmd``, a ``stop``, or a malformed line (which stops them)."""
+    def _note(self, event: str, fields: dict[str, Any]) -> None:
+        """Log a note of the rules; the wheels' own stops only when the robot was moving."""
+        if event in ("lease", "watchdog") and not self.robot.moving:
+            return
+        if event in ("cmd", "stop", "lease", "watchdog"):
+            fields = {**fields, "robot_time": self.robot.time}
+        self.events.write(event, **fields)
+
+
+def _fields(message: pr.Message) -> dict[str, Any]:
+    """A decoded message as the rules take it: its type and wire fields."""
+    return {"type": message.TYPE, **message.wire_fields()}
