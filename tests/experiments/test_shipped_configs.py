@@ -23,7 +23,7 @@ def test_configs_are_shipped() -> None:
 
 @pytest.mark.parametrize("path", SHIPPED, ids=[path.name for path in SHIPPED])
 def test_shipped_config_loads(path: Path) -> None:
-    if path.name == "realtime.toml":
+    if path.name.startswith("realtime"):
         assert load_realtime_config(path).run.episodes > 0
     elif path.name.startswith("tune-"):
         experiment, tune = load_tune_config(path)

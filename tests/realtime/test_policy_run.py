@@ -280,7 +280,7 @@ def test_a_failing_policy_stops_the_robot_and_ends_the_run(
 @pytest.mark.parametrize(
     ("arguments", "message"),
     [
-        ([], "one of the arguments --agent --policy --policy-file is required"),
+        ([], "one of the arguments --agent --policy --policy-file --agent-file is required"),
         (["--policy", "goal-tracker", "--agent", "dyna-q"], "not allowed with argument"),
         (["--policy", "wall-follower"], "unknown policy 'wall-follower'; expected one of"),
         (["--policy-file", "missing.json"], "missing.json: no such policy file"),

@@ -34,7 +34,7 @@ def test_the_command_line_becomes_the_settings(tmp_path: Path, monkeypatch) -> N
 @pytest.mark.parametrize(
     ("pilots", "message"),
     [
-        ({}, "exactly one of agent, policy and policy_file, got 0"),
+        ({}, "exactly one of agent, policy, policy_file and agent_file, got 0"),
         ({"agent": "dyna-q", "policy": "goal-tracker"}, "exactly one of .* got 2"),
         ({"agent": "dyna-q", "driver": "bluetooth"}, "driver one of sim, tcp, serial, ros2"),
     ],

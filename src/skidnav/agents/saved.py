@@ -56,6 +56,16 @@ def saved_json(path: SavedPath, what: str = "agent file") -> Path:
     return save_paths(path)[1]
 
 
+def saved_family(
+    path: SavedPath, what: str = "agent file"
+) -> tuple[Path, dict[str, Any], Family[Any]]:
+    """(the ``.json`` path, its content, the family of its format) of the agent or policy saved
+    at ``path``: which door it goes through (``skidnav robot run --agent-file``);
+    CorruptFileError in one line naming the file when it is unreadable or of no family's
+    format."""
+    return _saved(path, what)
+
+
 def _saved(path: SavedPath, what: str) -> tuple[Path, dict[str, Any], Family[Any]]:
     """(the ``.json`` path, its content, the family of its format); CorruptFileError in one line
     naming the ``what`` (``"agent file"``, ``"policy file"``) when it is unreadable or of no

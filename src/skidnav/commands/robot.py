@@ -207,6 +207,12 @@ def _add_run(commands: Any) -> None:
         type=Path,
         help="a saved continuous policy (its JSON file), loaded by the loader of its format",
     )
+    pilot.add_argument(
+        "--agent-file",
+        type=Path,
+        help="a saved agent of any family (skidnav run's runs/RUN/agent.json): tabular agents "
+        "and mppi-kinematic keep learning, the others act frozen",
+    )
     run.add_argument("--config", type=Path, help="real-time TOML config (configs/realtime.toml)")
     run.add_argument("--preset", help="a [presets.NAME] table of the config to apply")
     run.add_argument("--episodes", type=int, help="episodes to run (overrides the config)")
@@ -226,8 +232,9 @@ def _run_loop(args: argparse.Namespace) -> int:
     check_output_dir(args.out)
     settings = RobotRunSettings(
         out=args.out, driver=args.driver, agent=args.agent, policy=args.policy,
-        policy_file=args.policy_file, config=args.config, preset=args.preset,
-        episodes=args.episodes, time_scale=args.time_scale, reset=args.reset, resume=args.resume,
+        policy_file=args.policy_file, agent_file=args.agent_file, config=args.config,
+        preset=args.preset, episodes=args.episodes, time_scale=args.time_scale, reset=args.reset,
+        resume=args.resume,
     )  # fmt: skip
 
     def progress(line: str) -> None:

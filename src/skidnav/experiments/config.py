@@ -221,6 +221,10 @@ class ExperimentConfig:
         confidence: confidence level of every interval, in [0.5, 0.999].
         greedy_eval: evaluate the greedy policy after each episode (needed for the primary
             convergence definition).
+        save_agents: keep each run's trained agent, saved by its family's own ``save`` beside
+            its run file (``runs/<run_id>/agent.npz`` + ``agent.json``, with ``world.json`` and
+            ``map.txt``: the world it was trained for), for ``skidnav robot run --agent-file``
+            (docs/robot-learning.md). Default false.
         optimum_grids: state grids (n_x, n_y, n_headings), coarse to fine, at which the continuous
             optimum of every world is computed (:mod:`skidnav.experiments.reference.optimum`; the
             last is the reference, the one before it checks its convergence); () for none.
@@ -253,6 +257,7 @@ class ExperimentConfig:
     bootstrap_samples: int = 2000
     confidence: float = 0.95
     greedy_eval: bool = True
+    save_agents: bool = False
     optimum_grids: tuple[Levels, ...] = ()
     optimum_samples: int = 8
     optimum_rollouts: int = 100
@@ -332,10 +337,11 @@ class ExperimentConfig:
             check_levels("each of optimum_grids", levels)
         _check_range("optimum_samples", self.optimum_samples, 1, 1_000, integer=True)
         _check_range("optimum_rollouts", self.optimum_rollouts, 1, 10_000, integer=True)
-        if not isinstance(self.greedy_eval, bool):
-            raise ValueError(
-                f"expected greedy_eval to be true or false, got {shown(self.greedy_eval)}"
-            )
+        for name in ("greedy_eval", "save_agents"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(
+                    f"expected {name} to be true or false, got {shown(getattr(self, name))}"
+                )
         episodes = self.n_runs * self.episodes
         if episodes > MAX_TOTAL_EPISODES:
             raise ValueError(
@@ -361,13 +367,15 @@ class ExperimentConfig:
 
 def config_to_dict(config: ExperimentConfig) -> dict[str, Any]:
     """The resolved config as a JSON-ready dict (inverse of :func:`config_from_dict`). The
-    optimum settings and an agent's discretization appear only when set, so a config without
-    them keeps the dict, and the fingerprint, it had before they existed."""
+    optimum settings, ``save_agents`` and an agent's discretization appear only when set, so a
+    config without them keeps the dict, and the fingerprint, it had before they existed (a
+    resume that turns ``save_agents`` on is another config: the runs done lack their agents)."""
     data = _base_dict(config)
     optimum = {
         "optimum_grids": [list(levels) for levels in config.optimum_grids],
         "optimum_samples": config.optimum_samples,
         "optimum_rollouts": config.optimum_rollouts,
+        "save_agents": config.save_agents,
     }
     defaults = {field.name: field.default for field in dataclasses.fields(config)}
     data.update({k: v for k, v in optimum.items() if getattr(config, k) != defaults[k]})

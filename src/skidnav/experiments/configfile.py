@@ -52,6 +52,7 @@ EXPERIMENT_KEYS = (
     "bootstrap_samples",
     "confidence",
     "greedy_eval",
+    "save_agents",
     "optimum_grids",
     "optimum_samples",
     "optimum_rollouts",

@@ -6,6 +6,9 @@ Layout of a results directory::
     config.toml          the config file as given (when run from a file)
     runs/run-000042.npz  one finished run: episode arrays, final trajectory, maps, summary JSON,
                          the code that produced it (version, commit, dirty flag, session)
+    runs/run-000042/     with ``[experiment] save_agents``: its trained agent (agent.npz,
+                         agent.json, by the family's own save) and the world it was trained
+                         for (world.json, map.txt), written before the run file
     episodes.parquet     tidy: one row per (run, episode)
     summaries.parquet    one row per run: grid coordinates + every metric (also summaries.csv)
     metadata.json        config, package versions, git commit, seeds, every session (start,
@@ -34,9 +37,10 @@ kind is never read as another.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -53,6 +57,7 @@ from skidnav.experiments.runs import Grid
 from skidnav.experiments.tables import read_table
 from skidnav.files.atomic import (
     remove_stale_temporaries,
+    write_atomic,
     write_npz_atomic,
     write_user_file,
     writing,
@@ -97,6 +102,9 @@ class TrialResult(NamedTuple):
             ``start`` and ``goal`` (2,), ``slip_eta`` (regions_x, regions_y) [rad/s]. Cells
             without a learned value (walls, never updated) are NaN / −1 (see
             :func:`skidnav.experiments.trial.value_maps`).
+        files: files kept beside the run file, ``runs/<run_id>/<name>``, by name: the trained
+            agent of a config with ``save_agents`` (:func:`skidnav.experiments.trial.agent_files`);
+            empty otherwise.
     """
 
     run_id: str
@@ -104,6 +112,7 @@ class TrialResult(NamedTuple):
     episodes: dict[str, np.ndarray]
     summary: dict[str, float]
     arrays: dict[str, np.ndarray]
+    files: Mapping[str, bytes] = MappingProxyType({})
 
 
 _WORLD_ARRAYS = {
@@ -265,9 +274,25 @@ class ResultStore:
         """Ids of the runs already written."""
         return {path.stem for path in self.runs_dir.glob("run-*.npz")}
 
+    def run_folder(self, run_id: str) -> Path:
+        """Where the files kept beside the run file of ``run_id`` live (:attr:`TrialResult.files`:
+        ``agent.npz``, ``agent.json``, ``world.json``, ``map.txt``)."""
+        return self.runs_dir / run_id
+
     def write_run(self, result: TrialResult, code: dict[str, Any] | None = None) -> None:
         """Store one finished run atomically, with the record ``code`` of the code that produced
-        it (:mod:`skidnav.experiments.sessions`)."""
+        it (:mod:`skidnav.experiments.sessions`). Its files (:attr:`TrialResult.files`) are
+        written first, each atomically: a run whose run file exists has them all, and a run
+        killed before its run file is run again and writes them again."""
+        if result.files:
+            folder = self.run_folder(result.run_id)
+            with writing(folder, "agent folder"):
+                folder.mkdir(exist_ok=True)
+            remove_stale_temporaries(folder)
+            for name, data in result.files.items():
+                path = folder / name
+                with writing(path, "agent file"):
+                    write_atomic(path, data)
         payload: dict[str, np.ndarray] = {
             f"episode.{key}": np.asarray(value) for key, value in result.episodes.items()
         }

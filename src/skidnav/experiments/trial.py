@@ -27,6 +27,7 @@ import dataclasses
 import functools
 import logging
 import math
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -37,6 +38,7 @@ import numpy as np
 from skidnav.agents.catalog import CatalogAgent, CatalogEntry, entry
 from skidnav.agents.interface import Agent
 from skidnav.agents.tabular.agent import TabularAgent
+from skidnav.agents.trained_world import trained_world
 from skidnav.agents.training import Evaluation, TrainingLog, greedy_path
 from skidnav.envs.registration import allowed_env_modules, registered_env_id, with_env_modules
 from skidnav.envs.wrappers import FineStates
@@ -369,7 +371,23 @@ def measure_trial(spec: ExperimentRun) -> TrialResult:
     summary = run_metrics(episodes, poses, reached, rule, clock)
     summary["action_limit"] = float(max_steps)
     summary.update(world.summary_columns(rule))
-    return TrialResult(spec.run_id, spec.coordinates, episodes, summary, arrays)
+    files = agent_files(built.agent, env) if config.save_agents else {}
+    return TrialResult(spec.run_id, spec.coordinates, episodes, summary, arrays, files)
+
+
+def agent_files(agent: Agent, env: gymnasium.Env[Any, Any]) -> dict[str, bytes]:
+    """The files of a trained ``agent`` kept beside its run file (``[experiment] save_agents``),
+    by name: ``agent.npz`` and ``agent.json`` as its family's own ``save`` writes them (here
+    into a temporary folder, so that a worker process or a Dask worker hands back bytes, never
+    the agent), and, on the skid-steer env ``env`` (the agent's view of it), ``world.json`` and
+    ``map.txt``: the world it was trained for (:mod:`skidnav.agents.trained_world`)."""
+    with tempfile.TemporaryDirectory(prefix="skidnav-agent-") as folder:
+        paths = agent.save(Path(folder) / "agent")
+        files = {path.name: path.read_bytes() for path in paths}
+    world = trained_world(agent.name, env)
+    if world is not None:
+        files.update(world.files())
+    return files
 
 
 def check_config(config: ExperimentConfig, path: Path | str | None = None) -> None:

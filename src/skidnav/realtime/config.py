@@ -58,6 +58,12 @@ class RunSettings:
             before the end pose is read (at least 1); raise it with the link's latency.
         homing_timeout: longest homing [s robot time].
         keep_checkpoints: episode checkpoints kept on disk (the newest ones).
+        command_latency: how long after a command leaves the robot's wheels take it [s robot
+            time], ≥ 0: each kinematic log row pairs the motion of a period with the commands
+            in effect during it, the one before for this long and the new one for the rest
+            (their time-weighted mean). 0 (the default) pairs it with the new one alone; with a
+            pilot that changes its command every period (``mppi-kinematic``) and a link of 50 ms,
+            that halved the speeds its model learned (docs/robot-learning.md).
     """
 
     episodes: int = 20
@@ -76,6 +82,7 @@ class RunSettings:
     homing_timeout: float = 120.0
     settle_periods: int = 1
     keep_checkpoints: int = 3
+    command_latency: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("episodes", "max_actions", "substeps", "pose_timeout_periods"):
@@ -85,7 +92,7 @@ class RunSettings:
         for name in ("time_scale", "period", "homing_tolerance", "homing_timeout"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"expected {name} > 0, got {shown(getattr(self, name))}")
-        for name in ("arena_margin", "reconnect_timeout", "pose_timeout_min"):
+        for name in ("arena_margin", "reconnect_timeout", "pose_timeout_min", "command_latency"):
             if not getattr(self, name) >= 0:
                 raise ValueError(f"expected {name} >= 0, got {shown(getattr(self, name))}")
         settle = self.settle_periods

@@ -29,13 +29,13 @@ import json
 import math
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
 from skidnav.agents.geometry import geometry_json
 from skidnav.agents.mpc.config import MPPIConfig
-from skidnav.agents.mpc.costmap import MapCosts
+from skidnav.agents.mpc.costmap import CostMap, MapCosts
 from skidnav.agents.mpc.dynamics import (
     SampledDynamics,
     fixed_dynamics,
@@ -91,6 +91,14 @@ def ranges_of(observation: Any, lidar_rays: int) -> np.ndarray:
     if values.shape == (7 + lidar_rays,):
         return np.ascontiguousarray(values[7:])
     return np.zeros(0)
+
+
+class PlanningView(NamedTuple):
+    """A copy of what the planner reads (:meth:`MPPIKinematicAgent.planning_view`): the sampled
+    dynamics and the cost map."""
+
+    dynamics: SampledDynamics
+    cost_map: CostMap
 
 
 class MPPIKinematicAgent:
@@ -201,6 +209,25 @@ class MPPIKinematicAgent:
         float64 (2,)."""
         pose = pose_of(observation, self.lidar_rays)
         left, right = self.planner.step(pose, self.dynamics, self.evidence.cost_map, self.costs)
+        self.rollouts += self.config.samples
+        return np.array([left, right])
+
+    def planning_view(self) -> PlanningView:
+        """What :meth:`act` plans with, copied: the sampled dynamics and the cost map as they are
+        now. A learner off the control path (``skidnav robot run``, realtime/control/learner.py)
+        hands each new view to the control path, which plans on it (:meth:`act_on`) while the
+        agent goes on learning."""
+        return PlanningView(
+            SampledDynamics(*(np.copy(array) for array in self.dynamics)),
+            CostMap(*(np.copy(array) for array in self.evidence.cost_map)),
+        )
+
+    def act_on(self, observation: Any, view: PlanningView) -> np.ndarray:
+        """:meth:`act` on a :meth:`planning_view` instead of the agent's own model and map: the
+        wheel speeds (ω_L, ω_R) [rad/s], float64 (2,). Only the plan and the Generator move, so
+        it may run beside :meth:`observe` in another thread."""
+        pose = pose_of(observation, self.lidar_rays)
+        left, right = self.planner.step(pose, view.dynamics, view.cost_map, self.costs)
         self.rollouts += self.config.samples
         return np.array([left, right])
 

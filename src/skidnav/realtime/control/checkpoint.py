@@ -2,8 +2,9 @@
 
 Layout under ``OUT/checkpoints/``::
 
-    ep-00004/agent.npz, agent.json   the agent (agent.save; absent in a policy's run: it
-                                     does not learn)
+    ep-00004/agent.npz, agent.json   the agent (agent.save: a tabular agent's tables,
+                                     mppi-kinematic's model, map and plan; absent in a frozen
+                                     policy's run: it does not learn)
     ep-00004/loop.json               the loop state (episode results, wheel-speed statistics, …)
     latest.json                      {"episode": 4, "directory": "ep-00004"}
 
@@ -26,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from skidnav.agents.tabular.agent import TabularAgent
+from skidnav.agents.interface import Agent
 from skidnav.errors import CorruptFileError, first_line, shown
 from skidnav.files.atomic import remove_stale_temporaries, write_atomic
 from skidnav.files.saved import read_json
@@ -57,7 +58,7 @@ class Checkpoints:
         self.root = root
         self.keep = keep
 
-    def save(self, episode: int, agent: TabularAgent | None, loop_state: dict[str, Any]) -> Path:
+    def save(self, episode: int, agent: Agent | None, loop_state: dict[str, Any]) -> Path:
         """Write the checkpoint after ``episode`` (0-based) and point ``latest.json`` to it;
         ``agent`` None (a frozen policy) writes the loop state only."""
         name = directory_name(episode)

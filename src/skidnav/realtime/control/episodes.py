@@ -114,6 +114,11 @@ class EpisodeLoop(PeriodicControl):
         if icr_sums.shape == self.icr.sums.shape:
             self.icr.sums[:] = icr_sums
 
+    def summary_fields(self) -> dict[str, Any]:
+        """What the loop adds to the run's ``summary.json`` (nothing; a learner's loop adds its
+        control-period and learning statistics)."""
+        return {}
+
     def interrupt(self, reason: str) -> None:
         """Called from a signal handler: stop now and end the run."""
         self.interrupted = True

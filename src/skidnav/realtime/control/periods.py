@@ -68,6 +68,13 @@ class PeriodicControl:
         self._last_command = (0.0, 0.0)
         self._stamp_before = -math.inf  # lockstep: the robot stamp when the newest cmd left
         self._stale_periods = 0  # lockstep: periods in a row that brought no new pose
+        self.late_pose: float | None = None
+        """None (the default): each period of an action waits for its pose up to two periods
+        after its command (:meth:`_hold`). A share f of a period: a pilot that decides every
+        period (:mod:`.mppi_loop`) gives up on a period's pose f periods after it was due (a
+        whole number of periods after the newest pose's stamp) and goes on with the newest, so
+        a dropped pose delays its next decision by f of a period, not by a whole one; a
+        kinematic log row spanning more than 1.5 periods (two commands) is then left out."""
         period_wall = self.settings.period_wall
         self.monitor = SafetyMonitor(
             driver,
@@ -197,8 +204,8 @@ class PeriodicControl:
         Periods are counted on the robot's clock (pose stamps), not the host's: at a high time
         scale a host scheduling delay of a millisecond is a whole period, and counting it would
         make actions last 8 to 11 periods instead of ``substeps``. The wall clock only bounds
-        each wait (two periods), so a lost pose cannot stall the action."""
-        period, period_wall = self.settings.period, self.settings.period_wall
+        each wait (two periods; :attr:`late_pose`), so a lost pose cannot stall the action."""
+        period = self.settings.period
         pose, stamp = self._measure()
         first = stamp
         rows: list[np.ndarray] = []
@@ -207,18 +214,47 @@ class PeriodicControl:
             if self._would_collide(pose, command):
                 collided = True
                 break
+            previous = self._last_command
             self._command(*command)
             target = first + (k + 1) * period
-            new, new_stamp = self._wait_for_stamp(target, time.monotonic() + 2.0 * period_wall)
+            new, new_stamp = self._wait_for_stamp(target, self._pose_deadline(pose))
             region = self.grid.region(pose.x, pose.y)
-            row = log_row(pose, new, new_stamp - stamp, region, command)
+            in_effect = self._in_effect(previous, command, new_stamp - stamp)
+            row = log_row(pose, new, new_stamp - stamp, region, in_effect)
             if row is not None:
-                if k >= self.settings.settle_periods:
+                spans_one = self.late_pose is None or new_stamp - stamp <= 1.5 * period
+                if k >= self.settings.settle_periods and spans_one:
                     rows.append(row)
                 pose, stamp = new, new_stamp
         if stop or collided:
             pose = self._stop_and_settle(stamp)
         return pose, np.array(rows, dtype=np.float64).reshape(-1, 6), collided
+
+    def _in_effect(
+        self, previous: tuple[float, float], command: tuple[float, float], elapsed: float
+    ) -> tuple[float, float]:
+        """The wheel command (ω_L, ω_R) [rad/s] in effect, on average, over the ``elapsed``
+        [s robot time] after ``command`` replaced ``previous``: the wheels ran ``previous`` for
+        ``[run] command_latency`` of it (all of it at most), ``command`` for the rest."""
+        latency = self.settings.command_latency
+        if latency <= 0.0 or not elapsed > 0.0 or previous == command:
+            return command
+        share = min(1.0, latency / elapsed)
+        return (
+            share * previous[0] + (1.0 - share) * command[0],
+            share * previous[1] + (1.0 - share) * command[1],
+        )
+
+    def _pose_deadline(self, newest: Pose) -> float:
+        """When (monotonic [s]) a period's wait for its pose ends whatever its stamp, the
+        command just sent and ``newest`` the pose before it (:attr:`late_pose`)."""
+        period_wall, now = self.settings.period_wall, time.monotonic()
+        deadline = now + 2.0 * period_wall
+        if self.late_pose is None:
+            return deadline
+        # the next pose is due a whole number of periods after the newest one's stamp
+        periods = math.floor(max(0.0, now - newest.stamp) / period_wall) + 1
+        return min(deadline, newest.stamp + (periods + self.late_pose) * period_wall)
 
     def _stop_and_settle(self, stamp: float) -> Pose:
         """Stop the wheels and return the pose ``max(1, settle_periods)`` periods of robot time

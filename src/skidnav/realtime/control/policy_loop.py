@@ -132,9 +132,23 @@ class PolicyLoop(EpisodeLoop):
         truncated = last and not terminated
         self._log_transition(result, before, decision, end, reward, terminated, truncated,
                              collided, len(rows))  # fmt: skip
+        self._after_action(decision, end, rows, collided, reward, (terminated, truncated))
         if terminated and not collided and not last:  # stopped already otherwise
             self._stop_and_settle(self._measure()[1])
         return terminated or truncated
+
+    def _after_action(
+        self,
+        decision: Decision,
+        end: Pose,
+        rows: np.ndarray,
+        collided: bool,
+        reward: float,
+        ended: tuple[bool, bool],
+    ) -> None:
+        """Called after each action driven to its end (``end`` pose, kinematic log ``rows``
+        (n, 6), ``ended`` = (terminated, truncated)): a frozen policy learns nothing; a loop
+        whose pilot learns (:mod:`.mppi_loop`) hands the step on."""
 
     def _log_transition(
         self,

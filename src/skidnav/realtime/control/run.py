@@ -22,15 +22,21 @@ from typing import Any
 
 import numpy as np
 
+from skidnav.agents.mpc.agent import AGENT_NAME as MPPI_AGENT
+from skidnav.agents.mpc.agent import MPPIKinematicAgent
+from skidnav.agents.mpc.loading import load_mppi_agent
 from skidnav.envs.step_info import step_info
 from skidnav.errors import UserError, first_line, shown
 from skidnav.files.atomic import write_user_file
 from skidnav.files.outputs import make_output_dir
+from skidnav.realtime.agent_file import RunWorld, SavedPilot, check_loaded, open_agent_file
 from skidnav.realtime.arena import arena_map, seed_streams
 from skidnav.realtime.config import RealtimeConfig, load_config, with_overrides
 from skidnav.realtime.control.checkpoint import Checkpoints
 from skidnav.realtime.control.episodes import EpisodeLoop
 from skidnav.realtime.control.loop import RealtimeLoop
+from skidnav.realtime.control.mppi_agent import new_mppi_agent, warm_up_mppi
+from skidnav.realtime.control.mppi_loop import MPPILoop
 from skidnav.realtime.control.policy_loop import PolicyLoop
 from skidnav.realtime.control.transition import compile_scoring
 from skidnav.realtime.drivers import DRIVERS, make_driver, require_driver_extras
@@ -45,7 +51,7 @@ from skidnav.world.grid import GridMap
 @dataclass(frozen=True)
 class RobotRunSettings:
     """What a real-time run is asked for (``skidnav robot run``, docs/realtime.md), validated on
-    construction: exactly one pilot (``agent``, ``policy`` or ``policy_file``).
+    construction: exactly one pilot (``agent``, ``policy``, ``policy_file`` or ``agent_file``).
 
     Attributes:
         out: the output directory (run log, checkpoints, summary).
@@ -53,6 +59,8 @@ class RobotRunSettings:
         agent: a tabular agent that learns online, by registry name; None with a policy.
         policy: a named continuous policy (frozen: it does not learn), or None.
         policy_file: a saved continuous policy (its JSON file), or None.
+        agent_file: a saved agent of any family (:mod:`skidnav.realtime.agent_file`): a
+            tabular agent or ``mppi-kinematic`` keeps learning, the others act frozen; or None.
         config: the real-time TOML config (None: the defaults).
         preset: a ``[presets.NAME]`` table of the config to apply, or None.
         episodes: episodes to run, overriding ``[run] episodes`` (None: the config's).
@@ -67,6 +75,7 @@ class RobotRunSettings:
     agent: str | None = None
     policy: str | None = None
     policy_file: Path | None = None
+    agent_file: Path | None = None
     config: Path | None = None
     preset: str | None = None
     episodes: int | None = None
@@ -75,10 +84,13 @@ class RobotRunSettings:
     resume: bool = False
 
     def __post_init__(self) -> None:
-        pilots = [p for p in (self.agent, self.policy, self.policy_file) if p is not None]
+        pilots = [
+            p for p in (self.agent, self.policy, self.policy_file, self.agent_file) if p is not None
+        ]
         if len(pilots) != 1:
             raise ValueError(
-                f"expected exactly one of agent, policy and policy_file, got {len(pilots)}"
+                "expected exactly one of agent, policy, policy_file and agent_file, got "
+                f"{len(pilots)}"
             )
         if self.driver not in DRIVERS:
             raise ValueError(
@@ -87,14 +99,15 @@ class RobotRunSettings:
 
 
 def online_agent_class(name: str) -> type[Any]:
-    """The class of agent ``name`` if it learns online on the robot (the tabular family, the
-    one whose agents the real-time loop trains step by step); UserError in one line naming
-    those agents otherwise, or for an unknown name."""
+    """The class of agent ``name`` if it learns online on the robot (the tabular family, whose
+    agents the real-time loop trains step by step, and ``mppi-kinematic``, which learns off the
+    control path: :mod:`.mppi_loop`); UserError in one line naming those agents otherwise, or
+    for an unknown name."""
     from skidnav.agents.catalog import entry, family
 
     described = entry(name)
-    if described.family.name != "tabular":
-        online = ", ".join(family("tabular").agents)
+    if described.family.name != "tabular" and name != MPPI_AGENT:
+        online = ", ".join((*family("tabular").agents, MPPI_AGENT))
         raise UserError(
             f"agent {name!r} ({described.family.name} family) does not learn online on the "
             f"robot: expected one of {online} (a saved wheel-speed policy runs with "
@@ -120,9 +133,12 @@ def _make_or_resume_agent(
     settings: RobotRunSettings,
     config: RealtimeConfig,
     context: dict[str, Any],
-    grid: Discretization,
+    world: RunWorld,
+    saved: SavedPilot | None = None,
 ) -> tuple[Any, int, dict[str, Any] | None]:
-    """(agent ``name``, first episode, loop state to restore or None)."""
+    """(agent ``name``, first episode, loop state to restore or None): from the newest
+    checkpoint when resuming, else the ``saved`` agent (``--agent-file``, checked against the
+    run's ``world``) or a new one."""
     from skidnav.agents.tabular.registry import load_agent
 
     if settings.resume:
@@ -138,7 +154,11 @@ def _make_or_resume_agent(
         if agent.name != name:
             raise UserError(f"{directory}: checkpoint holds agent {agent.name!r}, not {name!r}")
         return agent, episode + 1, state
-    agent = new_agent(name, config, context, grid, seed_streams(config.run.seed)["agent"])
+    if saved is not None:
+        agent = load_agent(saved.json_path.with_suffix(""), **context)
+        check_loaded(agent, saved.json_path, world)
+        return agent, 0, None
+    agent = new_agent(name, config, context, world.grid, seed_streams(config.run.seed)["agent"])
     return agent, 0, None
 
 
@@ -213,18 +233,8 @@ def run_robot(
     require_driver_extras(settings.driver, config)
     robot, grid = RobotParams(), Discretization()
     grid_map = arena_map(config.run.map, config.run.seed, grid)
-    policy_name: str | None = None
-    if settings.agent is None:
-        pilot, policy_name = select_policy(settings.policy, settings.policy_file, config, robot)
-        action_duration = config.run.period * config.run.substeps
-        check_policy(pilot, policy_name, grid_map, grid, action_duration)
-        first_episode, state = _resume_policy(settings, policy_name)
-    else:
-        context = agent_context(settings.agent, robot, grid)
-        pilot, first_episode, state = _make_or_resume_agent(
-            settings.agent, settings, config, context, grid
-        )
-        warm_up_agent(settings.agent, config, context, grid.n_states)
+    world = RunWorld(robot, grid, config.run.period * config.run.substeps, grid_map)
+    pilot, first_episode, state, policy_name = _pilot(settings, config, world)
     out = make_output_dir(settings.out)  # a refused resume has written nothing
     code, loop = drive(
         settings.driver,
@@ -240,6 +250,74 @@ def run_robot(
         policy_name=policy_name,
     )
     return code, _summarize(loop, out, code)
+
+
+def _pilot(
+    settings: RobotRunSettings, config: RealtimeConfig, world: RunWorld
+) -> tuple[Any, int, dict[str, Any] | None, str | None]:
+    """(pilot, first episode, loop state to restore or None, policy label or None) of the run:
+    an agent that learns online (by name or ``--agent-file``), warmed up, or a frozen policy
+    (by name, ``--policy-file``, or ``--agent-file`` of a family that does not learn here),
+    asked once at the start."""
+    name, saved = settings.agent, None
+    if settings.agent_file is not None:
+        saved = open_agent_file(settings.agent_file, world)
+        if saved.learns:
+            name = saved.name
+    if name is None:
+        policy_file = saved.json_path if saved is not None else settings.policy_file
+        pilot, policy_name = select_policy(settings.policy, policy_file, config, world.robot)
+        check_policy(pilot, policy_name, world.grid_map, world.grid, world.action_duration)
+        first_episode, state = _resume_policy(settings, policy_name)
+        return pilot, first_episode, state, policy_name
+    if name == MPPI_AGENT:
+        mppi, first_episode, state = _mppi_agent(settings, config, world, saved)
+        warm_up_mppi(mppi, world.grid_map)
+        return mppi, first_episode, state, None
+    context = agent_context(name, world.robot, world.grid)
+    agent, first_episode, state = _make_or_resume_agent(
+        name, settings, config, context, world, saved
+    )
+    warm_up_agent(name, config, context, world.grid.n_states)
+    return agent, first_episode, state, None
+
+
+def _mppi_agent(
+    settings: RobotRunSettings, config: RealtimeConfig, world: RunWorld, saved: SavedPilot | None
+) -> tuple[MPPIKinematicAgent, int, dict[str, Any] | None]:
+    """(``mppi-kinematic``, first episode, loop state to restore or None): from the newest
+    checkpoint when resuming, else the ``saved`` agent (checked against the run's ``world``) or
+    a new one (:func:`~.mppi_agent.new_mppi_agent`)."""
+    if settings.resume:
+        episode, directory, state = _latest_agent_checkpoint(settings.out, MPPI_AGENT)
+        return _load_mppi(directory / "agent.json", world), episode + 1, state
+    if saved is not None:
+        return _load_mppi(saved.json_path, world), 0, None
+    rng = seed_streams(config.run.seed)["agent"]
+    table = config.agents.get(MPPI_AGENT, {})
+    agent = new_mppi_agent(
+        table, world.robot, world.grid, world.action_duration, world.grid_map, rng
+    )
+    return agent, 0, None
+
+
+def _load_mppi(json_path: Path, world: RunWorld) -> MPPIKinematicAgent:
+    agent = load_mppi_agent(json_path)
+    check_loaded(agent, json_path, world)
+    return agent
+
+
+def _latest_agent_checkpoint(out: Path, name: str) -> tuple[int, Path, dict[str, Any]]:
+    """(episode, directory, loop state) of the newest checkpoint in ``out``, which must hold
+    agent ``name`` (UserError otherwise)."""
+    latest = Checkpoints(out / "checkpoints").latest()
+    if latest is None:
+        raise UserError(f"{out}: no checkpoint to resume from")
+    episode, directory, state = latest
+    if "policy" in state or state.get("agent", name) != name:
+        holder = f"policy {shown(state['policy'])}" if "policy" in state else state.get("agent")
+        raise UserError(f"{directory}: checkpoint holds {holder}, not agent {name!r}")
+    return episode, directory, state
 
 
 def _resume_policy(settings: RobotRunSettings, label: str) -> tuple[int, dict[str, Any] | None]:
@@ -298,7 +376,9 @@ def drive(
             "wait_for_operator": wait_for_operator,
         }
         loop: EpisodeLoop
-        if policy_name is None:
+        if isinstance(agent, MPPIKinematicAgent):
+            loop = MPPILoop(driver, agent, grid_map, config, out, **common)
+        elif policy_name is None:
             loop = RealtimeLoop(driver, agent, grid_map, config, out, **common)
         else:
             loop = PolicyLoop(
@@ -323,6 +403,7 @@ def _summarize(loop: EpisodeLoop, out: Path, code: int) -> str:
         "aborted": sum(r.aborted for r in results),
         "actions": sum(r.actions for r in results),
         "last_abort_reason": next((r.reason for r in reversed(results) if r.aborted), None),
+        **loop.summary_fields(),
     }
     write_user_file(out / "summary.json", json.dumps(summary, indent=1).encode(), "run summary")
     return (
