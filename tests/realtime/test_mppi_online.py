@@ -81,9 +81,13 @@ def test_refits_run_off_the_control_path_and_the_period_holds(
     assert period["count"] == len(transitions) - 1
     assert period["median"] == pytest.approx(PERIOD, rel=0.05)
     assert period["p95"] <= 1.2 * PERIOD
-    # the period around each refit: the decisions while it ran came on time
+    # the period around each refit that ran while the robot drove (a learner that lags on a
+    # loaded machine may run one after the last action, while the loop waits for it): the
+    # decisions while it ran came on time
     decisions = np.array([e["mono"] for e in transitions])
-    for event in refits:
+    while_driving = [e for e in refits if e["mono"] - e["seconds"] < decisions[-1] - 2.5 * PERIOD]
+    assert while_driving
+    for event in while_driving:
         started = event["mono"] - event["seconds"]
         during = decisions[(decisions > started) & (decisions < event["mono"])]
         assert len(during) >= 2
@@ -145,10 +149,12 @@ def test_a_lost_pose_trips_stops_and_the_learner_keeps_what_it_learned(tmp_path:
     events = read_events(out / "run.jsonl")
     trip = next(e for e in events if e["event"] == "trip")
     assert "pose stale" in trip["reason"]
-    assert [e["confirmed"] for e in events if e["event"] == "stopped"] == [True]
+    stops = [e["confirmed"] for e in events if e["event"] == "stopped"]
+    assert stops and all(stops)  # one per trip (a loaded machine may add a late-pose trip)
     assert any(e["event"] == "reconnected" for e in events)
     summary = json.loads((out / "summary.json").read_text())
-    assert (summary["episodes"], summary["aborted"], summary["exit_code"]) == (2, 1, 0)
+    assert (summary["episodes"], summary["exit_code"]) == (2, 0)
+    assert summary["aborted"] >= 1
     transitions = [e for e in events if e["event"] == "transition"]
     assert summary["learning"]["steps"] == len(transitions)
     learned = agent_at(out / "checkpoints" / "ep-00001")

@@ -6,8 +6,9 @@ learned map (docs/agents/mppi-kinematic.md).
 Modules: ``config`` (:class:`~skidnav.agents.mpc.config.MPPIConfig`), ``dynamics`` (the model as
 the rollouts sample it), ``costmap`` (wall evidence as costs, the cells' cost-to-go, the terminal
 value), ``lattice`` (the states' heading-aware cost-to-go), ``evidence`` (what a real step
-teaches the map), ``rollouts`` (the compiled K × H batch), ``planner`` (the MPPI step), ``agent``
-(:class:`~skidnav.agents.mpc.agent.MPPIKinematicAgent`, its frozen
-:class:`~skidnav.agents.mpc.agent.MPPIPolicy`, saving), ``loading``, ``training``
+teaches the map), ``rollouts`` (the compiled K × H batch), ``planner`` (the MPPI step),
+``observations`` (the pose and lidar readings of an observation), ``agent``
+(:class:`~skidnav.agents.mpc.agent.MPPIKinematicAgent`, saving), ``policy`` (its frozen
+:class:`~skidnav.agents.mpc.policy.MPPIPolicy`), ``loading``, ``training``
 (:func:`~skidnav.agents.mpc.training.train_mppi`).
 """

@@ -24,9 +24,7 @@ it knew of the map stay as they were, but within a rollout it still marks what i
 
 from __future__ import annotations
 
-import copy
 import json
-import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, ClassVar, NamedTuple
@@ -46,7 +44,9 @@ from skidnav.agents.mpc.dynamics import (
     update_dynamics,
 )
 from skidnav.agents.mpc.evidence import MapEvidence
+from skidnav.agents.mpc.observations import pose_of, ranges_of
 from skidnav.agents.mpc.planner import MPPIPlanner
+from skidnav.agents.mpc.policy import MPPIPolicy
 from skidnav.agents.saving import generator_state, save_paths
 from skidnav.envs.navigation import with_control_period
 from skidnav.errors import UserError, first_line
@@ -64,33 +64,6 @@ SAVE_VERSION = 3
 GREEDY_SEED = 0
 """The seed of the frozen planner :meth:`MPPIKinematicAgent.greedy_action` rolls out: every
 greedy rollout draws the same numbers, none of the agent's."""
-
-
-def pose_of(observation: Any, lidar_rays: int) -> np.ndarray:
-    """The pose (x [m], y [m], heading [rad]) float64 (3,) of a pose observation (3,) or of a
-    feature observation (7 + ``lidar_rays``,) (x, y, cos ψ, sin ψ, …); ValueError otherwise."""
-    values = np.asarray(observation, dtype=np.float64)
-    if values.shape == (3,):
-        pose = values.copy()
-    elif values.shape == (7 + lidar_rays,):
-        pose = np.array([values[0], values[1], math.atan2(values[3], values[2])])
-    else:
-        raise ValueError(
-            f"expected a pose (3,) or a feature observation ({7 + lidar_rays},), got shape "
-            f"{values.shape}"
-        )
-    if not np.isfinite(pose).all():
-        raise ValueError("expected a finite pose")
-    return pose
-
-
-def ranges_of(observation: Any, lidar_rays: int) -> np.ndarray:
-    """The lidar readings [m] float64 (``lidar_rays``,) of a feature observation (its entries
-    7 onwards), or (0,) for a pose observation (which holds none)."""
-    values = np.asarray(observation, dtype=np.float64)
-    if values.shape == (7 + lidar_rays,):
-        return np.ascontiguousarray(values[7:])
-    return np.zeros(0)
 
 
 class PlanningView(NamedTuple):
@@ -340,52 +313,6 @@ class MPPIKinematicAgent:
         write_npz_atomic(npz_path, self.state_arrays(), compress=True)
         write_atomic(json_path, json.dumps(self.metadata(), indent=1).encode("utf-8"))
         return npz_path, json_path
-
-
-class MPPIPolicy:
-    """A frozen ``mppi-kinematic`` planner: a
-    :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`.
-
-    MPPI is a controller with a state (its plan, warm-started from step to step) and samples
-    from its own Generator: the wheel speeds depend on the observation, the plan and the draws,
-    the same for the same seed and observations. :meth:`reset` forgets the plan (a new episode).
-    """
-
-    def __init__(self, agent: MPPIKinematicAgent, seed: int) -> None:
-        self.lidar_rays, self.lidar_range = agent.lidar_rays, agent.lidar_range
-        self.goal = agent.goal
-        """The goal cell (i, j) it drives to."""
-        self.control_period = agent.robot.action_duration
-        """The duration [s] of one action it plans with: a run must hold each command as long."""
-        self.dynamics = SampledDynamics(*(np.copy(array) for array in agent.dynamics))
-        self._frozen_evidence = copy.deepcopy(agent.evidence)
-        self.evidence = copy.deepcopy(self._frozen_evidence)
-        """The map it plans on: the agent's as frozen, plus what its lidar has read since the
-        rollout started (:meth:`wheel_speeds`)."""
-        self.costs = agent.costs
-        self.planner = MPPIPlanner(
-            agent.config, agent.kernel_robot, agent.kernel_grid, np.random.default_rng(seed)
-        )
-
-    def wheel_speeds(self, observation: np.ndarray) -> tuple[float, float]:
-        """(ω_L, ω_R) [rad/s] for a pose (3,) or feature observation (7 + k,). The lidar
-        readings of a feature observation go into the rollout's map first, as the agent's own
-        steps put them into its map: a navigator sees the walls in front of it whether or not
-        it learns (the model stays frozen, and :meth:`reset` forgets the readings)."""
-        pose = pose_of(observation, self.lidar_rays)
-        ranges = ranges_of(observation, self.lidar_rays)
-        self.evidence.record_readings(pose, ranges, self.lidar_range, self.dynamics)
-        return self.planner.step(pose, self.dynamics, self.evidence.cost_map, self.costs)
-
-    def reset(self) -> None:
-        """Forget the plan and what the lidar read since the policy was frozen."""
-        self.planner.reset()
-        self.evidence = copy.deepcopy(self._frozen_evidence)
-
-    def start_greedy_rollout(self) -> None:
-        """A rollout (an episode) starts: :meth:`reset`
-        (:class:`~skidnav.agents.training.RolloutState`)."""
-        self.reset()
 
 
 def map_costs(config: MPPIConfig, robot: RobotParams, goal: tuple[int, int]) -> MapCosts:

@@ -24,10 +24,10 @@ from skidnav.agents.mpc.agent import (
     SAVE_FORMAT,
     SAVE_VERSION,
     MPPIKinematicAgent,
-    MPPIPolicy,
 )
 from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.dynamics import SampledDynamics, lattice_coefficients
+from skidnav.agents.mpc.policy import MPPIPolicy
 from skidnav.agents.saving import generator_from_state, save_paths
 from skidnav.errors import UserError, shown
 from skidnav.files.saved import ArraySpec, SavedArchive, loading, read_json
