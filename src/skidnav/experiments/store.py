@@ -40,7 +40,6 @@ import json
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from types import MappingProxyType
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -83,6 +82,11 @@ measured), and its summary lacks the columns added with them (``oracle_cost``,
 GRID_COLUMNS = ("run_id", "agent", "algorithm", "map", "preset", "seed")
 
 
+NO_FILES: Mapping[str, bytes] = {}
+"""The files of a run that keeps none (read only; a plain dict, so that a result crosses to the
+runner's process: a ``MappingProxyType`` cannot be pickled)."""
+
+
 class TrialResult(NamedTuple):
     """What one run sends back to the runner (picklable: plain arrays, dicts and strings).
 
@@ -112,7 +116,7 @@ class TrialResult(NamedTuple):
     episodes: dict[str, np.ndarray]
     summary: dict[str, float]
     arrays: dict[str, np.ndarray]
-    files: Mapping[str, bytes] = MappingProxyType({})
+    files: Mapping[str, bytes] = NO_FILES
 
 
 _WORLD_ARRAYS = {
