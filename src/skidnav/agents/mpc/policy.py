@@ -39,9 +39,10 @@ class MPPIPolicy:
     """A frozen ``mppi-kinematic`` planner: a
     :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy`.
 
-    MPPI is a controller with a state (its plan, warm-started from step to step) and samples
-    from its own Generator: the wheel speeds depend on the observation, the plan and the draws,
-    the same for the same seed and observations. :meth:`reset` forgets the plan (a new episode).
+    MPPI is a controller with a state (its plan, warm-started from step to step, and the
+    rollout's map) and samples from its own Generator: the wheel speeds depend on the rollout's
+    observations, the plan and the draws, the same for the same seed and observations.
+    :meth:`reset` forgets the plan and the readings (a new episode).
     """
 
     def __init__(self, agent: Planning, seed: int) -> None:
