@@ -51,8 +51,9 @@ def test_every_agent_round_trips_through_the_api(name: str, tmp_path: Path) -> N
     observation, _ = env.reset(seed=3)
     start_rollout(agent)  # a planner with a state of its own starts each rollout afresh
     before = np.asarray(agent.greedy_action(observation))
-    returned = skidnav.save_agent(agent, tmp_path / "agent")
-    for where in (returned, tmp_path / "agent", returned[0]):
+    stem = tmp_path / "not-yet" / "agent"  # a folder that does not exist yet
+    returned = skidnav.save_agent(agent, stem)
+    for where in (returned, stem, returned[0]):
         loaded = skidnav.load_agent(where, env)
         assert loaded.name == name
         start_rollout(loaded)

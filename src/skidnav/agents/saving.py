@@ -24,6 +24,13 @@ def save_paths(path: str | Path) -> tuple[Path, Path]:
     return base.with_name(base.name + ".npz"), base.with_name(base.name + ".json")
 
 
+def new_save_paths(path: str | Path) -> tuple[Path, Path]:
+    """:func:`save_paths` of an agent about to be written: its folder is created if missing."""
+    npz_path, json_path = save_paths(path)
+    npz_path.parent.mkdir(parents=True, exist_ok=True)
+    return npz_path, json_path
+
+
 def generator_state(rng: np.random.Generator) -> dict[str, Any]:
     """The generator's bit-generator state as a JSON-able dict."""
     return dict(rng.bit_generator.state)

@@ -39,7 +39,7 @@ import numpy as np
 from gymnasium.wrappers import RescaleObservation
 from gymnasium.wrappers.utils import rescale_box
 
-from skidnav.agents.saving import save_paths
+from skidnav.agents.saving import new_save_paths, save_paths
 from skidnav.agents.training import (
     NO_EVALUATION,
     Episode,
@@ -276,8 +276,7 @@ class DeepAgent(Generic[ConfigT]):
     def save(self, path: str | Path) -> tuple[Path, Path]:
         """Write ``path.npz`` (the acting network's weights) and ``path.json`` (config, spaces,
         seed, counters), each atomically. Returns both paths."""
-        npz_path, json_path = save_paths(path)
-        npz_path.parent.mkdir(parents=True, exist_ok=True)
+        npz_path, json_path = new_save_paths(path)
         write_npz_atomic(npz_path, self.weights(), compress=True)
         space = self.scaled.env.observation_space
         assert isinstance(space, gymnasium.spaces.Box)

@@ -31,7 +31,7 @@ import numpy as np
 from skidnav.agents.linear.config import LinearConfig
 from skidnav.agents.linear.tile_coding import active_tiles, check_coder
 from skidnav.agents.linear.updates import choose_action, greedy_linear
-from skidnav.agents.saving import generator_from_state, generator_state, save_paths
+from skidnav.agents.saving import generator_from_state, generator_state, new_save_paths
 from skidnav.errors import CorruptFileError, shown
 from skidnav.files.atomic import write_atomic, write_npz_atomic
 from skidnav.sim.q_values import epsilon_at
@@ -204,8 +204,7 @@ class LinearAgent:
     def save(self, path: str | Path) -> tuple[Path, Path]:
         """Write ``path.npz`` (arrays) and ``path.json`` (name, bounds, config, counters,
         generator state), each atomically. Returns both paths."""
-        npz_path, json_path = save_paths(path)
-        npz_path.parent.mkdir(parents=True, exist_ok=True)
+        npz_path, json_path = new_save_paths(path)
         write_npz_atomic(npz_path, self.state_arrays(), compress=True)
         meta = {
             "format": SAVE_FORMAT,

@@ -47,7 +47,7 @@ from skidnav.agents.mpc.evidence import MapEvidence
 from skidnav.agents.mpc.observations import pose_of, ranges_of
 from skidnav.agents.mpc.planner import MPPIPlanner
 from skidnav.agents.mpc.policy import MPPIPolicy
-from skidnav.agents.saving import generator_state, save_paths
+from skidnav.agents.saving import generator_state, new_save_paths
 from skidnav.envs.navigation import with_control_period
 from skidnav.errors import UserError, first_line
 from skidnav.files.atomic import write_atomic, write_npz_atomic
@@ -308,8 +308,7 @@ class MPPIKinematicAgent:
         """Write ``path.npz`` (:meth:`state_arrays`) and ``path.json`` (:meth:`metadata`), each
         atomically, never pickle; read back by :func:`skidnav.agents.mpc.loading.load_mppi_agent`.
         Returns both paths."""
-        npz_path, json_path = save_paths(path)
-        npz_path.parent.mkdir(parents=True, exist_ok=True)
+        npz_path, json_path = new_save_paths(path)
         write_npz_atomic(npz_path, self.state_arrays(), compress=True)
         write_atomic(json_path, json.dumps(self.metadata(), indent=1).encode("utf-8"))
         return npz_path, json_path

@@ -22,7 +22,7 @@ from skidnav.agents.geometry import geometry_from_json, geometry_json
 from skidnav.agents.policies.goal_tracker import POLICY_NAME, GoalTracker, GoalTrackerConfig
 from skidnav.agents.policies.search.policy_file import policy_from_file, save_policy
 from skidnav.agents.policies.search.tanh_policy import TanhPolicy
-from skidnav.agents.saving import save_paths
+from skidnav.agents.saving import new_save_paths
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError, UserError, first_line, shown
 from skidnav.files.atomic import write_atomic, write_npz_atomic
@@ -79,7 +79,7 @@ class GoalTrackerAgent(PolicyAgent):
 
     def save(self, path: str | Path) -> tuple[Path, Path]:
         """Write ``path.json`` (its gains and robot) and an empty ``path.npz``; both paths."""
-        npz_path, json_path = save_paths(path)
+        npz_path, json_path = new_save_paths(path)
         meta = {
             "format": GOAL_TRACKER_FORMAT,
             "version": GOAL_TRACKER_VERSION,

@@ -38,7 +38,7 @@ from skidnav.agents.learning import (
     experience_from_info,
     learn,
 )
-from skidnav.agents.saving import generator_from_state, generator_state, save_paths
+from skidnav.agents.saving import generator_from_state, generator_state, new_save_paths
 from skidnav.errors import CorruptFileError, shown
 from skidnav.files.atomic import write_atomic, write_npz_atomic
 from skidnav.sim.q_values import epsilon_at, epsilon_greedy, greedy_first
@@ -199,8 +199,7 @@ class TabularAgent(Generic[ArraysT, SettingsT]):
         generator state), each atomically (:func:`~skidnav.files.atomic.write_npz_atomic`,
         :func:`~skidnav.files.atomic.write_atomic`): a failure or a kill leaves the old file, never
         a torn one. Returns both paths."""
-        npz_path, json_path = save_paths(path)
-        npz_path.parent.mkdir(parents=True, exist_ok=True)
+        npz_path, json_path = new_save_paths(path)
         write_npz_atomic(npz_path, {"q": self.q, **self._state_arrays()}, compress=True)
         meta = {
             "format": SAVE_FORMAT,

@@ -35,7 +35,7 @@ from skidnav.agents.policies.search.tanh_policy import (
     TanhPolicy,
     parameter_count,
 )
-from skidnav.agents.saving import save_paths
+from skidnav.agents.saving import new_save_paths, save_paths
 from skidnav.checks import check_magnitude, check_number
 from skidnav.errors import CorruptFileError, first_line, shown
 from skidnav.files.atomic import write_atomic, write_npz_atomic
@@ -53,7 +53,7 @@ def save_policy(
     """Write ``path.npz`` and ``path.json`` (a ``.npz``/``.json`` suffix of ``path`` is dropped),
     each atomically; ``provenance`` (JSON-able) is stored as it is. Returns both paths; raises
     OSError."""
-    npz_path, json_path = save_paths(path)
+    npz_path, json_path = new_save_paths(path)
     layout = policy.layout
     arrays = {
         "parameters": policy.parameters,
