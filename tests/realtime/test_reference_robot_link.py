@@ -15,6 +15,7 @@ import pytest
 
 from skidnav.realtime.link import protocol as pr
 from skidnav.realtime.link.line_client import LineClient, SerialLink, TcpLink
+from tests.cli_support import exit_code
 from tests.realtime.realtime_helpers import (
     RawClient,
     read_events,
@@ -24,7 +25,7 @@ from tests.realtime.realtime_helpers import (
 )
 from tests.realtime.reference_robot_helpers import PtyBridge, RobotProcess, RobotThread
 from tests.realtime.test_link_auth import refused
-from tests.realtime.test_wire_server import busy_or_closed, next_reply
+from tests.realtime.test_wire_server import busy_or_closed, check_replays_refused
 
 SECRET = b"the lab's shared secret, 33 bytes"
 
@@ -88,23 +89,9 @@ def test_a_second_host_is_busy_and_the_slot_frees_when_the_first_leaves() -> Non
 @pytest.mark.parametrize("secret", [None, SECRET], ids=["plain", "auth"])
 def test_a_replayed_or_older_command_is_refused_not_acknowledged(secret: bytes | None) -> None:
     with RobotThread(secret=secret) as robot:
-        client = RawClient(robot.port, secret=secret)
-        client.hello()
-        client.command(1.7, 1.7)
-        assert isinstance(next_reply(client), pr.Ack)
-        client.sock.sendall(client.sent[-1])  # the very same line again
-        replayed = next_reply(client)
-        assert isinstance(replayed, pr.Error) and replayed.code == "replay"
-        assert robot.base.wheels == (0.0, 0.0)
-        client.seq -= 2  # an older seq, correctly authenticated
-        client.command(1.7, 1.7)
-        older = next_reply(client)
-        assert isinstance(older, pr.Error) and older.code == "replay"
-        client.seq += 5
-        fresh = client.command(1.7, 1.7)
-        ack = next_reply(client)
-        assert isinstance(ack, pr.Ack) and ack.ack == fresh
-        client.close()
+        check_replays_refused(
+            RawClient(robot.port, secret=secret), lambda: robot.base.wheels == (0.0, 0.0)
+        )
 
 
 @pytest.mark.parametrize(
@@ -317,10 +304,7 @@ def test_bad_arguments_end_in_one_line_and_exit_code_2(
     short = tmp_path / "short.key"
     short.write_text("short\n", encoding="utf-8")
     arguments = [a.format(short=short, missing=tmp_path / "no-such-port") for a in argv]
-    try:
-        code = main(arguments)
-    except SystemExit as leave:
-        code = int(leave.code or 0)
+    code = exit_code(arguments, main)
     captured = capsys.readouterr()
     lines = captured.err.strip().splitlines()
     assert code == 2 and captured.out == ""

@@ -8,6 +8,7 @@ import selectors
 import socket
 import struct
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -249,23 +250,31 @@ def next_reply(client: RawClient) -> pr.Message:
             return message
 
 
+def check_replays_refused(client: RawClient, stopped: Callable[[], bool]) -> None:
+    """After a ``hello`` and an acknowledged ``cmd``: the same line again, and a correctly
+    authenticated older ``seq``, are refused (``replay``), the robot standing (``stopped()``) after
+    the replay; a newer ``seq`` is acknowledged again. Closes ``client``."""
+    client.hello()
+    client.command(1.7, 1.7)
+    assert isinstance(next_reply(client), pr.Ack)
+    client.sock.sendall(client.sent[-1])  # the very same line again
+    replayed = next_reply(client)
+    assert isinstance(replayed, pr.Error) and replayed.code == "replay"
+    assert stopped()
+    client.seq -= 2  # an older seq, correctly authenticated
+    client.command(1.7, 1.7)
+    older = next_reply(client)
+    assert isinstance(older, pr.Error) and older.code == "replay"
+    client.seq += 5
+    fresh = client.command(1.7, 1.7)
+    ack = next_reply(client)
+    assert isinstance(ack, pr.Ack) and ack.ack == fresh
+    client.close()
+
+
 @pytest.mark.parametrize("secret", [None, b"a shared secret of the lab"], ids=["plain", "auth"])
 def test_a_replayed_or_older_command_is_refused_not_acknowledged(secret: bytes | None) -> None:
     with ServerThread(TIME_SCALE, options={"secret": secret}) as server:
-        client = RawClient(server.port, secret=secret)
-        client.hello()
-        client.command(1.7, 1.7)
-        assert isinstance(next_reply(client), pr.Ack)
-        client.sock.sendall(client.sent[-1])  # the very same line again
-        replayed = next_reply(client)
-        assert isinstance(replayed, pr.Error) and replayed.code == "replay"
-        assert not server.robot.moving
-        client.seq -= 2  # an older seq, correctly authenticated
-        client.command(1.7, 1.7)
-        older = next_reply(client)
-        assert isinstance(older, pr.Error) and older.code == "replay"
-        client.seq += 5
-        fresh = client.command(1.7, 1.7)
-        ack = next_reply(client)
-        assert isinstance(ack, pr.Ack) and ack.ack == fresh
-        client.close()
+        check_replays_refused(
+            RawClient(server.port, secret=secret), lambda: not server.robot.moving
+        )
