@@ -179,11 +179,8 @@ class MPPIKinematicAgent:
 
     def act(self, observation: Any) -> np.ndarray:
         """The wheel speeds (ω_L, ω_R) [rad/s] to command at ``observation`` (one MPPI step),
-        float64 (2,)."""
-        pose = pose_of(observation, self.lidar_rays)
-        left, right = self.planner.step(pose, self.dynamics, self.evidence.cost_map, self.costs)
-        self.rollouts += self.config.samples
-        return np.array([left, right])
+        float64 (2,): :meth:`act_on` the agent's own dynamics and map, uncopied."""
+        return self.act_on(observation, PlanningView(self.dynamics, self.evidence.cost_map))
 
     def planning_view(self) -> PlanningView:
         """What :meth:`act` plans with, copied: the sampled dynamics and the cost map as they are
