@@ -24,11 +24,13 @@ from skidnav.robot.presets import robot_preset
 from skidnav.robot.slip import SlipField, make_slip_field
 from skidnav.seeding import ARENA_ROLES, streams
 from skidnav.sim.features import PoseFeatures
+from skidnav.sim.lidar import FULL_TURN
 from skidnav.sim.navigation import NavigationTask, RewardScheme
 from skidnav.sim.task import build_task, step_arrays, task_arrays
 from skidnav.world import rendering
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
+from skidnav.world.mapfile import load_map_file
 from skidnav.world.maps import build_map
 
 OBSERVATION_KINDS = ("discrete", "pose", "features")
@@ -76,12 +78,17 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     the goal it ranks paths as the return does.
 
     ## Starting State
-    The centre of the map's start cell, heading 0 (facing +x).
+    The centre of the map's start cell, heading 0 (facing +x); or ``start_pose`` (x [m], y [m],
+    heading [rad]), which a map file of format version 2 may give (``start`` line).
 
     ## Episode End
-    Terminated when an action ends in the goal cell. The env itself never truncates: Gymnasium's
-    ``TimeLimit`` does, which ``gymnasium.make`` adds after 500 actions (registered
-    ``max_episode_steps``; ``gymnasium.make(..., max_episode_steps=N)`` overrides it and
+    Terminated when an action ends in the goal cell; with a goal disc (``goal_disc`` (x [m], y [m],
+    radius [m]) or a version-2 map file's ``goal`` line, as the BARN worlds have), when it ends
+    within the disc instead. A robot with a footprint (``RobotParams.footprint_length`` ×
+    ``footprint_width``, the Jackal's) collides when its rectangle touches a wall cell's inscribed
+    disc (:mod:`skidnav.sim.footprint`), a point robot when it enters a wall cell. The env itself
+    never truncates: Gymnasium's ``TimeLimit`` does, which ``gymnasium.make`` adds after 500 actions
+    (registered ``max_episode_steps``; ``gymnasium.make(..., max_episode_steps=N)`` overrides it and
     ``env.spec.max_episode_steps`` says which applies). Built directly, wrap it in
     ``gymnasium.wrappers.TimeLimit`` for a limit. Agents bootstrap on truncation, never on
     termination.
@@ -99,16 +106,16 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     ``map_kind`` ("free", "obstacles", "maze") or ``map_file`` (plain-text map) or ``grid_map``;
     ``world_seed`` (draws the map and the slip field; the map does not change between episodes);
     ``slip`` preset (:data:`skidnav.robot.slip.SLIP_PRESETS`: "thesis", "slippery", "rough",
-    "nominal", "rough-physics", "slippery-physics", "ice-physics") or
-    ``slip_field``; ``drift_amplitude`` and ``drift_period`` [s] (non-stationary slip; the clock
-    runs across episodes and restarts when ``reset`` is given a seed); ``robot``
-    (:class:`RobotParams`, e.g. ``integrator="exact"``, or a robot's name, "thesis" or
-    "jackal", :data:`skidnav.robot.presets.ROBOT_PRESETS`); ``discretization``; ``observation``
-    ("discrete", "pose", "features"); ``lidar_rays`` (k ≥ 0, default 8) and ``lidar_range`` [m]
-    (> 0, default 0.3) of the features; ``variance``; ``render_mode`` ("rgb_array" or "ansi");
-    ``action`` ("discrete", the default, or "continuous"); ``control_period`` [s]: the duration of
-    one action, a whole number of the robot's sub-steps of ``robot.dt`` (default
-    ``robot.action_duration``, 1 s: the robot's ``substeps`` are replaced by
+    "nominal", "rough-physics", "slippery-physics", "ice-physics") or ``slip_field``;
+    ``drift_amplitude`` and ``drift_period`` [s] (non-stationary slip; the clock runs across
+    episodes and restarts when ``reset`` is given a seed); ``robot`` (:class:`RobotParams`, e.g.
+    ``integrator="exact"``, or a robot's name, "thesis" or "jackal",
+    :data:`skidnav.robot.presets.ROBOT_PRESETS`); ``discretization``; ``observation`` ("discrete",
+    "pose", "features"); ``lidar_rays`` (k ≥ 0, default 8), ``lidar_range`` [m] (> 0, default 0.3)
+    and ``lidar_fov`` [rad] (in (0, 2π], default 2π) of the features; ``variance``; ``render_mode``
+    ("rgb_array" or "ansi"); ``action`` ("discrete", the default, or "continuous");
+    ``control_period`` [s]: the duration of one action, a whole number of the robot's sub-steps of
+    ``robot.dt`` (default ``robot.action_duration``, 1 s: the robot's ``substeps`` are replaced by
     ``control_period / dt``); ``dynamics``: "kinematic" (the ICR model of Kozłowski & Pazderski
     (2004), the default) or "mujoco" (the MuJoCo robot of :mod:`skidnav.physics`, the ``physics``
     extra: the same spaces, rewards, walls and episode rules, the slip field's wheel-speed loss
@@ -130,13 +137,13 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
     True
 
     ## Version History
-    v0: initial version; truncation moved from the env to Gymnasium's ``TimeLimit`` (same
-    limit, 500 actions, when made with ``gymnasium.make``); ``dynamics`` and ``floor`` added
-    (the default ``dynamics="kinematic"`` gives the same numbers as before);
+    v0: initial version; ``start_pose``, ``goal_disc``, ``lidar_fov`` and robot footprints added
+    (the defaults give the same numbers as before); truncation moved from the env to Gymnasium's
+    ``TimeLimit`` (same limit, 500 actions, when made with ``gymnasium.make``); ``dynamics`` and
+    ``floor`` added (the default ``dynamics="kinematic"`` gives the same numbers as before);
     ``observation="features"`` with ``lidar_rays`` and ``lidar_range`` added; ``action`` and
-    ``control_period`` added (the defaults give the same numbers as before); ``info["cost"]``
-    added; the ``true_kinematics`` property added (a reference for agents, nothing in the MDP
-    changes).
+    ``control_period`` added (the defaults give the same numbers as before); ``info["cost"]`` added;
+    the ``true_kinematics`` property added (a reference for agents, nothing in the MDP changes).
     """
 
     metadata = {"render_modes": ["rgb_array", "ansi"], "render_fps": 10}  # noqa: RUF012
@@ -161,8 +168,11 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         floor: str | None = None,
         lidar_rays: int = 8,
         lidar_range: float = 0.3,
+        lidar_fov: float = FULL_TURN,
         action: str = "discrete",
         control_period: float | None = None,
+        start_pose: tuple[float, float, float] | None = None,
+        goal_disc: tuple[float, float, float] | None = None,
     ) -> None:
         self._check_choices(render_mode, observation, variance, dynamics, action)
         self.render_mode = render_mode
@@ -172,6 +182,8 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         world = streams(world_seed, ARENA_ROLES)
         map_rng, slip_rng = world["map"], world["slip"]
         self.grid_map = _resolve_map(grid_map, map_file, map_kind, map_rng, discretization)
+        if map_file is not None:
+            start_pose, goal_disc = _metric_marks(map_file, start_pose, goal_disc)
         self.discretization = discretization or Discretization(
             n_x=self.grid_map.shape[0],
             n_y=self.grid_map.shape[1],
@@ -189,11 +201,15 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         )
         rewards = RewardScheme(observed_variance=variance == "observed")
         self.task: NavigationTask = build_task(
-            self.grid_map, self.slip_field, self.robot, self.discretization, rewards
+            self.grid_map, self.slip_field, self.robot, self.discretization, rewards, goal_disc
         )
+        self._start_pose = self._checked_start(start_pose)
         self._task_arrays = task_arrays(self.task)
         self.observation_kind = observation
-        self.features = PoseFeatures(self.grid_map, self.discretization, lidar_rays, lidar_range)
+        self.features = PoseFeatures(
+            self.grid_map, self.discretization, lidar_rays, lidar_range, lidar_fov,
+            self.goal_point if goal_disc is not None else None,
+        )  # fmt: skip
         self.action_kind = action
         self.action_space = action_space(action, self.robot)
         self._commands = [commanded_wheel_speeds(a, self.robot.wheel_speed) for a in range(4)]
@@ -261,9 +277,39 @@ class SkidSteerNavEnv(gymnasium.Env[Any, int]):
         return self.slip_field.expected_velocities(self.robot)
 
     def start_pose(self) -> np.ndarray:
-        """(x, y, heading) at the centre of the start cell, heading 0."""
+        """(x [m], y [m], heading [rad]) where an episode starts: the given start pose, else the
+        centre of the start cell, heading 0."""
+        if self._start_pose is not None:
+            return np.array(self._start_pose)
         x, y = self.discretization.cell_centre(*self.grid_map.start)
         return np.array([x, y, 0.0])
+
+    @property
+    def goal_point(self) -> tuple[float, float]:
+        """The goal (x, y) [m]: the goal disc's centre, else the goal cell's centre."""
+        if self.task.goal_radius > 0.0:
+            return self.task.goal_x, self.task.goal_y
+        return self.discretization.cell_centre(*self.grid_map.goal)
+
+    @property
+    def goal_radius(self) -> float:
+        """The goal disc's radius [m]; 0 when the goal is the goal cell."""
+        return float(self.task.goal_radius)
+
+    def _checked_start(
+        self, start_pose: tuple[float, float, float] | None
+    ) -> tuple[float, float, float] | None:
+        """``start_pose`` as floats; ValueError unless finite, in the arena and free."""
+        if start_pose is None:
+            return None
+        x, y, heading = (float(v) for v in start_pose)
+        width, height = self.robot.arena_width, self.robot.arena_height
+        if not (all(math.isfinite(v) for v in (x, y, heading)) and 0 <= x <= width
+                and 0 <= y <= height):  # fmt: skip
+            raise ValueError(f"expected a finite start pose in the arena, got {start_pose}")
+        if self.grid_map.occupancy[self.discretization.cell(x, y)]:
+            raise ValueError(f"expected a start pose off the walls, got {start_pose}")
+        return x, y, heading
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -393,6 +439,20 @@ def _check_same_arena(robot: RobotParams, discretization: Discretization) -> Non
             f"expected the discretization's arena {grid_size[0]:g} × {grid_size[1]:g} m to be "
             f"the robot's {robot_size[0]:g} × {robot_size[1]:g} m"
         )
+
+
+def _metric_marks(
+    map_file: str | Path,
+    start_pose: tuple[float, float, float] | None,
+    goal_disc: tuple[float, float, float] | None,
+) -> tuple[tuple[float, float, float] | None, tuple[float, float, float] | None]:
+    """The start pose and goal disc an env on ``map_file`` uses: those given, else the file's
+    own (format version 2's ``start`` and ``goal`` lines, :mod:`skidnav.world.mapfile`)."""
+    document = load_map_file(map_file)
+    return (
+        start_pose if start_pose is not None else document.start_pose,
+        goal_disc if goal_disc is not None else document.goal,
+    )
 
 
 def _resolve_map(

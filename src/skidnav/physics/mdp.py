@@ -23,7 +23,7 @@ slip region ρ at simulated time t:
 With the observed variance (``RewardScheme.observed_variance``) the wheel set points of forward
 actions (:func:`~skidnav.sim.navigation.records_variance`) feed the region's running
 statistics, as in the kinematic kernel. Reward, termination, state and region come from the
-kernels' ``score_action`` (and ``cell_of``, ``region_of``): the rules exist once.
+kernels' ``score_action``, ``hits_wall`` and ``region_of``: the rules exist once.
 
 The caller owns the pose (x [m], y [m], heading [rad], the heading unwrapped as in the kinematic
 env); the MuJoCo robot holds the velocities. A pose changed outside (a reset) puts the robot
@@ -45,11 +45,12 @@ from skidnav.sim.navigation import (
     Outcome,
     _log_row,
     _record_wheel_speed,
+    hits_wall,
     records_variance,
     score_action,
     slip_scale,
 )
-from skidnav.world.discretization import cell_of, region_of
+from skidnav.world.discretization import region_of
 
 POSE_TOLERANCE = 1e-9
 """Largest difference [m, rad] between the caller's pose and the robot's still taken as equal."""
@@ -119,8 +120,7 @@ def simulate_physics_action(
         eta = slip_scale(task, region, time + k * robot.dt)
         set_points, twist = body.substep(commands, eta, (noise[2 * k], noise[2 * k + 1]), robot.dt)
         new_x, new_y, heading, clipped = measured_pose(body, task, heading)
-        i, j = cell_of(new_x, new_y, grid)
-        if task.occupancy[i, j] != 0:
+        if hits_wall(task, new_x, new_y, heading):
             collided = True
             break
         if clipped:

@@ -7,6 +7,7 @@ actions of ±1.7 rad/s.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -22,6 +23,8 @@ class KinematicConstants(NamedTuple):
     arena_width: float
     arena_height: float
     exact_integration: bool
+    footprint_length: float
+    footprint_width: float
 
 
 @dataclass(frozen=True)
@@ -44,6 +47,11 @@ class RobotParams:
         arena_height: arena extent along y [m]; poses are clipped to [0, arena_height].
         integrator: ``"euler"`` (explicit Euler, as the thesis) or ``"exact"`` (closed-form
             constant-twist step).
+        footprint_length, footprint_width: the rectangle the robot occupies [m], along and across
+            its heading, centred on its position; both 0 (the default, the thesis robot) for a
+            point robot, which collides when its position enters a wall cell. With a footprint
+            it collides when the rectangle touches a wall cell's inscribed disc
+            (:mod:`skidnav.sim.footprint`).
 
     >>> RobotParams().action_duration
     1.0
@@ -65,6 +73,8 @@ class RobotParams:
     arena_width: float = 0.62
     arena_height: float = 0.505
     integrator: str = "euler"
+    footprint_length: float = 0.0
+    footprint_width: float = 0.0
 
     def __post_init__(self) -> None:
         positive = {
@@ -88,8 +98,23 @@ class RobotParams:
             )
         if not (isinstance(self.substeps, int) and self.substeps >= 1):
             raise ValueError(f"expected substeps to be an integer >= 1, got {self.substeps!r}")
+        self._check_footprint()
         if self.integrator not in ("euler", "exact"):
             raise ValueError(f"expected integrator 'euler' or 'exact', got {self.integrator!r}")
+
+    def _check_footprint(self) -> None:
+        """ValueError unless the footprint is a point (both 0) or a rectangle (both > 0)."""
+        size = (self.footprint_length, self.footprint_width)
+        if not (size == (0.0, 0.0) or all(math.isfinite(v) and v > 0 for v in size)):
+            raise ValueError(
+                f"expected footprint_length and footprint_width both 0 (a point robot) or both "
+                f"> 0 m, got {size[0]} and {size[1]}"
+            )
+
+    @property
+    def has_footprint(self) -> bool:
+        """True when the robot collides by its rectangle rather than its position."""
+        return self.footprint_length > 0.0
 
     @property
     def action_duration(self) -> float:
@@ -112,4 +137,6 @@ class RobotParams:
             arena_width=float(self.arena_width),
             arena_height=float(self.arena_height),
             exact_integration=self.exact_integration,
+            footprint_length=float(self.footprint_length),
+            footprint_width=float(self.footprint_width),
         )

@@ -10,14 +10,16 @@ index name                   unit    bounds
 1     ``y``                  m       [0, H]
 2     ``cos_heading``        —       [−1, 1]: cos ψ
 3     ``sin_heading``        —       [−1, 1]: sin ψ
-4     ``goal_distance``      m       [0, √(W² + H²)]: to the goal cell's centre
+4     ``goal_distance``      m       [0, √(W² + H²)]: to the goal (the goal cell's centre, or
+                                             the map's goal point)
 5     ``goal_cos_bearing``   —       [−1, 1]: cos β, β the goal direction minus the heading
 6     ``goal_sin_bearing``   —       [−1, 1]: sin β (> 0: the goal lies to the left)
-7 + r ``range_r``            m       [0, lidar_range]: lidar ray r, along ψ + 2π·r / k
+7 + r ``range_r``            m       [0, lidar_range]: lidar ray r, along ψ + 2π·r / k (a
+                                             narrower field of view: see :class:`PoseFeatures`)
 ===== ====================== ======= ==========================================================
 
-The bearing is taken as (cos β, sin β) = (1, 0) when the robot stands on the goal cell's centre.
-The ranges come from :func:`skidnav.sim.lidar.lidar_ranges` (walls and the arena border).
+The bearing is taken as (cos β, sin β) = (1, 0) when the robot stands on the goal.
+The ranges come from :func:`skidnav.sim.lidar.lidar_scan` (walls and the arena border).
 
 >>> from skidnav.world.discretization import Discretization
 >>> from skidnav.world.maps import build_map
@@ -37,7 +39,7 @@ from gymnasium import spaces
 
 from skidnav._jit import inline_jit, jit
 from skidnav.checks import check_integer
-from skidnav.sim.lidar import lidar_ranges
+from skidnav.sim.lidar import FULL_TURN, LaserSpec, lidar_scan
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 
@@ -110,18 +112,20 @@ def fill_features(
     pose: np.ndarray,
     max_range: float,
     out: np.ndarray,
+    field_of_view: float = FULL_TURN,
 ) -> None:
     """Write the features (module doc) of ``pose`` float64 (3,) (x [m], y [m], heading [rad])
     into ``out`` float64 (7 + k,): walls ``occupancy`` uint8 (n_x, n_y), ``arena`` (W, H) [m],
-    the goal cell's centre ``goal`` (x, y) [m], k = len(out) − 7 rays of at most ``max_range``
-    [m]. Compiled, so that compiled loops can observe too."""
+    the goal ``goal`` (x, y) [m], k = len(out) − 7 rays of at most ``max_range`` [m] over
+    ``field_of_view`` [rad] (:func:`skidnav.sim.lidar.lidar_scan`). Compiled, so that compiled
+    loops can observe too."""
     x, y, heading = pose[0], pose[1], pose[2]
     distance, cos_bearing, sin_bearing = goal_features(x, y, heading, goal[0], goal[1])
     out[0], out[1] = x, y
     out[2], out[3] = math.cos(heading), math.sin(heading)
     out[4] = min(distance, length(arena[0], arena[1]))  # ≤ the diagonal but for rounding
     out[5], out[6] = cos_bearing, sin_bearing
-    lidar_ranges(occupancy, arena[0], arena[1], x, y, heading, max_range, out[7:])
+    lidar_scan(occupancy, arena[0], arena[1], x, y, heading, max_range, field_of_view, out[7:])
 
 
 class PoseFeatures:
@@ -130,6 +134,11 @@ class PoseFeatures:
     Args:
         grid_map: the walls and the goal cell. discretization: the cells and the arena extent.
         lidar_rays: k ≥ 0 rays (0: no range readings). lidar_range: the largest reading [m] > 0.
+        field_of_view: the sector the rays sweep [rad], in (0, 2π] (2π, the default: a full
+            turn, ray 0 ahead and the others counter-clockwise; narrower: ray 0 at the
+            clockwise edge, both edges included, :class:`skidnav.sim.lidar.LaserSpec`).
+        goal: the goal point (x, y) [m] the goal features measure to; None: the goal cell's
+            centre.
     """
 
     def __init__(
@@ -138,11 +147,15 @@ class PoseFeatures:
         discretization: Discretization,
         lidar_rays: int = 8,
         lidar_range: float = 0.3,
+        field_of_view: float = FULL_TURN,
+        goal: tuple[float, float] | None = None,
     ) -> None:
         check_lidar(lidar_rays, lidar_range)
+        LaserSpec(max(lidar_rays, 1), float(lidar_range), field_of_view)  # checks the sector
         self.lidar_rays, self.lidar_range = lidar_rays, float(lidar_range)
+        self.field_of_view = float(field_of_view)
         self.arena = (float(discretization.arena_width), float(discretization.arena_height))
-        self.goal = discretization.cell_centre(*grid_map.goal)
+        self.goal = goal if goal is not None else discretization.cell_centre(*grid_map.goal)
         self.occupancy = np.ascontiguousarray(grid_map.as_uint8())
 
     def names(self) -> tuple[str, ...]:
@@ -178,5 +191,8 @@ class PoseFeatures:
         """The observation, float64 (7 + k,), of ``pose`` (x [m], y [m], heading [rad]) in the
         arena."""
         observation = np.empty(7 + self.lidar_rays)
-        fill_features(self.occupancy, self.arena, self.goal, pose, self.lidar_range, observation)
+        fill_features(
+            self.occupancy, self.arena, self.goal, pose, self.lidar_range, observation,
+            self.field_of_view,
+        )  # fmt: skip
         return observation

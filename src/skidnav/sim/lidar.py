@@ -40,6 +40,9 @@ import numpy as np
 from skidnav._jit import inline_jit, jit
 from skidnav.world.discretization import level_index
 
+FULL_TURN = 2.0 * math.pi
+"""A field of view of a full turn [rad]: a laser that sees all around."""
+
 
 @inline_jit
 def _axis_start(position: float, rate: float, cell: int, levels: int) -> tuple[float, float, int]:
@@ -175,7 +178,7 @@ class LaserSpec:
 
     rays: int
     max_range: float
-    field_of_view: float = 2.0 * math.pi
+    field_of_view: float = FULL_TURN
 
     def __post_init__(self) -> None:
         if not (isinstance(self.rays, int) and self.rays >= 1):

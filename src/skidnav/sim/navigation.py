@@ -16,12 +16,15 @@ robot in coarse region ρ at simulated time t:
    robot's own unless the floor was calibrated, :mod:`skidnav.robot.floors`) gives (v_x, v_y,
    yaw_rate); the robot's integrator (explicit Euler or the exact constant-twist step,
    ``RobotParams.integrator``) advances the pose, which is clipped to the arena;
-4. if the new position lies in a wall cell the motion stops: the position stays at the last free
+4. if the new position lies in a wall cell (for a robot with a footprint: if its rectangle touches a
+   wall cell's disc, :mod:`skidnav.sim.footprint`) the motion stops: the position stays at the last
+   free
    sub-step, the heading of the colliding sub-step is kept, and the action is a collision;
    otherwise the sub-step is logged as (ρ, ω_L_cmd, ω_R_cmd, v_x, v_y, yaw_rate).
 
 Reward (thesis, :func:`action_reward`, also the real-time loop's): +10 and termination if the
-robot ends the action in the goal cell; −10 after a collision; otherwise −1 − 10·var, var being
+robot ends the action in the goal cell (or within the goal disc of a task that has one,
+:func:`at_goal`); −10 after a collision; otherwise −1 − 10·var, var being
 the wheel-speed variance of the region where the action ends: the slip field's true η²/12
 (default) or, with ``observed_variance``, the running sample variance of wheel speeds measured
 during forward actions in that region (the thesis's choice).
@@ -50,6 +53,7 @@ from skidnav.robot.kinematics import (
     pose_step,
 )
 from skidnav.robot.params import KinematicConstants
+from skidnav.sim.footprint import footprint_collides
 from skidnav.world.discretization import (
     GridShape,
     cell_of,
@@ -79,6 +83,9 @@ class NavigationTask(NamedTuple):
         grid: discretization levels and arena size.
         occupancy: uint8 (n_x, n_y), 1 = wall.
         goal_i, goal_j: goal cell.
+        goal_x, goal_y, goal_radius: a goal disc (centre [m], radius [m]); with a radius > 0 an
+            action terminates the episode when it ends within it (the BARN rule,
+            :mod:`skidnav.world.barn`), with 0 (the default) when it ends in the goal cell.
         eta: base wheel-speed loss scale per flat region, shape (n_regions,) [rad/s].
         x_icr: ICR offset per flat region, shape (n_regions,) [m].
         wheel_radius, half_track: effective wheel radius r and half track c per flat region,
@@ -97,6 +104,9 @@ class NavigationTask(NamedTuple):
     occupancy: np.ndarray
     goal_i: int
     goal_j: int
+    goal_x: float
+    goal_y: float
+    goal_radius: float
     eta: np.ndarray
     x_icr: np.ndarray
     wheel_radius: np.ndarray
@@ -243,6 +253,41 @@ def substep(
 
 
 @inline_jit
+def hits_wall(task: NavigationTask, x: float, y: float, heading: float) -> bool:
+    """Whether the robot of ``task`` at pose (x [m], y [m], heading [rad]) collides with a wall:
+    its position in a wall cell for a point robot, its footprint touching a wall cell's disc
+    otherwise (:mod:`skidnav.sim.footprint`)."""
+    robot = task.robot
+    if robot.footprint_length > 0.0:
+        return footprint_collides(
+            task.occupancy, task.grid, x, y, heading, robot.footprint_length,
+            robot.footprint_width,
+        )  # fmt: skip
+    i, j = cell_of(x, y, task.grid)
+    return task.occupancy[i, j] != 0
+
+
+@inline_jit
+def at_goal(
+    x: float,
+    y: float,
+    grid: GridShape,
+    goal_cell: tuple[int, int],
+    goal_disc: tuple[float, float, float],
+) -> bool:
+    """Whether a position (x, y) [m] ends the episode: within ``goal_disc`` (x [m], y [m],
+    radius [m]) when its radius is > 0, else in ``goal_cell`` (i, j) of ``grid``.
+
+    Scalars only (see :func:`drifted_slip`)."""
+    goal_x, goal_y, radius = goal_disc
+    if radius > 0.0:
+        dx, dy = x - goal_x, y - goal_y
+        return dx * dx + dy * dy <= radius * radius
+    i, j = cell_of(x, y, grid)
+    return i == goal_cell[0] and j == goal_cell[1]
+
+
+@inline_jit
 def is_forward_drive(commands: tuple[float, float]) -> bool:
     """Whether the wheel speeds ``commands`` (ω_L, ω_R) [rad/s] drive straight forward: equal
     and positive — the discrete forward action, or a continuous one at any speed. The thesis
@@ -291,8 +336,17 @@ def simulate_action(
         new_x, new_y, heading, omega_left, omega_right, twist = substep(
             robot, slip, (x, y, heading), commands, (noise[2 * k], noise[2 * k + 1])
         )
-        i, j = cell_of(new_x, new_y, grid)
-        if task.occupancy[i, j] != 0:
+        # :func:`hits_wall`, spelled out: an inlined helper given the task costs its arrays'
+        # reference counts on every sub-step (a tenth of the batch simulator's speed, measured)
+        if robot.footprint_length > 0.0:
+            hit = footprint_collides(
+                task.occupancy, grid, new_x, new_y, heading, robot.footprint_length,
+                robot.footprint_width,
+            )  # fmt: skip
+        else:
+            i, j = cell_of(new_x, new_y, grid)
+            hit = task.occupancy[i, j] != 0
+        if hit:
             collided = True
             break
         x, y = new_x, new_y
@@ -375,10 +429,12 @@ def score_action(
     """The :class:`Outcome` of an action that started at ``time`` [s] and left the robot at
     ``pose`` (x [m], y [m], heading [rad]): state, region, goal, reward and cost (module doc), for
     any robot that moved it (this kernel's, or the physical one of :mod:`skidnav.physics`)."""
-    i, j = cell_of(pose[0], pose[1], task.grid)
     state = state_of(pose[0], pose[1], pose[2], task.grid)
     region = region_of(pose[0], pose[1], task.grid)
-    terminated = i == task.goal_i and j == task.goal_j
+    terminated = at_goal(
+        pose[0], pose[1], task.grid, (task.goal_i, task.goal_j),
+        (task.goal_x, task.goal_y, task.goal_radius),
+    )  # fmt: skip
     end_time = time + task.robot.dt * task.robot.substeps
     variance = region_variance(task, region, end_time)
     reward = action_reward(task.rewards, terminated, collided, variance)

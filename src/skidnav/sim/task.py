@@ -6,6 +6,8 @@ simulated robot's sub-step under arbitrary wheel speeds (:func:`drive_substep`).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from skidnav._jit import inline_jit, jit
@@ -15,10 +17,11 @@ from skidnav.sim.navigation import (
     NavigationTask,
     RewardScheme,
     command_transition,
+    hits_wall,
     region_slip,
     substep,
 )
-from skidnav.world.discretization import Discretization, GridShape, cell_of, region_of
+from skidnav.world.discretization import Discretization, GridShape, region_of
 from skidnav.world.grid import GridMap
 
 
@@ -28,9 +31,12 @@ def build_task(
     robot: RobotParams,
     discretization: Discretization,
     rewards: RewardScheme | None = None,
+    goal_disc: tuple[float, float, float] | None = None,
 ) -> NavigationTask:
     """Assemble a :class:`NavigationTask` from the Python-side objects, checking they agree
-    (map and slip-field sizes, x_ICR of every region within the robot's [−a, b])."""
+    (map and slip-field sizes, x_ICR of every region within the robot's [−a, b]). With
+    ``goal_disc`` (x [m], y [m], radius [m] > 0) an episode ends within that disc instead of in
+    the map's goal cell."""
     if grid_map.shape != (discretization.n_x, discretization.n_y):
         raise ValueError(
             f"expected a map of {discretization.n_x} × {discretization.n_y} cells, "
@@ -38,7 +44,15 @@ def build_task(
         )
     task = floor_task(grid_map.as_uint8(), slip, robot, discretization)
     goal_i, goal_j = (int(v) for v in grid_map.goal)
-    return task._replace(goal_i=goal_i, goal_j=goal_j, rewards=rewards or RewardScheme())
+    task = task._replace(goal_i=goal_i, goal_j=goal_j, rewards=rewards or RewardScheme())
+    if goal_disc is None:
+        return task
+    goal_x, goal_y, goal_radius = (float(v) for v in goal_disc)
+    if not (math.isfinite(goal_x) and math.isfinite(goal_y) and math.isfinite(goal_radius)):
+        raise ValueError(f"expected a finite goal disc, got {goal_disc}")
+    if not goal_radius > 0:
+        raise ValueError(f"expected a goal radius > 0 m, got {goal_radius}")
+    return task._replace(goal_x=goal_x, goal_y=goal_y, goal_radius=goal_radius)
 
 
 def floor_task(
@@ -67,6 +81,9 @@ def floor_task(
         occupancy=np.ascontiguousarray(walls != 0, dtype=np.uint8),
         goal_i=-1,
         goal_j=-1,
+        goal_x=0.0,
+        goal_y=0.0,
+        goal_radius=0.0,
         eta=eta,
         x_icr=x_icr,
         wheel_radius=wheel_radius,
@@ -98,13 +115,12 @@ def drive_substep(
     new_x, new_y, new_heading, _, _, _ = substep(
         task.robot, slip, pose, commands, (noise_left, noise_right)
     )
-    i, j = cell_of(new_x, new_y, task.grid)
-    if task.occupancy[i, j] != 0:
+    if hits_wall(task, new_x, new_y, new_heading):
         return x, y, new_heading
     return new_x, new_y, new_heading
 
 
-N_TASK_SCALARS = 24
+N_TASK_SCALARS = 29
 """Length of the scalar vector of :func:`task_arrays`."""
 
 TaskArrays = tuple[
@@ -114,18 +130,18 @@ TaskArrays = tuple[
 
 
 def task_arrays(task: NavigationTask) -> TaskArrays:
-    """``task`` as the eight arrays :func:`step_arrays` takes: float64 (:data:`N_TASK_SCALARS`,) of
-    its scalars (the fields of ``robot`` and ``grid``, the goal cell, the drift amplitude and
-    period, the fields of ``rewards``, in this order), then ``occupancy``, ``eta``, ``x_icr``,
-    ``wheel_radius``, ``half_track``, ``drift_phase`` and ``variance_stats`` (shared, not
-    copied: the kernel updates the last).
+    """``task`` as the eight arrays :func:`step_arrays` takes: float64 (:data:`N_TASK_SCALARS`,)
+    of its scalars (the fields of ``robot`` and ``grid``, the goal cell, the goal disc, the
+    drift amplitude and period, the fields of ``rewards``, in this order), then ``occupancy``,
+    ``eta``, ``x_icr``, ``wheel_radius``, ``half_track``, ``drift_phase`` and ``variance_stats``
+    (shared, not copied: the kernel updates the last).
 
     Why arrays: numba types a NamedTuple argument in Python on every call (about 4 µs for a task,
     more than the action's own work), an array in C (about 0.05 µs).
     """
     scalars = np.array(
-        [*task.robot, *task.grid, task.goal_i, task.goal_j, task.drift_amplitude,
-         task.drift_period, *task.rewards],
+        [*task.robot, *task.grid, task.goal_i, task.goal_j, task.goal_x, task.goal_y,
+         task.goal_radius, task.drift_amplitude, task.drift_period, *task.rewards],
         dtype=np.float64,
     )  # fmt: skip
     assert scalars.shape == (N_TASK_SCALARS,)
@@ -149,12 +165,14 @@ def task_from_arrays(
     """The :class:`NavigationTask` of :func:`task_arrays` (integers and flags are exact in
     float64)."""
     s = scalars
-    robot = KinematicConstants(s[0], s[1], s[2], s[3], int(s[4]), s[5], s[6], s[7] != 0.0)
-    grid = GridShape(int(s[8]), int(s[9]), int(s[10]), int(s[11]), int(s[12]), s[13], s[14])
-    rewards = RewardScheme(s[19], s[20], s[21], s[22], s[23] != 0.0)
+    robot = KinematicConstants(
+        s[0], s[1], s[2], s[3], int(s[4]), s[5], s[6], s[7] != 0.0, s[8], s[9]
+    )
+    grid = GridShape(int(s[10]), int(s[11]), int(s[12]), int(s[13]), int(s[14]), s[15], s[16])
+    rewards = RewardScheme(s[24], s[25], s[26], s[27], s[28] != 0.0)
     return NavigationTask(
-        robot, grid, occupancy, int(s[15]), int(s[16]), eta, x_icr, wheel_radius, half_track,
-        drift_phase, s[17], s[18], rewards, variance_stats,
+        robot, grid, occupancy, int(s[17]), int(s[18]), s[19], s[20], s[21], eta, x_icr,
+        wheel_radius, half_track, drift_phase, s[22], s[23], rewards, variance_stats,
     )  # fmt: skip
 
 

@@ -28,8 +28,9 @@ def with_statistics(task: NavigationTask, variance_stats: np.ndarray) -> Navigat
     """``task`` with the wheel-speed statistics ``variance_stats`` float64 (n_regions, 3) of one
     robot."""
     return NavigationTask(
-        task.robot, task.grid, task.occupancy, task.goal_i, task.goal_j, task.eta, task.x_icr,
-        task.wheel_radius, task.half_track, task.drift_phase, task.drift_amplitude,
+        task.robot, task.grid, task.occupancy, task.goal_i, task.goal_j, task.goal_x,
+        task.goal_y, task.goal_radius, task.eta, task.x_icr, task.wheel_radius, task.half_track,
+        task.drift_phase, task.drift_amplitude,
         task.drift_period, task.rewards, variance_stats,
     )  # fmt: skip
 
