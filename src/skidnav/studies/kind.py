@@ -101,6 +101,7 @@ class VerdictStudy(Protocol):
 
 STUDY_MODULES: dict[str, str] = {
     EXPERIMENT_KIND: "skidnav.studies.experiment.study",
+    "barn": "skidnav.studies.barn.study",
     "continuity": "skidnav.studies.continuity.study",
     "generalisation": "skidnav.studies.generalisation.study",
     "kinematic-curve": "skidnav.studies.kinematic_models.curve_study",

@@ -57,14 +57,18 @@ def draw_arena(axes: Axes, run: TrialResult, *, slip: bool = True) -> None:
 
 
 def draw_cells(
-    axes: Axes, occupancy: np.ndarray, start: tuple[int, int], goal: tuple[int, int]
+    axes: Axes,
+    occupancy: np.ndarray,
+    start: tuple[int, int],
+    goal: tuple[int, int],
+    arena: tuple[float, float] = ARENA,
 ) -> None:
     """Walls (``occupancy`` bool (n_x, n_y), True = wall), the start (green) and goal (red)
-    cells on the arena's cells (W / (n_x − 1) by H / (n_y − 1) [m], as the discretization's),
-    equal aspect, axes in metres (the patches carry the labels "start" and "goal" for a
-    legend)."""
+    cells on the cells of the arena W × H = ``arena`` [m] (W / (n_x − 1) by H / (n_y − 1) [m],
+    as the discretization's), equal aspect, axes in metres (the patches carry the labels
+    "start" and "goal" for a legend)."""
     n_x, n_y = occupancy.shape
-    cell_w, cell_h = ARENA[0] / (n_x - 1), ARENA[1] / (n_y - 1)
+    cell_w, cell_h = arena[0] / (n_x - 1), arena[1] / (n_y - 1)
     walls = np.ma.masked_where(~occupancy.T, np.ones_like(occupancy.T, dtype=float))
     axes.imshow(
         walls,

@@ -1,0 +1,72 @@
+"""What each agent of a BARN study sees and answers, from its catalog entry.
+
+Every agent drives the same robot on the same world; what differs is the env's interface:
+
+* an agent answering wheel speeds (``actions = "wheel-speeds"``: ``goal-tracker``,
+  ``mppi-kinematic``, …) drives with ``action = "continuous"``; one answering the four discrete
+  actions (``q-learning``, ``dyna-full``, the linear and deep agents) with ``action =
+  "discrete"`` (full speed ahead, back, or a turn in place, for one control period);
+* a tabular agent observes the discrete state of the world's cells (31 × 101 cells × 20
+  heading bins); every other agent the features, with a laser like the benchmark's Hokuyo
+  UST-10 (:data:`LIDAR_RANGE`, :data:`LIDAR_FOV`, the config's ``lidar_rays``).
+
+An agent whose parameters describe the observation's laser (``lidar_rays``, ``lidar_range``:
+the goal tracker) is given the study's; a config that sets them otherwise is refused.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+from skidnav.agents.catalog import CatalogEntry, entry
+from skidnav.errors import UserError
+from skidnav.experiments.config import AgentSpec
+from skidnav.studies.barn.grid import BarnGrid
+
+LIDAR_RANGE = 10.0
+"""The laser's range [m] (Hokuyo UST-10LX: 10 m)."""
+LIDAR_FOV = 1.5 * math.pi
+"""The laser's field of view [rad] (270°), centred on the heading."""
+OBSERVATION = "features"
+"""The observation of every agent that does not learn over the discrete state."""
+
+
+def env_interface(name: str) -> dict[str, str]:
+    """The env's ``action`` and ``observation`` for agent ``name`` (module doc); UserError for
+    an unknown agent."""
+    described = entry(name)
+    action = "discrete" if described.family.actions == "discrete" else "continuous"
+    return {"action": action, "observation": described.env_observation(OBSERVATION)}
+
+
+def laser_params(grid: BarnGrid) -> dict[str, Any]:
+    """The laser's layout as an agent's parameters: ``lidar_rays``, ``lidar_range`` [m]."""
+    return {"lidar_rays": grid.lidar_rays, "lidar_range": LIDAR_RANGE}
+
+
+def agent_params(agent: AgentSpec, grid: BarnGrid, described: CatalogEntry) -> dict[str, Any]:
+    """The parameters ``agent`` is built with: its own, and the study's laser where its config
+    describes one (module doc); UserError when it sets another."""
+    params = agent.params_dict()
+    config: Any = described.config_class  # a frozen dataclass, as every agent config
+    fields = {field.name for field in dataclasses.fields(config)}
+    for key, value in laser_params(grid).items():
+        if key not in fields:
+            continue
+        if key in params and params[key] != value:
+            raise UserError(
+                f"agent {agent.label!r}: {key} is the study's laser ({value!r}); "
+                f"set lidar_rays in [barn], not {key} = {params[key]!r} in params"
+            )
+        params[key] = value
+    return params
+
+
+def check_agents(grid: BarnGrid) -> None:
+    """Check every agent of ``grid`` before any run: a known name, parameters its config
+    accepts; UserError naming the agent otherwise."""
+    for agent in grid.agents:
+        described = entry(agent.name)
+        described.config(agent_params(agent, grid, described))
