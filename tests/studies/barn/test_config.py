@@ -1,0 +1,109 @@
+"""A BARN config: its keys and values checked before anything runs, a bad one refused in one
+line naming the file and the key (exit code 2); the world range form; the shipped configs."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from skidnav.agents.catalog import agent_names
+from skidnav.studies.barn.grid import BarnGrid, expand_worlds, quintile
+from skidnav.studies.loading import parse_grid
+from tests.cli_support import exit_code
+
+CONFIGS = Path(__file__).parents[3] / "configs"
+GOOD = """kind = "barn"
+[barn]
+worlds = [0, 1]
+{extra}
+[[agents]]
+name = "goal-tracker"
+{agent}
+"""
+
+
+def grid(extra: str = "", agent: str = "") -> BarnGrid:
+    text = GOOD.format(extra=extra, agent=agent)
+    if extra.startswith("worlds"):
+        text = text.replace("worlds = [0, 1]\n", "", 1)
+    parsed = parse_grid(text, Path("barn-test.toml")).grid
+    assert isinstance(parsed, BarnGrid)
+    return parsed
+
+
+def test_defaults_and_the_runs_of_the_grid() -> None:
+    parsed = grid('floors = ["nominal", "ice-physics"]\nseeds = 2')
+    assert parsed.name == "barn-test" and parsed.protocol == "zero-shot"
+    assert parsed.episodes == 1 and parsed.lidar_rays == 271 and parsed.dynamics == "kinematic"
+    assert [spec.label for spec in parsed.maps] == ["world-0", "world-1"]
+    assert parsed.presets == ("nominal", "ice-physics") and parsed.n_runs == 8
+    assert BarnGrid.from_dict(parsed.to_dict()) == parsed
+
+
+def test_worlds_as_a_range() -> None:
+    assert grid("worlds = { start = 10, stop = 300, step = 145 }").worlds == (10, 155)
+    assert expand_worlds({"stop": 3}) == (0, 1, 2)
+    assert [quintile(world) for world in (0, 59, 60, 179, 240, 299)] == [0, 0, 1, 2, 4, 4]
+
+
+@pytest.mark.parametrize(
+    ("extra", "agent", "message"),
+    [
+        ("seedz = 2", "", "[barn]: unknown key 'seedz' (expected one of name, seeds"),
+        ('protocol = "few-shot"', "", "expected protocol one of zero-shot, learning"),
+        ("episodes = 3", "", "expected episodes = 1 with protocol zero-shot, got 3"),
+        ('protocol = "learning"\nepisodes = 0', "", "expected episodes to be an integer in [1"),
+        ("worlds = [0, 300]", "", "expected each of worlds to be an integer in [0, 299], got 300"),
+        ("worlds = [4, 4]", "", "expected distinct worlds, got [4, 4]"),
+        ("worlds = []", "", "expected worlds to be a non-empty list or a range"),
+        ("worlds = { start = 0 }", "", "expected worlds to have a stop"),
+        ("worlds = { stop = 9, stride = 2 }", "", "worlds: unknown key 'stride'"),
+        ("worlds = { stop = 5, step = 0 }", "", "expected worlds.step to be an integer in [1"),
+        ('floors = ["ice"]', "", "expected floors to be distinct names among"),
+        ('dynamics = "gazebo"', "", "expected dynamics one of kinematic, mujoco"),
+        ("lidar_rays = 5000", "", "expected lidar_rays to be an integer in [0, 1024]"),
+        ("root_seed = -1", "", "expected root_seed to be an integer >= 0"),
+        ("seeds = 1.5", "", "expected seeds to be an integer in [1, 1,000]"),
+        ("", "params = { turn_gain = -1 }", "expected turn_gain to be a finite number > 0, got -1"),
+        ("", "params = { lidar_rays = 8 }", "lidar_rays is the study's laser (271)"),
+        ("", "colour = 3", "[[agents]] #1: unknown key 'colour'"),
+    ],
+)
+def test_a_bad_config_is_one_line_and_exit_code_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: str, agent: str, message: str
+) -> None:
+    config = tmp_path / "bad.toml"
+    text = GOOD.format(extra="", agent=agent)
+    config.write_text(text.replace("worlds = [0, 1]", extra or "worlds = [0, 1]"))
+    assert exit_code(["run", str(config), "--out", str(tmp_path / "out")]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and f"{config}: " in error and message in error, error
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_unknown_agent_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    config = tmp_path / "bad.toml"
+    config.write_text(GOOD.format(extra="", agent="").replace("goal-tracker", "pilot"))
+    assert exit_code(["run", str(config), "--out", str(tmp_path / "out")]) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and "unknown agent 'pilot'" in error, error
+
+
+@pytest.mark.parametrize(
+    ("name", "protocol", "n_worlds", "floors"),
+    [
+        ("barn-zero-shot", "zero-shot", 300, ("nominal",)),
+        ("barn-ice-learning", "learning", 30, ("ice-physics",)),
+        ("barn-dyna-full-learning", "learning", 30, ("nominal",)),
+        ("barn-smoke", "zero-shot", 2, ("nominal",)),
+    ],
+)
+def test_the_shipped_configs(name: str, protocol: str, n_worlds: int, floors: tuple[str]) -> None:
+    path = CONFIGS / f"{name}.toml"
+    if "classical" in path.read_text() and "classical" not in agent_names():
+        pytest.skip("the classical agent is not registered in this tree")
+    parsed = parse_grid(path.read_text(), path).grid
+    assert isinstance(parsed, BarnGrid) and parsed.name == name
+    assert parsed.protocol == protocol and len(parsed.worlds) == n_worlds
+    assert parsed.floors == floors and parsed.episodes <= 5
