@@ -67,6 +67,6 @@ def test_the_kind_of_a_results_directory(
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1, lines
     known = ", ".join(STUDY_MODULES)
-    assert known.startswith("experiment, continuity, generalisation, ")
+    assert known.startswith("experiment, barn, continuity, generalisation, ")
     assert lines[0] == f"skidnav: error: {tmp_path}: holds 'nope' results; known kinds: {known}"
     assert not (tmp_path / "report.html").exists()
