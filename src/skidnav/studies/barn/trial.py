@@ -28,9 +28,7 @@ import gymnasium
 import numpy as np
 
 from skidnav.agents.catalog import CatalogAgent, entry
-from skidnav.agents.family import asks_for
 from skidnav.agents.training import Greedy, as_state, start_rollout
-from skidnav.envs.navigation import SkidSteerNavEnv
 from skidnav.envs.registration import registered_env_id
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import TrialResult
@@ -74,10 +72,9 @@ def barn_env(
         dynamics=grid.dynamics,
         lidar_rays=grid.lidar_rays,
         lidar_range=LIDAR_RANGE,
+        lidar_fov=LIDAR_FOV,
         **env_interface(spec.agent.name),
     )
-    if asks_for(SkidSteerNavEnv, "lidar_fov"):  # an env without it casts its rays all round
-        options["lidar_fov"] = LIDAR_FOV
     return gymnasium.make(registered_env_id(ENV_ID), **options).unwrapped
 
 
