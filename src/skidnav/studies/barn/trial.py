@@ -1,7 +1,7 @@
 """One run of a BARN study: one agent on one world and floor, scored by the benchmark's rules.
 
-The env (:func:`barn_env`): the world's map file (start pose, goal point and radius, as the
-shipped archive has them), the Jackal at the benchmark's 10 Hz (``control_period = 0.1``), the
+The env (:func:`barn_env`): the world's map, start pose, goal point and radius (as the shipped
+archive has them), the Jackal at the benchmark's 10 Hz (``control_period = 0.1``), the
 floor's slip preset, the agent's action and observation (:mod:`skidnav.studies.barn.agents`).
 
 A **scored run** (:func:`scored_run`) is one BARN run of the agent's greedy policy from a reset,
@@ -19,9 +19,7 @@ episodes. So two agents' scored runs of a world meet the same floor noise, and p
 
 from __future__ import annotations
 
-import tempfile
 import time
-from pathlib import Path
 from typing import Any
 
 import gymnasium
@@ -43,7 +41,6 @@ from skidnav.studies.barn.grid import (
 )
 from skidnav.studies.barn.rules import BarnClock, BarnOutcome
 from skidnav.world.barn import TIME_LIMIT, BarnWorld, load_barn_world
-from skidnav.world.mapfile import save_map
 
 ENV_ID = "skidnav/SkidSteerNav-v0"
 """The env every run drives."""
@@ -56,14 +53,15 @@ BarnRun = RunSpec[BarnGrid]
 """One run of a BARN grid."""
 
 
-def barn_env(
-    spec: BarnRun, world: BarnWorld, map_file: Path, slip_seed: int
-) -> gymnasium.Env[Any, Any]:
-    """The unwrapped env of a run (module doc) on the map file ``map_file`` of ``world``, its
-    slip field drawn from ``slip_seed``; without a time limit (the rules end every run)."""
+def barn_env(spec: BarnRun, world: BarnWorld, slip_seed: int) -> gymnasium.Env[Any, Any]:
+    """The unwrapped env of a run (module doc) on ``world`` (its map, start pose and goal
+    disc), its slip field drawn from ``slip_seed``; without a time limit (the rules end every
+    run)."""
     grid = spec.config
     options: dict[str, Any] = dict(
-        map_file=str(map_file),
+        grid_map=world.map.grid,
+        start_pose=world.start_pose,
+        goal_disc=(*world.goal, world.goal_radius),
         discretization=world.discretization,
         robot=ROBOT,
         control_period=CONTROL_PERIOD,
@@ -187,10 +185,7 @@ def barn_trial(spec: BarnRun) -> TrialResult:
     run_streams = child_sequences(spec.run_seed.sequence(), RUN_ROLES)
     slip_seed = seed_int(world_streams["slip"])
     reset_seed = seed_int(world_streams["evaluation"])
-    with tempfile.TemporaryDirectory(prefix="skidnav-barn-") as folder:
-        map_file = Path(folder) / f"world_{world.number}.txt"
-        save_map(world.map, map_file)
-        env, scoring_env = (barn_env(spec, world, map_file, slip_seed) for _ in range(2))
+    env, scoring_env = (barn_env(spec, world, slip_seed) for _ in range(2))
     described = entry(spec.agent.name)
     params = agent_params(spec.agent, grid, described)
     built = described.build(env, params, run_streams["agent"], TRAINING_ACTIONS)
