@@ -30,12 +30,17 @@ def geometry_from_task(task: NavigationTask) -> tuple[RobotParams, Discretizatio
         wheel_radius=kc.wheel_radius, half_track=kc.half_track, wheel_speed=kc.wheel_speed,
         dt=kc.dt, substeps=kc.substeps, arena_width=kc.arena_width,
         arena_height=kc.arena_height, integrator="exact" if kc.exact_integration else "euler",
+        footprint_length=kc.footprint_length, footprint_width=kc.footprint_width,
     )  # fmt: skip
     discretization = Discretization(
         n_x=grid.n_x, n_y=grid.n_y, n_headings=grid.n_headings, regions_x=grid.regions_x,
         regions_y=grid.regions_y, arena_width=grid.arena_width, arena_height=grid.arena_height,
     )  # fmt: skip
     return robot, discretization
+
+
+LATER_ROBOT_FIELDS = frozenset({"footprint_length", "footprint_width"})
+"""Fields of :class:`RobotParams` that agents saved before them lack (a point robot)."""
 
 
 def geometry_json(robot: RobotParams, grid: Discretization | None) -> dict[str, Any]:
@@ -50,20 +55,25 @@ def geometry_from_json(value: Any) -> tuple[RobotParams, Discretization | None]:
     finite, and valid for the dataclasses."""
     if not isinstance(value, Mapping) or set(value) != {"robot", "discretization"}:
         raise ValueError("expected a geometry with 'robot' and 'discretization'")
-    robot = _dataclass_from_json(RobotParams, value["robot"], "robot")
+    robot = _dataclass_from_json(RobotParams, value["robot"], "robot", LATER_ROBOT_FIELDS)
     grid = value["discretization"]
     if grid is None:
         return robot, None
     return robot, _dataclass_from_json(Discretization, grid, "discretization")
 
 
-def _dataclass_from_json(cls: Any, value: Any, where: str) -> Any:
+def _dataclass_from_json(
+    cls: Any, value: Any, where: str, later: frozenset[str] = frozenset()
+) -> Any:
     """``cls(**value)`` once ``value`` has exactly ``cls``'s fields, each of its default's type
-    (an int where an int is, a finite number where a float is)."""
+    (an int where an int is, a finite number where a float is); the fields ``later`` (added
+    after files were first saved) may be absent, and take their defaults."""
     defaults = {field.name: field.default for field in fields(cls)}
-    if not isinstance(value, Mapping) or set(value) != set(defaults):
+    if not isinstance(value, Mapping) or not set(defaults) - later <= set(value) <= set(defaults):
         raise ValueError(f"expected the {where} fields {sorted(defaults)}")
     for name, default in defaults.items():
+        if name not in value:
+            continue
         item = value[name]
         if isinstance(default, bool) or isinstance(item, bool):
             ok = type(item) is type(default)
