@@ -32,6 +32,7 @@ FAMILY_MODULES: tuple[str, ...] = (
     "skidnav.agents.deep.family",
     "skidnav.agents.mpc.family",
     "skidnav.agents.policies.family",
+    "skidnav.agents.classical.family",
 )
 """The modules defining each family's ``FAMILY``, in the order agents are listed."""
 BOX_OBSERVATIONS = ("pose", "features")

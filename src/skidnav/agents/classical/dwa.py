@@ -1,0 +1,178 @@
+"""The local controller: the dynamic window approach over the datasheet robot.
+
+Fox, Burgard & Thrun (1997), "The dynamic window approach to collision avoidance", IEEE
+Robotics & Automation Magazine 4(1): sample velocity commands, simulate each for a short
+horizon, drop those that collide, and take the best of the rest by a weighted sum of heading,
+clearance and speed. Here, as in Nav2's DWB controller, the heading term is progress along a
+global cost-to-go (:mod:`skidnav.agents.classical.costmap`), so that the robot does not stop in
+front of a wall the straight line to the goal runs into. Per control step, from the pose
+(x, y, ψ):
+
+1. **Samples** (:func:`command_samples`, once): forward speeds v ∈ {0, …, v_max} (and one
+   backwards speed), yaw rates ψ̇ ∈ {−ψ̇_max, …, ψ̇_max}; each (v, ψ̇) becomes wheel speeds
+   by inverting the datasheet's ICR model (ω_R = (v + c ψ̇)/r, ω_L = (v − c ψ̇)/r), scaled
+   down together (the same curvature) until both lie within ± Ω. The robot of the simulator
+   takes a wheel-speed command at once, so the window is every command the wheels allow.
+2. **Rollout** (:func:`choose_command`): each command held for ``steps`` × ``step`` seconds
+   through the datasheet's kinematics without slip (:func:`skidnav.robot.kinematics.
+   body_velocities` with the nominal r, c and x_ICR; the exact constant-twist step
+   :func:`skidnav.robot.kinematics.exact_step`), the footprint checked at every step against
+   the occupied cells (:func:`~skidnav.agents.classical.footprint.footprint_collides`).
+3. **Score** of a rollout that never collides (lower is better, in metres):
+   D(end) + w_h |angle from the end heading to the route point ``lookahead`` ahead|
+   + w_o max inflation cost along it + w_v (1 − v / v_max), D the cost-to-go of the end
+   position (:func:`~skidnav.agents.classical.costmap.route_distance`).
+4. **Recovery** when every rollout collides (as Nav2's and move_base's recovery behaviours
+   back up or spin when the controller finds no way): the command whose first collision
+   comes latest, then the one with the fewest colliding steps (out of a contact first),
+   then the best score. Turning in place and backing up are among the samples, so this is
+   how the robot gets out of a corner.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from skidnav._jit import jit
+from skidnav.agents.classical.costmap import route_distance
+from skidnav.agents.classical.footprint import footprint_collides
+from skidnav.agents.mpc.costmap import CostMap, MapCosts, cell_centre, lookahead_waypoint
+from skidnav.robot.datasheet import Datasheet
+from skidnav.robot.kinematics import body_velocities, exact_step, wrap_angle
+from skidnav.world.discretization import GridShape, cell_of
+
+
+class Controller(NamedTuple):
+    """The scalars of :func:`choose_command` (SI units).
+
+    Attributes:
+        wheel_radius: r [m]. half_track: c [m]. x_icr: the datasheet's ICR offset [m].
+        steps: footprint checks per rollout. step: time between them [s].
+        length, width: the padded footprint [m].
+        max_speed: v_max [m/s], the speed term's scale.
+        heading_weight: w_h [m/rad]. obstacle_weight: w_o [m]. speed_weight: w_v [m].
+    """
+
+    wheel_radius: float
+    half_track: float
+    x_icr: float
+    steps: int
+    step: float
+    length: float
+    width: float
+    max_speed: float
+    heading_weight: float
+    obstacle_weight: float
+    speed_weight: float
+
+
+def command_samples(
+    sheet: Datasheet,
+    max_speed: float,
+    reverse_speed: float,
+    max_yaw_rate: float,
+    speed_samples: int,
+    yaw_rate_samples: int,
+) -> np.ndarray:
+    """The sampled commands as wheel speeds (ω_L, ω_R) [rad/s], float64 (K, 2) (module doc,
+    step 1): ``speed_samples`` forward speeds from 0 to ``max_speed`` [m/s] and, if
+    ``reverse_speed`` [m/s] > 0, −``reverse_speed``, each with ``yaw_rate_samples`` yaw rates
+    over ± ``max_yaw_rate`` [rad/s] (capped at the datasheet's r Ω / c)."""
+    top_yaw = min(max_yaw_rate, sheet.turn_rate())
+    speeds = np.linspace(0.0, max_speed, speed_samples)
+    if reverse_speed > 0.0:
+        speeds = np.append(speeds, -reverse_speed)
+    yaw_rates = np.linspace(-top_yaw, top_yaw, yaw_rate_samples)
+    v, yaw = (grid.ravel() for grid in np.meshgrid(speeds, yaw_rates, indexing="ij"))
+    right = (v + sheet.half_track * yaw) / sheet.wheel_radius
+    left = (v - sheet.half_track * yaw) / sheet.wheel_radius
+    largest = np.maximum(np.abs(left), np.abs(right))
+    scale = np.where(
+        largest > sheet.wheel_speed, sheet.wheel_speed / np.maximum(largest, 1e-300), 1.0
+    )
+    return np.ascontiguousarray(np.stack([left * scale, right * scale], axis=1))
+
+
+@jit
+def rollout(
+    x: float,
+    y: float,
+    heading: float,
+    left: float,
+    right: float,
+    occupied: np.ndarray,
+    cost_map: CostMap,
+    costs: MapCosts,
+    grid: GridShape,
+    controller: Controller,
+) -> tuple[int, int, float]:
+    """Steps 2 and 3 of the module doc for one command (ω_L, ω_R) [rad/s] from the pose
+    (x [m], y [m], heading [rad]): (the first colliding step, 1-based, or ``steps`` + 1 for
+    none; the number of colliding steps; the score [m])."""
+    c = controller
+    v_x, v_y, yaw_rate = body_velocities(left, right, c.x_icr, c.wheel_radius, c.half_track)
+    first, colliding, worst = c.steps + 1, 0, 0.0
+    for s in range(1, c.steps + 1):
+        x, y, heading = exact_step(x, y, heading, v_x, v_y, yaw_rate, c.step)
+        x = min(max(x, 0.0), grid.arena_width)  # the simulator clips the pose to the arena
+        y = min(max(y, 0.0), grid.arena_height)
+        if footprint_collides(occupied, grid, x, y, heading, c.length, c.width):
+            colliding += 1
+            first = min(first, s)
+        i, j = cell_of(x, y, grid)
+        worst = max(worst, cost_map.wall_probability[i, j])
+        if i == costs.goal_i and j == costs.goal_j:
+            return (
+                first,
+                colliding,
+                c.obstacle_weight * worst + c.speed_weight * (1.0 - v_x / c.max_speed),
+            )
+    aim_i, aim_j = lookahead_waypoint(x, y, cost_map, costs, grid)
+    aim_x, aim_y = cell_centre(aim_i, aim_j, grid)
+    misalignment = 0.0
+    if aim_x != x or aim_y != y:
+        misalignment = abs(wrap_angle(math.atan2(aim_y - y, aim_x - x) - heading))
+    score = (
+        route_distance(x, y, cost_map, grid)
+        + c.heading_weight * misalignment
+        + c.obstacle_weight * worst
+        + c.speed_weight * (1.0 - v_x / c.max_speed)
+    )
+    return first, colliding, score
+
+
+@jit
+def choose_command(
+    x: float,
+    y: float,
+    heading: float,
+    samples: np.ndarray,
+    occupied: np.ndarray,
+    cost_map: CostMap,
+    costs: MapCosts,
+    grid: GridShape,
+    controller: Controller,
+) -> tuple[int, bool]:
+    """(the index of the chosen command among ``samples`` float64 (K, 2) [rad/s], whether it
+    was admissible) from the pose (x [m], y [m], heading [rad]) (module doc): the best-scoring
+    command that never collides, else the recovery's choice (step 4). Ties go to the first."""
+    best, best_score = -1, math.inf
+    rescue, rescue_key, rescue_score = 0, -1, math.inf
+    for k in range(samples.shape[0]):
+        first, colliding, score = rollout(
+            x, y, heading, samples[k, 0], samples[k, 1], occupied, cost_map, costs, grid,
+            controller,
+        )  # fmt: skip
+        if first > controller.steps:
+            if score < best_score:
+                best, best_score = k, score
+            continue
+        key = first * (controller.steps + 2) - colliding  # latest first, then fewest
+        if key > rescue_key or (key == rescue_key and score < rescue_score):
+            rescue, rescue_key, rescue_score = k, key, score
+    if best >= 0:
+        return best, True
+    return rescue, False
