@@ -64,6 +64,9 @@ class ClassicalConfig:
     """How long [s] each sampled command is rolled out, > 0."""
     rollout_step: float = 0.05
     """Time [s] between the rollout's footprint checks, in (0, ``horizon``]."""
+    deceleration: float = 2.5
+    """a_b [m/s²]: a command is admissible if the robot, holding it for a control period and
+    then braking at a_b, stops before its rollout's first collision (Fox et al. 1997), > 0."""
     heading_weight: float = 0.3
     """Metres per radian of the end heading's angle to the route ``lookahead`` ahead, ≥ 0."""
     obstacle_weight: float = 0.5
@@ -88,6 +91,7 @@ class ClassicalConfig:
             check_number("max_speed", self.max_speed, 0.0, MAX_LENGTH)
         check_number("max_yaw_rate", self.max_yaw_rate, 0.0, MAX_LENGTH)
         check_number("horizon", self.horizon, 0.0, MAX_LENGTH)
+        check_number("deceleration", self.deceleration, 0.0, MAX_LENGTH)
         check_number("rollout_step", self.rollout_step, 0.0, self.horizon)
         check_integer("speed_samples", self.speed_samples, 2, MAX_SAMPLES)
         check_integer("yaw_rate_samples", self.yaw_rate_samples, 3, MAX_SAMPLES)

@@ -18,11 +18,16 @@ front of a wall the straight line to the goal runs into. Per control step, from 
    body_velocities` with the nominal r, c and x_ICR; the exact constant-twist step
    :func:`skidnav.robot.kinematics.exact_step`), the footprint checked at every step against
    the occupied cells (:func:`~skidnav.agents.classical.footprint.footprint_collides`).
-3. **Score** of a rollout that never collides (lower is better, in metres):
+3. **Admissible** (Fox et al.'s admissible velocities): a command whose rollout meets no
+   occupied cell before the robot, holding it for ``reaction_time`` t_r (a control period)
+   and then braking at ``deceleration`` a_b, could stop: the first collision comes no sooner
+   than t_r + |v| / a_b.
+   **Score** (lower is better, in metres) of the rollout's part before its first collision:
    D(end) + w_h |angle from the end heading to the route point ``lookahead`` ahead|
    + w_o max inflation cost along it + w_v (1 − v / v_max), D the cost-to-go of the end
-   position (:func:`~skidnav.agents.classical.costmap.route_distance`).
-4. **Recovery** when every rollout collides (as Nav2's and move_base's recovery behaviours
+   position (:func:`~skidnav.agents.classical.costmap.route_distance`); a rollout that enters
+   the goal's cell ends there with D = 0 and no heading term (the episode would end).
+4. **Recovery** when no command is admissible (as Nav2's and move_base's recovery behaviours
    back up or spin when the controller finds no way): the command whose first collision
    comes latest, then the one with the fewest colliding steps (out of a contact first),
    then the best score. Turning in place and backing up are among the samples, so this is
@@ -36,7 +41,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from skidnav._jit import jit
+from skidnav._jit import inline_jit, jit
 from skidnav.agents.classical.costmap import route_distance
 from skidnav.agents.classical.footprint import footprint_collides
 from skidnav.agents.mpc.costmap import CostMap, MapCosts, cell_centre, lookahead_waypoint
@@ -54,6 +59,8 @@ class Controller(NamedTuple):
         length, width: the padded footprint [m].
         max_speed: v_max [m/s], the speed term's scale.
         heading_weight: w_h [m/rad]. obstacle_weight: w_o [m]. speed_weight: w_v [m].
+        deceleration: a_b [m/s²], the braking the admissibility assumes.
+        reaction_time: t_r [s], how long a command holds before the next can brake.
     """
 
     wheel_radius: float
@@ -67,6 +74,8 @@ class Controller(NamedTuple):
     heading_weight: float
     obstacle_weight: float
     speed_weight: float
+    deceleration: float
+    reaction_time: float
 
 
 def command_samples(
@@ -96,6 +105,30 @@ def command_samples(
     return np.ascontiguousarray(np.stack([left * scale, right * scale], axis=1))
 
 
+@inline_jit
+def pose_score(
+    x: float,
+    y: float,
+    heading: float,
+    speed: float,
+    worst: float,
+    cost_map: CostMap,
+    costs: MapCosts,
+    grid: GridShape,
+    controller: Controller,
+) -> float:
+    """The score [m] of a rollout that ends at the pose (x [m], y [m], heading [rad]), driven at
+    ``speed`` [m/s] past cells of inflation cost at most ``worst`` (module doc, step 3)."""
+    c = controller
+    score = c.obstacle_weight * worst + c.speed_weight * (1.0 - speed / c.max_speed)
+    aim_i, aim_j = lookahead_waypoint(x, y, cost_map, costs, grid)
+    aim_x, aim_y = cell_centre(aim_i, aim_j, grid)
+    if aim_x != x or aim_y != y:
+        misalignment = abs(wrap_angle(math.atan2(aim_y - y, aim_x - x) - heading))
+        score += c.heading_weight * misalignment
+    return score + route_distance(x, y, cost_map, grid)
+
+
 @jit
 def rollout(
     x: float,
@@ -111,10 +144,12 @@ def rollout(
 ) -> tuple[int, int, float]:
     """Steps 2 and 3 of the module doc for one command (ω_L, ω_R) [rad/s] from the pose
     (x [m], y [m], heading [rad]): (the first colliding step, 1-based, or ``steps`` + 1 for
-    none; the number of colliding steps; the score [m])."""
+    none; the number of colliding steps; the score [m] of its part before the first collision,
+    0 plus the obstacle and speed terms if that part enters the goal's cell)."""
     c = controller
     v_x, v_y, yaw_rate = body_velocities(left, right, c.x_icr, c.wheel_radius, c.half_track)
     first, colliding, worst = c.steps + 1, 0, 0.0
+    end_x, end_y, end_heading = x, y, heading
     for s in range(1, c.steps + 1):
         x, y, heading = exact_step(x, y, heading, v_x, v_y, yaw_rate, c.step)
         x = min(max(x, 0.0), grid.arena_width)  # the simulator clips the pose to the arena
@@ -122,25 +157,18 @@ def rollout(
         if footprint_collides(occupied, grid, x, y, heading, c.length, c.width):
             colliding += 1
             first = min(first, s)
+        if first <= s:
+            continue  # only counting the collisions (the recovery's key)
+        end_x, end_y, end_heading = x, y, heading
         i, j = cell_of(x, y, grid)
         worst = max(worst, cost_map.wall_probability[i, j])
-        if i == costs.goal_i and j == costs.goal_j:
+        if i == costs.goal_i and j == costs.goal_j:  # the episode would end here
             return (
                 first,
                 colliding,
                 c.obstacle_weight * worst + c.speed_weight * (1.0 - v_x / c.max_speed),
             )
-    aim_i, aim_j = lookahead_waypoint(x, y, cost_map, costs, grid)
-    aim_x, aim_y = cell_centre(aim_i, aim_j, grid)
-    misalignment = 0.0
-    if aim_x != x or aim_y != y:
-        misalignment = abs(wrap_angle(math.atan2(aim_y - y, aim_x - x) - heading))
-    score = (
-        route_distance(x, y, cost_map, grid)
-        + c.heading_weight * misalignment
-        + c.obstacle_weight * worst
-        + c.speed_weight * (1.0 - v_x / c.max_speed)
-    )
+    score = pose_score(end_x, end_y, end_heading, v_x, worst, cost_map, costs, grid, c)
     return first, colliding, score
 
 
@@ -158,19 +186,21 @@ def choose_command(
 ) -> tuple[int, bool]:
     """(the index of the chosen command among ``samples`` float64 (K, 2) [rad/s], whether it
     was admissible) from the pose (x [m], y [m], heading [rad]) (module doc): the best-scoring
-    command that never collides, else the recovery's choice (step 4). Ties go to the first."""
+    admissible command, else the recovery's choice (step 4). Ties go to the first."""
+    c = controller
     best, best_score = -1, math.inf
     rescue, rescue_key, rescue_score = 0, -1, math.inf
     for k in range(samples.shape[0]):
+        left, right = samples[k, 0], samples[k, 1]
         first, colliding, score = rollout(
-            x, y, heading, samples[k, 0], samples[k, 1], occupied, cost_map, costs, grid,
-            controller,
-        )  # fmt: skip
-        if first > controller.steps:
+            x, y, heading, left, right, occupied, cost_map, costs, grid, c
+        )
+        speed = abs(0.5 * c.wheel_radius * (left + right))
+        if (first - 1) * c.step >= c.reaction_time + speed / c.deceleration:
             if score < best_score:
                 best, best_score = k, score
             continue
-        key = first * (controller.steps + 2) - colliding  # latest first, then fewest
+        key = first * (c.steps + 2) - colliding  # the latest first collision, then the fewest
         if key > rescue_key or (key == rescue_key and score < rescue_score):
             rescue, rescue_key, rescue_score = k, key, score
     if best >= 0:

@@ -95,7 +95,8 @@ class ClassicalNavigator:
         self.controller = Controller(
             sheet.wheel_radius, sheet.half_track, sheet.x_icr, steps, config.horizon / steps,
             length + 2 * padding, width + 2 * padding, max_speed, config.heading_weight,
-            config.obstacle_weight, config.speed_weight,
+            config.obstacle_weight, config.speed_weight, config.deceleration,
+            robot.action_duration,
         )  # fmt: skip
         self.reset()
 
