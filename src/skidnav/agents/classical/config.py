@@ -29,8 +29,9 @@ MAX_WEIGHT = 1e6
 class ClassicalConfig:
     """The global planner's and the local controller's settings (docs/agents/classical.md).
 
-    Costs are in metres of path: the global cost-to-go D is a length, and every other term of
-    the controller's score is weighed against it.
+    The controller's score is in seconds: the global cost-to-go D [m] over the top speed
+    sampled, and every other term weighed against it; so the same weights serve a robot of
+    2 m/s and one of 4 cm/s.
     """
 
     inflation_radius: float = 0.55
@@ -39,8 +40,9 @@ class ClassicalConfig:
     cost_scaling: float = 10.0
     """k [1/m] of the inflation cost exp(−k (d − r_in)) at a distance d beyond the footprint's
     inscribed radius r_in (Nav2's ``cost_scaling_factor``), ≥ 0."""
-    inflation_weight: float = 0.5
-    """Metres of path that entering a cell of inflation cost 1 adds to the cost-to-go, ≥ 0."""
+    inflation_weight: float = 3.0
+    """Cells of path that entering a cell of inflation cost 1 adds to the cost-to-go (in cell
+    sides, the smaller one), ≥ 0."""
     footprint_length: float | None = None
     """The rectangle's length along the heading [m], ≥ 0; None: the robot's
     ``footprint_length`` (0, a point, for a robot without one)."""
@@ -67,12 +69,12 @@ class ClassicalConfig:
     deceleration: float = 2.5
     """a_b [m/s²]: a command is admissible if the robot, holding it for a control period and
     then braking at a_b, stops before its rollout's first collision (Fox et al. 1997), > 0."""
-    heading_weight: float = 0.3
-    """Metres per radian of the end heading's angle to the route ``lookahead`` ahead, ≥ 0."""
-    obstacle_weight: float = 0.5
-    """Metres per unit of the greatest inflation cost along a rollout, ≥ 0."""
-    speed_weight: float = 0.2
-    """Metres per unit of the speed deficit 1 − v / ``max_speed``, ≥ 0."""
+    heading_weight: float = 0.15
+    """Seconds per radian of the end heading's angle to the route ``lookahead`` ahead, ≥ 0."""
+    obstacle_weight: float = 0.25
+    """Seconds per unit of the greatest inflation cost along a rollout, ≥ 0."""
+    speed_weight: float = 0.1
+    """Seconds per unit of the speed deficit 1 − v / ``max_speed``, ≥ 0."""
     lookahead: float = 1.0
     """How far along the global route [m] the heading term aims, ≥ 0."""
     ray_stride: int = 1

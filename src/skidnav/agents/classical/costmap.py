@@ -16,10 +16,11 @@ the goal over it.
 3. **Route** (Dijkstra 1959): the cost-to-go D [m] of every cell to the goal's cell over the
    8-connected cells, :func:`skidnav.agents.mpc.costmap.route_costs`, the project's one
    Dijkstra: entering a cell costs the centre-to-centre length, plus ``inflation_weight`` ×
-   its inflation cost, plus :data:`LETHAL_COST` if it is lethal, and no diagonal move cuts past
-   a lethal cell. It reads the inflation cost where ``mppi-kinematic`` keeps a wall probability
-   (:attr:`~skidnav.agents.mpc.costmap.CostMap.wall_probability`) and the lethal cells as its
-   blocked ones; D stays finite, so a goal walled in still has a gradient.
+   its inflation cost cell sides, plus :data:`LETHAL_CELLS` cell sides if it is lethal, and
+   no diagonal move cuts past a lethal cell. It reads the inflation cost where
+   ``mppi-kinematic`` keeps a wall probability and the lethal cells as its blocked ones
+   (:class:`~skidnav.agents.mpc.costmap.CostMap`); D stays finite, so a goal walled in still
+   has a gradient.
 
 The route is recomputed only when the occupied cells (or the goal's cell) change: a reading
 that only confirms free space changes nothing.
@@ -35,8 +36,8 @@ from skidnav._jit import jit
 from skidnav.agents.mpc.costmap import CostMap, MapCosts, cell_centre, empty_cost_map, route_costs
 from skidnav.world.discretization import GridShape, cell_of
 
-LETHAL_COST = 1000.0
-"""Extra cost [m] of entering a lethal cell: a detour of up to a kilometre is preferred."""
+LETHAL_CELLS = 10_000.0
+"""Extra cost of entering a lethal cell [cell sides]: any detour of fewer cells is preferred."""
 
 
 def new_cost_map(n_x: int, n_y: int) -> CostMap:
@@ -44,13 +45,18 @@ def new_cost_map(n_x: int, n_y: int) -> CostMap:
     return empty_cost_map(n_x, n_y, np.zeros(1))
 
 
-def route_settings(goal: tuple[int, int], inflation_weight: float, lookahead: float) -> MapCosts:
+def route_settings(
+    goal: tuple[int, int], grid: GridShape, inflation_weight: float, lookahead: float
+) -> MapCosts:
     """The scalars :func:`~skidnav.agents.mpc.costmap.route_costs` and
     :func:`~skidnav.agents.mpc.costmap.lookahead_waypoint` read, for costs in metres: a step of
-    1 m, the inflation weight [m] as the cost of a probability 1, the look-ahead [m]."""
+    1 m; ``inflation_weight`` [cell sides] as the cost of a probability 1 and
+    :data:`LETHAL_CELLS` as the blocked cost, in metres on ``grid``; the look-ahead [m]."""
+    side = min(grid.arena_width / (grid.n_x - 1), grid.arena_height / (grid.n_y - 1))
     return MapCosts(
         goal_i=int(goal[0]), goal_j=int(goal[1]), step_length=1.0, turn_step=1.0,
-        collision_cost=float(inflation_weight), blocked_cost=LETHAL_COST, free_prior=0.0,
+        collision_cost=float(inflation_weight) * side, blocked_cost=LETHAL_CELLS * side,
+        free_prior=0.0,
         ray_weight=0.0, heading_weight=0.0, lookahead=float(lookahead), use_states=False,
     )  # fmt: skip
 

@@ -22,8 +22,8 @@ front of a wall the straight line to the goal runs into. Per control step, from 
    occupied cell before the robot, holding it for ``reaction_time`` t_r (a control period)
    and then braking at ``deceleration`` a_b, could stop: the first collision comes no sooner
    than t_r + |v| / a_b.
-   **Score** (lower is better, in metres) of the rollout's part before its first collision:
-   D(end) + w_h |angle from the end heading to the route point ``lookahead`` ahead|
+   **Score** (lower is better, in seconds) of the rollout's part before its first collision:
+   D(end) / v_max + w_h |angle from the end heading to the route point ``lookahead`` ahead|
    + w_o max inflation cost along it + w_v (1 − v / v_max), D the cost-to-go of the end
    position (:func:`~skidnav.agents.classical.costmap.route_distance`); a rollout that enters
    the goal's cell ends there with D = 0 and no heading term (the episode would end).
@@ -58,7 +58,7 @@ class Controller(NamedTuple):
         steps: footprint checks per rollout. step: time between them [s].
         length, width: the padded footprint [m].
         max_speed: v_max [m/s], the speed term's scale.
-        heading_weight: w_h [m/rad]. obstacle_weight: w_o [m]. speed_weight: w_v [m].
+        heading_weight: w_h [s/rad]. obstacle_weight: w_o [s]. speed_weight: w_v [s].
         deceleration: a_b [m/s²], the braking the admissibility assumes.
         reaction_time: t_r [s], how long a command holds before the next can brake.
     """
@@ -117,7 +117,7 @@ def pose_score(
     grid: GridShape,
     controller: Controller,
 ) -> float:
-    """The score [m] of a rollout that ends at the pose (x [m], y [m], heading [rad]), driven at
+    """The score [s] of a rollout that ends at the pose (x [m], y [m], heading [rad]), driven at
     ``speed`` [m/s] past cells of inflation cost at most ``worst`` (module doc, step 3)."""
     c = controller
     score = c.obstacle_weight * worst + c.speed_weight * (1.0 - speed / c.max_speed)
@@ -126,7 +126,7 @@ def pose_score(
     if aim_x != x or aim_y != y:
         misalignment = abs(wrap_angle(math.atan2(aim_y - y, aim_x - x) - heading))
         score += c.heading_weight * misalignment
-    return score + route_distance(x, y, cost_map, grid)
+    return score + route_distance(x, y, cost_map, grid) / c.max_speed
 
 
 @jit
@@ -144,7 +144,7 @@ def rollout(
 ) -> tuple[int, int, float]:
     """Steps 2 and 3 of the module doc for one command (ω_L, ω_R) [rad/s] from the pose
     (x [m], y [m], heading [rad]): (the first colliding step, 1-based, or ``steps`` + 1 for
-    none; the number of colliding steps; the score [m] of its part before the first collision,
+    none; the number of colliding steps; the score [s] of its part before the first collision,
     0 plus the obstacle and speed terms if that part enters the goal's cell)."""
     c = controller
     v_x, v_y, yaw_rate = body_velocities(left, right, c.x_icr, c.wheel_radius, c.half_track)

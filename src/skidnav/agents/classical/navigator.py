@@ -108,7 +108,9 @@ class ClassicalNavigator:
         self.occupied = np.zeros((n_x, n_y), dtype=np.uint8)
         self._no_hits = np.zeros((n_x, n_y), dtype=np.int64)
         self.cost_map = new_cost_map(n_x, n_y)
-        self.costs = route_settings((-1, -1), self.config.inflation_weight, self.config.lookahead)
+        self.costs = route_settings(
+            (-1, -1), self.grid, self.config.inflation_weight, self.config.lookahead
+        )
         self.goal_point = (math.inf, math.inf)
         """The goal (x, y) [m] the route leads to."""
         self.replans = 0
