@@ -5,7 +5,7 @@
 >>> ClassicalConfig(cost_scaling=-1.0)
 Traceback (most recent call last):
 ...
-ValueError: expected cost_scaling to be a finite number >= 0, got -1.0
+ValueError: expected cost_scaling to be a finite number in [0, 100], got -1.0
 """
 
 from __future__ import annotations

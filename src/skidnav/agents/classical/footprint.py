@@ -38,7 +38,7 @@ def footprint_collides(
     >>> from skidnav.world.discretization import Discretization
     >>> grid = Discretization(n_x=11, n_y=11, arena_width=1.0, arena_height=1.0).grid_shape()
     >>> walls = np.zeros((11, 11), dtype=np.uint8); walls[5, 5] = 1  # disc at (0.55, 0.55), r 0.05
-    >>> footprint_collides(walls, grid, 0.3, 0.55, 0.0, 0.4, 0.2)  # front edge at 0.5 m
+    >>> footprint_collides(walls, grid, 0.31, 0.55, 0.0, 0.4, 0.2)  # front edge at 0.51 m
     True
     >>> footprint_collides(walls, grid, 0.29, 0.55, 0.0, 0.4, 0.2)
     False
