@@ -27,7 +27,7 @@ import skidnav
 from skidnav.agents.classical import navigator
 from skidnav.agents.classical.agent import ClassicalAgent
 from skidnav.agents.classical.config import ClassicalConfig
-from skidnav.agents.classical.footprint import footprint_collides
+from skidnav.sim.footprint import footprint_collides
 from skidnav.world.barn import load_barn_world
 
 JACKAL_FOOTPRINT = (0.458, 0.416)

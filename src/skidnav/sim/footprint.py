@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from skidnav._jit import inline_jit, jit
-from skidnav.world.discretization import GridShape, level_index
+from skidnav.world.discretization import GridShape, cell_of, level_index
 
 
 @inline_jit
@@ -78,3 +78,22 @@ def footprint_collides(
             if rectangle_touches_disc(u, v, half_length, half_width, radius):
                 return True
     return False
+
+
+@jit
+def collides(
+    occupancy: np.ndarray,
+    grid: GridShape,
+    x: float,
+    y: float,
+    heading: float,
+    length: float,
+    width: float,
+) -> bool:
+    """The collision rule of a robot at pose (x [m], y [m], heading [rad]) among the walls
+    ``occupancy`` (nonzero = wall) of ``grid``: with a footprint ``length`` × ``width`` [m] > 0,
+    :func:`footprint_collides`; a point robot (0 × 0), when its position is in a wall cell."""
+    if length > 0.0:
+        return footprint_collides(occupancy, grid, x, y, heading, length, width)
+    i, j = cell_of(x, y, grid)
+    return bool(occupancy[i, j] != 0)

@@ -53,7 +53,7 @@ from skidnav.robot.kinematics import (
     pose_step,
 )
 from skidnav.robot.params import KinematicConstants
-from skidnav.sim.footprint import footprint_collides
+from skidnav.sim.footprint import collides, footprint_collides
 from skidnav.world.discretization import (
     GridShape,
     cell_of,
@@ -258,13 +258,9 @@ def hits_wall(task: NavigationTask, x: float, y: float, heading: float) -> bool:
     its position in a wall cell for a point robot, its footprint touching a wall cell's disc
     otherwise (:mod:`skidnav.sim.footprint`)."""
     robot = task.robot
-    if robot.footprint_length > 0.0:
-        return footprint_collides(
-            task.occupancy, task.grid, x, y, heading, robot.footprint_length,
-            robot.footprint_width,
-        )  # fmt: skip
-    i, j = cell_of(x, y, task.grid)
-    return task.occupancy[i, j] != 0
+    return collides(
+        task.occupancy, task.grid, x, y, heading, robot.footprint_length, robot.footprint_width
+    )
 
 
 @inline_jit
@@ -336,8 +332,9 @@ def simulate_action(
         new_x, new_y, heading, omega_left, omega_right, twist = substep(
             robot, slip, (x, y, heading), commands, (noise[2 * k], noise[2 * k + 1])
         )
-        # :func:`hits_wall`, spelled out: an inlined helper given the task costs its arrays'
-        # reference counts on every sub-step (a tenth of the batch simulator's speed, measured)
+        # :func:`hits_wall` (:func:`skidnav.sim.footprint.collides`), spelled out: a call given
+        # the task's arrays costs their reference counts on every sub-step (a tenth of the batch
+        # simulator's speed, measured)
         if robot.footprint_length > 0.0:
             hit = footprint_collides(
                 task.occupancy, grid, new_x, new_y, heading, robot.footprint_length,

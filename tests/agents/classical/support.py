@@ -9,7 +9,7 @@ import gymnasium
 import numpy as np
 
 import skidnav  # noqa: F401  (registers the env)
-from skidnav.agents.classical.footprint import footprint_collides
+from skidnav.sim.footprint import footprint_collides
 from skidnav.world.barn import load_barn_world
 
 JACKAL = {"footprint_length": 0.458, "footprint_width": 0.416}

@@ -9,7 +9,7 @@ the goal over it.
 2. **Inflation** (the configuration space of a footprint; as Nav2's inflation layer, whose
    costs decay exponentially away from the obstacles). Each cell's clearance d [m] is the
    distance from its centre to the nearest occupied cell's inscribed disc (the footprint rule's
-   disc, :mod:`skidnav.agents.classical.footprint`), as far as ``inflation_radius``. A cell is
+   disc, :mod:`skidnav.sim.footprint`), as far as ``inflation_radius``. A cell is
    *lethal* when d ≤ r_in, the footprint's inscribed radius (half its smaller side, plus the
    padding): a robot centred there touches the obstacle whatever its heading. Beyond, its
    inflation cost is exp(−k (d − r_in)) ∈ (0, 1] up to d = ``inflation_radius``, then 0.

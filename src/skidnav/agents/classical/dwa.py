@@ -17,7 +17,7 @@ front of a wall the straight line to the goal runs into. Per control step, from 
    through the datasheet's kinematics without slip (:func:`skidnav.robot.kinematics.
    body_velocities` with the nominal r, c and x_ICR; the exact constant-twist step
    :func:`skidnav.robot.kinematics.exact_step`), the footprint checked at every step against
-   the occupied cells (:func:`~skidnav.agents.classical.footprint.footprint_collides`).
+   the occupied cells (the simulator's rule, :func:`skidnav.sim.footprint.collides`).
 3. **Admissible** (Fox et al.'s admissible velocities): a command whose rollout meets no
    occupied cell before the robot, holding it for ``reaction_time`` t_r (a control period)
    and then braking at ``deceleration`` a_b, could stop: the first collision comes no sooner
@@ -43,10 +43,10 @@ import numpy as np
 
 from skidnav._jit import inline_jit, jit
 from skidnav.agents.classical.costmap import route_distance
-from skidnav.agents.classical.footprint import footprint_collides
 from skidnav.agents.mpc.costmap import CostMap, MapCosts, cell_centre, lookahead_waypoint
 from skidnav.robot.datasheet import Datasheet
 from skidnav.robot.kinematics import body_velocities, exact_step, wrap_angle
+from skidnav.sim.footprint import collides
 from skidnav.world.discretization import GridShape, cell_of
 
 
@@ -154,7 +154,7 @@ def rollout(
         x, y, heading = exact_step(x, y, heading, v_x, v_y, yaw_rate, c.step)
         x = min(max(x, 0.0), grid.arena_width)  # the simulator clips the pose to the arena
         y = min(max(y, 0.0), grid.arena_height)
-        if footprint_collides(occupied, grid, x, y, heading, c.length, c.width):
+        if collides(occupied, grid, x, y, heading, c.length, c.width):
             colliding += 1
             first = min(first, s)
         if first <= s:
