@@ -18,12 +18,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 from skidnav.agents.catalog import CatalogEntry, entry
 from skidnav.errors import UserError
 from skidnav.experiments.config import AgentSpec
-from skidnav.studies.barn.grid import BarnGrid
+from skidnav.extras import require
+from skidnav.studies.agent_grid import read_grid
+from skidnav.studies.barn.grid import KIND, BarnGrid
 
 LIDAR_RANGE = 10.0
 """The laser's range [m] (Hokuyo UST-10LX: 10 m)."""
@@ -70,3 +74,21 @@ def check_agents(grid: BarnGrid) -> None:
     for agent in grid.agents:
         described = entry(agent.name)
         described.config(agent_params(agent, grid, described))
+
+
+def grid_from_document(document: Mapping[str, Any], path: Path) -> BarnGrid:
+    """The grid of a parsed BARN config read from ``path`` (its ``[barn]`` table and its
+    ``[[agents]]``), the agents' names and parameters checked against the catalog.
+
+    Raises:
+        UserError: one line naming ``path`` and the key; or the physics extra is missing for
+            ``dynamics = "mujoco"``.
+    """
+    grid = read_grid(BarnGrid, document, path, KIND)
+    try:
+        check_agents(grid)
+    except UserError as error:
+        raise UserError(f"{path}: {error}") from None
+    if grid.dynamics == "mujoco":
+        require("physics", "dynamics 'mujoco'")
+    return grid

@@ -30,18 +30,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 from skidnav.checks import check_integer, check_names
-from skidnav.errors import UserError, shown
+from skidnav.errors import shown
 from skidnav.experiments.config import MapSpec
 from skidnav.experiments.store import RunLayout
-from skidnav.extras import require
 from skidnav.files.saved import ArraySpec, up_to
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.sim.features import MAX_LIDAR_RAYS
-from skidnav.studies.agent_grid import AgentSeedGrid, check_choice, read_grid
+from skidnav.studies.agent_grid import AgentSeedGrid, check_choice
 from skidnav.world.barn import N_WORLDS, TIME_LIMIT
 
 KIND = "barn"
@@ -191,26 +189,6 @@ class BarnGrid(AgentSeedGrid):
         values = super().to_dict()
         values.update(worlds=list(self.worlds), floors=list(self.floors))
         return values
-
-
-def grid_from_document(document: Mapping[str, Any], path: Path) -> BarnGrid:
-    """The grid of a parsed BARN config read from ``path`` (its ``[barn]`` table and its
-    ``[[agents]]``), the agents' names and parameters checked against the catalog.
-
-    Raises:
-        UserError: one line naming ``path`` and the key; or the physics extra is missing for
-            ``dynamics = "mujoco"``.
-    """
-    grid = read_grid(BarnGrid, document, path, KIND)
-    from skidnav.studies.barn.agents import check_agents  # the catalog, imported when needed
-
-    try:
-        check_agents(grid)
-    except UserError as error:
-        raise UserError(f"{path}: {error}") from None
-    if grid.dynamics == "mujoco":
-        require("physics", "dynamics 'mujoco'")
-    return grid
 
 
 def run_file_specs(grid: BarnGrid) -> dict[str, ArraySpec]:

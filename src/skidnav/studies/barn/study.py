@@ -10,7 +10,8 @@ from typing import Any
 from skidnav.experiments.runner import TrialFunction
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import RunLayout
-from skidnav.studies.barn.grid import KIND, LAYOUT, BarnGrid, grid_from_document
+from skidnav.studies.barn.agents import grid_from_document
+from skidnav.studies.barn.grid import KIND, LAYOUT, BarnGrid
 from skidnav.studies.barn.report import report_section
 from skidnav.studies.barn.trial import barn_trial
 from skidnav.studies.kind import STUDY_BACKENDS, Study
