@@ -12,6 +12,7 @@ import gymnasium
 import numpy as np
 import pytest
 
+from skidnav.agents.catalog import entry
 from skidnav.agents.linear.registry import make_linear_agent
 from skidnav.agents.policies.agent import GoalTrackerAgent
 from skidnav.agents.policies.goal_tracker import GoalTracker, GoalTrackerConfig
@@ -200,3 +201,24 @@ def test_a_saved_frozen_policy_acts_and_a_linear_agent_is_refused(
     assert main([*argv, "--agent-file", str(linear_file)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and "a saved linear agent does not run on the robot" in lines[0], lines
+
+
+def test_a_saved_classical_navigator_drives_frozen(tmp_path: Path) -> None:
+    """The classical navigator, saved, drives ``robot run --agent-file`` as a frozen policy."""
+    env = gymnasium.make(
+        "skidnav/SkidSteerNav-v0", map_kind="free", observation="features", action="continuous"
+    )
+    navigator = entry("classical").build(env, {}, np.random.SeedSequence(0), 100).agent
+    (tmp_path / "classical").mkdir()
+    saved = navigator.save(tmp_path / "classical" / "agent")[1]
+    config = write_config(
+        tmp_path,
+        "[run]\n"
+        + "".join(f"{key} = {value}\n" for key, value in RUN.items())
+        + 'map = "free"\n[sim]\nlatency = 0.0\ndrop = 0.0\n',
+    )
+    out = tmp_path / "out"
+    argv = ["robot", "run", "--quiet", "--config", str(config), "--out", str(out)]
+    assert main([*argv, "--agent-file", str(saved)]) == 0
+    latest = Checkpoints(out / "checkpoints").latest()
+    assert latest is not None and latest[2]["policy"] == f"file:{saved.resolve()}"

@@ -183,6 +183,15 @@ def check_wheel_speed_env(env: Env) -> None:
         )
 
 
+def require_wheel_speed_env(name: str, env: Env) -> None:
+    """:func:`check_wheel_speed_env` for making agent ``name``: UserError in one line naming
+    the agent and the config keys to set."""
+    try:
+        check_wheel_speed_env(env)
+    except ValueError as error:
+        raise UserError(f"agent {name!r}: {error} (set [env] action and observation)") from None
+
+
 def train_own_loop(
     agent: EpisodeTrainingAgent,
     env: Env,

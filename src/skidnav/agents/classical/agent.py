@@ -119,11 +119,12 @@ class ClassicalAgent:
 
 
 def laser_of(nav: Any) -> Laser:
-    """The lidar layout of the navigation env ``nav`` (unwrapped): its features' rays and range,
-    and their field of view (a full turn where the env states none)."""
+    """The lidar layout of the navigation env ``nav`` (unwrapped): its features' rays, range
+    and field of view."""
     features = nav.features
-    fov = getattr(features, "field_of_view", getattr(nav, "lidar_fov", 2.0 * math.pi))
-    return Laser(int(features.lidar_rays), float(features.lidar_range), float(fov))
+    return Laser(
+        int(features.lidar_rays), float(features.lidar_range), float(features.field_of_view)
+    )
 
 
 def make_classical_agent(env: Any, params: Mapping[str, Any]) -> ClassicalAgent:

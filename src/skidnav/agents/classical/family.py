@@ -25,11 +25,10 @@ from skidnav.agents.classical.agent import (
     make_classical_agent,
 )
 from skidnav.agents.classical.config import ClassicalConfig
-from skidnav.agents.family import Env, Family, Params, check_wheel_speed_env
+from skidnav.agents.family import Env, Family, Params, require_wheel_speed_env
 from skidnav.agents.interface import AgentConfig
-from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog, train_plain
+from skidnav.agents.training import train_plain
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
-from skidnav.errors import UserError
 
 
 def _agent_class(name: str) -> type[ClassicalAgent]:
@@ -45,25 +44,8 @@ def _make(
 ) -> ClassicalAgent:
     """The navigator for the navigation env ``env`` (it draws no random number: ``seed`` is
     unused); UserError for an env of other spaces or bad ``params``."""
-    try:
-        check_wheel_speed_env(env)
-    except ValueError as error:
-        raise UserError(f"agent {name!r}: {error} (set [env] action and observation)") from None
+    require_wheel_speed_env(name, env)
     return make_classical_agent(env, params)
-
-
-def _train(
-    agent: ClassicalAgent,
-    env: Env,
-    episodes: int,
-    /,
-    *,
-    max_steps: int | None = None,
-    evaluation: Evaluation = NO_EVALUATION,
-    seed: int | None = None,
-) -> TrainingLog:
-    """Its episodes in the plain loop: each from an empty map, learning nothing."""
-    return train_plain(agent, env, episodes, max_steps=max_steps, evaluation=evaluation, seed=seed)
 
 
 def _load(json_path: Path, meta: Mapping[str, Any], env: Env | None) -> ClassicalAgent:
@@ -84,7 +66,7 @@ FAMILY: Family[ClassicalAgent] = Family(
     agent_class=_agent_class,
     config_class=_config_class,
     make=_make,
-    train=_train,
+    train=train_plain,
     save_formats=(SAVE_FORMAT,),
     load=_load,
     policy=_policy,

@@ -16,13 +16,12 @@ from typing import Any
 import numpy as np
 from numpy.random import SeedSequence
 
-from skidnav.agents.family import Env, Family, Params, check_wheel_speed_env
+from skidnav.agents.family import Env, Family, Params, require_wheel_speed_env
 from skidnav.agents.interface import AgentConfig
 from skidnav.agents.mpc.agent import AGENT_NAME, SAVE_FORMAT, MPPIKinematicAgent, make_mppi_agent
 from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.loading import load_mppi_agent, policy_from_file
 from skidnav.agents.mpc.training import train_mppi
-from skidnav.errors import UserError
 
 
 def _agent_class(name: str) -> type[MPPIKinematicAgent]:
@@ -40,10 +39,7 @@ def _make(
     goal cell and lidar layout (never its walls or floor), draws from ``seed``. UserError for an
     env of other spaces or bad ``params`` (``kinematic_model = "true"`` among them: the
     simulator offers no coefficients of the model to plan with)."""
-    try:
-        check_wheel_speed_env(env)
-    except ValueError as error:
-        raise UserError(f"agent {name!r}: {error} (set [env] action and observation)") from None
+    require_wheel_speed_env(name, env)
     return make_mppi_agent(env, dict(params), np.random.default_rng(seed))
 
 

@@ -17,7 +17,7 @@ from typing import Any
 
 from numpy.random import SeedSequence
 
-from skidnav.agents.family import Env, Family, Params, check_wheel_speed_env, train_own_loop
+from skidnav.agents.family import Env, Family, Params, require_wheel_speed_env, train_own_loop
 from skidnav.agents.interface import Agent, AgentConfig, EpisodeTrainingAgent
 from skidnav.agents.policies.agent import (
     GOAL_TRACKER_FORMAT,
@@ -57,10 +57,7 @@ def _config_class(name: str) -> type[AgentConfig]:
 
 
 def _make(name: str, env: Env, params: Params, seed: SeedSequence, max_steps: int) -> Agent:
-    try:
-        check_wheel_speed_env(env)
-    except ValueError as error:
-        raise UserError(f"agent {name!r}: {error} (set [env] action and observation)") from None
+    require_wheel_speed_env(name, env)
     if name == "cmaes":
         agent: Agent = _search_module().make_cmaes_agent(env, params, seed_int(seed), max_steps)
         return agent
