@@ -9,6 +9,7 @@ import pytest
 
 from skidnav.cli import main
 from skidnav.experiments.report import html
+from tests.cli_support import exit_code
 
 
 @pytest.mark.parametrize("command", ["run", "tune"])
@@ -54,3 +55,27 @@ def test_a_report_into_a_missing_folder_is_one_line(
     assert main(["report", str(tmp_path), "-o", str(tmp_path)]) == 2  # a directory
     assert "a directory, not a file; choose another --output" in capsys.readouterr().err
     assert sorted(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    "arguments",
+    [
+        ["run", "{config}", "--out", "{out}", "--tensorboard", ""],
+        ["run", "{config}", "--out", ""],
+        ["tune", "{config}", "--out", ""],
+        ["report", ""],
+        ["world", "simulate", "--random", "1", "--out", ""],
+    ],
+)
+def test_an_empty_path_is_refused_not_taken_for_the_working_directory(
+    arguments: list[str],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    filled = [a.format(config=tmp_path / "c.toml", out=tmp_path / "out") for a in arguments]
+    assert exit_code(filled) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].endswith("expected a path, got an empty one"), lines
+    assert list(tmp_path.iterdir()) == []

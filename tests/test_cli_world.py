@@ -88,7 +88,14 @@ EDGE_MAP = "skidnav-map 1\nwidth 6\nheight 5\nmap\n######\n#....S\n#....#\n#G...
         (["world", "map", "show", "missing.txt"], "missing.txt: no such map file"),
         (["world", "map", "generate", "--size", "3", "3"], "at least 5"),
         (["world", "simulate", "--random", "0"], "--random >= 1"),
-        (["world", "simulate", "--drift", "-1", "--random", "1"], "expected drift_amplitude >= 0"),
+        (
+            ["world", "simulate", "--drift", "-1", "--random", "1"],
+            "expected drift_amplitude to be a",
+        ),
+        (
+            ["world", "simulate", "--drift", "inf", "--random", "1"],
+            "drift_amplitude to be a finite",
+        ),
         (
             ["world", "simulate", "--world-seed", "-5", "--random", "1"],
             "expected --world-seed >= 0",

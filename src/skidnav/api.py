@@ -38,9 +38,10 @@ from skidnav.agents.catalog import agent_names as agent_names
 from skidnav.agents.interface import Agent
 from skidnav.agents.saved import SavedPath, load_saved_agent
 from skidnav.agents.training import Evaluation, Rollout, TrainingLog, greedy_evaluation
-from skidnav.envs.registration import ENV_ID
-from skidnav.errors import UserError
+from skidnav.envs.registration import ENV_ID, creation_error
+from skidnav.errors import UserError, shown
 from skidnav.experiments.config import ExperimentConfig
+from skidnav.experiments.limits import check_setting
 from skidnav.experiments.metrics import ConvergenceRule, convergence_metrics, evaluation_summary
 from skidnav.experiments.runner import RunOutcome
 from skidnav.experiments.store import ResultStore, RunLayout
@@ -56,6 +57,35 @@ DEFAULTS: Mapping[str, Any] = {
 """An experiment config's defaults: the convergence rule and oracle settings used here too."""
 NO_LIMIT = 10_000
 """Actions per episode on an env without a time limit."""
+
+
+def _check_setting(function: str, name: str, value: object, setting: str) -> None:
+    """UserError ``"FUNCTION: expected NAME to be …"`` unless ``value`` is within the limit of
+    the experiment config's ``setting`` (:data:`skidnav.experiments.limits.SETTINGS`: the
+    config, the command line and the API accept the same values)."""
+    try:
+        check_setting(setting, value, shown_as=name)
+    except ValueError as error:
+        raise UserError(f"{function}: {error}") from None
+
+
+def _check_type(function: str, name: str, value: object, kinds: Any, expected: str) -> None:
+    """UserError ``"FUNCTION: expected NAME to be EXPECTED, got …"`` unless ``value`` is an
+    instance of ``kinds``."""
+    if not isinstance(value, kinds):
+        raise UserError(f"{function}: expected {name} to be {expected}, got {shown(value)}")
+
+
+def _check_run(function: str, agent: object, env: object) -> None:
+    """UserError unless ``agent`` is an agent and ``env`` a Gymnasium env."""
+    _check_type(function, "agent", agent, Agent, "an agent (skidnav.make_agent)")
+    _check_type(function, "env", env, gymnasium.Env, "a Gymnasium env (skidnav.make_env)")
+
+
+def _check_limit(function: str, max_steps: object) -> None:
+    """UserError unless ``max_steps`` is None (the env's limit) or an action limit."""
+    if max_steps is not None:
+        _check_setting(function, "max_steps", max_steps, "max_steps")
 
 
 def make_env(
@@ -81,6 +111,10 @@ def make_env(
     Raises:
         UserError: an unknown map kind, a missing map file, or an option the env refuses.
     """
+    _check_type("make_env", "map", map, str | Path, "a map kind or a map file's path")
+    _check_type("make_env", "slip", slip, str, "a slip preset's name")
+    _check_type("make_env", "observation", observation, str, "an observation's name")
+    _check_setting("make_env", "seed", seed, "root_seed")
     if isinstance(map, str) and map not in MAP_KINDS and not Path(map).exists():
         raise UserError(
             f"make_env: expected a map kind ({', '.join(MAP_KINDS)}) or a map file, got {map!r}"
@@ -91,7 +125,7 @@ def make_env(
             ENV_ID, world_seed=seed, slip=slip, observation=observation, **where, **options
         )
     except (TypeError, ValueError, gymnasium.error.Error) as error:
-        raise UserError(f"make_env: {error}") from None
+        raise UserError(f"make_env: {creation_error(error)}") from None
 
 
 def make_agent(name: str, env: Env, *, seed: int = 0, **params: Any) -> Agent:
@@ -102,6 +136,9 @@ def make_agent(name: str, env: Env, *, seed: int = 0, **params: Any) -> Agent:
         UserError: an unknown agent, a bad hyperparameter, an env whose observation the agent
             does not learn over, or the agent's extra missing (one line naming it).
     """
+    _check_type("make_agent", "name", name, str, "an agent's name (skidnav.agent_names())")
+    _check_type("make_agent", "env", env, gymnasium.Env, "a Gymnasium env (skidnav.make_env)")
+    _check_setting("make_agent", "seed", seed, "root_seed")
     described = entry(name)
     _check_observation(described, env)
     sequence = child_sequences(seed, TRAINING_ROLES)["agent"]
@@ -156,10 +193,14 @@ def train(
         The per-episode :class:`~skidnav.agents.training.TrainingLog` (returns, lengths,
         greedy evaluations, …): :func:`convergence_episode` reads it.
     """
-    if episodes < 1 or rollouts < 1:
-        raise UserError(
-            f"train: expected episodes >= 1 and rollouts >= 1, got {episodes} and {rollouts}"
-        )
+    _check_run("train", agent, env)
+    _check_setting("train", "episodes", episodes, "episodes")
+    _check_setting("train", "rollouts", rollouts, "eval_rollouts")
+    if seed is not None:
+        _check_setting("train", "seed", seed, "root_seed")
+    _check_limit("train", max_steps)
+    if eval_env is not None:
+        _check_type("train", "eval_env", eval_env, gymnasium.Env, "a Gymnasium env or None")
     limit = max_steps or _limit(env)
     evaluation = eval_env if eval_env is not None else _twin(env)
     seeds = None if seed is None else _evaluation_seeds(seed, rollouts)
@@ -182,12 +223,18 @@ def evaluate(
     seed of ``seed`` (the seeds :func:`train` evaluates with) and cut at ``max_steps`` actions
     (default: the env's limit); each a :class:`~skidnav.agents.training.Rollout` (length
     [actions] and cost, −1 and NaN where it did not reach the goal)."""
+    _check_run("evaluate", agent, env)
+    _check_setting("evaluate", "rollouts", rollouts, "eval_rollouts")
+    _check_setting("evaluate", "seed", seed, "root_seed")
+    _check_limit("evaluate", max_steps)
     limit = max_steps or _limit(env)
     return greedy_evaluation(agent, env, limit, _evaluation_seeds(seed, rollouts))
 
 
 def save_agent(agent: Agent, path: str | Path) -> tuple[Path, Path]:
     """Save ``agent`` as ``path.npz`` + ``path.json`` (never pickle); both paths returned."""
+    _check_type("save_agent", "agent", agent, Agent, "an agent (skidnav.make_agent)")
+    _check_type("save_agent", "path", path, str | Path, "a path")
     return agent.save(path)
 
 
@@ -196,6 +243,13 @@ def load_agent(path: SavedPath, env: Env | None = None) -> Agent:
     the pair it returned), of any family
     (:func:`skidnav.agents.saved.load_saved_agent`; a deep agent needs the ``env`` it acts in).
     """
+    pair = isinstance(path, list | tuple) and all(isinstance(p, str | Path) for p in path)
+    if not (isinstance(path, str | Path) or pair):
+        raise UserError(
+            f"load_agent: expected path to be a path or a pair of paths, got {shown(path)}"
+        )
+    if env is not None:
+        _check_type("load_agent", "env", env, gymnasium.Env, "a Gymnasium env or None")
     return load_saved_agent(path, env)
 
 
@@ -219,7 +273,11 @@ def convergence_episode(
     Raises:
         UserError: ``env`` is not the skid-steer env on kinematic dynamics (no oracle).
     """
-    rule = ConvergenceRule(reference_length(env), tolerance, window, level)
+    _check_type("convergence_episode", "log", log, TrainingLog, "a training log (skidnav.train)")
+    _check_setting("convergence_episode", "tolerance", tolerance, "convergence_tolerance")
+    _check_setting("convergence_episode", "window", window, "convergence_window")
+    _check_setting("convergence_episode", "level", level, "convergence_level")
+    rule = ConvergenceRule(_reference_length(env, "convergence_episode"), tolerance, window, level)
     mean, share = evaluation_summary(log.greedy_lengths)
     episodes = {"greedy_length": mean, "greedy_success": share, "length": log.lengths}
     metrics = convergence_metrics(episodes, rule)
@@ -234,11 +292,21 @@ def reference_length(env: Env) -> float:
     Raises:
         UserError: ``env`` is not the skid-steer env on kinematic dynamics (no oracle).
     """
+    return _reference_length(env, "reference_length")
+
+
+def _reference_length(env: Env, function: str) -> float:
+    """:func:`reference_length`, its error naming the API ``function`` called."""
     from skidnav.experiments.reference.oracle import load_or_compute_oracle
 
-    nav = env.unwrapped
-    if env.spec is None or env.spec.id != ENV_ID or getattr(nav, "dynamics", "") != "kinematic":
-        raise UserError("convergence_episode: expected a skidnav/SkidSteerNav-v0 env on kinematic "
+    nav = getattr(env, "unwrapped", None)
+    if (
+        not isinstance(env, gymnasium.Env)
+        or env.spec is None
+        or env.spec.id != ENV_ID
+        or getattr(nav, "dynamics", "") != "kinematic"
+    ):
+        raise UserError(f"{function}: expected a skidnav/SkidSteerNav-v0 env on kinematic "
                         "dynamics (its oracle gives the optimal length)")  # fmt: skip
     discrete = gymnasium.make(env.spec, observation="discrete").unwrapped
     limit = _limit(env)
@@ -285,6 +353,12 @@ def run_config(
     from skidnav.files.outputs import check_output_dir
     from skidnav.studies.loading import load_grid, run_loaded
 
+    _check_type("run_config", "config", config, str | Path, "a config file's path")
+    _check_type("run_config", "out", out, str | Path | None, "a folder's path or None")
+    _check_type("run_config", "backend", backend, str | None, "a backend's name or None")
+    if jobs is not None:
+        _check_type("run_config", "jobs", jobs, int, "a number of workers or None")
+    _check_type("run_config", "progress", progress, bool, "true or false")
     loaded = load_grid(Path(config))
     folder = Path(out) if out is not None else Path("runs") / loaded.grid.name
     outcome = run_loaded(

@@ -19,7 +19,10 @@ from skidnav.studies.tuning.config import load_tune_config
 from tests.experiments.exp_support import TINY_TOML, cli_command, cli_env
 
 DEEP = 5000
-TUNE = "\n[tune]\ntrials = 2\n\n[tune.space.q-learning]\nalpha = { low = 0.05, high = 1.0 }\n"
+TUNE = (
+    "\n[tune]\ntrials = 2\nseeds = 2\n\n[tune.space.q-learning]\n"
+    "alpha = { low = 0.05, high = 1.0 }\n"
+)
 """A ``[tune]`` table for :data:`TINY_TOML` (so that ``skidnav tune`` reads the agents)."""
 PARAMS = "params = { planning_steps = 5 }"
 
@@ -49,6 +52,27 @@ CASES: dict[str, tuple[str, str]] = {
         TINY_TOML.replace("episodes = 6", f"{'k' * 10_000} = 6"),
         "[experiment]: unknown key \"'kkkk",
     ),
+    "a generated map whose oracle does not fit": (
+        TINY_TOML.replace(
+            'kind = "free"', 'kind = "free"\noptions = { shape = [1000, 1000] }'
+        ).replace("oracle_samples = 4", "oracle_samples = 64"),
+        "map 'free': its oracle would need 19.1 GiB (20,000,000 states × 4 actions × 64 samples",
+    ),
+    "an optimum grid whose oracle does not fit": (
+        TINY_TOML.replace(
+            "eval_rollouts = 2", "optimum_grids = [[1000, 1000, 5]]\noptimum_samples = 1000"
+        ),
+        "optimum grid [1000, 1000, 5]: its oracle would need 74.5 GiB",
+    ),
+    "a bool for a number": (
+        TINY_TOML.replace(PARAMS, "params = { planning_steps = 5, alpha = true }"),
+        "agent 'dyna-q': expected alpha to be a float, got True",
+    ),
+    "an unknown env option": (
+        TINY_TOML + "\n[env]\nbogus_key = 3\n",
+        "environment or map options: SkidSteerNavEnv.__init__() got an unexpected keyword "
+        "argument 'bogus_key'",
+    ),
     "long map file": (
         TINY_TOML.replace('kind = "free"', f'file = "{"m" * 10_000}.txt"'),
         "file: no such map file \"'mmmm",
@@ -71,6 +95,13 @@ def test_a_hostile_config_is_one_line_and_writes_nothing(
     assert message in lines[0], lines
     assert not re.search(r"(.)\1{40}", lines[0])  # an excerpt of a long value, not all of it
     assert sorted(tmp_path.iterdir()) == [config]
+
+
+def test_a_tuning_table_without_seeds_is_named_not_a_constructor_error(tmp_path: Path) -> None:
+    config = tmp_path / "tune.toml"
+    config.write_text(TINY_TOML + TUNE.replace("seeds = 2\n", ""))
+    with pytest.raises(UserError, match=r"tune.toml: \[tune\]: missing key 'seeds' \(tuning seeds"):
+        load_tune_config(config)
 
 
 def test_the_loaders_bound_their_own_reads(tmp_path: Path) -> None:

@@ -69,6 +69,9 @@ def _broken(old: str, new: str) -> str:
     [
         (_broken("skidnav-map 1", "skidnav-map 3"), "f.txt:1: expected first line"),
         (_broken("width 6", "width six"), "f.txt:3: expected an integer width"),
+        (_broken("width 6", "width \uff16"), "f.txt:3: expected ASCII numbers after width"),
+        (_broken("width 6", "width 0_6"), "f.txt:3: expected an integer width, got '0_6'"),
+        (_broken("width 6", "width +6"), "f.txt:3: expected an integer width, got '+6'"),
         (_broken("width 6", "width 2"), "f.txt:3: expected width between 3 and 1000"),
         (_broken("width 6\n", ""), "missing width before 'map'"),
         (_broken("height 5", "depth 5"), "f.txt:4: expected 'width N'"),

@@ -21,6 +21,7 @@ from typing import Any, Generic
 
 from numpy.random import SeedSequence
 
+from skidnav.agents.config import check_field_types
 from skidnav.agents.family import AgentT, Env, Family, Params, asks_for, constructor_context
 from skidnav.agents.interface import Agent, AgentConfig
 from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog
@@ -117,6 +118,7 @@ class AgentEntry(Generic[AgentT]):
         """The agent's config from ``params`` (e.g. an ``[[agents]]`` table's ``params``),
         validated as a new agent would; UserError naming the agent otherwise."""
         try:
+            check_field_types(self.config_class, dict(params))
             return self.config_class.from_mapping(dict(params))
         except (ValueError, TypeError, UserError) as error:
             raise UserError(f"agent {self.name!r}: {first_line(error)}") from None
@@ -154,6 +156,7 @@ class AgentEntry(Generic[AgentT]):
         """A new agent for ``env`` (unwrapped) with ``params``, drawing from ``seed``, with its
         training; a deep agent drives ``env`` itself, cut at ``max_steps`` actions per
         episode. UserError when ``env``'s spaces are not the agent's or ``params`` are bad."""
+        self.config(params)  # the one check of the params, whoever builds the agent
         return BuiltAgent(self.family.make(self.name, env, params, seed, max_steps), self.family)
 
     def bind(self, agent: Agent) -> BuiltAgent[AgentT]:

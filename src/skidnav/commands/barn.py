@@ -4,8 +4,8 @@ files (:mod:`skidnav.world.barn_import`)."""
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
+from skidnav.commands.parsing import path_argument
 from skidnav.errors import UserError
 from skidnav.world.barn import N_WORLDS
 
@@ -18,9 +18,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
         "import", help="convert BARN .world and path_N.npy files to skidnav map files"
     )
     convert.add_argument(
-        "source", type=Path, help="the BARN directory, or a checkout of Daffan/the-barn-challenge"
+        "source",
+        type=path_argument,
+        help="the BARN directory, or a checkout of Daffan/the-barn-challenge",
     )
-    convert.add_argument("out", type=Path, help="a directory, or a .zip archive, to write to")
+    convert.add_argument(
+        "out", type=path_argument, help="a directory, or a .zip archive, to write to"
+    )
     convert.add_argument(
         "--world", type=int, action="append", help=f"world number (default: all {N_WORLDS})"
     )

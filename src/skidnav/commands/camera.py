@@ -21,10 +21,9 @@ from __future__ import annotations
 import argparse
 import importlib
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
-from skidnav.commands.parsing import positive_number
+from skidnav.commands.parsing import path_argument, positive_number
 from skidnav.extras import require
 from skidnav.realtime.camera.defaults import (
     BOARD_MARKER_SIZE,
@@ -55,20 +54,22 @@ def add_parser(subparsers: Any) -> None:
 
     calib = actions.add_parser("calibrate", help="fit the floor homography from corner markers")
     _add_source_arguments(calib)
-    calib.add_argument("--out", required=True, type=Path, help="calibration JSON to write")
+    calib.add_argument("--out", required=True, type=path_argument, help="calibration JSON to write")
     calib.add_argument(
         "--frames", type=int, default=10, help="frames to combine by median (default 10)"
     )
-    calib.add_argument("--intrinsics", type=Path, help="lens model JSON: undistort first")
+    calib.add_argument("--intrinsics", type=path_argument, help="lens model JSON: undistort first")
     _add_layout_arguments(calib)
     calib.set_defaults(func=_action("calibrate"))
 
     track = actions.add_parser("track", help="print the robot pose in every frame")
     _add_source_arguments(track)
-    track.add_argument("--calibration", required=True, type=Path, help="calibration JSON")
+    track.add_argument("--calibration", required=True, type=path_argument, help="calibration JSON")
     track.add_argument("--max-frames", type=int, default=None, help="stop after N frames")
     track.add_argument(
-        "--intrinsics", type=Path, help="lens model JSON (checked against the calibration's)"
+        "--intrinsics",
+        type=path_argument,
+        help="lens model JSON (checked against the calibration's)",
     )
     track.add_argument(
         "--marker-height",
@@ -80,7 +81,7 @@ def add_parser(subparsers: Any) -> None:
     _add_lens_parsers(actions)
 
     markers = actions.add_parser("markers", help="write printable marker images (PNG)")
-    markers.add_argument("--out", required=True, type=Path, help="folder to write into")
+    markers.add_argument("--out", required=True, type=path_argument, help="folder to write into")
     markers.add_argument("--ids", type=int, nargs="+", default=[0, 1, 2, 3, 4])
     markers.add_argument("--pixels", type=int, default=600, help="side of each image [px]")
     markers.add_argument("--dictionary", default=DEFAULT_DICTIONARY)
@@ -90,7 +91,7 @@ def add_parser(subparsers: Any) -> None:
 def _add_lens_parsers(actions: Any) -> None:
     """The ``board`` and ``intrinsics`` sub-subcommands (the lens model)."""
     board = actions.add_parser("board", help="write a printable ChArUco board (PNG)")
-    board.add_argument("--out", required=True, type=Path, help="PNG file to write")
+    board.add_argument("--out", required=True, type=path_argument, help="PNG file to write")
     board.add_argument(
         "--pixels-per-square", type=int, default=120, help="[px] per square (default 120)"
     )
@@ -101,7 +102,7 @@ def _add_lens_parsers(actions: Any) -> None:
     lens.add_argument(
         "--images", required=True, nargs="+", help="image files and/or folders of images"
     )
-    lens.add_argument("--out", required=True, type=Path, help="intrinsics JSON to write")
+    lens.add_argument("--out", required=True, type=path_argument, help="intrinsics JSON to write")
     lens.add_argument(
         "--min-views", type=int, default=MIN_VIEWS, help=f"views needed (default {MIN_VIEWS})"
     )

@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
 import numpy as np
 
+from skidnav.commands.parsing import path_argument
 from skidnav.errors import UserError
 from skidnav.files.atomic import write_user_file
 from skidnav.files.outputs import check_output_file
@@ -42,7 +42,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     )
     calibrate.add_argument("--seconds", type=int, default=60, help="driving per material [s]")
     calibrate.add_argument("--seed", type=int, default=0, help="excitation and interval seed")
-    calibrate.add_argument("--out", type=Path, help="JSON file to write the fits to")
+    calibrate.add_argument("--out", type=path_argument, help="JSON file to write the fits to")
     calibrate.set_defaults(func=_calibrate)
     prior = actions.add_parser(
         "prior",

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 import numpy as np
 
+from skidnav.commands.parsing import path_argument
 from skidnav.errors import UserError
 from skidnav.files.outputs import check_output_file
 from skidnav.world.discretization import Discretization
@@ -22,11 +22,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     generate.add_argument("--kind", choices=MAP_KINDS, default="obstacles")
     generate.add_argument("--seed", type=int, default=0, help="map seed")
     generate.add_argument("--size", type=int, nargs=2, default=(25, 25), metavar=("NX", "NY"))
-    generate.add_argument("--out", type=Path, help="map file to write (default: print it)")
+    generate.add_argument("--out", type=path_argument, help="map file to write (default: print it)")
     generate.set_defaults(func=_generate)
     show = actions.add_parser("show", help="print a map file as text, or draw it as a PNG")
-    show.add_argument("file", type=Path)
-    show.add_argument("--png", type=Path, help="write a picture instead of printing text")
+    show.add_argument("file", type=path_argument)
+    show.add_argument("--png", type=path_argument, help="write a picture instead of printing text")
     show.set_defaults(func=_show)
 
 

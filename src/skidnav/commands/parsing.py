@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from pathlib import Path
 from typing import NoReturn
 
 
@@ -50,3 +51,19 @@ def positive_number(text: str) -> float:
     if not 0 < value < math.inf:
         raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
     return value
+
+
+def path_argument(text: str) -> Path:
+    """A path, for an argument's ``type``: an empty one is refused (``Path("")`` would be the
+    working directory, where a command would then write).
+
+    >>> path_argument("runs/a")
+    PosixPath('runs/a')
+    >>> path_argument("")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: expected a path, got an empty one
+    """
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a path, got an empty one")
+    return Path(text)

@@ -10,6 +10,7 @@ import argparse
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from skidnav.commands.parsing import path_argument
 from skidnav.errors import UserError
 from skidnav.files.outputs import check_output_file
 
@@ -24,9 +25,13 @@ def add_parser(subparsers: Any) -> None:
         "figures, the config), written atomically: an interrupted report leaves the previous "
         "one or none.",
     )
-    parser.add_argument("run_dir", type=Path, help="results directory")
+    parser.add_argument("run_dir", type=path_argument, help="results directory")
     parser.add_argument(
-        "-o", "--output", type=Path, default=None, help="output file (default: RUN_DIR/report.html)"
+        "-o",
+        "--output",
+        type=path_argument,
+        default=None,
+        help="output file (default: RUN_DIR/report.html)",
     )
     parser.add_argument(
         "--study",

@@ -13,6 +13,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from skidnav.commands.parsing import path_argument
 from skidnav.envs.registration import allow_env_modules
 from skidnav.experiments.runner import BACKENDS, RunOutcome
 from skidnav.experiments.tensorboard_log import TensorBoardLog
@@ -32,9 +33,12 @@ def add_parser(subparsers: Any) -> None:
         "'kind' names the study). Started again on the same --out directory it skips the runs "
         "already finished; a second run on a directory in use is refused.",
     )
-    parser.add_argument("config", type=Path, help="experiment or study config (TOML)")
+    parser.add_argument("config", type=path_argument, help="experiment or study config (TOML)")
     parser.add_argument(
-        "--out", type=Path, default=None, help="results directory (default: runs/<config name>)"
+        "--out",
+        type=path_argument,
+        default=None,
+        help="results directory (default: runs/<config name>)",
     )
     add_backend_arguments(parser, default=None)
     add_env_module_argument(parser)
@@ -42,7 +46,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--report", action="store_true", help="write report.html when done")
     parser.add_argument(
         "--tensorboard",
-        type=Path,
+        type=path_argument,
         default=None,
         metavar="DIR",
         help="also log every run's episodes to TensorBoard in DIR (the logging extra)",

@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import argparse
 import math
-from pathlib import Path
 from typing import TYPE_CHECKING
 
+from skidnav.commands.parsing import path_argument
 from skidnav.commands.shortcut import FLAGS
 from skidnav.errors import UserError
 from skidnav.experiments.runs import expand_runs
@@ -70,7 +70,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     parser.add_argument("--eval-episodes", type=int, default=10, help="episodes of the mean")
     parser.add_argument("--eval-every", type=int, default=1, help="generations between them")
     parser.add_argument("--seed", type=int, default=0, help="root seed of the study")
-    parser.add_argument("--out", type=Path, required=True, help="folder of the results")
+    parser.add_argument("--out", type=path_argument, required=True, help="folder of the results")
     parser.set_defaults(func=_search)
 
 

@@ -10,6 +10,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from skidnav.commands.parsing import path_argument
 from skidnav.commands.run import add_backend_arguments, outcome_line
 from skidnav.experiments.runner import RunOutcome
 from skidnav.files.configtables import toml_document
@@ -25,7 +26,7 @@ def add_run_arguments(parser: argparse.ArgumentParser, name: str) -> None:
     ``--no-progress``, as ``skidnav run`` has them."""
     parser.add_argument(
         "--out",
-        type=Path,
+        type=path_argument,
         default=None,
         help=f"results directory (default: runs/{name}); started again on it, the runs already "
         "finished are kept",

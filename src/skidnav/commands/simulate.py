@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from skidnav.commands.parsing import path_argument
 from skidnav.errors import UserError, excerpt
 from skidnav.files.atomic import write_atomic
 from skidnav.files.outputs import check_output_file
@@ -41,7 +42,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     """Add ``simulate``."""
     parser = subparsers.add_parser("simulate", help="run an action script or a random policy")
     source = parser.add_mutually_exclusive_group()
-    source.add_argument("--map", type=Path, help="map file (default: a generated map)")
+    source.add_argument("--map", type=path_argument, help="map file (default: a generated map)")
     source.add_argument("--map-kind", choices=MAP_KINDS, default="obstacles")
     parser.add_argument("--world-seed", type=int, default=0, help="draws the map and slip field")
     parser.add_argument("--slip", choices=SLIP_PRESETS, default="thesis")
@@ -50,10 +51,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:  # type: ignore[
     parser.add_argument("--seed", type=int, default=0, help="root of the slip noise and policy")
     script = parser.add_mutually_exclusive_group()
     script.add_argument("--actions", help="actions, e.g. 'f f l f r' or '0,0,2,0,3'")
-    script.add_argument("--actions-file", type=Path, help="file of actions (same syntax)")
+    script.add_argument("--actions-file", type=path_argument, help="file of actions (same syntax)")
     script.add_argument("--random", type=int, default=200, metavar="N", help="random actions")
-    parser.add_argument("--out", type=Path, default=Path("trajectory.png"), help="PNG to write")
-    parser.add_argument("--csv", type=Path, help="also write the trajectory as CSV")
+    parser.add_argument(
+        "--out", type=path_argument, default=Path("trajectory.png"), help="PNG to write"
+    )
+    parser.add_argument("--csv", type=path_argument, help="also write the trajectory as CSV")
     parser.set_defaults(func=_simulate)
 
 

@@ -8,6 +8,7 @@ import logging
 from pathlib import Path
 from typing import Any
 
+from skidnav.commands.parsing import path_argument
 from skidnav.commands.run import add_backend_arguments, add_env_module_argument
 from skidnav.envs.registration import allow_env_modules
 from skidnav.errors import UserError
@@ -27,9 +28,14 @@ def add_parser(subparsers: Any) -> None:
         "directory it continues each study up to its trial count (docs/tuning.md); a second "
         "search on a directory in use is refused.",
     )
-    parser.add_argument("config", type=Path, help="experiment config with a [tune] table (TOML)")
     parser.add_argument(
-        "--out", type=Path, default=None, help="study directory (default: runs/<config name>)"
+        "config", type=path_argument, help="experiment config with a [tune] table (TOML)"
+    )
+    parser.add_argument(
+        "--out",
+        type=path_argument,
+        default=None,
+        help="study directory (default: runs/<config name>)",
     )
     parser.add_argument(
         "--trials",

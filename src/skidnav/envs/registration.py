@@ -54,6 +54,22 @@ def register_envs() -> None:
             gymnasium.register(id=env_id, entry_point=entry_point, max_episode_steps=None)
 
 
+CREATOR_SUFFIX = " was raised from the environment creator for "
+"""Where Gymnasium's message about an env that refused its arguments starts repeating every
+argument (maps and arrays included: dozens of lines)."""
+
+
+def creation_error(error: BaseException) -> str:
+    """The one line of an error ``gymnasium.make`` raised, without Gymnasium's repetition of the
+    env's arguments: ``"SkidSteerNavEnv.__init__() got an unexpected keyword argument 'x'"``.
+
+    >>> creation_error(TypeError("f() got an unexpected keyword argument 'x'" + CREATOR_SUFFIX
+    ...                          + "skidnav/SkidSteerNav-v0 with kwargs ({'x': 1,\n ...})"))
+    "f() got an unexpected keyword argument 'x'"
+    """
+    return first_line(str(error).split(CREATOR_SUFFIX, 1)[0])
+
+
 Result = TypeVar("Result")
 _allowed_modules: set[str] = set()
 """The modules :func:`allow_env_modules` imported in this process."""

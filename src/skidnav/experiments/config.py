@@ -31,7 +31,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from skidnav.errors import shown
-from skidnav.robot.slip import SLIP_PRESETS
+from skidnav.experiments.limits import check_range, check_setting
+from skidnav.robot.slip import MAX_DRIFT_AMPLITUDE, MAX_DRIFT_PERIOD, SLIP_PRESETS
 from skidnav.world.grid import MAP_KINDS
 
 #: Values a hyperparameter or option may take: TOML scalars, or tuples of them (TOML arrays).
@@ -41,12 +42,6 @@ _SCALARS = (bool, int, float, str)
 
 DEFAULT_ENV_ID = "skidnav/SkidSteerNav-v0"
 
-MAX_SEEDS = 10_000
-"""Most seeds per cell."""
-MAX_EPISODES = 10_000_000
-"""Most training episodes per run."""
-MAX_STEPS = 1_000_000
-"""Largest action limit per episode."""
 MAX_BOOTSTRAP = 1_000_000
 """Most bootstrap resamples per interval."""
 MAX_STATE_LEVELS = 1000
@@ -169,14 +164,6 @@ class MapSpec:
         if not self.label:
             raise ValueError("expected a non-empty map label")
         _check_params(f"map {shown(self.label)} options", self.options)
-
-
-def _check_range(name: str, value: float, low: float, high: float, *, integer: bool) -> None:
-    kind = "an integer" if integer else "a number"
-    ok_type = isinstance(value, int) if integer else isinstance(value, int | float)
-    if isinstance(value, bool) or not ok_type or not (low <= value <= high):
-        bounds = f"in [{low}, {high}]" if math.isfinite(high) else f">= {low}"
-        raise ValueError(f"expected {name} to be {kind} {bounds}, got {shown(value)}")
 
 
 CONVERGENCE_OBJECTIVES = {"actions": "greedy_length", "cost": "greedy_cost"}
@@ -312,31 +299,31 @@ class ExperimentConfig:
                 raise ValueError(f"expected unique {what}, got {labels}")
 
     def _check_numbers(self) -> None:
-        _check_range("seeds", self.seeds, 1, MAX_SEEDS, integer=True)
-        _check_range("episodes", self.episodes, 2, MAX_EPISODES, integer=True)
+        check_setting("seeds", self.seeds)
+        check_setting("episodes", self.episodes, low=2)
         if self.max_steps is not None:
-            _check_range("max_steps", self.max_steps, 1, MAX_STEPS, integer=True)
-        _check_range("root_seed", self.root_seed, 0, 2**63 - 1, integer=True)
-        _check_range("drift_amplitude", self.drift_amplitude, 0.0, 100.0, integer=False)
-        _check_range("drift_period", self.drift_period, 1e-9, 1e12, integer=False)
-        _check_range(
-            "convergence_tolerance", self.convergence_tolerance, 1e-6, 0.999, integer=False
+            check_setting("max_steps", self.max_steps)
+        check_setting("root_seed", self.root_seed)
+        check_range(
+            "drift_amplitude", self.drift_amplitude, 0.0, MAX_DRIFT_AMPLITUDE, integer=False
         )
-        _check_range("convergence_window", self.convergence_window, 1, 10_000, integer=True)
-        _check_range("convergence_level", self.convergence_level, 1e-6, 1.0, integer=False)
+        check_range("drift_period", self.drift_period, 1e-9, MAX_DRIFT_PERIOD, integer=False)
+        check_setting("convergence_tolerance", self.convergence_tolerance)
+        check_setting("convergence_window", self.convergence_window)
+        check_setting("convergence_level", self.convergence_level)
         if self.convergence_objective not in CONVERGENCE_OBJECTIVES:
             raise ValueError(
                 f"expected convergence_objective in {sorted(CONVERGENCE_OBJECTIVES)}, "
                 f"got {shown(self.convergence_objective)}"
             )
-        _check_range("eval_rollouts", self.eval_rollouts, 1, 100, integer=True)
-        _check_range("oracle_samples", self.oracle_samples, 1, 1_000, integer=True)
-        _check_range("bootstrap_samples", self.bootstrap_samples, 100, MAX_BOOTSTRAP, integer=True)
-        _check_range("confidence", self.confidence, 0.5, 0.999, integer=False)
+        check_setting("eval_rollouts", self.eval_rollouts)
+        check_range("oracle_samples", self.oracle_samples, 1, 1_000, integer=True)
+        check_range("bootstrap_samples", self.bootstrap_samples, 100, MAX_BOOTSTRAP, integer=True)
+        check_range("confidence", self.confidence, 0.5, 0.999, integer=False)
         for levels in self.optimum_grids:
             check_levels("each of optimum_grids", levels)
-        _check_range("optimum_samples", self.optimum_samples, 1, 1_000, integer=True)
-        _check_range("optimum_rollouts", self.optimum_rollouts, 1, 10_000, integer=True)
+        check_range("optimum_samples", self.optimum_samples, 1, 1_000, integer=True)
+        check_range("optimum_rollouts", self.optimum_rollouts, 1, 10_000, integer=True)
         for name in ("greedy_eval", "save_agents"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(

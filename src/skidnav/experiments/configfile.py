@@ -23,6 +23,7 @@ from skidnav.experiments.config import (
     MapSpec,
     freeze_params,
 )
+from skidnav.experiments.memory import check_memory
 from skidnav.files.configtables import check_keys, resolve_path, table, table_array
 from skidnav.files.saved import MAX_CONFIG_BYTES, parse_toml, read_config_text
 
@@ -141,9 +142,12 @@ def _build(data: dict[str, Any], path: Path) -> ExperimentConfig:
     maps = _maps(data, values.get("env_id", DEFAULT_ENV_ID), path.parent)
     env = freeze_params(table(data.get("env", {}), "[env]"))
     try:
-        return ExperimentConfig(agents=agents, maps=maps, env_options=env, **values)
+        config = ExperimentConfig(agents=agents, maps=maps, env_options=env, **values)
     except ValueError as error:
         raise ValueError(f"[experiment]: {error}") from None
+    if config.env_id == DEFAULT_ENV_ID:
+        check_memory(config)
+    return config
 
 
 def _agents(agent: dict[str, Any], where: str) -> list[AgentSpec]:

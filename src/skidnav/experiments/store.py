@@ -47,11 +47,11 @@ import pandas as pd
 
 from skidnav.errors import CorruptFileError, UserError, shown
 from skidnav.experiments.config import (
-    MAX_STEPS,
     ExperimentConfig,
     config_from_dict,
     config_to_dict,
 )
+from skidnav.experiments.limits import MAX_STEPS
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.tables import read_table
 from skidnav.files.atomic import (

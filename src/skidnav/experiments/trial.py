@@ -40,7 +40,12 @@ from skidnav.agents.interface import Agent
 from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.agents.trained_world import trained_world
 from skidnav.agents.training import Evaluation, TrainingLog, greedy_path
-from skidnav.envs.registration import allowed_env_modules, registered_env_id, with_env_modules
+from skidnav.envs.registration import (
+    allowed_env_modules,
+    creation_error,
+    registered_env_id,
+    with_env_modules,
+)
 from skidnav.envs.wrappers import FineStates
 from skidnav.errors import UserError
 from skidnav.experiments.config import CONVERGENCE_OBJECTIVES, ExperimentConfig, MapSpec
@@ -417,7 +422,7 @@ def _check_config(config: ExperimentConfig) -> None:
     except gymnasium.error.Error as error:
         raise UserError(f"environment {config.env_id!r}: {error}") from None
     except (TypeError, ValueError) as error:
-        raise UserError(f"environment or map options: {error}") from None
+        raise UserError(f"environment or map options: {creation_error(error)}") from None
 
 
 def _check_agents(config: ExperimentConfig) -> dict[str, CatalogEntry]:

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from skidnav._jit import jit
+from skidnav.checks import check_number
 from skidnav.robot.floors import (
     CALIBRATED_PRESETS,
     PRESET_FLOORS,
@@ -35,6 +36,12 @@ from skidnav.robot.kinematics import N_ACTIONS, commanded_wheel_speeds, expected
 from skidnav.robot.params import RobotParams
 
 SLIP_PRESETS = ("thesis", "slippery", "rough", "nominal", *CALIBRATED_PRESETS)
+
+
+MAX_DRIFT_AMPLITUDE = 100.0
+"""Largest relative drift amplitude A (a wheel-speed loss up to 101 times the field's)."""
+MAX_DRIFT_PERIOD = 1e12
+"""Longest drift period P [s]."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,10 +84,8 @@ class SlipField:
             object.__setattr__(self, name, value)
         self._check_floor(eta.shape)
         object.__setattr__(self, "eta", eta)
-        if not self.drift_amplitude >= 0:
-            raise ValueError(f"expected drift_amplitude >= 0, got {self.drift_amplitude}")
-        if not self.drift_period > 0:
-            raise ValueError(f"expected drift_period > 0 s, got {self.drift_period}")
+        check_number("drift_amplitude", self.drift_amplitude, 0.0, MAX_DRIFT_AMPLITUDE, closed=True)
+        check_number("drift_period", self.drift_period, 0.0, MAX_DRIFT_PERIOD)
 
     def _check_floor(self, shape: tuple[int, ...]) -> None:
         """Validate (and store as arrays) the optional scales and materials."""

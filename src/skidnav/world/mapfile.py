@@ -127,6 +127,8 @@ def _read_version(path: Path | str, lines: list[str]) -> int:
 
 def _header_value(path: Path | str, number: int, key: str, value: str) -> object:
     """The value of header line ``key value``: an int size, a tuple of floats, or path cells."""
+    if not value.isascii():  # int() and float() also read other scripts' digits, e.g. "６"
+        raise _fail(path, number, f"expected ASCII numbers after {key}, got {excerpt(value)}")
     if key == "path":
         return _path_cells(path, number, value)
     words = value.split()
@@ -135,12 +137,9 @@ def _header_value(path: Path | str, number: int, key: str, value: str) -> object
             path, number, f"expected {_ARITY[key]} number(s) after {key}, got {excerpt(value)}"
         )
     if key in ("width", "height"):
-        try:
-            size = int(words[0])
-        except ValueError:
-            raise _fail(
-                path, number, f"expected an integer {key}, got {excerpt(words[0])}"
-            ) from None
+        if not words[0].isdigit():  # ASCII here: no sign, no "_" (int() would take "1_0")
+            raise _fail(path, number, f"expected an integer {key}, got {excerpt(words[0])}")
+        size = int(words[0])
         if not MIN_SIZE <= size <= MAX_SIZE:
             raise _fail(
                 path, number, f"expected {key} between {MIN_SIZE} and {MAX_SIZE}, got {size}"

@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import Any
 
 from skidnav.errors import UserError, shown
-from skidnav.experiments.config import MAX_EPISODES, MAX_SEEDS, AgentSpec, MapSpec
+from skidnav.experiments.config import AgentSpec, MapSpec
+from skidnav.experiments.limits import MAX_EPISODES, MAX_SEEDS
 from skidnav.files.configtables import build_dataclass
 from skidnav.realtime.arena import arena_map
 from skidnav.realtime.config import (

@@ -36,11 +36,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from skidnav.errors import UserError, shown
-from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec, _check_range
+from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec
 
 # The [[maps]] schema lives in configfile; reusing it keeps [[tune.maps]] and [[maps]] one schema,
 # with the same messages.
 from skidnav.experiments.configfile import config_from_tables, parse_tables, read_map
+from skidnav.experiments.limits import check_range
 from skidnav.files.configtables import check_keys, table, table_array
 from skidnav.files.saved import read_config_text
 
@@ -221,21 +222,21 @@ class TuneConfig:
     pruner_warmup_seeds: int = 2
 
     def __post_init__(self) -> None:
-        _check_range("trials", self.trials, 1, MAX_TRIALS, integer=True)
-        _check_range("seeds", self.seeds, 1, MAX_SEEDS, integer=True)
+        check_range("trials", self.trials, 1, MAX_TRIALS, integer=True)
+        check_range("seeds", self.seeds, 1, MAX_SEEDS, integer=True)
         if self.timeout_s is not None:
-            _check_range("timeout_s", self.timeout_s, 1e-3, math.inf, integer=False)
+            check_range("timeout_s", self.timeout_s, 1e-3, math.inf, integer=False)
         for name, value, allowed in (
             ("sampler", self.sampler, SAMPLERS),
             ("pruner", self.pruner, PRUNERS),
         ):
             if value not in allowed:
                 raise ValueError(f"expected {name} one of {', '.join(allowed)}, got {shown(value)}")
-        _check_range("startup_trials", self.startup_trials, 0, MAX_TRIALS, integer=True)
-        _check_range(
+        check_range("startup_trials", self.startup_trials, 0, MAX_TRIALS, integer=True)
+        check_range(
             "pruner_startup_trials", self.pruner_startup_trials, 0, MAX_TRIALS, integer=True
         )
-        _check_range("pruner_warmup_seeds", self.pruner_warmup_seeds, 0, self.seeds, integer=True)
+        check_range("pruner_warmup_seeds", self.pruner_warmup_seeds, 0, self.seeds, integer=True)
         if not self.maps:
             raise ValueError("expected at least one tuning map")
         map_labels = [spec.label for spec in self.maps]
@@ -307,6 +308,8 @@ def parse_tune(value: Any, config: ExperimentConfig, path: Path) -> TuneConfig:
         maps = tuple(read_map(t, where.format(n + 1), path.parent) for n, t in enumerate(tables))
     if "space" not in tune:
         raise ValueError("[tune]: missing table [tune.space.<agent label>]")
+    if "seeds" not in tune:
+        raise ValueError("[tune]: missing key 'seeds' (tuning seeds per trial)")
     spaces = tuple(
         (label, _space(label, ranges))
         for label, ranges in table(tune["space"], "[tune.space]").items()
