@@ -128,6 +128,16 @@ def test_calibration_json_round_trip(tmp_path, calibration):
         ),
         (lambda text, data: json.dumps({**data, "homography": [[1, 0], [0, 1]]}), "3×3"),
         (lambda text, data: json.dumps({**data, "homography": [[0] * 3] * 3}), "singular"),
+        (
+            lambda text, data: json.dumps({**data, "homography": [[1e308] * 3] * 3}),
+            "'homography' holds a value that is NaN or not below 1e\\+12",
+        ),
+        (
+            lambda text, data: json.dumps(
+                {**data, "homography": [[1, 0, 0], [0, 1e-14, 0], [0, 0, 1]]}
+            ),
+            "singular",
+        ),
         (lambda text, data: json.dumps({**data, "corner_ids": [0, 0, 1, 2]}), "distinct"),
     ],
 )

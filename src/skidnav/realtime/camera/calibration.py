@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from skidnav.checks import check_magnitude
 from skidnav.errors import CorruptFileError, UserError, first_line
 from skidnav.realtime.camera.intrinsics import CameraIntrinsics
 from skidnav.realtime.camera.lens import (
@@ -35,6 +36,11 @@ from skidnav.realtime.camera.markers import (
 )
 from skidnav.realtime.camera.sources import Frame, read_json_file, write_json_file
 
+MAX_HOMOGRAPHY_ENTRY = 1e12
+"""Largest entry of a floor homography in magnitude (a pixel-to-metre map has entries of order
+1e-4 to 1e3; 1e308 would overflow every pose computed through it)."""
+MAX_CONDITION = 1e12
+"""Largest condition number of a usable homography (beyond it, a pose is noise)."""
 LOGGER = logging.getLogger(__name__)
 
 FORMAT_NAME = "skidnav-camera-calibration"
@@ -65,7 +71,8 @@ class FloorCalibration:
         matrix = np.asarray(self.homography, dtype=np.float64)
         if matrix.shape != (3, 3) or not np.all(np.isfinite(matrix)):
             raise ValueError(f"expected a finite 3×3 homography, got shape {matrix.shape}")
-        if abs(np.linalg.det(matrix)) < 1e-15:
+        check_magnitude("homography", matrix, MAX_HOMOGRAPHY_ENTRY)
+        if abs(np.linalg.det(matrix)) < 1e-15 or not np.linalg.cond(matrix) < MAX_CONDITION:
             raise ValueError("expected an invertible homography, got a singular matrix")
         if len(self.image_size) != 2 or min(self.image_size) <= 0:
             raise ValueError(
