@@ -64,7 +64,7 @@ def creation_error(error: BaseException) -> str:
     env's arguments: ``"SkidSteerNavEnv.__init__() got an unexpected keyword argument 'x'"``.
 
     >>> creation_error(TypeError("f() got an unexpected keyword argument 'x'" + CREATOR_SUFFIX
-    ...                          + "skidnav/SkidSteerNav-v0 with kwargs ({'x': 1,\n ...})"))
+    ...                          + "skidnav/SkidSteerNav-v0 with kwargs ({'x': 1})"))
     "f() got an unexpected keyword argument 'x'"
     """
     return first_line(str(error).split(CREATOR_SUFFIX, 1)[0])
