@@ -192,6 +192,11 @@ def train(
     Returns:
         The per-episode :class:`~skidnav.agents.training.TrainingLog` (returns, lengths,
         greedy evaluations, …): :func:`convergence_episode` reads it.
+
+    Raises:
+        UserError: an argument of the wrong type, or beyond the experiment config's limit
+            (:data:`skidnav.experiments.limits.SETTINGS`: ``episodes`` ≤ 10⁷, ``max_steps``
+            ≤ 10⁶, ``rollouts`` ≤ 100), one line naming it.
     """
     _check_run("train", agent, env)
     _check_setting("train", "episodes", episodes, "episodes")
@@ -222,7 +227,8 @@ def evaluate(
     """``rollouts`` greedy rollouts of ``agent`` on ``env`` without learning, each from a reset
     seed of ``seed`` (the seeds :func:`train` evaluates with) and cut at ``max_steps`` actions
     (default: the env's limit); each a :class:`~skidnav.agents.training.Rollout` (length
-    [actions] and cost, −1 and NaN where it did not reach the goal)."""
+    [actions] and cost, −1 and NaN where it did not reach the goal). UserError for an argument
+    of the wrong type or beyond its limit, as :func:`train`."""
     _check_run("evaluate", agent, env)
     _check_setting("evaluate", "rollouts", rollouts, "eval_rollouts")
     _check_setting("evaluate", "seed", seed, "root_seed")
