@@ -26,7 +26,7 @@ EXTRAS: dict[str, tuple[str, ...]] = {
     "camera": ("cv2",),
     "ros2": ("roslibpy",),
     "serial": ("serial",),
-    "distributed": ("dask", "distributed"),
+    "distributed": ("dask", "distributed", "cryptography"),
     "tuning": ("optuna",),
     "search": ("cmaes", "threadpoolctl"),
     "gp": ("sklearn",),

@@ -3,6 +3,7 @@ duplicates nothing."""
 
 from __future__ import annotations
 
+import logging
 import os
 import signal
 import subprocess
@@ -25,7 +26,10 @@ def test_process_pool_matches_serial(serial_results: Path, tmp_path: Path) -> No
     pd.testing.assert_frame_equal(comparable(tmp_path), comparable(serial_results))
 
 
-def test_dask_local_cluster_matches_serial(serial_results: Path, tmp_path: Path) -> None:
+def test_dask_tcp_scheduler_matches_serial_with_one_warning(
+    serial_results: Path, tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A plain ``tcp://`` scheduler (the TLS ones: tests/experiments/test_dask_security.py)."""
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(
         n_workers=2,
@@ -34,11 +38,20 @@ def test_dask_local_cluster_matches_serial(serial_results: Path, tmp_path: Path)
         host="127.0.0.1",
         dashboard_address=None,
     ) as cluster:
-        outcome = run_experiment(
-            parse_config(TINY_TOML), tmp_path, backend="dask", scheduler=cluster.scheduler_address
-        )
+        address = cluster.scheduler_address
+        assert address.startswith("tcp://")
+        with caplog.at_level(logging.WARNING, logger="skidnav.experiments.dask_backend"):
+            outcome = run_experiment(
+                parse_config(TINY_TOML), tmp_path, backend="dask", scheduler=address
+            )
         assert outcome.executed == 8
     pd.testing.assert_frame_equal(comparable(tmp_path), comparable(serial_results))
+    warnings = [r.getMessage() for r in caplog.records if r.name.endswith("dask_backend")]
+    assert warnings == [
+        f"Dask scheduler {address}: the link is unauthenticated and unencrypted (whoever "
+        "reaches the scheduler can run code on its workers and read the runs); use a tls:// "
+        "scheduler"
+    ]
 
 
 def _finished(out: Path) -> list[Path]:

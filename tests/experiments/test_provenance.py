@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import skidnav
-from skidnav.experiments import runner
+from skidnav.experiments import dask_backend, runner
 from skidnav.experiments.configfile import parse_config
 from skidnav.experiments.provenance import (
     CODE_KEYS,
@@ -106,7 +106,7 @@ def test_unreachable_scheduler_creates_no_directory(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     pytest.importorskip("distributed")
-    monkeypatch.setattr(runner, "DASK_CONNECT_TIMEOUT", "1s")
+    monkeypatch.setattr(dask_backend, "DASK_CONNECT_TIMEOUT", "1s")
     out = tmp_path / "out"
     with pytest.raises(runner.UserError, match="cannot connect to Dask scheduler"):
         runner.run_experiment(

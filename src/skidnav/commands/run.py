@@ -71,7 +71,9 @@ def add_backend_arguments(parser: argparse.ArgumentParser, default: str | None =
     parser.add_argument(
         "--scheduler",
         default=None,
-        help="Dask scheduler address, e.g. tcp://127.0.0.1:8786 (with --backend dask)",
+        help="Dask scheduler address (with --backend dask): tls://host:port, with the TLS "
+        "credentials of Dask's config (distributed.comm.tls.*), or tcp://host:port, "
+        "unauthenticated (warned); default: a local TLS-only cluster of --jobs workers",
     )
 
 

@@ -7,9 +7,11 @@ Backends (all give identical numbers, since a run is a pure function of its spec
   of each algorithm runs in this process first, to compile and cache the kernels once. The
   workers end when this process dies, even by SIGKILL (:mod:`skidnav.experiments.workers`).
 * ``dask``: a ``dask.distributed`` Client on the scheduler at ``scheduler``; without an address,
-  a local cluster of ``jobs`` worker processes on 127.0.0.1. The client connects before the
-  results directory is created, so a scheduler that cannot be reached leaves nothing behind.
-  Dask is the ``distributed`` extra: without it the backend is refused in one line.
+  a local cluster of ``jobs`` worker processes on 127.0.0.1, reachable only with its own TLS
+  credentials and serving no HTTP (:mod:`skidnav.experiments.dask_backend`). The client
+  connects before the results directory is created, so a scheduler that cannot be reached
+  leaves nothing behind. Dask is the ``distributed`` extra: without it the backend is refused
+  in one line.
 
 Local worker processes import nothing from the current directory
 (:func:`skidnav.childprocess.safe_path_children`).
@@ -37,7 +39,6 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import importlib
 import itertools
 import logging
 import multiprocessing
@@ -56,6 +57,7 @@ from skidnav._jit import jit_disabled
 from skidnav.childprocess import safe_path_children
 from skidnav.errors import RunsFailedError, UserError
 from skidnav.experiments.config import ExperimentConfig
+from skidnav.experiments.dask_backend import dask_client, distributed_module
 from skidnav.experiments.failures import RunFailure, attempt, failed_runs_message
 from skidnav.experiments.lock import directory_lock
 from skidnav.experiments.provenance import CODE_KEYS, code_version, package_versions
@@ -73,8 +75,6 @@ TrialFunction = Callable[[RunSpec[Any]], TrialResult]
 experiment)."""
 RunObserver = Callable[[TrialResult], None]
 """Told of each finished run in the runner's process (:func:`run_experiment`'s ``on_run``)."""
-DASK_CONNECT_TIMEOUT = "15s"
-"""How long the Dask client tries to reach ``scheduler``."""
 
 
 class RunOutcome(NamedTuple):
@@ -143,48 +143,11 @@ def _process(
         yield from _submitted(own, runs, trial)
 
 
-def _distributed() -> Any:
-    """The ``distributed`` package, imported when a Dask backend is used (it has no type
-    hints, so it is handled as ``Any``)."""
-    return importlib.import_module("distributed")
-
-
-@contextlib.contextmanager
-def dask_client(jobs: int, scheduler: str | None) -> Iterator[Any]:
-    """A ``distributed.Client`` on ``scheduler``, or on a local cluster of ``jobs`` worker
-    processes; closed (with the cluster) on exit.
-
-    Raises:
-        UserError: the scheduler cannot be reached within :data:`DASK_CONNECT_TIMEOUT`.
-    """
-    distributed = _distributed()
-    if scheduler is not None:
-        try:
-            client = distributed.Client(scheduler, timeout=DASK_CONNECT_TIMEOUT)
-        except OSError as error:
-            raise UserError(f"cannot connect to Dask scheduler {scheduler!r}: {error}") from None
-        with client:
-            yield client
-        return
-    with (
-        safe_path_children(),
-        distributed.LocalCluster(
-            n_workers=jobs,
-            threads_per_worker=1,
-            processes=True,
-            host="127.0.0.1",
-            dashboard_address=None,
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
-        yield client
-
-
 def _dask(runs: Sequence[RunSpec[Any]], trial: TrialFunction, client: Any) -> Iterator[Outcome]:
     keys = [f"skidnav-{spec.config.fingerprint()[:12]}-{spec.run_id}" for spec in runs]
     futures = client.map(trial, runs, key=keys, pure=False)
     by_key = dict(zip(keys, runs, strict=True))
-    for future in _distributed().as_completed(futures):
+    for future in distributed_module().as_completed(futures):
         yield attempt(by_key[future.key], future.result)
 
 
@@ -264,7 +227,9 @@ def run_experiment(
         out_dir: results directory (created, or reopened to resume the same config).
         backend: one of :data:`BACKENDS`.
         jobs: worker processes (default: local cores).
-        scheduler: Dask scheduler address (``tcp://host:port``), only with ``backend="dask"``.
+        scheduler: Dask scheduler address (``tls://host:port``, with the TLS credentials of
+            Dask's config, or ``tcp://host:port``, with a warning:
+            :mod:`skidnav.experiments.dask_backend`), only with ``backend="dask"``.
         trial: the run function (default, for an experiment:
             :func:`skidnav.experiments.trial.run_trial`); with ``backend="process"`` or
             ``"dask"`` it must be importable by worker processes.

@@ -51,12 +51,12 @@ from skidnav.experiments.config import (
     ExperimentConfig,
     config_to_dict,
 )
+from skidnav.experiments.dask_backend import dask_client
 from skidnav.experiments.failures import RunFailure
 from skidnav.experiments.lock import directory_lock
 from skidnav.experiments.runner import (
     TrialFunction,
     _check_backend,
-    dask_client,
     default_jobs,
     process_pool,
 )
