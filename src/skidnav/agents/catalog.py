@@ -116,10 +116,20 @@ class AgentEntry(Generic[AgentT]):
 
     def config(self, params: Params) -> AgentConfig:
         """The agent's config from ``params`` (e.g. an ``[[agents]]`` table's ``params``),
-        validated as a new agent would; UserError naming the agent otherwise."""
+        validated as a new agent would: by its own checks first (their messages name the
+        range), and each value's type (:func:`~skidnav.agents.config.check_field_types`: a bool
+        or a float its checks let through, a string they trip on); UserError naming the agent
+        otherwise. A missing
+        extra is its own UserError, unchanged."""
+        config_class = self.config_class
         try:
-            check_field_types(self.config_class, dict(params))
-            return self.config_class.from_mapping(dict(params))
+            try:
+                config = config_class.from_mapping(dict(params))
+            except TypeError:  # its checks compared a value of another type: name it
+                check_field_types(config_class, dict(params))
+                raise
+            check_field_types(config_class, dict(params))
+            return config
         except (ValueError, TypeError, UserError) as error:
             raise UserError(f"agent {self.name!r}: {first_line(error)}") from None
 
