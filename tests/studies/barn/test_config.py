@@ -41,6 +41,17 @@ def test_defaults_and_the_runs_of_the_grid() -> None:
     assert BarnGrid.from_dict(parsed.to_dict()) == parsed
 
 
+def test_the_discrete_action_duration_is_whole_periods_and_kept_out_of_old_fingerprints() -> None:
+    default = grid()
+    assert default.discrete_action_duration == 0.1 and default.action_periods == 1
+    assert "discrete_action_duration" not in default.to_dict()  # the results of old configs
+    longer = grid("discrete_action_duration = 1")
+    assert longer.discrete_action_duration == 1.0 and longer.action_periods == 10
+    assert BarnGrid.from_dict(longer.to_dict()) == longer
+    assert longer.fingerprint() != default.fingerprint()
+    assert grid("discrete_action_duration = 0.3").action_periods == 3
+
+
 def test_worlds_as_a_range() -> None:
     assert grid("worlds = { start = 10, stop = 300, step = 145 }").worlds == (10, 155)
     assert expand_worlds({"stop": 3}) == (0, 1, 2)
@@ -64,6 +75,10 @@ def test_worlds_as_a_range() -> None:
         ('dynamics = "gazebo"', "", "expected dynamics one of kinematic, mujoco"),
         ("lidar_rays = 5000", "", "expected lidar_rays to be an integer in [0, 1024]"),
         ("root_seed = -1", "", "expected root_seed to be an integer >= 0"),
+        ("discrete_action_duration = 0.05", "", "to be a finite number in [0.1, 10], got 0.05"),
+        ("discrete_action_duration = 0.25", "", "a whole number of the benchmark's 0.1 s periods"),
+        ("discrete_action_duration = 10.5", "", "discrete_action_duration to be a finite number "),
+        ('discrete_action_duration = "0.5"', "", "discrete_action_duration to be a finite number"),
         ("seeds = 1.5", "", "expected seeds to be an integer in [1, 1,000]"),
         ("", "params = { turn_gain = -1 }", "expected turn_gain to be a finite number > 0, got -1"),
         ("", "params = { lidar_rays = 8 }", "lidar_rays is the study's laser (271)"),
@@ -91,19 +106,22 @@ def test_an_unknown_agent_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixt
 
 
 @pytest.mark.parametrize(
-    ("name", "protocol", "n_worlds", "floors"),
+    ("name", "protocol", "n_worlds", "floors", "episodes", "duration"),
     [
-        ("barn-zero-shot", "zero-shot", 300, ("nominal",)),
-        ("barn-ice-learning", "learning", 30, ("ice-physics",)),
-        ("barn-dyna-full-learning", "learning", 30, ("nominal",)),
-        ("barn-smoke", "zero-shot", 2, ("nominal",)),
+        ("barn-zero-shot", "zero-shot", 300, ("nominal",), 1, 0.1),
+        ("barn-ice-learning", "learning", 30, ("ice-physics",), 5, 0.1),
+        ("barn-dyna-full-learning", "learning", 30, ("nominal",), 1000, 0.5),
+        ("barn-smoke", "zero-shot", 2, ("nominal",), 1, 0.1),
     ],
 )
-def test_the_shipped_configs(name: str, protocol: str, n_worlds: int, floors: tuple[str]) -> None:
+def test_the_shipped_configs(
+    name: str, protocol: str, n_worlds: int, floors: tuple[str], episodes: int, duration: float
+) -> None:
     path = CONFIGS / f"{name}.toml"
     if "classical" in path.read_text() and "classical" not in agent_names():
         pytest.skip("the classical agent is not registered in this tree")
     parsed = parse_grid(path.read_text(), path).grid
     assert isinstance(parsed, BarnGrid) and parsed.name == name
     assert parsed.protocol == protocol and len(parsed.worlds) == n_worlds
-    assert parsed.floors == floors and parsed.episodes <= 5
+    assert parsed.floors == floors and parsed.episodes == episodes
+    assert parsed.discrete_action_duration == duration

@@ -5,7 +5,8 @@ Every agent drives the same robot on the same world; what differs is the env's i
 * an agent answering wheel speeds (``actions = "wheel-speeds"``: ``goal-tracker``,
   ``mppi-kinematic``, …) drives with ``action = "continuous"``; one answering the four discrete
   actions (``q-learning``, ``dyna-full``, the linear and deep agents) with ``action =
-  "discrete"`` (full speed ahead, back, or a turn in place, for one control period);
+  "discrete"`` (full speed ahead, back, or a turn in place), each action lasting the config's
+  ``discrete_action_duration`` (:func:`action_duration`; by default the benchmark's 0.1 s);
 * a tabular agent observes the discrete state of the world's cells (31 × 101 cells × 20
   heading bins); every other agent the features, with a laser like the benchmark's Hokuyo
   UST-10 (:data:`LIDAR_RANGE`, :data:`LIDAR_FOV`, the config's ``lidar_rays``).
@@ -27,7 +28,7 @@ from skidnav.errors import UserError
 from skidnav.experiments.config import AgentSpec
 from skidnav.extras import require
 from skidnav.studies.agent_grid import read_grid
-from skidnav.studies.barn.grid import KIND, BarnGrid
+from skidnav.studies.barn.grid import CONTROL_PERIOD, KIND, BarnGrid
 
 LIDAR_RANGE = 10.0
 """The laser's range [m] (Hokuyo UST-10LX: 10 m)."""
@@ -43,6 +44,15 @@ def env_interface(name: str) -> dict[str, str]:
     described = entry(name)
     action = "discrete" if described.family.actions == "discrete" else "continuous"
     return {"action": action, "observation": described.env_observation(OBSERVATION)}
+
+
+def action_duration(name: str, grid: BarnGrid) -> float:
+    """How long one action of agent ``name`` lasts [s]: the grid's ``discrete_action_duration``
+    for an agent answering discrete actions, the benchmark's 0.1 s for one answering wheel
+    speeds; UserError for an unknown agent."""
+    if env_interface(name)["action"] == "discrete":
+        return grid.discrete_action_duration
+    return CONTROL_PERIOD
 
 
 def laser_params(grid: BarnGrid) -> dict[str, Any]:

@@ -16,6 +16,7 @@ A config is a TOML file (``configs/barn-zero-shot.toml``)::
     floors = ["nominal"]           # slip presets, e.g. "ice-physics" (BARN on ice)
     dynamics = "kinematic"         # or "mujoco" (the physics extra)
     lidar_rays = 271               # rays of the laser over its 270° field of view
+    discrete_action_duration = 0.1 # seconds a discrete agent's action lasts (0.1, 0.2, …)
 
     [[agents]]                     # one table per agent: name, label, params = { … }
     name = "goal-tracker"
@@ -32,7 +33,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from skidnav.checks import check_integer, check_names
+from skidnav.checks import check_integer, check_names, check_number
 from skidnav.errors import shown
 from skidnav.experiments.config import MapSpec
 from skidnav.experiments.store import RunLayout
@@ -56,6 +57,8 @@ QUINTILE_SIZE = N_WORLDS // 5
 in quintile n // 60 (0 the easiest, 4 the hardest)."""
 CONTROL_PERIOD = 0.1
 """Seconds per action [s], the benchmark's 10 Hz."""
+MAX_DISCRETE_ACTION_DURATION = 10.0
+"""Longest action of a discrete agent [s]: a tenth of the benchmark's time limit."""
 MAX_ACTIONS = 2 * round(TIME_LIMIT / CONTROL_PERIOD)
 """Most actions of a scored run [actions]: up to 100 s before the robot leaves its start, and
 the 100 s of the run (:mod:`skidnav.studies.barn.rules`)."""
@@ -141,6 +144,10 @@ class BarnGrid(AgentSeedGrid):
         floors: distinct slip presets (:data:`skidnav.robot.slip.SLIP_PRESETS`).
         dynamics: one of :data:`DYNAMICS`.
         lidar_rays: rays k of the laser's 270° field of view, 0 … ``MAX_LIDAR_RAYS``.
+        discrete_action_duration: how long an action of a discrete agent lasts [s], a whole
+            number of the benchmark's :data:`CONTROL_PERIOD` periods, at most
+            :data:`MAX_DISCRETE_ACTION_DURATION` (an agent answering wheel speeds acts every
+            period); :attr:`action_periods` of them.
     """
 
     description: str = ""
@@ -151,6 +158,7 @@ class BarnGrid(AgentSeedGrid):
     floors: tuple[str, ...] = ("nominal",)
     dynamics: str = "kinematic"
     lidar_rays: int = 271
+    discrete_action_duration: float = CONTROL_PERIOD
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -167,6 +175,22 @@ class BarnGrid(AgentSeedGrid):
         object.__setattr__(self, "floors", floors)
         check_choice("dynamics", self.dynamics, DYNAMICS)
         check_integer("lidar_rays", self.lidar_rays, 0, MAX_LIDAR_RAYS)
+        duration = check_number(
+            "discrete_action_duration", self.discrete_action_duration, CONTROL_PERIOD,
+            MAX_DISCRETE_ACTION_DURATION, closed=True,
+        )  # fmt: skip
+        if abs(round(duration / CONTROL_PERIOD) * CONTROL_PERIOD - duration) > 1e-9:
+            raise ValueError(
+                f"expected discrete_action_duration to be a whole number of the benchmark's "
+                f"{CONTROL_PERIOD} s periods, got {shown(self.discrete_action_duration)}"
+            )
+        object.__setattr__(self, "discrete_action_duration", duration)
+
+    @property
+    def action_periods(self) -> int:
+        """The benchmark's periods one action of a discrete agent lasts
+        (``discrete_action_duration`` / :data:`CONTROL_PERIOD`)."""
+        return round(self.discrete_action_duration / CONTROL_PERIOD)
 
     @property
     def maps(self) -> tuple[MapSpec, ...]:
@@ -188,6 +212,9 @@ class BarnGrid(AgentSeedGrid):
         """The grid as a JSON-ready dict (inverse of :meth:`from_dict`)."""
         values = super().to_dict()
         values.update(worlds=list(self.worlds), floors=list(self.floors))
+        if self.discrete_action_duration == CONTROL_PERIOD:
+            # only when set, so a config without it keeps its dict and fingerprint (its results)
+            del values["discrete_action_duration"]
         return values
 
 

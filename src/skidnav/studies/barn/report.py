@@ -15,7 +15,8 @@ after the last training episode); the learning table reads every episode.
    (:func:`~skidnav.statistics.intervals.difference_interval`): both agents met the same worlds
    and floor noise.
 4. **Learning** (learning protocol): the mean metric and success share after each episode, with
-   the mean seconds of driving it took.
+   the mean seconds of driving it took (at most :data:`LEARNING_ROWS` episodes evenly spread,
+   :func:`shown_episodes`).
 5. **Worlds**: a few worlds spread over the selection, each agent's last scored trajectory.
 """
 
@@ -33,13 +34,16 @@ from skidnav.experiments.report.page import image, interval_text, table
 from skidnav.experiments.store import ResultStore
 from skidnav.statistics.formatting import plural
 from skidnav.statistics.intervals import Interval, bootstrap_interval, difference_interval
-from skidnav.studies.barn.grid import LAYOUT, QUINTILE_SIZE, BarnGrid
+from skidnav.studies.barn.grid import CONTROL_PERIOD, LAYOUT, QUINTILE_SIZE, BarnGrid
 from skidnav.studies.barn.picture import worlds_picture
 
 PICTURE_WORLDS = 4
 """Worlds drawn in the picture."""
 PAIR_KEYS = ["world", "preset", "seed"]
 """What pairs two agents' scored runs: the same world, floor and seed."""
+LEARNING_ROWS = 20
+"""About the most episodes the learning table shows per agent and floor (the results hold
+every one)."""
 
 
 def _rng(grid: BarnGrid, *labels: object) -> np.random.Generator:
@@ -123,10 +127,27 @@ def differences_table(last: pd.DataFrame, grid: BarnGrid) -> str:
     return table(pd.DataFrame.from_records(records), labels=3)
 
 
+def shown_episodes(episodes: int) -> list[int]:
+    """The episodes (1 … ``episodes``) the learning table shows: every one up to
+    :data:`LEARNING_ROWS`, else the first, every k-th (k = ⌈episodes / LEARNING_ROWS⌉) and the
+    last.
+
+    >>> shown_episodes(3)
+    [1, 2, 3]
+    >>> shown = shown_episodes(1000)
+    >>> shown[:3], shown[-2:], len(shown)
+    ([1, 50, 100], [950, 1000], 21)
+    """
+    step = -(-episodes // LEARNING_ROWS)
+    return sorted({1, episodes, *range(step, episodes + 1, step)})
+
+
 def learning_table(episodes: pd.DataFrame, grid: BarnGrid) -> str:
-    """Table 4 of the module doc: one row per agent, floor and episode."""
+    """Table 4 of the module doc: one row per agent, floor and shown episode
+    (:func:`shown_episodes`)."""
     records = []
-    for (agent, floor, episode), rows in episodes.groupby(["agent", "preset", "episode"]):
+    shown = episodes[episodes["episode"].isin(shown_episodes(grid.episodes))]
+    for (agent, floor, episode), rows in shown.groupby(["agent", "preset", "episode"]):
         records.append(
             {
                 "agent": agent,
@@ -182,7 +203,13 @@ def report_section(run_dir: Path) -> str:
         differences_table(last, grid),
     ]
     if grid.protocol == "learning":
-        parts += ["<h3>Learning: score after each episode</h3>", learning_table(episodes, grid)]
+        shown = shown_episodes(grid.episodes)
+        after = (
+            "each episode"
+            if len(shown) == grid.episodes
+            else f"episodes {shown[0]}, {shown[1]}, {shown[2]}, …, {shown[-1]}"
+        )
+        parts += [f"<h3>Learning: score after {after}</h3>", learning_table(episodes, grid)]
     parts += ["<h3>Worlds</h3>", picture(store, last, grid)]
     return "".join(parts)
 
@@ -197,8 +224,21 @@ def settings_text(grid: BarnGrid, last: pd.DataFrame) -> str:
     return (
         f"{plural(len(last), 'run')} of {plural(len(grid.worlds), 'world')}, "
         f"{plural(len(grid.floors), 'floor')}, {plural(grid.seeds, 'seed')}; {protocol}; "
-        f"{grid.dynamics} dynamics, 0.1-s actions, a {grid.lidar_rays}-ray 270° laser of 10 m. "
+        f"{grid.dynamics} dynamics, {actions_text(grid)}, a {grid.lidar_rays}-ray 270° laser "
+        "of 10 m. "
         "Scored as the benchmark's run.py: success within 1 m of the goal, a collision or 100 s "
         "from the first 0.1 m of motion end the run; metric = success · OT / clip(AT, 2·OT, "
         "8·OT). Intervals: 95 % bootstrap over the runs of each cell."
+    )
+
+
+def actions_text(grid: BarnGrid) -> str:
+    """How long the agents' actions last: ``0.1-s actions``, or with longer discrete actions
+    ``0.1-s actions (discrete agents: 0.5-s actions, each held for 5 of the scored runs' 0.1-s
+    steps)``."""
+    if grid.action_periods == 1:
+        return f"{CONTROL_PERIOD:g}-s actions"
+    return (
+        f"{CONTROL_PERIOD:g}-s actions (discrete agents: {grid.discrete_action_duration:g}-s "
+        f"actions, each held for {grid.action_periods} of the scored runs' 0.1-s steps)"
     )

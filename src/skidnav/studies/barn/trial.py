@@ -1,16 +1,22 @@
 """One run of a BARN study: one agent on one world and floor, scored by the benchmark's rules.
 
 The env (:func:`barn_env`): the world's map, start pose, goal point and radius (as the shipped
-archive has them), the Jackal at the benchmark's 10 Hz (``control_period = 0.1``), the
-floor's slip preset, the agent's action and observation (:mod:`skidnav.studies.barn.agents`).
+archive has them), the Jackal, the floor's slip preset, the agent's action and observation
+(:mod:`skidnav.studies.barn.agents`), one action lasting ``control_period`` seconds.
 
 A **scored run** (:func:`scored_run`) is one BARN run of the agent's greedy policy from a reset,
-judged action by action by :class:`~skidnav.studies.barn.rules.BarnClock` and stopped at the
-first of success, collision and timeout, whatever the env itself terminates on.
+on an env at the benchmark's 10 Hz (``control_period = 0.1``), judged every 0.1 s by
+:class:`~skidnav.studies.barn.rules.BarnClock` and stopped at the first of success, collision
+and timeout, whatever the env itself terminates on. A discrete agent whose actions last longer
+(the config's ``discrete_action_duration``, k periods of 0.1 s) chooses every k periods and its
+action is held for them: the same motion, the same draws of the floor's noise and the same
+collision checks, sub-step by sub-step, as one action of the training env, but judged as
+``run.py`` judges, every 0.1 s.
 
 * **zero-shot**: a new agent's scored run, its first episode in a world it has never seen;
 * **learning**: ``episodes`` times, one training episode (the agent's own episode on the env's
-  rules, at most :data:`TRAINING_ACTIONS` actions) and then one scored run.
+  rules, with actions of the agent's duration, at most 100 s: :func:`training_actions`) and
+  then one scored run.
 
 Seeds: the world stream (shared by every agent of a world, floor and seed) gives the slip field
 and the reset seed of every scored run; the run stream gives the agent and its training
@@ -31,7 +37,13 @@ from skidnav.envs.registration import registered_env_id
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import TrialResult
 from skidnav.seeding import RUN_ROLES, WORLD_ROLES, child_sequences, seed_int
-from skidnav.studies.barn.agents import LIDAR_FOV, LIDAR_RANGE, agent_params, env_interface
+from skidnav.studies.barn.agents import (
+    LIDAR_FOV,
+    LIDAR_RANGE,
+    action_duration,
+    agent_params,
+    env_interface,
+)
 from skidnav.studies.barn.grid import (
     CONTROL_PERIOD,
     EPISODE_COLUMNS,
@@ -46,17 +58,23 @@ ENV_ID = "skidnav/SkidSteerNav-v0"
 """The env every run drives."""
 ROBOT = "jackal"
 """The benchmark's robot."""
-TRAINING_ACTIONS = round(TIME_LIMIT / CONTROL_PERIOD)
-"""Most actions of a training episode: the benchmark's 100 s."""
 
 BarnRun = RunSpec[BarnGrid]
 """One run of a BARN grid."""
 
 
-def barn_env(spec: BarnRun, world: BarnWorld, slip_seed: int) -> gymnasium.Env[Any, Any]:
+def training_actions(duration: float) -> int:
+    """Most actions of a training episode with actions of ``duration`` [s]: the benchmark's
+    100 s (1000 actions of 0.1 s)."""
+    return round(TIME_LIMIT / duration)
+
+
+def barn_env(
+    spec: BarnRun, world: BarnWorld, slip_seed: int, control_period: float = CONTROL_PERIOD
+) -> gymnasium.Env[Any, Any]:
     """The unwrapped env of a run (module doc) on ``world`` (its map, start pose and goal
-    disc), its slip field drawn from ``slip_seed``; without a time limit (the rules end every
-    run)."""
+    disc), its slip field drawn from ``slip_seed``, actions of ``control_period`` [s]; without
+    a time limit (the rules end every run)."""
     grid = spec.config
     options: dict[str, Any] = dict(
         grid_map=world.map.grid,
@@ -64,7 +82,7 @@ def barn_env(spec: BarnRun, world: BarnWorld, slip_seed: int) -> gymnasium.Env[A
         goal_disc=(*world.goal, world.goal_radius),
         discretization=world.discretization,
         robot=ROBOT,
-        control_period=CONTROL_PERIOD,
+        control_period=control_period,
         slip=spec.preset,
         world_seed=slip_seed,
         dynamics=grid.dynamics,
@@ -77,19 +95,23 @@ def barn_env(spec: BarnRun, world: BarnWorld, slip_seed: int) -> gymnasium.Env[A
 
 
 def scored_run(
-    agent: Greedy, env: gymnasium.Env[Any, Any], world: BarnWorld, seed: int
+    agent: Greedy, env: gymnasium.Env[Any, Any], world: BarnWorld, seed: int, periods: int = 1
 ) -> tuple[BarnOutcome, np.ndarray]:
-    """One BARN run of ``agent``'s greedy policy on ``env`` from ``env.reset(seed=seed)``
-    (a policy with a state of its own forgets it first); its outcome and its poses float32
-    (T + 1, 3) (x [m], y [m], heading [rad]: the reset's, then one per action)."""
+    """One BARN run of ``agent``'s greedy policy on ``env`` (0.1-s actions) from
+    ``env.reset(seed=seed)`` (a policy with a state of its own forgets it first), the policy
+    choosing every ``periods`` actions and its choice held for them (module doc); the outcome
+    and the poses float32 (T + 1, 3) (x [m], y [m], heading [rad]: the reset's, then one per
+    0.1-s action)."""
     observation, info = env.reset(seed=seed)
     start_rollout(agent)
     poses = [info["pose"]]
     start = (float(info["pose"][0]), float(info["pose"][1]))
     clock = BarnClock(start, world.goal, world.goal_radius, control_period=CONTROL_PERIOD)
-    ended = False
+    ended, action = False, None
     while not ended:
-        observation, _, _, _, info = env.step(agent.greedy_action(as_state(observation)))
+        if (len(poses) - 1) % periods == 0:
+            action = agent.greedy_action(as_state(observation))
+        observation, _, _, _, info = env.step(action)
         poses.append(info["pose"])
         ended = clock.step((info["pose"][0], info["pose"][1]), bool(info["collision"]))
     return clock.outcome(world.optimal_time), np.asarray(poses, dtype=np.float32)
@@ -97,10 +119,12 @@ def scored_run(
 
 class Rows:
     """The episode rows of a run (:data:`~skidnav.studies.barn.grid.EPISODE_COLUMNS`) and the
-    poses of its scored runs, one scored run at a time."""
+    poses of its scored runs, one scored run at a time, for an agent whose training actions
+    last ``action_duration`` [s]."""
 
-    def __init__(self, world: BarnWorld) -> None:
+    def __init__(self, world: BarnWorld, action_duration: float = CONTROL_PERIOD) -> None:
         self.world = world
+        self.action_duration = action_duration
         self.columns: dict[str, list[float]] = {key: [] for key in EPISODE_COLUMNS}
         self.poses: list[np.ndarray] = []
         self.driving_seconds = 0.0
@@ -110,7 +134,7 @@ class Rows:
     ) -> None:
         """Record one scored run after a training episode of ``training_actions`` actions that
         took ``wall_time`` [s] (0 and 0 for zero-shot)."""
-        self.driving_seconds += training_actions * CONTROL_PERIOD
+        self.driving_seconds += training_actions * self.action_duration
         row = {
             "world": self.world.number,
             "quintile": quintile(self.world.number),
@@ -168,12 +192,12 @@ def summary(episodes: dict[str, np.ndarray], world: BarnWorld) -> dict[str, floa
 
 
 def train_one(
-    built: CatalogAgent, env: gymnasium.Env[Any, Any], seed: int | None
+    built: CatalogAgent, env: gymnasium.Env[Any, Any], seed: int | None, max_steps: int
 ) -> tuple[int, float]:
     """One training episode of ``built`` on ``env`` (from ``env.reset(seed=seed)``, None: the
-    env's own generator), cut at :data:`TRAINING_ACTIONS`; (its actions, its wall time [s])."""
+    env's own generator), cut at ``max_steps`` actions; (its actions, its wall time [s])."""
     started = time.perf_counter()
-    log = built.train(env, 1, max_steps=TRAINING_ACTIONS, seed=seed)
+    log = built.train(env, 1, max_steps=max_steps, seed=seed)
     return int(log.lengths[0]), time.perf_counter() - started
 
 
@@ -185,19 +209,27 @@ def barn_trial(spec: BarnRun) -> TrialResult:
     run_streams = child_sequences(spec.run_seed.sequence(), RUN_ROLES)
     slip_seed = seed_int(world_streams["slip"])
     reset_seed = seed_int(world_streams["evaluation"])
-    env, scoring_env = (barn_env(spec, world, slip_seed) for _ in range(2))
+    duration = action_duration(spec.agent.name, grid)
+    periods = round(duration / CONTROL_PERIOD)
+    env = barn_env(spec, world, slip_seed, duration)
+    scoring_env = barn_env(spec, world, slip_seed)
     described = entry(spec.agent.name)
     params = agent_params(spec.agent, grid, described)
-    built = described.build(env, params, run_streams["agent"], TRAINING_ACTIONS)
-    rows = Rows(world)
+    limit = training_actions(duration)
+    built = described.build(env, params, run_streams["agent"], limit)
+    rows = Rows(world, duration)
+
+    def score() -> tuple[BarnOutcome, np.ndarray]:
+        return scored_run(built.agent, scoring_env, world, reset_seed, periods)
+
     if grid.protocol == "zero-shot":
-        rows.add(*scored_run(built.agent, scoring_env, world, reset_seed), 0, 0.0)
+        rows.add(*score(), 0, 0.0)
     else:
         episode_seed: int | None = seed_int(run_streams["episodes"])
         for _ in range(grid.episodes):
-            actions, wall_time = train_one(built, env, episode_seed)
+            actions, wall_time = train_one(built, env, episode_seed, limit)
             episode_seed = None  # later episodes continue the env's generator
-            rows.add(*scored_run(built.agent, scoring_env, world, reset_seed), actions, wall_time)
+            rows.add(*score(), actions, wall_time)
     episodes = rows.episodes()
     return TrialResult(
         spec.run_id, spec.coordinates, episodes, summary(episodes, world), rows.arrays()
