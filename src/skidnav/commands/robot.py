@@ -245,11 +245,13 @@ def _run_loop(args: argparse.Namespace) -> int:
         print(f"\n{message} — press Enter when ready", file=sys.stderr, flush=True)
         sys.stdin.readline()
 
-    code, summary = run_robot(settings, progress=progress, wait_for_operator=wait_for_operator)
+    outcome = run_robot(settings, progress=progress, wait_for_operator=wait_for_operator)
     if not args.quiet:
         print(file=sys.stderr)
-    print(summary)
-    return code
+    print(outcome.summary)
+    if outcome.problem is not None:
+        print(f"skidnav: error: {outcome.problem}", file=sys.stderr)
+    return outcome.code
 
 
 def _add_study(commands: Any) -> None:
