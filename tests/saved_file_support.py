@@ -110,9 +110,12 @@ def write_checkpoint(
 ) -> Path:
     """A real-time run directory ``out`` whose ``checkpoints/latest.json`` is ``pointer`` and
     whose ``checkpoints/ep-00000`` holds ``loop.json`` and, when given, the agent's JSON text and
-    ``.npz`` members as ``agent.json`` / ``agent.npz``; returns ``checkpoints/ep-00000``."""
+    ``.npz`` members as ``agent.json`` / ``agent.npz``; returns ``checkpoints/ep-00000``. With
+    its ``run.jsonl`` and without ``robot-run.json`` it is a run of any config to ``--resume``
+    (realtime/control/run_folder.py)."""
     directory = out / "checkpoints" / "ep-00000"
     directory.mkdir(parents=True, exist_ok=True)
+    (out / "run.jsonl").touch()
     (directory / "loop.json").write_text(loop_state)
     (out / "checkpoints" / "latest.json").write_text(pointer)
     if agent is not None:

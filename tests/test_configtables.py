@@ -88,3 +88,32 @@ def test_both_loaders_word_the_same_faults_alike() -> None:
         parse_config("env = 3\n" + TINY_TOML, "a.toml")
     with pytest.raises(UserError, match=r"^\[sim\]: expected a table, got 3$"):
         config_from_mapping({"sim": 3})
+
+
+@dataclass(frozen=True)
+class Typed:
+    count: int = 1
+    scale: float = 1.0
+    flag: bool = False
+    name: str = "a"
+    limit: float | None = None
+    items: tuple[int, ...] = ()
+
+
+def test_build_dataclass_checks_the_type_of_every_simple_field() -> None:
+    values = {"count": 2, "scale": 3, "flag": True, "name": "b", "limit": None, "items": (1,)}
+    assert build_dataclass(Typed, values, "[t]") == Typed(2, 3, True, "b", None, (1,))
+    cases = {
+        "[t]: expected count to be an integer, got True": {"count": True},
+        "[t]: expected count to be an integer, got 2.0": {"count": 2.0},
+        "[t]: expected scale to be a number, got '1.5'": {"scale": "1.5"},
+        "[t]: expected flag to be true or false, got 'yes'": {"flag": "yes"},
+        "[t]: expected flag to be true or false, got 1": {"flag": 1},
+        "[t]: expected name to be a string, got 3": {"name": 3},
+        "[t]: expected limit to be a number, got 'none'": {"limit": "none"},
+    }
+    for message, value in cases.items():
+        with pytest.raises(UserError) as caught:
+            build_dataclass(Typed, value, "[t]")
+        assert str(caught.value) == message
+    assert build_dataclass(Typed, {"items": ["x"]}, "[t]").items == ["x"]  # left to the class

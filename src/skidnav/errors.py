@@ -65,3 +65,26 @@ def first_line(error: BaseException, limit: int = 200) -> str:
         return type(error).__name__
     line = repr(text.splitlines()[0])[1:-1]
     return line[:limit] + ("…" if len(line) > limit else "")
+
+
+def unknown_arguments(words: list[str]) -> str:
+    """The command-line ``words`` a parser did not know, for its error message: each option by
+    its name, and what follows an unknown option (its ``=`` value, the words up to the next
+    option) as ``…``: a prefix or a misspelling of ``--secret-file`` must not print the secret
+    typed after it.
+
+    >>> unknown_arguments(["--secret", "hunter2", "--token=abc", "extra.toml"])
+    '--secret … --token=… extra.toml'
+    """
+    shown_words, after_option = [], False
+    for word in words:
+        if word.startswith("-") and len(word) > 1:
+            name, equals, _ = word.partition("=")
+            shown_words.append(name + ("=…" if equals else ""))
+            after_option = not equals
+        elif after_option:
+            if shown_words[-1] != "…":
+                shown_words.append("…")
+        else:
+            shown_words.append(word)
+    return " ".join(shown_words)

@@ -198,6 +198,7 @@ def test_a_saved_frozen_policy_acts_and_a_linear_agent_is_refused(
     assert isinstance(space, gymnasium.spaces.Box)
     linear = make_linear_agent("linear-q", space, 4, {}, np.random.default_rng(0))
     linear_file = linear.save(tmp_path / "linear" / "agent")[1]
+    argv[-1] = str(tmp_path / "linear-run")  # a new run: the first one's folder holds it
     assert main([*argv, "--agent-file", str(linear_file)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and "a saved linear agent does not run on the robot" in lines[0], lines

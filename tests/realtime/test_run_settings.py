@@ -8,15 +8,15 @@ from typing import Any
 import pytest
 
 from skidnav.cli import main
-from skidnav.realtime.control.run import RobotRunSettings
+from skidnav.realtime.control.run import RobotRunSettings, RunOutcome
 
 
 def test_the_command_line_becomes_the_settings(tmp_path: Path, monkeypatch) -> None:
     seen: list[RobotRunSettings] = []
 
-    def run_robot(settings: RobotRunSettings, **callbacks: Any) -> tuple[int, str]:
+    def run_robot(settings: RobotRunSettings, **callbacks: Any) -> RunOutcome:
         seen.append(settings)
-        return 0, "done"
+        return RunOutcome(0, "done")
 
     monkeypatch.setattr("skidnav.realtime.control.run.run_robot", run_robot)
     out = tmp_path / "run"

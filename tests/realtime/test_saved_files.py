@@ -16,7 +16,9 @@ import pytest
 from skidnav.agents.tabular.registry import load_agent, make_agent
 from skidnav.cli import main
 from skidnav.errors import CorruptFileError
+from skidnav.realtime.config import load_config
 from skidnav.realtime.control.checkpoint import LATEST, Checkpoints
+from skidnav.realtime.control.run_folder import mark_run_folder
 from tests.realtime.realtime_helpers import write_config
 from tests.saved_file_support import listing, write_checkpoint
 
@@ -200,6 +202,7 @@ def test_a_hostile_checkpoint_ends_the_resume_in_one_line(
     files, named, message = CHECKPOINT_CASES[case]
     out = tmp_path / "run"
     write_checkpoint(out, **files)
+    mark_run_folder(out, load_config(REALTIME))  # a run of this config: its checkpoint is read
     before = listing(out)
     code = main([*RUN, "--config", str(REALTIME), "--resume", "--out", str(out)])
     lines = capsys.readouterr().err.strip().splitlines()

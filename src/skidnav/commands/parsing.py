@@ -1,8 +1,12 @@
-"""The argument parser of every ``skidnav`` command: its errors are one line.
+"""The argument parser of every ``skidnav`` command: its errors are one line, and an option is
+only ever its whole name.
 
 argparse prints a usage block and then ``prog: error: …``; skidnav's rule for bad input is one
 line naming the problem and exit code 2, so every parser and subparser of the command line is an
-:class:`OneLineParser` (subparsers inherit their parent's class).
+:class:`OneLineParser` (subparsers inherit their parent's class). argparse also takes any
+unambiguous prefix of an option for the option (``--secret X`` for ``--secret-file X``, ``--ep``
+for ``--episodes``); no skidnav parser does: a word an option does not spell out is an unknown
+argument, and the words after it are not printed (:func:`~skidnav.errors.unknown_arguments`).
 """
 
 from __future__ import annotations
@@ -10,17 +14,34 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from collections.abc import Sequence
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
+
+from skidnav.errors import unknown_arguments
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """An argument parser whose errors are the one line ``skidnav: error: …`` (exit code 2).
+    """An argument parser whose errors are the one line ``skidnav: error: …`` (exit code 2),
+    and which takes no abbreviation of an option (``allow_abbrev`` is always False).
 
     The subcommand's path is named in the line (``skidnav: error: robot run: …``), except for the
     top-level parser. A command group called without its verb (bare ``skidnav``, ``skidnav
     study``) prints its usage, which lists the verbs, before that line.
     """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs["allow_abbrev"] = False
+        super().__init__(*args, **kwargs)
+
+    def parse_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> argparse.Namespace:
+        """argparse's, the unknown arguments named by :func:`~skidnav.errors.unknown_arguments`."""
+        parsed, extras = self.parse_known_args(args, namespace)
+        if extras:
+            self.error(f"unrecognized arguments: {unknown_arguments(extras)}")
+        return parsed
 
     def error(self, message: str) -> NoReturn:
         if self._subparsers is not None and message.startswith(MISSING_ARGUMENTS):

@@ -19,7 +19,7 @@ from pathlib import Path
 from types import FrameType
 from typing import IO, Any
 
-from skidnav.commands.parsing import positive_number
+from skidnav.commands.parsing import path_argument, positive_number
 from skidnav.errors import UserError
 from skidnav.files.outputs import check_output_dir
 
@@ -89,7 +89,7 @@ def _add_sim_server(commands: Any) -> None:
         help="no wall clock: each command advances the robot one period (docs/protocol.md)",
     )
     server.add_argument("--seed", type=int, default=0, help="root seed (map, slip, noise)")
-    server.add_argument("--log", type=Path, help="JSON-lines log of received commands")
+    server.add_argument("--log", type=path_argument, help="JSON-lines log of received commands")
     server.add_argument("--link-timeout", type=float, default=0.5, help="quiet link stop [s]")
     server.add_argument(
         "--max-lease",
@@ -99,7 +99,7 @@ def _add_sim_server(commands: Any) -> None:
     )
     server.add_argument(
         "--secret-file",
-        type=Path,
+        type=path_argument,
         help="file holding the link secret (or set SKIDNAV_LINK_SECRET); needed beyond loopback",
     )
     server.add_argument(
@@ -204,23 +204,27 @@ def _add_run(commands: Any) -> None:
     )
     pilot.add_argument(
         "--policy-file",
-        type=Path,
+        type=path_argument,
         help="a saved continuous policy (its JSON file), loaded by the loader of its format",
     )
     pilot.add_argument(
         "--agent-file",
-        type=Path,
+        type=path_argument,
         help="a saved agent of any family (skidnav run's runs/RUN/agent.json): tabular agents "
         "and mppi-kinematic keep learning, the others act frozen",
     )
-    run.add_argument("--config", type=Path, help="real-time TOML config (configs/realtime.toml)")
+    run.add_argument(
+        "--config", type=path_argument, help="real-time TOML config (configs/realtime.toml)"
+    )
     run.add_argument("--preset", help="a [presets.NAME] table of the config to apply")
     run.add_argument("--episodes", type=int, help="episodes to run (overrides the config)")
     run.add_argument(
         "--time-scale", type=float, help="robot s per wall s (a sim server's; 1 for a real robot)"
     )
     run.add_argument("--reset", choices=("auto", "manual"), help="between episodes")
-    run.add_argument("--out", type=Path, default=Path("realtime-run"), help="output directory")
+    run.add_argument(
+        "--out", type=path_argument, default=Path("realtime-run"), help="output directory"
+    )
     run.add_argument("--resume", action="store_true", help="continue from the last checkpoint")
     run.add_argument("--quiet", action="store_true", help="no live progress line")
     run.set_defaults(func=_run_loop)
@@ -245,11 +249,13 @@ def _run_loop(args: argparse.Namespace) -> int:
         print(f"\n{message} — press Enter when ready", file=sys.stderr, flush=True)
         sys.stdin.readline()
 
-    code, summary = run_robot(settings, progress=progress, wait_for_operator=wait_for_operator)
+    outcome = run_robot(settings, progress=progress, wait_for_operator=wait_for_operator)
     if not args.quiet:
         print(file=sys.stderr)
-    print(summary)
-    return code
+    print(outcome.summary)
+    if outcome.problem is not None:
+        print(f"skidnav: error: {outcome.problem}", file=sys.stderr)
+    return outcome.code
 
 
 def _add_study(commands: Any) -> None:
@@ -260,13 +266,13 @@ def _add_study(commands: Any) -> None:
         "real-time config by its path) to OUT/config.toml and run it as 'skidnav run' does "
         "(serially; resumable on the same --out); then the tables, OUT/study.md.",
     )
-    study.add_argument("--config", type=Path, required=True, help="configs/realtime.toml")
+    study.add_argument("--config", type=path_argument, required=True, help="configs/realtime.toml")
     study.add_argument("--agents", help="comma-separated agent names ([study] agents)")
     study.add_argument("--presets", help="comma-separated preset names ([study] presets)")
     study.add_argument("--episodes", type=int, help="episodes per run (default: the preset's)")
     study.add_argument("--time-scale", type=float, help="robot s per wall s of the sim server")
     study.add_argument("--seeds", type=int, help="runs per agent × preset ([study] seeds)")
-    study.add_argument("--out", type=Path, required=True, help="output directory")
+    study.add_argument("--out", type=path_argument, required=True, help="output directory")
     study.add_argument("--quiet", action="store_true", help="no live progress line")
     study.set_defaults(func=_run_study)
 

@@ -13,6 +13,8 @@ import dataclasses
 import json
 import math
 import re
+import types
+import typing
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
@@ -24,6 +26,7 @@ T = TypeVar("T")
 __all__ = [
     "build_dataclass",
     "check_keys",
+    "check_types",
     "resolve_path",
     "table",
     "table_array",
@@ -33,6 +36,11 @@ __all__ = [
 ]
 
 _BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+_KINDS: dict[type, str] = {
+    bool: "true or false", int: "an integer", float: "a number", str: "a string",
+}  # fmt: skip
+"""The field types a TOML value is checked against by :func:`check_types`, as a message words
+them."""
 
 
 def table(value: Any, where: str) -> dict[str, Any]:
@@ -74,12 +82,59 @@ def check_keys(values: Iterable[str], known: Iterable[str], where: str) -> None:
             raise UserError(f"{where}: unknown key {shown(key)} (expected one of {names})")
 
 
+def check_types(cls: type, values: Mapping[str, Any], where: str) -> None:
+    """UserError ``"{where}: expected KEY to be …, got …"`` for the first of ``values`` whose
+    field of the dataclass ``cls`` is annotated ``bool``, ``int``, ``float`` or ``str`` (or a
+    union of them, with None or not) and that is not of that type: a bool is neither an integer
+    nor a number, an integer is a number. Fields of other types are left to the class.
+
+    >>> @dataclasses.dataclass
+    ... class Link:
+    ...     port: int = 5757
+    ...     lockstep: bool = False
+    >>> check_types(Link, {"port": 6000, "lockstep": "yes"}, "[tcp]")
+    Traceback (most recent call last):
+    ...
+    skidnav.errors.UserError: [tcp]: expected lockstep to be true or false, got 'yes'
+    """
+    hints = typing.get_type_hints(cls)
+    for key, value in values.items():
+        kinds = _simple_kinds(hints.get(key))
+        if kinds and not any(_is_kind(value, kind) for kind in kinds):
+            expected = " or ".join(_KINDS[kind] for kind in kinds if kind in _KINDS)
+            raise UserError(f"{where}: expected {key} to be {expected}, got {shown(value)}")
+
+
+def _simple_kinds(hint: Any) -> tuple[type, ...]:
+    """The :data:`_KINDS` an annotation allows, with ``NoneType`` if it allows None too (a
+    JSON ``null``; TOML has none); () if it allows anything else."""
+    if hint in _KINDS:
+        return (hint,)
+    if isinstance(hint, types.UnionType) or typing.get_origin(hint) is typing.Union:
+        kinds = typing.get_args(hint)
+        if all(kind in _KINDS or kind is type(None) for kind in kinds):
+            return kinds
+    return ()
+
+
+def _is_kind(value: Any, kind: type) -> bool:
+    if kind is type(None):
+        return value is None
+    if kind is bool or isinstance(value, bool):
+        return kind is bool and isinstance(value, bool)
+    if kind is float:
+        return isinstance(value, int | float)
+    return isinstance(value, kind)
+
+
 def build_dataclass(cls: type[T], value: Any, where: str) -> T:
-    """The dataclass ``cls`` built from a TOML table of its fields (each key one field; the class
-    validates the values on construction); UserError ``"{where}: …"`` for a value that is not a
-    table, an unknown key, or a value the class refuses (ValueError or TypeError)."""
+    """The dataclass ``cls`` built from a TOML table of its fields (each key one field, of the
+    field's type as :func:`check_types` checks it; the class validates the values on
+    construction); UserError ``"{where}: …"`` for a value that is not a table, an unknown key,
+    a value of the wrong type, or a value the class refuses (ValueError or TypeError)."""
     values = table(value, where)
     check_keys(values, (f.name for f in dataclasses.fields(cls)), where)  # type: ignore[arg-type]
+    check_types(cls, values, where)
     try:
         return cls(**values)
     except (ValueError, TypeError) as error:

@@ -1,10 +1,14 @@
 """Configuration of a real-time run, read from TOML (configs/realtime.toml, docs/realtime.md).
 
 Tables: ``[run]`` (:class:`RunSettings`), ``[sim]`` (:class:`SimSettings`), ``[tcp]``,
-``[serial]``, ``[ros2]`` (driver options), ``[agents.NAME]`` (the agent's hyperparameters),
-``[policies.NAME]`` (a named continuous policy's settings, realtime/policies.py) and
-``[presets.NAME]`` (tables merged over the others when the preset is chosen). The sim server's
-own options (:class:`ServerOptions`, from ``skidnav robot sim-server``) are here too.
+``[serial]``, ``[ros2]`` (driver options, :mod:`skidnav.realtime.driver_settings`),
+``[agents.NAME]`` (the agent's hyperparameters), ``[policies.NAME]`` (a named continuous
+policy's settings, realtime/policies.py) and ``[presets.NAME]`` (tables merged over the others
+when the preset is chosen). Every table of ``[run]``, ``[sim]`` and the drivers is checked as
+a whole when the config is read (:func:`~skidnav.files.configtables.build_dataclass`: unknown
+keys, types, ranges), whichever driver runs, and a ``secret`` key anywhere is refused
+(:func:`~skidnav.realtime.driver_settings.refuse_inline_secrets`). The sim server's own options
+(:class:`ServerOptions`, from ``skidnav robot sim-server``) are here too.
 """
 
 from __future__ import annotations
@@ -20,18 +24,25 @@ from skidnav.errors import UserError, shown
 from skidnav.files.configtables import build_dataclass, check_keys, resolve_path, table
 from skidnav.files.saved import parse_toml, read_config_text
 from skidnav.physics.materials import MATERIALS
+from skidnav.realtime.driver_settings import (
+    DRIVER_SETTINGS,
+    SerialSettings,
+    TcpSettings,
+    refuse_inline_secrets,
+)
 from skidnav.realtime.link.auth import require_secret
 from skidnav.realtime.link.protocol import MAX_LINE_BYTES
+from skidnav.realtime.link.ros2_config import Ros2Config
 from skidnav.realtime.reference_robot.rules import MAX_LEASE_LIMIT
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.world.grid import MAP_KINDS
 
-DRIVER_TABLES = ("tcp", "serial", "ros2")
+DRIVER_TABLES = tuple(DRIVER_SETTINGS)
 """The tables of driver options."""
 TOP_TABLES = ("run", "sim", *DRIVER_TABLES, "agents", "policies", "study")
 """The tables of a config besides ``[presets]`` (``[study]``:
 :mod:`skidnav.studies.hardware.study`)."""
-FAULTS = ("silence", "garbage", "oversized", "escape", "hangup")
+FAULTS = ("silence", "garbage", "oversized", "escape", "hangup", "future")
 """Faults the sim server can inject for tests (realtime/robot_server/server.py)."""
 
 
@@ -245,11 +256,15 @@ class ServerOptions:
 
 @dataclass(frozen=True)
 class RealtimeConfig:
-    """Everything a real-time run needs besides the command line."""
+    """Everything a real-time run needs besides the command line: its ``[run]``, ``[sim]``,
+    driver (``[tcp]``, ``[serial]``, ``[ros2]``), ``[agents.NAME]`` and ``[policies.NAME]``
+    tables."""
 
     run: RunSettings = field(default_factory=RunSettings)
     sim: SimSettings = field(default_factory=SimSettings)
-    drivers: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    tcp: TcpSettings = field(default_factory=TcpSettings)
+    serial: SerialSettings = field(default_factory=SerialSettings)
+    ros2: Ros2Config = field(default_factory=Ros2Config)
     agents: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     policies: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
 
@@ -266,26 +281,47 @@ def _merge(base: dict[str, Any], override: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def config_from_mapping(data: Mapping[str, Any], preset: str | None = None) -> RealtimeConfig:
-    """A config from parsed TOML, with ``[presets.NAME]`` merged over it if ``preset`` is given."""
+    """A config from parsed TOML, with ``[presets.NAME]`` merged over it if ``preset`` is given;
+    UserError ``"[TABLE]: …"`` (``"preset 'NAME': [TABLE]: …"`` for the tables merged) for an
+    unknown key, a value of the wrong type or out of range, or a ``secret`` key anywhere
+    (presets included)."""
+    refuse_inline_secrets(data)
     tables = {key: value for key, value in data.items() if key != "presets"}
-    if preset is not None:
-        presets = table(data.get("presets", {}), "[presets]")
-        if preset not in presets:
-            names = shown(", ".join(presets))
-            raise UserError(f"unknown preset {preset!r}; expected one of {names}")
-        tables = _merge(tables, table(presets[preset], f"[presets.{preset}]"))
+    if preset is None:
+        return _build(tables)
+    presets = table(data.get("presets", {}), "[presets]")
+    if preset not in presets:
+        names = ", ".join(shown(name) for name in presets) or "none (no [presets] table)"
+        raise UserError(f"unknown preset {shown(preset)}; expected one of {names}")
+    try:
+        return _build(_merge(tables, table(presets[preset], f"[presets.{preset}]")))
+    except UserError as error:
+        raise UserError(f"preset {preset!r}: {error}") from None
+
+
+def _build(tables: dict[str, Any]) -> RealtimeConfig:
+    """The config of the tables of a file (or of its tables and a preset's, merged)."""
     check_keys(tables, TOP_TABLES, "top level")
     agents = table(tables.get("agents", {}), "[agents]")
     policies = table(tables.get("policies", {}), "[policies]")
     return RealtimeConfig(
         run=build_dataclass(RunSettings, tables.get("run", {}), "[run]"),
         sim=build_dataclass(SimSettings, tables.get("sim", {}), "[sim]"),
-        drivers={name: dict(table(tables.get(name, {}), f"[{name}]")) for name in DRIVER_TABLES},
+        tcp=build_dataclass(TcpSettings, tables.get("tcp", {}), "[tcp]"),
+        serial=build_dataclass(SerialSettings, tables.get("serial", {}), "[serial]"),
+        ros2=build_dataclass(Ros2Config, _with_tuples(tables.get("ros2", {})), "[ros2]"),
         agents={name: dict(table(value, f"[agents.{name}]")) for name, value in agents.items()},
         policies={
             name: dict(table(value, f"[policies.{name}]")) for name, value in policies.items()
         },
     )
+
+
+def _with_tuples(value: Any) -> Any:
+    """A table with its arrays as tuples (a dataclass's tuple fields); anything else as is."""
+    if not isinstance(value, dict):
+        return value
+    return {key: tuple(item) if isinstance(item, list) else item for key, item in value.items()}
 
 
 def read_tables(path: Path) -> dict[str, Any]:
@@ -315,10 +351,19 @@ def resolve_map_paths(data: dict[str, Any], folder: Path) -> dict[str, Any]:
 
 
 def load_config(path: Path | None, preset: str | None = None) -> RealtimeConfig:
-    """Read a TOML config (defaults without a path); UserError if unreadable or invalid."""
+    """Read a TOML config (defaults without a path), every preset checked, ``preset`` applied;
+    UserError if unreadable or invalid, one line naming the file and the table
+    (``"my.toml: [tcp]: unknown key 'secret_fle' …"``)."""
     if path is None:
         return config_from_mapping({}, preset)
-    return config_from_mapping(read_tables(path), preset)
+    tables = read_tables(path)
+    try:
+        for other in table(tables.get("presets", {}), "[presets]"):
+            if other != preset:
+                config_from_mapping(tables, other)  # every preset is checked, not only this one
+        return config_from_mapping(tables, preset)
+    except UserError as error:
+        raise UserError(f"{path}: {error}") from None
 
 
 def with_overrides(config: RealtimeConfig, **run_fields: Any) -> RealtimeConfig:

@@ -13,7 +13,9 @@ module is installed.
 
 The line drivers authenticate the link (docs/protocol.md, "Authentication") with the secret in
 the file ``secret_file`` of their table, else in the environment variable
-``SKIDNAV_LINK_SECRET`` (which a ``sim`` server inherits); without either, they do not.
+``SKIDNAV_LINK_SECRET`` (which a ``sim`` server inherits); without either, they do not. A secret
+named but unreadable, too short or empty is a UserError (:func:`link_secret`), never a plain
+link.
 """
 
 from __future__ import annotations
@@ -21,7 +23,6 @@ from __future__ import annotations
 import importlib
 import logging
 import subprocess
-from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +30,7 @@ from skidnav.childprocess import child_environment, python_module_command
 from skidnav.errors import UserError
 from skidnav.extras import require
 from skidnav.realtime.config import RealtimeConfig
+from skidnav.realtime.driver_settings import SerialSettings, TcpSettings
 from skidnav.realtime.link.auth import load_secret
 from skidnav.realtime.link.interface import RobotDriver
 from skidnav.realtime.link.line_client import LineClient, SerialLink, TcpLink
@@ -124,19 +126,35 @@ class SimDriver(LineClient):
         self.server.stop()
 
 
+def link_secret(name: str, config: RealtimeConfig) -> bytes | None:
+    """The link secret of driver ``name``: the file of ``[tcp]`` or ``[serial]``
+    ``secret_file``, else ``SKIDNAV_LINK_SECRET`` (``sim`` too: its server inherits it), else
+    None; always None for ``ros2``. UserError in one line (the secret never shown) if the file
+    cannot be read, or the file or the variable holds fewer than 16 bytes."""
+    if name == "ros2":
+        return None
+    line = _line_settings(name, config)
+    return load_secret(line.secret_file if line is not None else None)
+
+
+def _line_settings(name: str, config: RealtimeConfig) -> TcpSettings | SerialSettings | None:
+    """The table of line driver ``name`` (``[tcp]`` or ``[serial]``); None for another."""
+    lines: dict[str, TcpSettings | SerialSettings] = {"tcp": config.tcp, "serial": config.serial}
+    return lines.get(name)
+
+
 def make_driver(name: str, config: RealtimeConfig, server_log: Path | None = None) -> RobotDriver:
     """The driver ``name`` configured from ``config`` (``[tcp]``, ``[serial]``, ``[ros2]``,
     ``[sim]`` and ``[run]``); ``server_log`` is the sim server's command log (sim only)."""
-    options = config.drivers.get(name, {})
-    lockstep = config.sim.lockstep if name == "sim" else bool(options.get("lockstep", False))
     if name == "ros2":
-        return _make_ros2_driver(options)
-    secret_file = options.get("secret_file")
+        return _make_ros2_driver(config)
+    line = _line_settings(name, config)
     client: dict[str, Any] = {
         "stop_timeout": max(0.05, 2 * config.run.period_wall),
         "command_ttl": config.run.pose_timeout,  # a command lives as long as a pose may lag
-        "lockstep": lockstep,
-        "secret": load_secret(None if secret_file is None else str(secret_file)),
+        "lockstep": config.sim.lockstep if line is None else line.lockstep,
+        "secret": link_secret(name, config),
+        "time_scale": config.run.time_scale,
     }
     if name == "sim":
         run = config.run
@@ -153,21 +171,14 @@ def make_driver(name: str, config: RealtimeConfig, server_log: Path | None = Non
         ]
         return SimDriver(SimServerProcess(arguments, server_log), **client)
     if name == "tcp":
-        host = str(options.get("host", "127.0.0.1"))
-        return LineClient(TcpLink(host, int(options.get("port", 5757))), **client)
+        return LineClient(TcpLink(config.tcp.host, config.tcp.port), **client)
     if name == "serial":
-        url = str(options.get("url", "/dev/ttyUSB0"))
-        return LineClient(SerialLink(url, int(options.get("baudrate", 115200))), **client)
+        return LineClient(SerialLink(config.serial.url, config.serial.baudrate), **client)
     raise UserError(f"unknown driver {name!r}; expected one of {', '.join(DRIVERS)}")
 
 
-def _make_ros2_driver(options: Mapping[str, Any]) -> RobotDriver:
-    """The rosbridge driver of ``skidnav.realtime.link.ros2`` built from the ``[ros2]`` table."""
+def _make_ros2_driver(config: RealtimeConfig) -> RobotDriver:
+    """The rosbridge driver of ``skidnav.realtime.link.ros2`` with the ``[ros2]`` settings."""
     module = importlib.import_module("skidnav.realtime.link.ros2")  # lazily: it imports roslibpy
-    values = {key: tuple(v) if isinstance(v, list) else v for key, v in options.items()}
-    try:
-        config = module.Ros2Config(**values)
-    except (TypeError, ValueError) as error:
-        raise UserError(f"[ros2]: {error}") from None
-    driver: RobotDriver = module.Ros2Driver(config)
+    driver: RobotDriver = module.Ros2Driver(config.ros2)
     return driver

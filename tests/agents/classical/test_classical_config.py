@@ -25,7 +25,7 @@ from tests.agents.classical.support import JACKAL, barn_env
         ({"yaw_rate_samples": 4}, "expected yaw_rate_samples to be odd"),
         ({"footprint_width": -0.1}, "expected footprint_width"),
         ({"ray_stride": 1.5}, "expected ray_stride to be an integer"),
-        ({"speed_weight": "fast"}, "expected speed_weight to be a finite number"),
+        ({"speed_weight": "fast"}, "expected speed_weight to be a number, got 'fast'"),
     ],
 )
 def test_a_bad_setting_is_one_line_naming_the_agent(

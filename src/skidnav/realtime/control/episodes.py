@@ -40,7 +40,10 @@ from skidnav.world.grid import GridMap
 
 log = logging.getLogger(__name__)
 
-EXIT_DONE, EXIT_SAFETY, EXIT_INTERRUPTED = 0, 3, 130
+EXIT_DONE, EXIT_SAFETY, EXIT_ALL_ABORTED, EXIT_INTERRUPTED = 0, 3, 4, 130
+"""Exit codes of a run (docs/realtime.md, "Exit codes"): every episode run, at least one of
+them not aborted; ended by a safety trip it could not recover from; every episode run, every
+one aborted; interrupted."""
 FINAL_TRIPS = ("robot outside", "policy")
 """Trip reasons that end the run instead of a reconnect: someone has to look at the robot, or
 at the policy."""
@@ -220,10 +223,14 @@ class EpisodeLoop(PeriodicControl):
         return False
 
     def run(self, first_episode: int = 0) -> int:
-        """Episodes ``first_episode`` … ``episodes − 1``; returns the exit code
-        (0 done, 3 ended by a safety trip it could not recover from, 130 interrupted)."""
+        """Episodes ``first_episode`` … ``episodes − 1``; returns the exit code: 0 done, at
+        least one of these episodes not aborted (the goal reached or the action limit); 4
+        (:data:`EXIT_ALL_ABORTED`) done, but every one of them aborted (a robot that stalls,
+        a lease or link lost every time: nothing was learned); 3 ended by a safety trip it
+        could not recover from; 130 interrupted."""
         self.monitor.start()
         episode = first_episode
+        done_before = len(self.results)  # restored from a checkpoint
         try:
             while episode < self.settings.episodes:
                 result = self.run_episode(episode)
@@ -235,7 +242,8 @@ class EpisodeLoop(PeriodicControl):
                 if episode < self.settings.episodes and not self._between_episodes():
                     return EXIT_INTERRUPTED if self.interrupted else EXIT_SAFETY
             self.monitor.disarm()
-            return EXIT_DONE
+            ran = self.results[done_before:]
+            return EXIT_ALL_ABORTED if ran and all(r.aborted for r in ran) else EXIT_DONE
         except KeyboardInterrupt:  # raised by the signal handler while waiting for the operator
             self.interrupted = True
             return EXIT_INTERRUPTED

@@ -23,7 +23,13 @@ import numpy as np
 from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.envs.step_info import step_info
 from skidnav.realtime.config import RealtimeConfig
-from skidnav.realtime.control.episodes import EXIT_DONE, EXIT_INTERRUPTED, EXIT_SAFETY, EpisodeLoop
+from skidnav.realtime.control.episodes import (
+    EXIT_ALL_ABORTED,
+    EXIT_DONE,
+    EXIT_INTERRUPTED,
+    EXIT_SAFETY,
+    EpisodeLoop,
+)
 from skidnav.realtime.control.periods import Aborted
 from skidnav.realtime.control.records import EpisodeResult
 from skidnav.realtime.link.interface import Pose, RobotDriver
@@ -32,7 +38,9 @@ from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 
-__all__ = ["EXIT_DONE", "EXIT_INTERRUPTED", "EXIT_SAFETY", "Aborted", "RealtimeLoop"]
+__all__ = [
+    "EXIT_ALL_ABORTED", "EXIT_DONE", "EXIT_INTERRUPTED", "EXIT_SAFETY", "Aborted", "RealtimeLoop",
+]  # fmt: skip
 
 
 class RealtimeLoop(EpisodeLoop):

@@ -11,7 +11,6 @@ runs too.
 from __future__ import annotations
 
 import inspect
-import json
 import signal
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -27,7 +26,6 @@ from skidnav.agents.mpc.agent import MPPIKinematicAgent
 from skidnav.agents.mpc.loading import load_mppi_agent
 from skidnav.envs.step_info import step_info
 from skidnav.errors import UserError, first_line, shown
-from skidnav.files.atomic import write_user_file
 from skidnav.files.outputs import make_output_dir
 from skidnav.realtime.agent_file import RunWorld, SavedPilot, check_loaded, open_agent_file
 from skidnav.realtime.arena import arena_map, seed_streams
@@ -38,12 +36,17 @@ from skidnav.realtime.control.loop import RealtimeLoop
 from skidnav.realtime.control.mppi_agent import new_mppi_agent, warm_up_mppi
 from skidnav.realtime.control.mppi_loop import MPPILoop
 from skidnav.realtime.control.policy_loop import PolicyLoop
+from skidnav.realtime.control.run_folder import (
+    RunOutcome,
+    check_run_folder,
+    mark_run_folder,
+    summarize,
+)
 from skidnav.realtime.control.transition import compile_scoring
-from skidnav.realtime.drivers import DRIVERS, make_driver, require_driver_extras
+from skidnav.realtime.drivers import DRIVERS, link_secret, make_driver, require_driver_extras
 from skidnav.realtime.policies import check_policy, select_policy
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
-from skidnav.statistics.formatting import plural
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap
 
@@ -223,19 +226,23 @@ def run_robot(
     *,
     progress: Callable[[str], None],
     wait_for_operator: Callable[[str], None],
-) -> tuple[int, str]:
+) -> RunOutcome:
     """Run an agent that learns online, or a frozen continuous policy (by name or file), in real
-    time as ``settings`` ask; returns (exit code, one-line summary)."""
+    time as ``settings`` ask. The config, the driver's extras and link secret, and the output
+    folder (:func:`~.run_folder.check_run_folder`) are checked before anything slow starts."""
     config = load_config(settings.config, settings.preset)
     config = with_overrides(
         config, episodes=settings.episodes, time_scale=settings.time_scale, reset=settings.reset
     )
     require_driver_extras(settings.driver, config)
+    link_secret(settings.driver, config)  # unreadable or short: refused now, never a plain link
+    check_run_folder(settings.out, config, settings.resume)
     robot, grid = RobotParams(), Discretization()
     grid_map = arena_map(config.run.map, config.run.seed, grid)
     world = RunWorld(robot, grid, config.run.period * config.run.substeps, grid_map)
     pilot, first_episode, state, policy_name = _pilot(settings, config, world)
     out = make_output_dir(settings.out)  # a refused resume has written nothing
+    mark_run_folder(out, config)
     code, loop = drive(
         settings.driver,
         pilot,
@@ -249,7 +256,7 @@ def run_robot(
         resume=(first_episode, state),
         policy_name=policy_name,
     )
-    return code, _summarize(loop, out, code)
+    return summarize(loop, out, code)
 
 
 def _pilot(
@@ -392,21 +399,3 @@ def drive(
     finally:
         shutdown()
     return code, loop
-
-
-def _summarize(loop: EpisodeLoop, out: Path, code: int) -> str:
-    results = loop.results
-    summary = {
-        "exit_code": code,
-        "episodes": len(results),
-        "goals": sum(r.reached_goal for r in results),
-        "aborted": sum(r.aborted for r in results),
-        "actions": sum(r.actions for r in results),
-        "last_abort_reason": next((r.reason for r in reversed(results) if r.aborted), None),
-        **loop.summary_fields(),
-    }
-    write_user_file(out / "summary.json", json.dumps(summary, indent=1).encode(), "run summary")
-    return (
-        f"{plural(len(results), 'episode')}, {summary['goals']} reached the goal, "
-        f"{summary['aborted']} aborted; results in {out}"
-    )

@@ -5,9 +5,12 @@
 (stamped on this process's monotonic clock at receipt), collects ``ack``/``stopped`` replies and
 sends a ``heartbeat`` whenever nothing was sent for ``heartbeat_interval`` seconds once the
 robot's ``hello`` arrived. A lost link, a malformed line, a robot message whose ``seq`` does not
-increase, an ``error`` from the robot and, with a secret, a line that fails authentication
-(docs/protocol.md, "Authentication") are *faults*: each is kept in :attr:`fault` and passed at
-once to the fault callback (the safety monitor's trip).
+increase, an ``error`` from the robot, a pose stamped from the future
+(:class:`~skidnav.realtime.link.robot_clock.RobotClock`) and, with a secret, a line that fails
+authentication (docs/protocol.md, "Authentication") are *faults*: each is kept in :attr:`fault`
+and passed at once to the fault callback (the safety monitor's trip). A fault during
+:meth:`LineClient.connect` is what its ConnectionError says, so only a fault of a connected
+link is logged as a warning.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from skidnav.extras import require
 from skidnav.realtime.link import protocol as pr
 from skidnav.realtime.link.auth import Session, require_secret
 from skidnav.realtime.link.interface import Pose
+from skidnav.realtime.link.robot_clock import RobotClock
 
 if TYPE_CHECKING:
     import serial
@@ -145,6 +149,8 @@ class LineClient:
             :meth:`wait_answered` instead of the wall clock.
         secret: the link secret (at least 16 bytes): the robot must prove it knows it and
             every line is authenticated; None: no authentication (loopback robots only).
+        time_scale: robot seconds per wall second (the run's; a real robot's is 1), for
+            :attr:`robot_clock`, which refuses poses stamped from the future.
     """
 
     def __init__(
@@ -158,6 +164,7 @@ class LineClient:
         dead_timeout: float = 2.0,
         lockstep: bool = False,
         secret: bytes | None = None,
+        time_scale: float = 1.0,
     ) -> None:
         if not (stop_timeout > 0 and command_ttl > 0 and dead_timeout > 0):
             raise ValueError("expected stop_timeout, command_ttl and dead_timeout > 0 s")
@@ -169,6 +176,8 @@ class LineClient:
         self.command_ttl = command_ttl
         self.dead_timeout = dead_timeout
         self.lockstep = lockstep
+        # kept across reconnections: the robot's clock goes on
+        self.robot_clock = RobotClock(time_scale, command_ttl, lockstep)
         self.robot_period: float | None = None
         self.fault: str | None = None
         self.on_fault: Callable[[str], None] | None = None
@@ -309,7 +318,9 @@ class LineClient:
     def _report(self, fault: str) -> None:
         if self.fault is None:
             self.fault = fault
-            log.warning("robot link fault: %s", fault)
+            # before the robot's hello, connect() raises it: the caller's one line says it
+            level = logging.WARNING if self._hello.is_set() else logging.DEBUG
+            log.log(level, "robot link fault: %s", fault)
             if self.on_fault is not None:
                 self.on_fault(fault)
 
@@ -377,7 +388,12 @@ class LineClient:
 
     def _handle(self, message: pr.Message) -> None:
         if isinstance(message, pr.PoseReport):
-            pose = Pose(time.monotonic(), message.x, message.y, message.heading)
+            received = time.monotonic()
+            refused = self.robot_clock.refuse(message.stamp, received)
+            if refused is not None:
+                self._report(refused)
+                return
+            pose = Pose(received, message.x, message.y, message.heading)
             self._measurement = (pose, message.stamp)
             self._pose = pose
             if self.on_pose is not None:

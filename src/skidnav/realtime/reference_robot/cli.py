@@ -19,7 +19,7 @@ from collections.abc import Sequence
 from types import FrameType
 from typing import Any, NoReturn
 
-from skidnav.errors import UserError
+from skidnav.errors import UserError, unknown_arguments
 from skidnav.realtime.reference_robot.interfaces import Transport
 from skidnav.realtime.reference_robot.loop import run
 from skidnav.realtime.reference_robot.rules import MAX_LEASE_LIMIT
@@ -31,7 +31,21 @@ PROG = "reference-robot"
 
 
 class _Parser(argparse.ArgumentParser):
-    """Errors in one line, ``reference-robot: error: …``, exit code 2."""
+    """Errors in one line, ``reference-robot: error: …``, exit code 2; no abbreviation of an
+    option taken (``--secret X`` is not ``--secret-file X``), and the words after an unknown
+    option not printed (:func:`~skidnav.errors.unknown_arguments`)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs["allow_abbrev"] = False
+        super().__init__(*args, **kwargs)
+
+    def parse_args(  # type: ignore[override]
+        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
+    ) -> argparse.Namespace:
+        parsed, extras = self.parse_known_args(args, namespace)
+        if extras:
+            self.error(f"unrecognized arguments: {unknown_arguments(extras)}")
+        return parsed
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{PROG}: error: {message}\n")

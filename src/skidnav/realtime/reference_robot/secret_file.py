@@ -31,13 +31,15 @@ def require_secret(secret: bytes) -> bytes:
 
 def load_secret(path: Path | str | None, environ: Mapping[str, str] = os.environ) -> bytes | None:
     """The link secret: the contents of the file ``path`` if given, else the value of
-    :data:`SECRET_ENV`, else None (no authentication); trailing whitespace (a newline) is not
-    part of it. UserError, in one line that never shows the secret, if the file cannot be read
-    or the secret is shorter than :data:`MIN_SECRET_BYTES`."""
+    :data:`SECRET_ENV` if it is set, else None (no authentication); trailing whitespace (a
+    newline) is not part of it. UserError, in one line that never shows the secret, if the file
+    cannot be read or the secret is shorter than :data:`MIN_SECRET_BYTES` — an empty file, or
+    the variable set but empty (``SKIDNAV_LINK_SECRET=$(cat missing.key)``), included: a secret
+    asked for is never silently none."""
     if path is not None:
         where = str(path)
         raw = read_limited(path, MAX_SECRET_BYTES, "secret file", UserError)
-    elif environ.get(SECRET_ENV):
+    elif SECRET_ENV in environ:
         where, raw = SECRET_ENV, environ[SECRET_ENV].encode("utf-8", errors="surrogateescape")
     else:
         return None

@@ -26,7 +26,9 @@ stop arrived and which command the wheels ran.
 Fault injection for tests: with ``faults`` set, each SIGUSR1 (or :meth:`SimServer.inject`)
 triggers the next one of them (cycling) at the next period: ``silence`` (no more poses),
 ``garbage`` (one line of junk bytes), ``oversized`` (one line over the length cap), ``escape``
-(poses reported outside the arena from then on), ``hangup`` (the client is disconnected).
+(poses reported outside the arena from then on), ``hangup`` (the client is disconnected),
+``future`` (poses stamped :data:`FUTURE_STAMP` from then on); ``silence``, ``escape`` and
+``future`` last until the next client connects.
 """
 
 from __future__ import annotations
@@ -53,6 +55,10 @@ READ_LIMIT = 32 * 1024
 """Most bytes read from the client per wake-up [bytes]; the rest waits for the next one."""
 LATE_LOG = 0.05
 """A period that starts this much late [s wall] is logged as ``late`` (the server stalled)."""
+FUTURE_STAMP = 1e308
+"""The stamp of the poses of the ``future`` fault [s robot clock]."""
+LASTING_FAULTS = ("silence", "escape", "future")
+"""The faults that last until the next client connects."""
 
 
 class SimServer:
@@ -147,8 +153,7 @@ class SimServer:
         self.firmware = Firmware(
             self.robot, self.options, self.events, self._send, time.monotonic(), nonce
         )
-        self._active_faults.discard("silence")
-        self._active_faults.discard("escape")
+        self._active_faults.difference_update(LASTING_FAULTS)
         if self._selector is not None:
             self._selector.register(channel.fileno(), selectors.EVENT_READ, "client")
         self.events.write("connect")
@@ -240,7 +245,7 @@ class SimServer:
         self._faults_injected += 1
         self.events.write("fault", fault=fault, robot_time=self.robot.time)
         log.info("injecting fault %s", fault)
-        if fault in ("silence", "escape"):
+        if fault in LASTING_FAULTS:
             self._active_faults.add(fault)
         elif fault == "garbage":
             self._send_raw(b"\x00\xff\xfe not json {{{\n")
@@ -278,7 +283,7 @@ class SimServer:
         x, y, heading = measured
         if "escape" in self._active_faults:
             x = -0.3
-        stamp = self.robot.time
+        stamp = FUTURE_STAMP if "future" in self._active_faults else self.robot.time
         self._send(lambda seq: pr.PoseReport(seq=seq, stamp=stamp, x=x, y=y, heading=heading))
 
     # --- main loops ----------------------------------------------------------------------

@@ -6,7 +6,6 @@ config's ``[run] map`` × presets × seeds from the ``[run] seed``.
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import json
 import math
@@ -235,7 +234,10 @@ def _preset_config(
             f"[presets.{preset}]: a study runs every preset on the [run] map from the [run] "
             "seed, resetting automatically; this preset sets [run] map, seed or reset"
         )
-    config = dataclasses.replace(config, drivers={})  # the sim driver needs none
+    # the sim driver reads no driver table: theirs stay at the defaults
+    config = RealtimeConfig(
+        run=config.run, sim=config.sim, agents=config.agents, policies=config.policies
+    )
     return with_overrides(config, episodes=settings.episodes, time_scale=settings.time_scale)
 
 

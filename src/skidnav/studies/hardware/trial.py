@@ -137,7 +137,8 @@ def run_summary(episodes: Mapping[str, np.ndarray], code: int) -> dict[str, floa
     the odd middle one included, where the agent has learned most), mean episode length
     [actions], return and collisions per episode (goal, truncated at ``max_actions`` and aborted
     episodes alike), aborted episodes, wall time [s] and the loop's exit code (3: ended by a
-    safety trip it could not recover from). Rates are NaN without episodes."""
+    safety trip it could not recover from; 4: every episode aborted). Rates are NaN without
+    episodes."""
     success = episodes["success"]
     late = success[len(success) // 2 :]
     return {
