@@ -67,7 +67,8 @@ def creation_error(error: BaseException) -> str:
     ...                          + "skidnav/SkidSteerNav-v0 with kwargs ({'x': 1})"))
     "f() got an unexpected keyword argument 'x'"
     """
-    return first_line(str(error).split(CREATOR_SUFFIX, 1)[0])
+    text = str(error).split(CREATOR_SUFFIX, 1)[0]
+    return first_line(ValueError(text)) if text else first_line(error)
 
 
 Result = TypeVar("Result")

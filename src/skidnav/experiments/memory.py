@@ -50,12 +50,17 @@ def check_oracle_memory(where: str, n_states: int, samples: int) -> None:
 
 def map_states(spec: MapSpec) -> int:
     """States of the env on map ``spec``: its cells (a file's, or a generated map's ``shape``
-    option) times the env's heading bins."""
+    option) times the env's heading bins; 0 for a ``shape`` that is not two integers (the map's
+    own checks name it)."""
     if spec.file:
-        n_x, n_y = load_map_file(spec.file).grid.shape
+        sides: object = load_map_file(spec.file).grid.shape
     else:
-        n_x, n_y = dict(spec.options).get("shape", DEFAULT_SIDES)  # type: ignore[misc]
-    return int(n_x) * int(n_y) * Discretization().n_headings
+        sides = dict(spec.options).get("shape", DEFAULT_SIDES)
+    if not (
+        isinstance(sides, tuple) and len(sides) == 2 and all(isinstance(n, int) for n in sides)
+    ):
+        return 0
+    return int(sides[0]) * int(sides[1]) * Discretization().n_headings
 
 
 def check_memory(config: ExperimentConfig) -> None:

@@ -27,7 +27,7 @@ def test_inflation_is_lethal_within_the_inscribed_radius_then_decays_to_zero() -
     occupied[5, 5] = 1  # a disc of radius 0.05 m at (0.55, 0.55)
     cost_map = new_cost_map(11, 11)
     replan(occupied, GRID, cost_map, route_settings((0, 0), GRID, 1.0, 0.5), 0.1, 0.3, 10.0)
-    lethal = cost_map.blocked
+    lethal = cost_map.lethal
     # clearance: centre distance − 0.05; lethal up to 0.1 m, i.e. the cell and its 8 neighbours
     assert lethal[4:7, 4:7].all() and lethal.sum() == 9
     two_away = cost_map.wall_probability[7, 5]  # clearance 0.2 − 0.05 = 0.15 m
@@ -50,7 +50,7 @@ def test_dijkstra_goes_around_a_wall_and_never_through_a_lethal_cell() -> None:
     while cell != goal:
         cell = tuple(int(v) for v in cost_map.waypoint[cell])
         visited.append(cell)
-    assert all(not cost_map.blocked[c] for c in visited) and max(j for _, j in visited) >= 8
+    assert all(not cost_map.lethal[c] for c in visited) and max(j for _, j in visited) >= 8
     walled = np.ones((11, 11), dtype=np.uint8)  # walled in: finite, through lethal cells
     walled[goal] = walled[start] = 0
     replan(walled, GRID, cost_map, route_settings(goal, GRID, 0.0, 0.5), 0.0, 0.0, 0.0)

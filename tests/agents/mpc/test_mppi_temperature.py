@@ -8,11 +8,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skidnav.agents.mpc.agent import map_costs
 from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.costmap import empty_cost_map
 from skidnav.agents.mpc.dynamics import fixed_dynamics
 from skidnav.agents.mpc.planner import MPPIPlanner
+from skidnav.agents.mpc.planning_robot import map_costs
 from skidnav.envs.navigation import with_control_period
 from skidnav.models.kinematic_regression import nominal_coefficients
 from skidnav.robot.params import RobotParams

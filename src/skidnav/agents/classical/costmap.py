@@ -11,14 +11,15 @@ the goal over it.
    distance from its centre to the nearest occupied cell's inscribed disc (the footprint rule's
    disc, :mod:`skidnav.sim.footprint`), as far as ``inflation_radius``. A cell is
    *lethal* when d ≤ r_in, the footprint's inscribed radius (half its smaller side, plus the
-   padding): a robot centred there touches the obstacle whatever its heading. Beyond, its
-   inflation cost is exp(−k (d − r_in)) ∈ (0, 1] up to d = ``inflation_radius``, then 0.
+   padding): a robot centred there touches the obstacle whatever its heading (the configuration
+   space of :mod:`skidnav.agents.mpc.costmap`, which ``mppi-kinematic`` plans in too). Beyond,
+   its inflation cost is exp(−k (d − r_in)) ∈ (0, 1] up to d = ``inflation_radius``, then 0.
 3. **Route** (Dijkstra 1959): the cost-to-go D [m] of every cell to the goal's cell over the
    8-connected cells, :func:`skidnav.agents.mpc.costmap.route_costs`, the project's one
    Dijkstra: entering a cell costs the centre-to-centre length, plus ``inflation_weight`` ×
    its inflation cost cell sides, plus :data:`LETHAL_CELLS` cell sides if it is lethal, and
    no diagonal move cuts past a lethal cell. It reads the inflation cost where
-   ``mppi-kinematic`` keeps a wall probability and the lethal cells as its blocked ones
+   ``mppi-kinematic`` keeps a wall probability and the lethal cells as its own lethal ones
    (:class:`~skidnav.agents.mpc.costmap.CostMap`); D stays finite, so a goal walled in still
    has a gradient.
 
@@ -33,7 +34,15 @@ import math
 import numpy as np
 
 from skidnav._jit import jit
-from skidnav.agents.mpc.costmap import CostMap, MapCosts, cell_centre, empty_cost_map, route_costs
+from skidnav.agents.mpc.costmap import (
+    CostMap,
+    MapCosts,
+    cell_centre,
+    clearance,
+    empty_cost_map,
+    mark_lethal,
+    route_costs,
+)
 from skidnav.world.discretization import GridShape, cell_of
 
 LETHAL_CELLS = 10_000.0
@@ -84,30 +93,18 @@ def inflate(
     cost_scaling: float,
     cost_map: CostMap,
 ) -> None:
-    """Fill ``cost_map.wall_probability`` with the inflation costs and ``cost_map.blocked`` with
-    the lethal cells of ``occupied`` uint8 (n_x, n_y) (module doc, step 2), for a footprint of
-    inscribed radius ``inscribed_radius`` [m], costs reaching ``inflation_radius`` [m] from the
-    obstacles with the decay ``cost_scaling`` [1/m]."""
-    n_x, n_y = occupied.shape
-    width, height = grid.arena_width / (n_x - 1), grid.arena_height / (n_y - 1)
-    radius = 0.5 * min(width, height)
-    reach = max(inscribed_radius, inflation_radius)
-    clearance = np.full((n_x, n_y), np.inf)
-    span_i, span_j = math.ceil((reach + radius) / width), math.ceil((reach + radius) / height)
-    for i in range(n_x):
-        for j in range(n_y):
-            if occupied[i, j] == 0:
-                continue
-            x, y = cell_centre(i, j, grid)
-            for ci in range(max(i - span_i, 0), min(i + span_i + 1, n_x)):
-                for cj in range(max(j - span_j, 0), min(j + span_j + 1, n_y)):
-                    cx, cy = cell_centre(ci, cj, grid)
-                    distance = math.sqrt((cx - x) ** 2 + (cy - y) ** 2) - radius
-                    clearance[ci, cj] = min(clearance[ci, cj], distance)
-    for i in range(n_x):
-        for j in range(n_y):
-            d = clearance[i, j]
-            cost_map.blocked[i, j] = d <= inscribed_radius
+    """Fill ``cost_map.lethal`` with the lethal cells of ``occupied`` uint8 (n_x, n_y) and
+    ``cost_map.wall_probability`` with their inflation costs (module doc, step 2; the clearance
+    and the lethal rule are the configuration space of :mod:`skidnav.agents.mpc.costmap`), for a
+    footprint of inscribed radius ``inscribed_radius`` [m], costs reaching ``inflation_radius``
+    [m] from the obstacles with the decay ``cost_scaling`` [1/m]; ``cost_map.blocked`` holds
+    the occupied cells."""
+    distances = clearance(occupied, grid, max(inscribed_radius, inflation_radius))
+    mark_lethal(distances, inscribed_radius, cost_map.lethal)
+    for i in range(occupied.shape[0]):
+        for j in range(occupied.shape[1]):
+            cost_map.blocked[i, j] = occupied[i, j] != 0
+            d = distances[i, j]
             if d <= inscribed_radius:
                 cost_map.wall_probability[i, j] = 1.0
             elif d <= inflation_radius:

@@ -33,34 +33,38 @@ import numpy as np
 
 from skidnav.agents.geometry import geometry_json
 from skidnav.agents.mpc.config import MPPIConfig
-from skidnav.agents.mpc.costmap import CostMap, MapCosts
+from skidnav.agents.mpc.costmap import CostMap
 from skidnav.agents.mpc.dynamics import (
     SampledDynamics,
     fixed_dynamics,
     lattice_coefficients,
     nominal_speeds,
     prior_dynamics,
+    top_speeds,
     true_coefficients_check,
     update_dynamics,
 )
 from skidnav.agents.mpc.evidence import MapEvidence
 from skidnav.agents.mpc.observations import pose_of, ranges_of
 from skidnav.agents.mpc.planner import MPPIPlanner
+from skidnav.agents.mpc.planning_robot import lattice_robot, map_costs, padded
 from skidnav.agents.mpc.policy import MPPIPolicy
 from skidnav.agents.saving import generator_state, new_save_paths
-from skidnav.envs.navigation import with_control_period
 from skidnav.errors import UserError, first_line
 from skidnav.files.atomic import write_atomic, write_npz_atomic
 from skidnav.models.kinematic import KinematicModel
-from skidnav.robot.params import KinematicConstants, RobotParams
+from skidnav.robot.params import RobotParams
 from skidnav.sim.features import check_lidar
+from skidnav.sim.lidar import FULL_TURN, LaserSpec
 from skidnav.world.discretization import Discretization
 
 AGENT_NAME = "mppi-kinematic"
 SAVE_FORMAT = "skidnav-mppi-agent"
 """The ``"format"`` of a saved agent's JSON (also a policy file: the frozen planner)."""
-SAVE_VERSION = 3
-"""3: ``temperature`` in seconds; version 2 held it in control steps (read by converting it)."""
+SAVE_VERSION = 4
+"""4: the lidar's field of view (``lidar_fov``); 3: ``temperature`` in seconds. Version 3 files
+(no field of view: a full turn) are read as they are, version 2 (``temperature`` in control
+steps) by converting it."""
 GREEDY_SEED = 0
 """The seed of the frozen planner :meth:`MPPIKinematicAgent.greedy_action` rolls out: every
 greedy rollout draws the same numbers, none of the agent's."""
@@ -88,9 +92,10 @@ class MPPIKinematicAgent:
             simulator's own coefficients per slip region, float64 (n_regions, 8) (columns of
             :data:`~skidnav.models.kinematic_regression.N_COEFFICIENTS`), planned with and never
             learned.
-        lidar_rays, lidar_range: the layout of the feature observations' range readings: rays
-            spread evenly over a full turn from the heading, readings of at most
-            ``lidar_range`` [m] (:mod:`skidnav.sim.lidar`).
+        lidar_rays, lidar_range, lidar_fov: the layout of the feature observations' range
+            readings: rays spread over ``lidar_fov`` [rad] in (0, 2π] (2π: evenly over a full
+            turn from the heading; narrower: a sector centred on it, both edges included),
+            readings of at most ``lidar_range`` [m] (:mod:`skidnav.sim.lidar`).
     """
 
     name: ClassVar[str] = AGENT_NAME
@@ -106,17 +111,22 @@ class MPPIKinematicAgent:
         true_coefficients: np.ndarray | None = None,
         lidar_rays: int = 8,
         lidar_range: float = 0.3,
+        lidar_fov: float = FULL_TURN,
     ) -> None:
         self.config = config or MPPIConfig()
         check_lidar(lidar_rays, lidar_range)
+        LaserSpec(max(int(lidar_rays), 1), float(lidar_range), lidar_fov)  # checks the sector
         self.lidar_rays, self.lidar_range = int(lidar_rays), float(lidar_range)
+        self.lidar_fov = float(lidar_fov)
         self.robot, self.discretization = robot, discretization
         self.goal = _checked_goal(goal, discretization)
         self.rng = rng if rng is not None else np.random.default_rng()
-        self.kernel_robot, self.kernel_grid = robot.kernel_constants(), discretization.grid_shape()
+        self.kernel_robot = padded(robot, self.config.footprint_padding).kernel_constants()
+        """The robot the rollouts drive: its timing, arena, scheme and padded footprint."""
+        self.kernel_grid = discretization.grid_shape()
         self.model = KinematicModel(robot, discretization, self.config.kinematic_config())
         self.dynamics = self._initial_dynamics(true_coefficients)
-        self.costs = map_costs(self.config, robot, self.goal)
+        self.costs = map_costs(self.config, robot, self.goal, self.route_speeds())
         lattice_robots = []
         if self.config.cost_to_go == "states":
             lattice_robots = [
@@ -167,7 +177,7 @@ class MPPIKinematicAgent:
         return cls(
             nav.robot, nav.discretization, tuple(nav.grid_map.goal), config, rng,
             true_coefficients=true_coefficients, lidar_rays=features.lidar_rays,
-            lidar_range=features.lidar_range,
+            lidar_range=features.lidar_range, lidar_fov=features.field_of_view,
         )  # fmt: skip
 
     @property
@@ -240,17 +250,40 @@ class MPPIKinematicAgent:
         self._greedy = None  # the frozen planner no longer is the agent's
         self.model.feed(log)
         if self.model.maybe_refit():
-            update_dynamics(self.dynamics, self.model)
-            coefficients = lattice_coefficients(self.model, self.dynamics.mean)
-            self.evidence.reweigh(coefficients, model_changed=True)
+            self.refresh_model()
         collided = bool(info.get("collision", False))
         self.evidence.record_step(pose, commands, log, collided, self.dynamics)
         seen = [next_observation] if self.episode_steps > 1 else [observation, next_observation]
         for each in seen:
             self.evidence.record_readings(
                 pose_of(each, self.lidar_rays), ranges_of(each, self.lidar_rays),
-                self.lidar_range, self.dynamics,
+                self.lidar_range, self.lidar_fov,
             )  # fmt: skip
+
+    def refresh_model(self) -> None:
+        """After a refit: the sampled dynamics from the model, then :meth:`refresh_costs`."""
+        update_dynamics(self.dynamics, self.model)
+        self.refresh_costs()
+
+    def refresh_costs(self) -> None:
+        """After the model changed (a refit, a load): the route's speeds (``route_speed``), the
+        cost map's scalars and the cost map with the lattice recomputed."""
+        self.costs = map_costs(self.config, self.robot, self.goal, self.route_speeds())
+        self.evidence.costs = self.costs
+        coefficients = lattice_coefficients(self.model, self.dynamics.mean)
+        self.evidence.reweigh(coefficients, model_changed=True)
+
+    def route_speeds(self) -> tuple[float, float]:
+        """The top forward speed [m/s] and turn rate [rad/s] of the cells' cost-to-go: the
+        nominal robot's, or with ``route_speed = "learned"`` after a refit the model's
+        (:func:`~skidnav.agents.mpc.dynamics.top_speeds` of its mean, where fast commands
+        informed it, :func:`~skidnav.agents.mpc.dynamics.lattice_coefficients`)."""
+        if self.config.route_speed == "learned" and self.model.refits > 0:
+            coefficients = lattice_coefficients(self.model, self.dynamics.mean)
+            learned = top_speeds(coefficients, self.robot.wheel_speed)
+            if learned is not None:
+                return learned
+        return nominal_speeds(self.robot)
 
     def end_episode(self) -> None:
         """Forget the plan (the next episode starts from rest)."""
@@ -292,6 +325,7 @@ class MPPIKinematicAgent:
             "goal": list(self.goal),
             "lidar_rays": self.lidar_rays,
             "lidar_range": self.lidar_range,
+            "lidar_fov": self.lidar_fov,
             "counters": {
                 "steps": self.steps,
                 "episodes": self.episodes,
@@ -309,31 +343,6 @@ class MPPIKinematicAgent:
         write_npz_atomic(npz_path, self.state_arrays(), compress=True)
         write_atomic(json_path, json.dumps(self.metadata(), indent=1).encode("utf-8"))
         return npz_path, json_path
-
-
-def map_costs(config: MPPIConfig, robot: RobotParams, goal: tuple[int, int]) -> MapCosts:
-    """The cost map's scalars: the goal, the config's weights, and the nominal robot's distance
-    [m] and turn [rad] in one control step at top speed."""
-    speed, yaw_rate = nominal_speeds(robot)
-    period = robot.action_duration
-    return MapCosts(
-        goal[0], goal[1], speed * period, yaw_rate * period, float(config.collision_cost),
-        float(config.blocked_cost), float(config.free_prior), float(config.ray_weight),
-        float(config.heading_weight),
-        float(config.lookahead), config.cost_to_go == "states",
-    )  # fmt: skip
-
-
-def lattice_robot(robot: RobotParams, duration: float) -> KinematicConstants:
-    """``robot``'s kernel constants timed for a lattice action of ``duration`` [s]; ValueError
-    unless it is a whole number ≥ 1 of the robot's sub-steps."""
-    try:
-        return with_control_period(robot, duration).kernel_constants()
-    except ValueError:
-        raise ValueError(
-            f"expected each lattice duration to be a whole number >= 1 of the robot's "
-            f"{robot.dt:g} s sub-steps, got {duration!r}"
-        ) from None
 
 
 def _checked_goal(goal: Any, grid: Discretization) -> tuple[int, int]:

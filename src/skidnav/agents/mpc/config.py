@@ -33,6 +33,8 @@ MAX_DURATIONS = 8
 """Most lattice durations."""
 COST_TO_GO = ("states", "cells")
 """Values of :attr:`MPPIConfig.cost_to_go`."""
+ROUTE_SPEEDS = ("nominal", "learned")
+"""Values of :attr:`MPPIConfig.route_speed`."""
 MAX_COST = 1e12
 """Greatest cost weight [cost units]: sums of costs stay far from overflow."""
 
@@ -99,6 +101,14 @@ class MPPIConfig(KinematicModelFields):
     """Durations [s] the four actions of the states' lattice are held for, each a whole number
     of the robot's sub-steps, 1 to 8 of them (a list is stored as a tuple); 1 s: the thesis's
     actions, 3.8 cm or 36.5° each."""
+    route_speed: str = "nominal"
+    """("cells" only) The top speeds the cells' cost-to-go turns metres and radians into
+    control steps with: "nominal", the datasheet robot's r·Ω and r·Ω/c (a lower bound of the
+    time where the floor is slower); "learned", once the model has been refitted, the fastest
+    forward speed and turn rate its mean predicts at full commands in any region
+    (:func:`~skidnav.agents.mpc.dynamics.top_speeds`), so that on a floor ten times slower
+    than the datasheet a metre of progress is worth ten times the control steps it is under
+    "nominal" (docs/agents/mppi-kinematic.md, "On BARN")."""
     heading_weight: float = 1.0
     """("cells" only) Weight ≥ 0 of the terminal turn time: the time [control steps] to turn,
     at the nominal top yaw rate, to face (or back towards) the route's look-ahead cell."""
@@ -118,6 +128,11 @@ class MPPIConfig(KinematicModelFields):
     sample_uncertainty: bool = True
     """Draw the model per sequence (posterior weights and sub-step noise); False plans every
     sequence with the posterior mean."""
+    footprint_padding: float = 0.02
+    """Margin [m] added to each side of a robot's footprint (``RobotParams.footprint_length`` ×
+    ``footprint_width``, the rectangle the simulator collides by) in the rollouts' collision rule
+    and in the inscribed radius of the cost-to-go's lethal cells, in [0, 100]; a point robot
+    (footprint 0 × 0, the thesis robot) stays a point."""
     kinematic_refit_every: int = 50
     """Minimum new sub-step samples between refits (checked after every real step)."""
 
@@ -151,6 +166,10 @@ class MPPIConfig(KinematicModelFields):
             check_number(name, getattr(self, name), 0.0, MAX_COST, closed=True)
         if self.cost_to_go not in COST_TO_GO:
             raise ValueError(f"expected cost_to_go in {COST_TO_GO}, got {shown(self.cost_to_go)}")
+        if self.route_speed not in ROUTE_SPEEDS:
+            raise ValueError(
+                f"expected route_speed in {ROUTE_SPEEDS}, got {shown(self.route_speed)}"
+            )
         durations = self.lattice_durations
         durations = tuple(durations) if isinstance(durations, list | tuple) else ()
         if not 1 <= len(durations) <= MAX_DURATIONS:
@@ -163,6 +182,7 @@ class MPPIConfig(KinematicModelFields):
         object.__setattr__(self, "lattice_durations", durations)
         check_number("lookahead", self.lookahead, 0.0, 1e6, closed=True)
         check_number("prior_spread", self.prior_spread, 0.0, 10.0, closed=True)
+        check_number("footprint_padding", self.footprint_padding, 0.0, 100.0, closed=True)
         if not isinstance(self.sample_uncertainty, bool):
             raise ValueError(
                 f"expected sample_uncertainty true or false, got {self.sample_uncertainty!r}"

@@ -13,14 +13,26 @@ optimism for cells never seen), and it is *blocked* while W > F. A real wall's e
 grows (the robot is never inside it and no ray crosses it); a pass or a crossing ray undoes a
 wrong guess. The goal cell is known free: never blocked, p = 0.
 
+**The configuration space of a footprint** (:func:`clearance`, :func:`mark_lethal`; Latombe
+1991, *Robot Motion Planning*, §4; as Nav2's inflation layer). Obstacles are the blocked cells'
+inscribed discs, the simulator's footprint rule (:mod:`skidnav.sim.footprint`; on BARN's 0.15 m
+cells the benchmark's cylinders). A cell's clearance d [m] is the distance from its centre to the
+nearest disc; it is *lethal* when d ≤ r_in (``MapCosts.inscribed_radius``: half the footprint's
+smaller side plus its padding): the robot's inscribed circle centred there touches the obstacle,
+whatever its heading, so its rectangle does too. A point robot (r_in = 0) has the blocked cells as
+its lethal ones. The routes below go around the lethal cells; the rollouts check the rectangle
+itself against the blocked cells (:mod:`skidnav.agents.mpc.rollouts`). The classical navigator
+(:mod:`skidnav.agents.classical.costmap`) inflates with the same two functions.
+
 **Cost-to-go.** Dijkstra's algorithm (Dijkstra 1959) from the goal cell over the 8-connected
-cells, a diagonal move only between two cells that are not blocked: entering cell c from a
+cells, a diagonal move only between two cells that are not lethal: entering cell c from a
 neighbour costs the centre-to-centre distance over the distance the nominal robot covers in one
-control step, plus C · p(c), plus ``blocked_cost`` if c is blocked. So the cost-to-go D is in
+control step, plus C · p(c), plus ``blocked_cost`` if c is lethal. So the cost-to-go D is in
 control steps at top speed (a lower bound of the time where the floor is slower, i.e.
-optimistic), goes around every blocked cell while a way exists and stays finite everywhere. Each
+optimistic), goes around every lethal cell while a way exists and stays finite everywhere. Each
 cell's *waypoint* is the next cell of its route (the goal cell's is itself). The field is
-recomputed when the map changes: a hit, or a pass through a cell with hits (p changes).
+recomputed when the map changes: a hit, or a pass through a cell with hits (p changes), or a
+lidar reading.
 
 **Terminal value** of a pose (x, y, ψ) (:func:`terminal_value`): by default the value of its
 discrete state over the heading-aware lattice (:mod:`skidnav.agents.mpc.lattice`). Over the
@@ -55,6 +67,9 @@ class CostMap(NamedTuple):
     Attributes:
         wall_probability: float64 p of each cell (module doc).
         blocked: bool, the cells whose wall evidence outweighs their free evidence.
+        lethal: bool, the cells the routes and the lattice treat as walls: the blocked cells
+            dilated by the footprint's inscribed radius (module doc; a point robot's are its
+            blocked cells). The classical navigator's lethal cells, of its occupied ones.
         cost_to_go: float64 D [control steps] to the goal.
         waypoint: int64 (n_x, n_y, 2), the next cell (i, j) of each cell's route.
         state_value: float64 (n_states,) the heading-aware cost-to-go [control steps] of each
@@ -64,6 +79,7 @@ class CostMap(NamedTuple):
 
     wall_probability: np.ndarray
     blocked: np.ndarray
+    lethal: np.ndarray
     cost_to_go: np.ndarray
     waypoint: np.ndarray
     state_value: np.ndarray
@@ -76,12 +92,14 @@ class MapCosts(NamedTuple):
         goal_i, goal_j: the goal cell.
         step_length: the nominal robot's distance in one control step at top speed [m].
         turn_step: its turn in one control step at top yaw rate [rad].
-        collision_cost: C [cost units]. blocked_cost: extra cost of a blocked cell.
+        collision_cost: C [cost units]. blocked_cost: extra cost of a lethal cell.
         free_prior: f₀ [passes]. ray_weight: w, the wall evidence of one lidar reading's end
             [collisions]. heading_weight: weight of the terminal turn time.
         lookahead: how far along the route the terminal value aims [m].
         use_states: the terminal value is the states' (:mod:`skidnav.agents.mpc.lattice`),
             else the cells'.
+        inscribed_radius: r_in [m] of the footprint the lethal cells are dilated by (module
+            doc); 0: a point robot, its lethal cells the blocked ones.
     """
 
     goal_i: int
@@ -95,13 +113,15 @@ class MapCosts(NamedTuple):
     heading_weight: float
     lookahead: float
     use_states: bool
+    inscribed_radius: float = 0.0
 
 
 def empty_cost_map(n_x: int, n_y: int, state_value: np.ndarray) -> CostMap:
     """A cost map of ``n_x`` × ``n_y`` cells with no evidence (:func:`weigh_map` fills it),
     holding ``state_value`` (the lattice's values, or a (1,) placeholder)."""
     return CostMap(
-        np.zeros((n_x, n_y)), np.zeros((n_x, n_y), dtype=np.bool_), np.zeros((n_x, n_y)),
+        np.zeros((n_x, n_y)), np.zeros((n_x, n_y), dtype=np.bool_),
+        np.zeros((n_x, n_y), dtype=np.bool_), np.zeros((n_x, n_y)),
         np.zeros((n_x, n_y, 2), dtype=np.int64), state_value,
     )  # fmt: skip
 
@@ -117,8 +137,8 @@ def weigh_map(
     cost_map: CostMap,
 ) -> None:
     """Fill ``cost_map`` from the evidence ``hits``, ``passes``, ``ray_ends`` and
-    ``ray_crossings`` (int64 (n_x, n_y)): the wall probabilities, the blocked cells, then the
-    cost-to-go and waypoints (module doc)."""
+    ``ray_crossings`` (int64 (n_x, n_y)): the wall probabilities, the blocked cells, the
+    lethal cells, then the cost-to-go and waypoints (module doc)."""
     for i in range(hits.shape[0]):
         for j in range(hits.shape[1]):
             wall = float(hits[i, j]) + costs.ray_weight * float(ray_ends[i, j])
@@ -127,14 +147,52 @@ def weigh_map(
             known = wall > 0.0 and not goal
             cost_map.wall_probability[i, j] = wall / (wall + free) if known else 0.0
             cost_map.blocked[i, j] = known and wall > free
+    if costs.inscribed_radius > 0.0:
+        distances = clearance(cost_map.blocked, grid, costs.inscribed_radius)
+        mark_lethal(distances, costs.inscribed_radius, cost_map.lethal)
+        cost_map.lethal[costs.goal_i, costs.goal_j] = False  # known free, as it is not blocked
+    else:
+        cost_map.lethal[:, :] = cost_map.blocked
     route_costs(cost_map, costs, grid)
+
+
+@jit
+def clearance(occupied: np.ndarray, grid: GridShape, reach: float) -> np.ndarray:
+    """float64 (n_x, n_y): each cell's clearance d [m] (module doc) from the nonzero cells of
+    ``occupied`` (uint8 or bool (n_x, n_y)) on ``grid``, computed as far as ``reach`` [m]
+    (+inf beyond it)."""
+    n_x, n_y = occupied.shape
+    width, height = grid.arena_width / (n_x - 1), grid.arena_height / (n_y - 1)
+    radius = 0.5 * min(width, height)
+    distances = np.full((n_x, n_y), np.inf)
+    span_i, span_j = math.ceil((reach + radius) / width), math.ceil((reach + radius) / height)
+    for i in range(n_x):
+        for j in range(n_y):
+            if occupied[i, j] == 0:
+                continue
+            x, y = cell_centre(i, j, grid)
+            for ci in range(max(i - span_i, 0), min(i + span_i + 1, n_x)):
+                for cj in range(max(j - span_j, 0), min(j + span_j + 1, n_y)):
+                    cx, cy = cell_centre(ci, cj, grid)
+                    distance = math.sqrt((cx - x) ** 2 + (cy - y) ** 2) - radius
+                    distances[ci, cj] = min(distances[ci, cj], distance)
+    return distances
+
+
+@jit
+def mark_lethal(distances: np.ndarray, inscribed_radius: float, lethal: np.ndarray) -> None:
+    """Set ``lethal`` bool (n_x, n_y) to the cells whose clearance ``distances`` [m]
+    (:func:`clearance`) is at most ``inscribed_radius`` [m] (module doc)."""
+    for i in range(lethal.shape[0]):
+        for j in range(lethal.shape[1]):
+            lethal[i, j] = distances[i, j] <= inscribed_radius
 
 
 @inline_jit
 def _entering_cost(cost_map: CostMap, costs: MapCosts, i: int, j: int) -> float:
     """The evidence's cost of entering cell (i, j) in the cost-to-go."""
     cost: float = costs.collision_cost * cost_map.wall_probability[i, j]
-    if cost_map.blocked[i, j]:
+    if cost_map.lethal[i, j]:
         cost += costs.blocked_cost
     return cost
 
@@ -142,7 +200,7 @@ def _entering_cost(cost_map: CostMap, costs: MapCosts, i: int, j: int) -> float:
 @jit
 def route_costs(cost_map: CostMap, costs: MapCosts, grid: GridShape) -> None:
     """Dijkstra from the goal cell (module doc): ``cost_map.cost_to_go`` and ``waypoint``."""
-    n_x, n_y = cost_map.blocked.shape
+    n_x, n_y = cost_map.lethal.shape
     width, height = grid.arena_width / (grid.n_x - 1), grid.arena_height / (grid.n_y - 1)
     cost_map.cost_to_go.fill(np.inf)
     settled = np.zeros((n_x, n_y), dtype=np.bool_)
@@ -162,8 +220,8 @@ def route_costs(cost_map: CostMap, costs: MapCosts, grid: GridShape) -> None:
                 ni, nj = i + di, j + dj
                 if (di == 0 and dj == 0) or not (0 <= ni < n_x and 0 <= nj < n_y):
                     continue
-                if di != 0 and dj != 0 and (cost_map.blocked[ni, j] or cost_map.blocked[i, nj]):
-                    continue  # no corner cutting past a blocked cell
+                if di != 0 and dj != 0 and (cost_map.lethal[ni, j] or cost_map.lethal[i, nj]):
+                    continue  # no corner cutting past a lethal cell
                 length = math.sqrt((di * width) ** 2 + (dj * height) ** 2) / costs.step_length
                 candidate = distance + length + entering
                 if candidate < cost_map.cost_to_go[ni, nj]:
@@ -219,8 +277,8 @@ def interpolated_state_value(
 ) -> float:
     """The states' value at a pose, interpolated trilinearly between the 8 states around it
     (cell centres in x and y, bin centres in heading, cyclic), leaving out the states of
-    blocked cells (walls, whose values are not a route's); the value of the pose's own state
-    when all 8 are blocked."""
+    lethal cells (walls, whose values are not a route's); the value of the pose's own state
+    when all 8 are lethal."""
     i0, fx = _corner(x, grid.arena_width, grid.n_x)
     j0, fy = _corner(y, grid.arena_height, grid.n_y)
     turns = (wrap_angle(heading) + math.pi) / (2.0 * math.pi) * grid.n_headings - 0.5
@@ -229,7 +287,7 @@ def interpolated_state_value(
     total, weights = 0.0, 0.0
     for di in range(2):
         for dj in range(2):
-            if cost_map.blocked[i0 + di, j0 + dj]:
+            if cost_map.lethal[i0 + di, j0 + dj]:
                 continue
             w_cell = (fx if di else 1.0 - fx) * (fy if dj else 1.0 - fy)
             for dk in range(2):

@@ -182,6 +182,16 @@ def nominal_speeds(robot: RobotParams) -> tuple[float, float]:
     return top, top / robot.half_track
 
 
+def top_speeds(coefficients: np.ndarray, wheel_speed: float) -> tuple[float, float] | None:
+    """The fastest forward speed [m/s] (both wheels at ``wheel_speed`` Ω [rad/s]) and turn rate
+    [rad/s] (the wheels at ∓Ω) that any region's ``coefficients`` (n_regions, 8) give; None
+    unless both are > 0 (a fit that does not drive forward or turn)."""
+    forward = (coefficients[:, 0] + coefficients[:, 1]) * wheel_speed + coefficients[:, 2]
+    turn = np.abs(coefficients[:, 4] - coefficients[:, 3]) * wheel_speed
+    fastest, turning = float(forward.max()), float(turn.max())
+    return (fastest, turning) if fastest > 0.0 and turning > 0.0 else None
+
+
 @inline_jit
 def sampled_twist(
     dynamics: SampledDynamics,

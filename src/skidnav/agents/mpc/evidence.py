@@ -8,7 +8,10 @@ pass. After a collision the robot stands at the last free position with the head
 colliding sub-step; the colliding sub-step itself is not logged. Its wall cell is guessed as
 ``dyna-kinematic`` guesses it (:func:`~skidnav.models.kinematic_prediction.collision_wall_cell`):
 repeat the model's predicted sub-step — here the posterior-mean twist of the commanded wheel
-speeds, from the retraced pose before the collision — until it leaves the current cell.
+speeds, from the retraced pose before the collision — until it leaves the current cell. A robot
+with a footprint meets a wall with any part of its rectangle, away from the cell its centre
+would enter, so its collisions are no evidence of a cell (as for the classical navigator): its
+map is the lidar's.
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import numpy as np
 from skidnav._jit import jit
 from skidnav.agents.mpc.costmap import CostMap, MapCosts, empty_cost_map, weigh_map
 from skidnav.agents.mpc.dynamics import SampledDynamics, sampled_twist
-from skidnav.agents.mpc.laser import record_rays
+from skidnav.agents.mpc.laser import record_scan
 from skidnav.agents.mpc.lattice import (
     cells_near,
     empty_lattice,
@@ -123,7 +126,7 @@ class MapEvidence:
         model's ``coefficients`` changed: kept as :attr:`coefficients`) and its values."""
         if model_changed:
             self.coefficients = coefficients
-        blocked_before = self.cost_map.blocked.copy()
+        lethal_before = self.cost_map.lethal.copy()
         weigh_map(
             self.hits, self.passes, self.ray_ends, self.ray_crossings, self.costs, self.grid,
             self.cost_map,
@@ -131,7 +134,7 @@ class MapEvidence:
         self.reweighs += 1
         if not self.lattice_robots:
             return
-        changed = blocked_before != self.cost_map.blocked
+        changed = lethal_before != self.cost_map.lethal
         if model_changed or changed.any():
             goal = (self.costs.goal_i, self.costs.goal_j)
             if model_changed:
@@ -141,7 +144,7 @@ class MapEvidence:
                 reach = lattice_reach(self.lattice.velocities, longest, self.grid)
                 cells = cells_near(changed, reach)
             refresh_table(
-                self.lattice, coefficients, self.cost_map.blocked, goal, self.lattice_robots,
+                self.lattice, coefficients, self.cost_map.lethal, goal, self.lattice_robots,
                 self.grid, cells,
             )  # fmt: skip
             self.table_refreshes += 1
@@ -164,7 +167,7 @@ class MapEvidence:
         x, y, heading, changed = retrace_free_substeps(
             pose, log, self.robot, self.grid, self.hits, self.ray_ends, self.passes
         )
-        if collided:
+        if collided and self.robot.footprint_length == 0.0:  # module doc
             wall = self.guess_wall(x, y, heading, commands, dynamics)
             if wall is not None:
                 self.hits[wall] += 1
@@ -173,17 +176,18 @@ class MapEvidence:
             self.reweigh(self.coefficients)
 
     def record_readings(
-        self, pose: np.ndarray, ranges: np.ndarray, max_range: float, dynamics: SampledDynamics
+        self, pose: np.ndarray, ranges: np.ndarray, max_range: float, field_of_view: float
     ) -> None:
         """Learn from the lidar readings ``ranges`` float64 (k,) [m] (range limit ``max_range``
-        [m]) taken at ``pose`` (x [m], y [m], heading [rad]): the inverse sensor model of
+        [m], spread over ``field_of_view`` [rad] as the env's features spread them) taken at
+        ``pose`` (x [m], y [m], heading [rad]): the inverse sensor model of
         :mod:`skidnav.agents.mpc.laser`; the cost map is recomputed if a wall probability
         changed."""
         if ranges.shape[0] == 0:
             return
-        changed = record_rays(
-            pose[0], pose[1], pose[2], ranges, max_range, self.grid, self.ray_ends,
-            self.ray_crossings, self.hits,
+        changed = record_scan(
+            pose[0], pose[1], pose[2], ranges, max_range, field_of_view, 1, self.grid,
+            self.ray_ends, self.ray_crossings, self.hits,
         )  # fmt: skip
         if changed:
             self.reweigh(self.coefficients)

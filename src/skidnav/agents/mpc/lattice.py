@@ -10,7 +10,8 @@ docs/agents/mppi-kinematic.md). A value over the states does: from each state's 
 heading-bin centre, the learned model predicts the pose after each of the four actions (forward,
 backward, turn left, turn right at ± Ω), each held for each of the ``lattice_durations``
 (:func:`~skidnav.models.kinematic_prediction.prediction_table`: the same prediction as
-``dyna-kinematic``'s table, the blocked cells as its walls, the goal cell as its goal), and
+``dyna-kinematic``'s table, the lethal cells as its walls — the blocked ones, dilated by a
+footprint's inscribed radius, :mod:`skidnav.agents.mpc.costmap` —, the goal cell as its goal), and
 Dijkstra's algorithm from the goal's states over these transitions gives V(s), the fewest control
 steps to the goal through the graph. An action costs its control steps, a predicted collision C
 more, and entering another cell C · p of its wall probability, as in the rollouts. Two durations
@@ -20,13 +21,13 @@ interpolation slopes smoothly; with 1-s actions alone (1.5 cells) the values cam
 cells wide, flat for a 2-s horizon (measured: docs/agents/mppi-kinematic.md). The 1-s actions
 keep the graph connected where the floor is slow: a 0.5-s action at half speed does not leave
 its cell. A state that
-does not reach the goal through the graph (or one inside a blocked cell, which predicts itself)
+does not reach the goal through the graph (or one inside a lethal cell, which predicts itself)
 gets the largest finite value plus ``blocked_cost``, so every value is finite.
 
 The terminal value of a pose is V interpolated between the states around it
 (:func:`~skidnav.agents.mpc.costmap.interpolated_state_value`; 0 in the goal cell). The
 predictions are recomputed when the model's fit changes (all of them) or a cell becomes or stops
-being blocked (those of the cells within one action's reach of it); the values whenever a wall
+being lethal (those of the cells within one action's reach of it); the values whenever a wall
 probability changes.
 """
 
@@ -83,7 +84,7 @@ def empty_lattice(n_states: int, n_regions: int, action_steps: np.ndarray) -> La
 def refresh_table(
     lattice: Lattice,
     coefficients: np.ndarray,
-    blocked: np.ndarray,
+    walls: np.ndarray,
     goal: tuple[int, int],
     robots: list[KinematicConstants],
     grid: GridShape,
@@ -91,13 +92,13 @@ def refresh_table(
 ) -> None:
     """Predict the actions of every state of the cells ``cells`` (bool (n_x, n_y)) (module
     doc) with the mean ``coefficients`` (n_regions, 8), ``robots[d]`` timed for duration d (its
-    ``substeps``), ``blocked`` (n_x, n_y) as walls."""
+    ``substeps``), the cells ``walls`` bool (n_x, n_y) (the lethal ones) as walls."""
     action_velocities(coefficients, robots[0].wheel_speed, lattice.velocities)
-    goals = np.zeros_like(blocked)
+    goals = np.zeros_like(walls)
     goals[goal] = True
     for duration, robot in enumerate(robots):
         robust_predictions(
-            lattice.velocities, blocked, goals, robot, grid, cells, N_ACTIONS * duration,
+            lattice.velocities, walls, goals, robot, grid, cells, N_ACTIONS * duration,
             lattice.next_state, lattice.outcome,
         )  # fmt: skip
 
@@ -241,7 +242,7 @@ def _cap_unreached(value: np.ndarray, blocked_cost: float) -> None:
 
 
 def lattice_reach(velocities: np.ndarray, longest: float, grid: GridShape) -> int:
-    """The radius [cells, in i and j] around a cell that became or stopped being blocked whose
+    """The radius [cells, in i and j] around a cell that became or stopped being lethal whose
     states' predictions must be redone: the farthest the body centre moves in the longest
     lattice action (``longest`` [s]) at the fastest of ``velocities`` (n_regions, 4, 3), from a
     point a quarter cell off a cell's centre, in cells, plus one."""

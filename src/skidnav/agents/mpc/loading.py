@@ -26,13 +26,14 @@ from skidnav.agents.mpc.agent import (
     MPPIKinematicAgent,
 )
 from skidnav.agents.mpc.config import MPPIConfig
-from skidnav.agents.mpc.dynamics import SampledDynamics, lattice_coefficients
+from skidnav.agents.mpc.dynamics import SampledDynamics
 from skidnav.agents.mpc.policy import MPPIPolicy
 from skidnav.agents.saving import generator_from_state, save_paths
 from skidnav.errors import UserError, shown
 from skidnav.files.saved import ArraySpec, SavedArchive, loading, read_json
 from skidnav.models.kinematic_files import check_model_size
 from skidnav.models.kinematic_regression import N_COEFFICIENTS
+from skidnav.sim.lidar import FULL_TURN
 
 MAX_AGENT_JSON_BYTES = 2**20
 """Largest ``.json`` of a saved agent [bytes]."""
@@ -41,8 +42,9 @@ MAX_STATES = 4_000_000
 per state and duration)."""
 
 
-READ_VERSIONS = (2, SAVE_VERSION)
-"""The saved versions read: 2 held ``temperature`` in control steps (converted on reading)."""
+READ_VERSIONS = (2, 3, SAVE_VERSION)
+"""The saved versions read: 2 held ``temperature`` in control steps (converted on reading); 2
+and 3 no ``lidar_fov`` (their lidar spanned a full turn)."""
 
 
 def load_mppi_agent(path: str | Path) -> MPPIKinematicAgent:
@@ -89,6 +91,7 @@ def _fresh_agent(meta: Mapping[str, Any]) -> MPPIKinematicAgent:
         robot, grid, meta["goal"], config,
         true_coefficients=placeholder if config.kinematic_model == "true" else None,
         lidar_rays=meta["lidar_rays"], lidar_range=meta["lidar_range"],
+        lidar_fov=_field_of_view(meta, version),
     )  # fmt: skip
     counters, rng_state = meta["counters"], meta["rng"]
     if not isinstance(counters, Mapping) or not isinstance(rng_state, Mapping):
@@ -101,6 +104,17 @@ def _fresh_agent(meta: Mapping[str, Any]) -> MPPIKinematicAgent:
     agent.rng = generator_from_state(rng_state)
     agent.planner.rng = agent.rng
     return agent
+
+
+def _field_of_view(meta: Mapping[str, Any], version: Any) -> float:
+    """The saved lidar's field of view [rad]: a full turn for the versions before it was
+    saved; ValueError unless a number (the agent checks its range)."""
+    if version != SAVE_VERSION:
+        return FULL_TURN
+    fov = meta["lidar_fov"]
+    if type(fov) not in (int, float):
+        raise ValueError(f"expected lidar_fov to be a number, got {shown(fov)}")
+    return float(fov)
 
 
 def restore_arrays(agent: MPPIKinematicAgent, arrays: Mapping[str, np.ndarray]) -> None:
@@ -124,8 +138,7 @@ def restore_arrays(agent: MPPIKinematicAgent, arrays: Mapping[str, np.ndarray]) 
     if not (np.abs(plan) <= agent.robot.wheel_speed).all():  # NaN fails too
         raise ValueError("saved plan holds wheel speeds beyond the bound")
     agent.planner.plan[...] = plan
-    coefficients = lattice_coefficients(agent.model, agent.dynamics.mean)
-    agent.evidence.reweigh(coefficients, model_changed=True)
+    agent.refresh_costs()
 
 
 def policy_from_file(json_path: Path, meta: Mapping[str, Any]) -> MPPIPolicy:

@@ -25,6 +25,7 @@ class Planning(Protocol):
 
     lidar_rays: int
     lidar_range: float
+    lidar_fov: float
     goal: tuple[int, int]
     robot: RobotParams
     dynamics: SampledDynamics
@@ -47,6 +48,7 @@ class MPPIPolicy:
 
     def __init__(self, agent: Planning, seed: int) -> None:
         self.lidar_rays, self.lidar_range = agent.lidar_rays, agent.lidar_range
+        self.lidar_fov = agent.lidar_fov
         self.goal = agent.goal
         """The goal cell (i, j) it drives to."""
         self.control_period = agent.robot.action_duration
@@ -68,7 +70,7 @@ class MPPIPolicy:
         it learns (the model stays frozen, and :meth:`reset` forgets the readings)."""
         pose = pose_of(observation, self.lidar_rays)
         ranges = ranges_of(observation, self.lidar_rays)
-        self.evidence.record_readings(pose, ranges, self.lidar_range, self.dynamics)
+        self.evidence.record_readings(pose, ranges, self.lidar_range, self.lidar_fov)
         return self.planner.step(pose, self.dynamics, self.evidence.cost_map, self.costs)
 
     def reset(self) -> None:

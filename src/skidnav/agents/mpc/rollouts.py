@@ -10,8 +10,13 @@ the slip region under the robot, takes the twist of the rollout's model draw
 :func:`skidnav.sim.navigation.integrate`, as the simulator) and, on entering another cell, pays
 the collision cost C · p of its wall probability; a blocked cell stops the motion for the rest
 of the control step, as a wall stops the simulated robot (position of the last free sub-step,
-heading of the colliding one). Each control step costs 1 (time); a control step ending in the
-goal cell ends the rollout (the episode would terminate) with no further cost. Within a
+heading of the colliding one). A robot with a footprint (``robot.footprint_length`` ×
+``footprint_width`` > 0, padded by the agent) collides as the simulator's does
+(:func:`skidnav.sim.footprint.footprint_collides`): a sub-step whose rectangle touches the
+inscribed disc of a blocked cell costs C and stops the motion likewise, whether or not its
+centre entered another cell — so a gap narrower than the robot is a wall to it. Each control
+step costs 1 (time); a control step ending in the goal cell ends the rollout (the episode would
+terminate) with no further cost. Within a
 control step the twist changes only with the region (the wheels and the noise are the step's),
 so it is computed again only when the rollout enters another region: the same numbers, 1.5×
 faster at 1-s control steps of 10 sub-steps. A rollout that
@@ -34,6 +39,7 @@ from skidnav._jit import jit
 from skidnav.agents.mpc.costmap import CostMap, MapCosts, terminal_value
 from skidnav.agents.mpc.dynamics import SampledDynamics, sampled_twist
 from skidnav.robot.params import KinematicConstants
+from skidnav.sim.footprint import footprint_collides
 from skidnav.sim.navigation import integrate
 from skidnav.world.discretization import GridShape, cell_of, region_of
 
@@ -75,7 +81,7 @@ def rollout_costs(
         controls: float64 (K, H, 2) wheel speeds (ω_L, ω_R) [rad/s] of each control step.
         draws: the rollouts' standard normals. dynamics: the model's arrays.
         cost_map, costs: the learned map and the costs' scalars.
-        robot, grid: the robot's timing, arena and scheme; the discretization.
+        robot, grid: the robot's timing, arena, scheme and footprint; the discretization.
         out: float64 (K · M,) receives the costs [control steps], M per sequence in a row.
     """
     for r in range(out.shape[0]):
@@ -113,6 +119,12 @@ def sequence_cost(
                 )
                 twist_region = region
             nx, ny, heading = integrate(robot, x, y, heading, twist)
+            if robot.footprint_length > 0.0 and footprint_collides(
+                cost_map.blocked, grid, nx, ny, heading, robot.footprint_length,
+                robot.footprint_width,
+            ):  # fmt: skip
+                cost += costs.collision_cost
+                break
             i, j = cell_of(nx, ny, grid)
             if i != ci or j != cj:
                 cost += costs.collision_cost * cost_map.wall_probability[i, j]
