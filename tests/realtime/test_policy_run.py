@@ -284,7 +284,7 @@ def test_a_failing_policy_stops_the_robot_and_ends_the_run(
         (["--policy", "goal-tracker", "--agent", "dyna-q"], "not allowed with argument"),
         (["--policy", "wall-follower"], "unknown policy 'wall-follower'; expected one of"),
         (["--policy-file", "missing.json"], "missing.json: no such policy file"),
-        (["--policy-file", ""], "not the path of a policy file"),
+        (["--policy-file", ""], "argument --policy-file: expected a path, got an empty one"),
         (["--policy-file", "/"], "not the path of a policy file"),
     ],
 )
