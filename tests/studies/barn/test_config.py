@@ -112,6 +112,9 @@ def test_an_unknown_agent_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixt
         ("barn-ice-learning", "learning", 30, ("ice-physics",), 5, 0.1),
         ("barn-dyna-full-learning", "learning", 30, ("nominal",), 1000, 0.5),
         ("barn-smoke", "zero-shot", 2, ("nominal",), 1, 0.1),
+        ("barn-mujoco-zero-shot", "zero-shot", 30, ("nominal",), 1, 0.1),
+        ("barn-mujoco-ice-zero-shot", "zero-shot", 30, ("ice-physics",), 1, 0.1),
+        ("barn-mujoco-learning", "learning", 30, ("nominal",), 3, 0.1),
     ],
 )
 def test_the_shipped_configs(
@@ -125,3 +128,4 @@ def test_the_shipped_configs(
     assert parsed.protocol == protocol and len(parsed.worlds) == n_worlds
     assert parsed.floors == floors and parsed.episodes == episodes
     assert parsed.discrete_action_duration == duration
+    assert parsed.dynamics == ("mujoco" if "mujoco" in name else "kinematic")

@@ -23,6 +23,8 @@ MAX_LENGTH = 100.0
 """Greatest length [m] or duration [s] of any setting: beyond any arena or horizon here."""
 MAX_WEIGHT = 1e6
 """Greatest weight of a cost term."""
+MAX_ACCELERATION = 1e4
+"""Greatest acceleration [m/s² or rad/s²] of the dynamic window: far beyond any robot's."""
 
 
 @dataclass(frozen=True)
@@ -66,6 +68,25 @@ class ClassicalConfig:
     """How long [s] each sampled command is rolled out, > 0."""
     rollout_step: float = 0.05
     """Time [s] between the rollout's footprint checks, in (0, ``horizon``]."""
+    acceleration: float | None = None
+    """a [m/s²]: the forward speeds searched are those within a T of the current speed, T the
+    control period (Fox et al.'s dynamic window; the speed measured from the robot's own
+    poses), > 0; None: a robot that takes any command at once, whose window is the whole
+    range."""
+    yaw_acceleration: float | None = None
+    """α [rad/s²]: the yaw rates searched are those within α T of the current yaw rate, > 0;
+    None: the whole range."""
+    half_track: float | None = None
+    """The half track c [m] the controller's model turns with, > 0; None: the datasheet's. A
+    skid-steer robot's tyres scrub, and it turns as a wider robot would (Mandow et al. 2007):
+    its effective half track, measured by driving it."""
+    stuck_time: float = 2.0
+    """How long [s] the progress check looks back (0: no check), ≥ 0."""
+    stuck_speed: float = 0.05
+    """The robot is stuck when, over ``stuck_time``, it moved less than this fraction of what
+    ``max_speed`` would cover, in [0, 1]; then the recovery runs."""
+    recovery_time: float = 1.0
+    """How long [s] the recovery runs once the robot is stuck, > 0 (at least one period)."""
     deceleration: float = 2.5
     """a_b [m/s²]: a command is admissible if the robot, holding it for a control period and
     then braking at a_b, stops before its rollout's first collision (Fox et al. 1997), > 0."""
@@ -91,6 +112,14 @@ class ClassicalConfig:
                 check_number(name, getattr(self, name), 0.0, MAX_LENGTH, closed=True)
         if self.max_speed is not None:
             check_number("max_speed", self.max_speed, 0.0, MAX_LENGTH)
+        for name in ("acceleration", "yaw_acceleration"):
+            if getattr(self, name) is not None:
+                check_number(name, getattr(self, name), 0.0, MAX_ACCELERATION)
+        if self.half_track is not None:
+            check_number("half_track", self.half_track, 0.0, MAX_LENGTH)
+        check_number("stuck_time", self.stuck_time, 0.0, MAX_LENGTH, closed=True)
+        check_number("stuck_speed", self.stuck_speed, 0.0, 1.0, closed=True)
+        check_number("recovery_time", self.recovery_time, 0.0, MAX_LENGTH)
         check_number("max_yaw_rate", self.max_yaw_rate, 0.0, MAX_LENGTH)
         check_number("horizon", self.horizon, 0.0, MAX_LENGTH)
         check_number("deceleration", self.deceleration, 0.0, MAX_LENGTH)

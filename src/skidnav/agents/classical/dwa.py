@@ -1,4 +1,5 @@
-"""The local controller: the dynamic window approach over the datasheet robot.
+"""The local controller: the dynamic window approach over the datasheet robot (or its
+effective half track).
 
 Fox, Burgard & Thrun (1997), "The dynamic window approach to collision avoidance", IEEE
 Robotics & Automation Magazine 4(1): sample velocity commands, simulate each for a short
@@ -8,14 +9,17 @@ global cost-to-go (:mod:`skidnav.agents.classical.costmap`), so that the robot d
 front of a wall the straight line to the goal runs into. Per control step, from the pose
 (x, y, ψ):
 
-1. **Samples** (:func:`command_samples`, once): forward speeds v ∈ {0, …, v_max} (and one
-   backwards speed), yaw rates ψ̇ ∈ {−ψ̇_max, …, ψ̇_max}; each (v, ψ̇) becomes wheel speeds
-   by inverting the datasheet's ICR model (ω_R = (v + c ψ̇)/r, ω_L = (v − c ψ̇)/r), scaled
-   down together (the same curvature) until both lie within ± Ω. The robot of the simulator
-   takes a wheel-speed command at once, so the window is every command the wheels allow.
+1. **Samples** (:mod:`skidnav.agents.classical.window`): forward speeds v and yaw rates ψ̇;
+   each (v, ψ̇) becomes wheel speeds by inverting the ICR model (ω_R = (v + c ψ̇)/r,
+   ω_L = (v − c ψ̇)/r, c the datasheet's half track or the robot's effective one), scaled
+   down together (the same curvature) until both lie within ± Ω. A robot that takes a
+   command at once (the kinematic simulator) has every command the wheels allow as its
+   window: v ∈ {0, …, v_max} (and one backwards speed), ψ̇ ∈ {−ψ̇_max, …, ψ̇_max}. A robot
+   with acceleration limits has Fox et al.'s dynamic window: the commands reachable within a
+   control period from its velocity, measured from its own poses.
 2. **Rollout** (:func:`choose_command`): each command held for ``steps`` × ``step`` seconds
-   through the datasheet's kinematics without slip (:func:`skidnav.robot.kinematics.
-   body_velocities` with the nominal r, c and x_ICR; the exact constant-twist step
+   through the ICR kinematics without slip (:func:`skidnav.robot.kinematics.body_velocities`
+   with the datasheet's r and x_ICR and the controller's c; the exact constant-twist step
    :func:`skidnav.robot.kinematics.exact_step`), the footprint checked at every step against
    the occupied cells (the simulator's rule, :func:`skidnav.sim.footprint.collides`).
 3. **Admissible** (Fox et al.'s admissible velocities): a command whose rollout meets no
@@ -27,11 +31,17 @@ front of a wall the straight line to the goal runs into. Per control step, from 
    + w_o max inflation cost along it + w_v (1 − v / v_max), D the cost-to-go of the end
    position (:func:`~skidnav.agents.classical.costmap.route_distance`); a rollout that enters
    the goal's cell ends there with D = 0 and no heading term (the episode would end).
-4. **Recovery** when no command is admissible (as Nav2's and move_base's recovery behaviours
-   back up or spin when the controller finds no way): the command whose first collision
+4. **The least bad** when no command is admissible: the command whose first collision
    comes latest, then the one with the fewest colliding steps (out of a contact first),
    then the best score. Turning in place and backing up are among the samples, so this is
    how the robot gets out of a corner.
+5. **Recovery** when the robot is stuck (as Nav2's and move_base's recovery behaviours back
+   up or spin when the robot makes no progress; :class:`~skidnav.agents.classical.window.
+   ProgressCheck`): for ``recovery_time``, among every command of the whole range that moves
+   a wheel, admissible or not, the one whose rollout spends the fewest steps in contact, then
+   whose first contact comes latest, then the best score. Standing still can be the best
+   admissible command for ever (in a gap the padded footprint barely fits, every motion
+   touches at once); this backs or turns the robot out of the pinch.
 """
 
 from __future__ import annotations
@@ -44,7 +54,6 @@ import numpy as np
 from skidnav._jit import inline_jit, jit
 from skidnav.agents.classical.costmap import route_distance
 from skidnav.agents.mpc.costmap import CostMap, MapCosts, cell_centre, lookahead_waypoint
-from skidnav.robot.datasheet import Datasheet
 from skidnav.robot.kinematics import body_velocities, exact_step, wrap_angle
 from skidnav.sim.footprint import collides
 from skidnav.world.discretization import GridShape, cell_of
@@ -76,33 +85,6 @@ class Controller(NamedTuple):
     speed_weight: float
     deceleration: float
     reaction_time: float
-
-
-def command_samples(
-    sheet: Datasheet,
-    max_speed: float,
-    reverse_speed: float,
-    max_yaw_rate: float,
-    speed_samples: int,
-    yaw_rate_samples: int,
-) -> np.ndarray:
-    """The sampled commands as wheel speeds (ω_L, ω_R) [rad/s], float64 (K, 2) (module doc,
-    step 1): ``speed_samples`` forward speeds from 0 to ``max_speed`` [m/s] and, if
-    ``reverse_speed`` [m/s] > 0, −``reverse_speed``, each with ``yaw_rate_samples`` yaw rates
-    over ± ``max_yaw_rate`` [rad/s] (capped at the datasheet's r Ω / c)."""
-    top_yaw = min(max_yaw_rate, sheet.turn_rate())
-    speeds = np.linspace(0.0, max_speed, speed_samples)
-    if reverse_speed > 0.0:
-        speeds = np.append(speeds, -reverse_speed)
-    yaw_rates = np.linspace(-top_yaw, top_yaw, yaw_rate_samples)
-    v, yaw = (grid.ravel() for grid in np.meshgrid(speeds, yaw_rates, indexing="ij"))
-    right = (v + sheet.half_track * yaw) / sheet.wheel_radius
-    left = (v - sheet.half_track * yaw) / sheet.wheel_radius
-    largest = np.maximum(np.abs(left), np.abs(right))
-    scale = np.where(
-        largest > sheet.wheel_speed, sheet.wheel_speed / np.maximum(largest, 1e-300), 1.0
-    )
-    return np.ascontiguousarray(np.stack([left * scale, right * scale], axis=1))
 
 
 @inline_jit
@@ -183,24 +165,29 @@ def choose_command(
     costs: MapCosts,
     grid: GridShape,
     controller: Controller,
+    recovering: bool = False,
 ) -> tuple[int, bool]:
     """(the index of the chosen command among ``samples`` float64 (K, 2) [rad/s], whether it
     was admissible) from the pose (x [m], y [m], heading [rad]) (module doc): the best-scoring
-    admissible command, else the recovery's choice (step 4). Ties go to the first."""
+    admissible command, else the least bad (step 4); while ``recovering`` (step 5), the
+    recovery's choice, admissible or not (``samples`` then those of the recovery). Ties go to
+    the first."""
     c = controller
     best, best_score = -1, math.inf
-    rescue, rescue_key, rescue_score = 0, -1, math.inf
+    rescue, rescue_key, rescue_score = 0, -((c.steps + 2) ** 2), math.inf
     for k in range(samples.shape[0]):
         left, right = samples[k, 0], samples[k, 1]
         first, colliding, score = rollout(
             x, y, heading, left, right, occupied, cost_map, costs, grid, c
         )
         speed = abs(0.5 * c.wheel_radius * (left + right))
-        if (first - 1) * c.step >= c.reaction_time + speed / c.deceleration:
+        if not recovering and (first - 1) * c.step >= c.reaction_time + speed / c.deceleration:
             if score < best_score:
                 best, best_score = k, score
             continue
-        key = first * (c.steps + 2) - colliding  # the latest first collision, then the fewest
+        # recovering: the fewest steps in contact, then the latest first one; else the latest
+        # first collision, then the fewest colliding steps
+        key = first - colliding * (c.steps + 2) if recovering else first * (c.steps + 2) - colliding
         if key > rescue_key or (key == rescue_key and score < rescue_score):
             rescue, rescue_key, rescue_score = k, key, score
     if best >= 0:

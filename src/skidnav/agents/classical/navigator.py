@@ -7,8 +7,10 @@ lidar ranges):
 1. the goal point from the goal's distance d and bearing β: (x + d cos(ψ + β), y + d sin(ψ + β));
 2. the readings into the occupancy grid (:mod:`skidnav.agents.classical.costmap`, step 1);
 3. if the occupied cells or the goal's cell changed: inflation and route (steps 2 and 3);
-4. the command of the local controller (:func:`skidnav.agents.classical.dwa.choose_command`),
-   wheel speeds within ± Ω.
+4. the robot's velocity from its last two poses, the dynamic window's commands and the progress
+   check (:mod:`skidnav.agents.classical.window`);
+5. the command of the local controller (:func:`skidnav.agents.classical.dwa.choose_command`),
+   wheel speeds within ± Ω; once the robot is stuck, the recovery's for ``recovery_time``.
 
 It is a :class:`~skidnav.agents.wheel_policy.WheelSpeedPolicy` with a state (the map): a new
 episode starts from an empty map (:meth:`ClassicalNavigator.reset`). Nothing is learned from
@@ -24,7 +26,13 @@ import numpy as np
 
 from skidnav.agents.classical.config import ClassicalConfig
 from skidnav.agents.classical.costmap import new_cost_map, replan, route_settings, update_occupancy
-from skidnav.agents.classical.dwa import Controller, choose_command, command_samples
+from skidnav.agents.classical.dwa import Controller, choose_command
+from skidnav.agents.classical.window import (
+    Odometry,
+    ProgressCheck,
+    command_samples,
+    window_commands,
+)
 from skidnav.agents.mpc.laser import record_scan
 from skidnav.robot.datasheet import Datasheet
 from skidnav.robot.params import RobotParams
@@ -35,6 +43,11 @@ GOAL_MOVE = 0.01
 """How far [m] the goal point computed from an observation must lie from the route's goal for a
 new route: the goal's distance and bearing give it back only to rounding, and a goal on a cell
 boundary would otherwise change cells from step to step."""
+
+
+MOVING = 1e-6
+"""A command moves a wheel when its wheel speed exceeds this fraction of the top wheel speed
+(the zero yaw rate of the samples comes out of a linear spacing only to rounding)."""
 
 
 class Laser(NamedTuple):
@@ -87,16 +100,36 @@ class ClassicalNavigator:
         padding = config.footprint_padding
         self.inscribed_radius = 0.5 * min(length, width) + padding
         """r_in [m]: the cells within it of an obstacle are lethal."""
+        radius, half_track = sheet.wheel_radius, config.half_track or sheet.half_track
+        top_yaw = min(config.max_yaw_rate, radius * sheet.wheel_speed / half_track)
+        self._wheels = (radius, half_track, sheet.wheel_speed)
         self.samples = command_samples(
-            sheet, max_speed, config.reverse_speed, config.max_yaw_rate, config.speed_samples,
+            *self._wheels, max_speed, config.reverse_speed, top_yaw, config.speed_samples,
             config.yaw_rate_samples,
         )  # fmt: skip
+        """The commands of the whole range (a robot that takes any command at once)."""
+        moving = np.abs(self.samples).max(axis=1) > MOVING * sheet.wheel_speed
+        self.recovery_samples = np.ascontiguousarray(self.samples[moving])
+        """The recovery's commands: those of the whole range that move a wheel."""
+        period = robot.action_duration
+        acceleration, yaw_acceleration = config.acceleration, config.yaw_acceleration
+        self.reach = (
+            math.inf if acceleration is None else acceleration * period,
+            math.inf if yaw_acceleration is None else yaw_acceleration * period,
+        )
+        """(a T [m/s], α T [rad/s]): the dynamic window's half widths."""
+        self._window = ((-config.reverse_speed, max_speed), top_yaw)
+        self.odometry = Odometry(period)
+        stuck_periods = round(config.stuck_time / period)
+        self.progress = ProgressCheck(
+            stuck_periods, config.stuck_speed * max_speed * stuck_periods * period
+        )
+        self.recovery_periods = max(1, round(config.recovery_time / period))
         steps = max(1, round(config.horizon / config.rollout_step))
         self.controller = Controller(
-            sheet.wheel_radius, sheet.half_track, sheet.x_icr, steps, config.horizon / steps,
+            radius, half_track, sheet.x_icr, steps, config.horizon / steps,
             length + 2 * padding, width + 2 * padding, max_speed, config.heading_weight,
-            config.obstacle_weight, config.speed_weight, config.deceleration,
-            robot.action_duration,
+            config.obstacle_weight, config.speed_weight, config.deceleration, period,
         )  # fmt: skip
         self.reset()
 
@@ -116,7 +149,13 @@ class ClassicalNavigator:
         self.replans = 0
         """Routes planned this episode."""
         self.recoveries = 0
-        """Steps this episode with no admissible command (the recovery's choice)."""
+        """Steps this episode with no admissible command or stuck (the recovery's choice)."""
+        self.stuck = 0
+        """Times this episode the progress check found the robot stuck."""
+        self._recovering = 0
+        """Periods of the running recovery still to go."""
+        self.odometry.reset()
+        self.progress.reset()
 
     def start_greedy_rollout(self) -> None:
         """A rollout starts: :meth:`reset` (:class:`~skidnav.agents.training.RolloutState`)."""
@@ -136,14 +175,37 @@ class ClassicalNavigator:
         x, y = float(values[0]), float(values[1])
         heading = math.atan2(values[3], values[2])
         self._map(x, y, heading, values)
+        samples = self._commands(x, y, heading)
+        recovering = self._recovering > 0
+        if recovering:
+            samples = self.recovery_samples  # a behaviour of its own: the whole range
         index, admissible = choose_command(
-            x, y, heading, self.samples, self.occupied, self.cost_map, self.costs, self.grid,
-            self.controller,
+            x, y, heading, samples, self.occupied, self.cost_map, self.costs, self.grid,
+            self.controller, recovering,
         )  # fmt: skip
         self.recoveries += not admissible
+        if recovering:
+            self._recovering -= 1
+            if self._recovering == 0:
+                self.progress.reset()  # a new look-back after the recovery
         limit = self.robot.wheel_speed
-        left, right = self.samples[index]
+        left, right = samples[index]
         return float(min(max(left, -limit), limit)), float(min(max(right, -limit), limit))
+
+    def _commands(self, x: float, y: float, heading: float) -> np.ndarray:
+        """Step 4 of the module doc: the commands to search (the whole range's for a robot
+        that takes any command at once), and a recovery started if the robot is stuck."""
+        velocity = self.odometry.update(x, y, heading)
+        if self.progress.stuck(x, y) and self._recovering == 0:
+            self._recovering = self.recovery_periods
+            self.stuck += 1
+        if self.reach == (math.inf, math.inf):
+            return self.samples
+        config = self.config
+        return window_commands(
+            velocity, self.reach, *self._wheels, *self._window,
+            (config.speed_samples, config.yaw_rate_samples),
+        )  # fmt: skip
 
     def _map(self, x: float, y: float, heading: float, values: np.ndarray) -> None:
         """Steps 1–3 of the module doc."""
