@@ -65,7 +65,7 @@ class RolloutDraws(NamedTuple):
     per_sequence: int
 
 
-BLOCK = 64
+BLOCK = 16
 """Rollouts advanced side by side, one control step of each in turn: the steps of different
 rollouts do not wait on one another, so the processor overlaps them (a rollout alone is one
 long chain of dependent operations), while the block's state and rows stay in the cache."""
