@@ -1,18 +1,28 @@
 """mppi-kinematic: planning time per control step on one core, against the 0.1-s control period
-(real time) and against the same rollouts vectorised in plain NumPy, both measured in this run.
+(real time) and against the same step in plain NumPy, both measured in this run.
 
 The agent first drives 150 actions of 0.1 s on world 3's obstacles arena (slippery floor), so
-its model has refitted and it has met the wall; then, from that pose, one control step is
-timed whole (:meth:`MPPIKinematicAgent.act`: the draws, the compiled K × H batch, the weights and
-the plan's update) and in its parts (the profile), each the median of :data:`REPEATS` timings.
-The NumPy twin (:func:`numpy_rollout_costs`) rolls the same K sequences with the same draws
-through the same model and costs, loop over the horizon and sub-steps, vectorised over the K
-sequences; its costs are checked against the kernel's. Also timed: what a change of the learned
-map costs (the lattice's local refresh and its values), and a refit's full refresh.
+its model has refitted and it has met the wall; then, from that pose, with a planner of each size
+(K sequences × H steps, its own Generator), one control step is timed whole
+(:meth:`MPPIKinematicAgent.act`: the compiled sampling, the compiled K × H batch, the weights
+and the plan's update) and in its parts (the profile), each the median of :data:`REPEATS`
+timings. Its NumPy twin (:func:`numpy_control_step`) is the same step with NumPy's normals,
+the AR(1) smoothing and clip as NumPy expressions, and the rollouts vectorised over the K
+sequences (:func:`numpy_rollout_costs`, loop over the horizon and sub-steps), from the same
+plan and Generator state: its costs are checked against the kernel's and its action against
+the compiled step's. Also timed: what a change of the learned map costs (the lattice's local
+refresh and its values), and a refit's full refresh.
+
+``--grid`` times instead MPPI-Generic's grid (K = 128 … 16,384, H = 100; Vlahov et al. 2024)
+and prints it as the Markdown table of docs/speed.md.
 """
 
 from __future__ import annotations
 
+import argparse
+import copy
+import dataclasses
+import math
 import statistics
 import time
 from collections.abc import Callable
@@ -24,11 +34,14 @@ import numpy as np
 import skidnav  # noqa: F401  (registers the env)
 from skidnav.agents.mpc.agent import MPPIKinematicAgent
 from skidnav.agents.mpc.config import MPPIConfig
+from skidnav.agents.mpc.planner import MPPIPlanner
 from skidnav.agents.mpc.rollouts import RolloutDraws, rollout_costs
 from skidnav.agents.training import run_episode
 
 CONTROL_PERIOD = 0.1
 SETTINGS = ((256, 20), (256, 40), (1024, 40))  # (K, H)
+GRID_SAMPLES = (128, 256, 512, 1024, 2048, 4096, 8192, 16384)
+GRID_HORIZON = 100
 REPEATS = 21
 TARGET_REAL_TIME = 10.0  # control steps planned per control period
 
@@ -60,12 +73,21 @@ def driven_agent(
     return agent, np.asarray(env.unwrapped.pose, dtype=np.float64)
 
 
+def resized(agent: MPPIKinematicAgent, samples: int, horizon: int) -> MPPIKinematicAgent:
+    """``agent`` (model and map as they are) with a fresh planner of K = ``samples``,
+    H = ``horizon`` and its own Generator (seed 0); the agent is changed in place."""
+    agent.config = dataclasses.replace(agent.config, samples=samples, horizon=horizon)
+    agent.planner = MPPIPlanner(
+        agent.config, agent.kernel_robot, agent.kernel_grid, np.random.default_rng(0)
+    )
+    return agent
+
+
 def batch(agent: MPPIKinematicAgent) -> tuple[np.ndarray, RolloutDraws]:
-    """One control step's sequences (clipped) and draws, as the planner makes them."""
-    planner = agent.planner
-    limit = agent.robot.wheel_speed
-    controls = np.clip(planner.plan + planner.perturbations(), -limit, limit)
-    return controls, planner.draws()
+    """One control step's sequences (clipped) and draws, as the planner makes them (copied)."""
+    controls, _, draws = agent.planner.sample()
+    model, noise = draws.model.copy(), draws.noise.copy()
+    return controls.copy(), RolloutDraws(model, noise, draws.noise_scale, draws.per_sequence)
 
 
 def kernel_costs(agent: MPPIKinematicAgent, pose: np.ndarray, controls: np.ndarray,
@@ -77,6 +99,55 @@ def kernel_costs(agent: MPPIKinematicAgent, pose: np.ndarray, controls: np.ndarr
         agent.kernel_robot, agent.kernel_grid, out,
     )  # fmt: skip
     return out
+
+
+def numpy_batch(planner: MPPIPlanner) -> tuple[np.ndarray, np.ndarray, RolloutDraws]:
+    """Steps 1–2 of :mod:`skidnav.agents.mpc.planner` and the draws in NumPy, from the
+    planner's Generator: the sequences, their perturbations and the rollouts' draws, the
+    numbers of :meth:`MPPIPlanner.sample`."""
+    config, limit = planner.config, planner.robot.wheel_speed
+    white = planner.rng.standard_normal((config.samples, config.horizon, 2))
+    white *= config.noise_std
+    beta = config.noise_correlation
+    if beta > 0.0:
+        innovation = math.sqrt(1.0 - beta * beta)
+        for t in range(1, config.horizon):
+            white[:, t] = beta * white[:, t - 1] + innovation * white[:, t]
+    white[0] = 0.0
+    controls = np.clip(planner.plan + white, -limit, limit)
+    rollouts = config.samples * config.model_draws
+    shape = ((rollouts, 5), (rollouts, config.horizon, 3))
+    if config.sample_uncertainty:
+        model, noise = (planner.rng.standard_normal(each) for each in shape)
+        scale = 1.0 / math.sqrt(planner.robot.substeps)
+    else:
+        (model, noise), scale = (np.zeros(each) for each in shape), 0.0
+    draws = RolloutDraws(model, noise, scale, config.model_draws)
+    return controls, controls - planner.plan, draws
+
+
+def numpy_control_step(agent: MPPIKinematicAgent, pose: np.ndarray) -> tuple[float, float]:
+    """The twin of one :meth:`MPPIKinematicAgent.act` at ``pose``: :func:`numpy_batch`, the
+    rollouts in NumPy (:func:`numpy_rollout_costs`) and the planner's own update."""
+    planner = agent.planner
+    controls, perturbation, draws = numpy_batch(planner)
+    planner.draw_costs[...] = numpy_rollout_costs(agent, pose, controls, draws)
+    return planner.update(perturbation)
+
+
+def twin_checked(agent: MPPIKinematicAgent, pose: np.ndarray) -> None:
+    """Assert that a control step and its NumPy twin, from the same plan and Generator state,
+    draw the same sequences and command the same wheel speeds (to 10⁻⁹: the twin's rollouts
+    sum in another order)."""
+    planner = agent.planner
+    saved = copy.deepcopy((planner.plan, planner.rng))
+    compiled = agent.act(pose)
+    planner.plan[...], planner.rng = copy.deepcopy(saved)
+    twin_controls = numpy_batch(planner)[0]
+    planner.plan[...], planner.rng = copy.deepcopy(saved)
+    assert np.array_equal(planner.sample()[0], twin_controls)
+    planner.plan[...], planner.rng = copy.deepcopy(saved)
+    assert np.allclose(compiled, numpy_control_step(agent, pose), rtol=1e-9, atol=1e-9)
 
 
 def numpy_rollout_costs(
@@ -205,16 +276,11 @@ def profile(agent: MPPIKinematicAgent, pose: np.ndarray) -> dict[str, float]:
     """Median seconds of the parts of one control step."""
     planner = agent.planner
     controls, draws = batch(agent)
-    out = np.zeros(controls.shape[0])
+    perturbation = controls - planner.plan
     parts = {
-        "perturbations (normals, AR(1) smoothing)": planner.perturbations,
-        "model draws and noise (normals)": planner.draws,
-        "clip": lambda: np.clip(planner.plan + controls, -1.7, 1.7),
+        "sampling (normals, AR(1) smoothing, clip; compiled)": planner.sample,
         "compiled K x H rollouts": lambda: kernel_costs(agent, pose, controls, draws),
-        "weights and plan update": lambda: (
-            np.exp(-(out - out.min())),
-            np.einsum("k,kha->ha", out, controls),
-        ),
+        "weights and plan update (NumPy)": lambda: planner.update(perturbation),
     }
     return {name: median_seconds(call) for name, call in parts.items()}
 
@@ -256,6 +322,17 @@ def rollout_rates(quick: bool) -> tuple[float, float]:
     return controls.shape[0] / kernel, controls.shape[0] / twin
 
 
+def step_rates(quick: bool) -> tuple[float, float]:
+    """Control steps/s of one whole :meth:`MPPIKinematicAgent.act` (K = 256, H = 40) and of
+    its NumPy twin (:func:`numpy_control_step`, checked to command the same wheel speeds): a
+    key figure of ``make bench`` and of the speed guard."""
+    agent, pose = driven_agent(256, 40)
+    twin_checked(agent, pose)
+    step = median_seconds(lambda: agent.act(pose), 7 if quick else REPEATS)
+    twin = median_seconds(lambda: numpy_control_step(agent, pose), 3 if quick else 7)
+    return 1.0 / step, 1.0 / twin
+
+
 def real_time_rates(quick: bool) -> tuple[float, float]:
     """Control steps planned per second (one whole :meth:`MPPIKinematicAgent.act`, K = 256,
     H = 40) and the 10 per second of the 0.1-s control period: a key figure of ``make bench``,
@@ -265,23 +342,29 @@ def real_time_rates(quick: bool) -> tuple[float, float]:
     return 1.0 / step, 1.0 / CONTROL_PERIOD
 
 
-def report(samples: int, horizon: int) -> None:
-    """Print the figures of K = ``samples``, H = ``horizon`` (and, for the default, the
-    profile and the map changes)."""
-    agent, pose = driven_agent(samples, horizon)
+def report(agent: MPPIKinematicAgent, pose: np.ndarray, samples: int, horizon: int) -> None:
+    """Print the figures of K = ``samples``, H = ``horizon`` planned by ``agent`` from ``pose``
+    (and, for the default, the profile and the map changes)."""
+    resized(agent, samples, horizon)
+    twin_checked(agent, pose)
     step = median_seconds(lambda: agent.act(pose))
+    twin = median_seconds(lambda: numpy_control_step(agent, pose), 5)
     controls, draws = batch(agent)
     compiled = kernel_costs(agent, pose, controls, draws)
-    twin = numpy_rollout_costs(agent, pose, controls, draws)
-    assert np.allclose(compiled, twin, rtol=1e-9, atol=1e-9), np.abs(compiled - twin).max()
+    twin_costs = numpy_rollout_costs(agent, pose, controls, draws)
+    assert np.allclose(compiled, twin_costs, rtol=1e-9, atol=1e-9), np.abs(
+        compiled - twin_costs
+    ).max()
     kernel = median_seconds(lambda: kernel_costs(agent, pose, controls, draws))
     numpy_time = median_seconds(lambda: numpy_rollout_costs(agent, pose, controls, draws), 5)
+    steps = samples * horizon
     print(
         f"K={samples} H={horizon} ({horizon * CONTROL_PERIOD:g} s): one control step "
-        f"{step * 1e3:.2f} ms = {CONTROL_PERIOD / step:.0f}x faster than real time "
-        f"(target >= {TARGET_REAL_TIME:g}x); compiled rollouts {kernel * 1e3:.2f} ms "
-        f"({samples * horizon / kernel / 1e6:.1f} M sub-steps/s), the same rollouts in "
-        f"vectorised NumPy {numpy_time * 1e3:.1f} ms: {numpy_time / kernel:.0f}x"
+        f"{step * 1e3:.2f} ms ({steps / step / 1e6:.1f} M sample-steps/s) = "
+        f"{CONTROL_PERIOD / step:.0f}x faster than real time (target >= {TARGET_REAL_TIME:g}x), "
+        f"its NumPy twin {twin * 1e3:.1f} ms: {twin / step:.1f}x; compiled rollouts "
+        f"{kernel * 1e3:.2f} ms ({steps / kernel / 1e6:.1f} M sample-steps/s), the same "
+        f"rollouts in vectorised NumPy {numpy_time * 1e3:.1f} ms: {numpy_time / kernel:.0f}x"
     )
     if (samples, horizon) == (256, 40):
         for name, seconds in profile(agent, pose).items():
@@ -290,9 +373,46 @@ def report(samples: int, horizon: int) -> None:
             print(f"  map change, {name}: {seconds * 1e3:.1f} ms")
 
 
+def grid_table(agent: MPPIKinematicAgent, pose: np.ndarray) -> str:
+    """MPPI-Generic's grid (K of :data:`GRID_SAMPLES`, H = :data:`GRID_HORIZON`) planned by
+    ``agent`` from ``pose``, as a Markdown table: a whole control step, its rate, its parts and
+    its NumPy twin, medians."""
+    lines = [
+        "| K | one control step | sample-steps/s | sampling | rollouts | update | "
+        "NumPy twin | ratio |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for samples in GRID_SAMPLES:
+        resized(agent, samples, GRID_HORIZON)
+        twin_checked(agent, pose)
+        repeats = REPEATS if samples <= 4096 else 7
+        step = median_seconds(lambda: agent.act(pose), repeats)
+        twin = median_seconds(lambda: numpy_control_step(agent, pose), 3)
+        parts = list(profile(agent, pose).values())
+        cells = " | ".join(f"{seconds * 1e3:.3g} ms" for seconds in parts)
+        rate = samples * GRID_HORIZON / step / 1e6
+        lines.append(
+            f"| {samples:,} | **{step * 1e3:.3g} ms** | {rate:.1f} M | {cells} | "
+            f"{twin * 1e3:.3g} ms | {twin / step:.1f}× |"
+        )
+        print(lines[-1], flush=True)
+    return "\n".join(lines)
+
+
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--grid", action="store_true",
+        help=f"time MPPI-Generic's grid (K = {GRID_SAMPLES[0]} to {GRID_SAMPLES[-1]:,}, "
+        f"H = {GRID_HORIZON}) instead, printed as a Markdown table",
+    )  # fmt: skip
+    arguments = parser.parse_args()
+    agent, pose = driven_agent(256, 40)
+    if arguments.grid:
+        print(grid_table(agent, pose))
+        return
     for samples, horizon in SETTINGS:
-        report(samples, horizon)
+        report(agent, pose, samples, horizon)
 
 
 if __name__ == "__main__":

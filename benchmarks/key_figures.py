@@ -121,6 +121,10 @@ FIGURES = {
         "mppi-kinematic's rollouts, 256 sequences × 40 steps of 0.1 s",
         "the same in vectorised NumPy", "sequences", 5.0, bench_mppi.rollout_rates,
     ),
+    "mppi-step": KeyFigure(
+        "mppi-kinematic, one whole control step (256 × 40: sampling, rollouts, update)",
+        "the same step in NumPy", "control steps", 2.0, bench_mppi.step_rates,
+    ),
     "mppi-real-time": KeyFigure(
         "mppi-kinematic, one whole control step (256 × 40)", "the 0.1-s control period",
         "control steps", 10.0, bench_mppi.real_time_rates, guarded=False,

@@ -1,6 +1,7 @@
 """mppi-kinematic gives the same actions and numbers with and without numba
-(NUMBA_DISABLE_JIT=1): the rollouts (two model draws per sequence in one mode), the cost maps,
-the lattice, the model's refits, the lidar's evidence."""
+(NUMBA_DISABLE_JIT=1): the sampling (the Generator's normals, the smoothing and the clip; white
+noise and an unsampled model too), the rollouts (two model draws per sequence in one mode), the
+cost maps, the lattice, the model's refits, the lidar's evidence."""
 
 from __future__ import annotations
 
@@ -12,12 +13,14 @@ from pathlib import Path
 import numpy as np
 
 TRAINING = """
+import dataclasses
 import sys
 import gymnasium
 import numpy as np
 import skidnav
 from skidnav.agents.mpc.agent import MPPIKinematicAgent
 from skidnav.agents.mpc.config import MPPIConfig
+from skidnav.agents.mpc.planner import MPPIPlanner
 from skidnav.world.discretization import Discretization
 from skidnav.world.mapfile import parse_map
 
@@ -64,6 +67,17 @@ for mode, draws in (("states", 2), ("cells", 1)):
     results[f"{mode}_refits"] = np.array([agent.model.refits, agent.evidence.hits.sum()])
     for name, array in {**agent.state_arrays(), **agent.evidence.cost_map._asdict()}.items():
         results[f"{mode}_{name}"] = array
+for beta, sampled in ((0.0, True), (0.9, False)):  # the compiled sampling's other branches
+    planner = MPPIPlanner(
+        dataclasses.replace(config, noise_correlation=beta, sample_uncertainty=sampled),
+        agent.kernel_robot, agent.kernel_grid, np.random.default_rng(5),
+    )
+    planner.plan[...] = np.linspace(-2.0, 2.0, planner.plan.size).reshape(planner.plan.shape)
+    controls, perturbation, draws = planner.sample()
+    for name, array in (("controls", controls), ("perturbation", perturbation),
+                        ("model", draws.model), ("noise", draws.noise)):
+        results[f"sample_{beta}_{name}"] = array
+    results[f"sample_{beta}_next"] = planner.rng.standard_normal(3)
 np.savez(sys.argv[1], **results)
 """
 

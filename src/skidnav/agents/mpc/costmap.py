@@ -271,14 +271,16 @@ def _corner(position: float, extent: float, levels: int) -> tuple[int, float]:
     return lower, min(max(scaled - lower, 0.0), 1.0)
 
 
-@jit
+@inline_jit
 def interpolated_state_value(
     x: float, y: float, heading: float, cost_map: CostMap, grid: GridShape
 ) -> float:
     """The states' value at a pose, interpolated trilinearly between the 8 states around it
     (cell centres in x and y, bin centres in heading, cyclic), leaving out the states of
     lethal cells (walls, whose values are not a route's); the value of the pose's own state
-    when all 8 are lethal."""
+    when all 8 are lethal. Inlined: a compiled call per rollout that takes the cost map's
+    arrays counts a reference of each in and out, 7 % of the rollouts' time (K = 256,
+    H = 40)."""
     i0, fx = _corner(x, grid.arena_width, grid.n_x)
     j0, fy = _corner(y, grid.arena_height, grid.n_y)
     turns = (wrap_angle(heading) + math.pi) / (2.0 * math.pi) * grid.n_headings - 0.5
@@ -312,6 +314,16 @@ def terminal_value(
         return 0.0
     if costs.use_states:
         return interpolated_state_value(x, y, heading, cost_map, grid)
+    return route_value(x, y, heading, cost_map, costs, grid)
+
+
+@jit
+def route_value(
+    x: float, y: float, heading: float, cost_map: CostMap, costs: MapCosts, grid: GridShape
+) -> float:
+    """The cells' cost-to-go [control steps] of the pose (x [m], y [m], heading [rad]) out of
+    the goal cell (module doc). Not inlined into :func:`terminal_value`: the arrays it reads
+    would be reference-counted at every terminal value of the states' too."""
     wi, wj = lookahead_waypoint(x, y, cost_map, costs, grid)
     target_x, target_y = cell_centre(wi, wj, grid)
     dx, dy = target_x - x, target_y - y

@@ -200,30 +200,35 @@ def sampled_twist(
     omega_right: float,
     draws: np.ndarray,
     noise: np.ndarray,
+    row: int,
+    step: int,
     noise_scale: float,
 ) -> tuple[float, float, float]:
     """Body twist (v_x [m/s], v_y [m/s], yaw_rate [rad/s]) of one sampled model (module doc) in
     ``region`` for the commanded wheel speeds [rad/s].
 
     Args:
-        dynamics: the sampled model's arrays. draws: float64 (5,) the sequence's standard
-            normals of the slopes. noise: float64 (3,) this control step's standard normals of
-            the noise (v_x, v_y, yaw rate). noise_scale: 1/√(sub-steps per control step), or 0
-            for no noise.
+        dynamics: the sampled model's arrays. draws: float64 (n, 5) standard normals of the
+            slopes, ``draws[row]`` the rollout's. noise: float64 (n, H, 3) standard normals of
+            the noise (v_x, v_y, yaw rate), ``noise[row, step]`` this control step's (read by
+            index: a view per sub-step would cost more than the twist). noise_scale:
+            1/√(sub-steps per control step), or 0 for no noise.
     """
     m, f, o = dynamics.mean, dynamics.factors, dynamics.offsets
-    d_left = f[region, 0] * draws[0]
-    d_right = f[region, 1] * draws[0] + f[region, 2] * draws[1]
+    d_left = f[region, 0] * draws[row, 0]
+    d_right = f[region, 1] * draws[row, 0] + f[region, 2] * draws[row, 1]
     v_x = m[region, 0] * omega_left + m[region, 1] * omega_right + m[region, 2]
     v_x += d_left * (omega_left - o[region, 0]) + d_right * (omega_right - o[region, 1])
-    d_left = f[region, 3] * draws[2]
-    d_right = f[region, 4] * draws[2] + f[region, 5] * draws[3]
+    d_left = f[region, 3] * draws[row, 2]
+    d_right = f[region, 4] * draws[row, 2] + f[region, 5] * draws[row, 3]
     yaw_rate = m[region, 3] * omega_left + m[region, 4] * omega_right + m[region, 5]
     yaw_rate += d_left * (omega_left - o[region, 2]) + d_right * (omega_right - o[region, 3])
-    yaw_rate += noise_scale * dynamics.noise_std[region, 2] * noise[2]
+    yaw_rate += noise_scale * dynamics.noise_std[region, 2] * noise[row, step, 2]
     v_y = (
-        m[region, 6] * yaw_rate + m[region, 7] + f[region, 6] * draws[4] * (yaw_rate - o[region, 4])
+        m[region, 6] * yaw_rate
+        + m[region, 7]
+        + f[region, 6] * draws[row, 4] * (yaw_rate - o[region, 4])
     )
-    v_x += noise_scale * dynamics.noise_std[region, 0] * noise[0]
-    v_y += noise_scale * dynamics.noise_std[region, 1] * noise[1]
+    v_x += noise_scale * dynamics.noise_std[region, 0] * noise[row, step, 0]
+    v_y += noise_scale * dynamics.noise_std[region, 1] * noise[row, step, 1]
     return v_x, v_y, yaw_rate

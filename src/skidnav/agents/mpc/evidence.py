@@ -70,8 +70,17 @@ def mean_twist(
     dynamics: SampledDynamics, region: int, omega_left: float, omega_right: float
 ) -> tuple[float, float, float]:
     """The posterior-mean body twist (v_x, v_y, yaw_rate) of the commanded wheel speeds."""
-    zeros = np.zeros(5)
-    return sampled_twist(dynamics, region, omega_left, omega_right, zeros, zeros, 0.0)
+    return sampled_twist(
+        dynamics,
+        region,
+        omega_left,
+        omega_right,
+        np.zeros((1, 5)),
+        np.zeros((1, 1, 3)),
+        0,
+        0,
+        0.0,
+    )
 
 
 class MapEvidence:

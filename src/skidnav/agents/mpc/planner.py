@@ -21,9 +21,11 @@ Each control step, from the robot's pose and the plan U (H, 2) [rad/s] kept from
 5. command U_0, then shift the plan by one step for the next control step (warm start), the
    last step repeated.
 
-Every random number is drawn here, in Python, from the planner's Generator (``standard_normal``
-in a fixed order: perturbations, then the model draws and the noise of
-:class:`~skidnav.agents.mpc.rollouts.RolloutDraws`); the compiled kernel draws none.
+Steps 1–2 and every random number are compiled (:mod:`~skidnav.agents.mpc.sampling`: the
+planner's Generator's ``standard_normal`` in a fixed order, the perturbations, then the model
+draws and the noise of :class:`~skidnav.agents.mpc.rollouts.RolloutDraws`, into arrays kept
+from step to step), then the rollouts (3); the rollout kernel draws none. The costs' reduction,
+the weights and the update (3–5) stay NumPy's, whose sums they were measured with.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.costmap import CostMap, MapCosts
 from skidnav.agents.mpc.dynamics import N_DRAWS, SampledDynamics
 from skidnav.agents.mpc.rollouts import RolloutDraws, rollout_costs
+from skidnav.agents.mpc.sampling import sample_batch
 from skidnav.robot.params import KinematicConstants
 from skidnav.world.discretization import GridShape
 
@@ -66,7 +69,7 @@ class MPPIPlanner:
         """float64 (K · M,): the last batch's cost of each sequence under each model draw."""
         self.weights = np.zeros(config.samples)
         """float64 (K,): the last batch's weights (summing to 1)."""
-        self._zero_draws: RolloutDraws | None = None
+        self._batch: tuple[np.ndarray, np.ndarray, RolloutDraws] | None = None
         self.temperature = config.temperature / (robot.dt * robot.substeps)
         """λ / T: the temperature in control steps (the costs' unit)."""
 
@@ -74,35 +77,29 @@ class MPPIPlanner:
         """Forget the plan (a new episode): the next step starts from U = 0."""
         self.plan[...] = 0.0
 
-    def perturbations(self) -> np.ndarray:
-        """Step 1: float64 (K, H, 2) time-correlated perturbations, sequence 0 all zero."""
+    def sample(self) -> tuple[np.ndarray, np.ndarray, RolloutDraws]:
+        """Steps 1–2 and the draws of step 3, compiled
+        (:func:`~skidnav.agents.mpc.sampling.sample_batch`): the sequences clip(U + ε) float64
+        (K, H, 2) [rad/s], their clipped perturbations ε float64 (K, H, 2) [rad/s], sequence 0
+        the plan itself, and the rollouts' model draws and noise (standard normals; zeros when
+        the model is not sampled). The arrays are the planner's, overwritten by the next call."""
         config = self.config
-        white = self.rng.standard_normal((config.samples, config.horizon, 2))
-        white *= config.noise_std
-        beta = config.noise_correlation
-        if beta > 0.0:
-            innovation = math.sqrt(1.0 - beta * beta)
-            for t in range(1, config.horizon):
-                white[:, t] = beta * white[:, t - 1] + innovation * white[:, t]
-        white[0] = 0.0
-        return white
-
-    def draws(self) -> RolloutDraws:
-        """The model draws and noise of a batch (standard normals), or zeros when the model
-        is not sampled."""
-        config = self.config
-        rollouts = config.samples * config.model_draws
-        if not config.sample_uncertainty:
-            if self._zero_draws is None:  # allocated once, at the first plan
-                shape = (rollouts, config.horizon, 3)
-                self._zero_draws = RolloutDraws(
-                    np.zeros((rollouts, N_DRAWS)), np.zeros(shape), 0.0, config.model_draws
-                )
-            return self._zero_draws
-        model = self.rng.standard_normal((rollouts, N_DRAWS))
-        noise = self.rng.standard_normal((rollouts, config.horizon, 3))
-        scale = 1.0 / math.sqrt(self.robot.substeps)
-        return RolloutDraws(model, noise, scale, config.model_draws)
+        if self._batch is None:  # allocated once, at the first plan
+            shape = (config.samples, config.horizon, 2)
+            rollouts = config.samples * config.model_draws
+            scale = 1.0 / math.sqrt(self.robot.substeps) if config.sample_uncertainty else 0.0
+            draws = RolloutDraws(
+                np.zeros((rollouts, N_DRAWS)), np.zeros((rollouts, config.horizon, 3)), scale,
+                config.model_draws,
+            )  # fmt: skip
+            self._batch = np.zeros(shape), np.zeros(shape), draws
+        controls, perturbation, draws = self._batch
+        sample_batch(
+            self.rng, self.plan, config.noise_std, config.noise_correlation,
+            self.robot.wheel_speed, controls, perturbation, draws.model, draws.noise,
+            config.sample_uncertainty,
+        )  # fmt: skip
+        return self._batch
 
     def step(
         self,
@@ -113,13 +110,19 @@ class MPPIPlanner:
     ) -> tuple[float, float]:
         """Steps 1–5 of the module doc from ``pose`` (x [m], y [m], heading [rad]); returns
         the wheel speeds (ω_L, ω_R) [rad/s] to command now."""
-        config, limit = self.config, self.robot.wheel_speed
-        controls = np.clip(self.plan + self.perturbations(), -limit, limit)
-        perturbation = controls - self.plan
+        controls, perturbation, draws = self.sample()
         rollout_costs(
-            np.asarray(pose, dtype=np.float64), controls, self.draws(), dynamics, cost_map,
+            np.asarray(pose, dtype=np.float64), controls, draws, dynamics, cost_map,
             costs, self.robot, self.grid, self.draw_costs,
         )  # fmt: skip
+        return self.update(perturbation)
+
+    def update(self, perturbation: np.ndarray) -> tuple[float, float]:
+        """Steps 3 (from the rollouts' costs in :attr:`draw_costs`) to 5 for the clipped
+        perturbations ``perturbation`` float64 (K, H, 2) [rad/s]: the sequences' costs, their
+        weights, the plan moved and shifted; returns the wheel speeds (ω_L, ω_R) [rad/s] to
+        command now. In NumPy: its sums are NumPy's, whose order the numbers keep."""
+        config, limit = self.config, self.robot.wheel_speed
         per_sequence = self.draw_costs.reshape(config.samples, config.model_draws)
         if config.risk == "worst":
             per_sequence.max(axis=1, out=self.costs)
