@@ -21,13 +21,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from skidnav.experiments.metrics import window_success_episode
 from skidnav.experiments.store import ResultStore
 from skidnav.statistics.intervals import bootstrap_interval, difference_interval
 from skidnav.statistics.survival import median_interval, speedup_interval
 from skidnav.studies.barn.grid import LAYOUT
 
 WINDOW, NEED = 10, 9
-"""Sustained success: at least NEED successes in WINDOW consecutive scored runs."""
+"""Sustained success: at least NEED successes in WINDOW consecutive scored runs
+(:func:`~skidnav.experiments.metrics.window_success_episode`: 90 % of the window)."""
 SEED = 2020
 """Root of the bootstrap streams (one child per statistic: the table is the same every run)."""
 
@@ -41,13 +43,12 @@ def per_world(episodes: pd.DataFrame) -> pd.DataFrame:
         success = runs["success"].to_numpy(dtype=float)
         driving = runs["driving_seconds"].to_numpy(dtype=float)
         first = np.flatnonzero(success)
-        windows = np.flatnonzero(np.convolve(success, np.ones(WINDOW), "valid") >= NEED)
-        sustained = windows[0] + WINDOW - 1 if windows.size else None  # index of its last run
+        sustained = window_success_episode(success, WINDOW)  # 1-based; NaN: never
         rows[(agent, world)] = {
             "first_episode": first[0] + 1 if first.size else np.nan,
             "first_seconds": driving[first[0]] if first.size else np.nan,
-            "sustained_episode": sustained + 1 if sustained is not None else np.nan,
-            "sustained_seconds": driving[sustained] if sustained is not None else np.nan,
+            "sustained_episode": sustained,
+            "sustained_seconds": driving[int(sustained) - 1] if sustained == sustained else np.nan,
             "last_success": success[-WINDOW:].mean(),
             "last_metric": runs["metric"].to_numpy(dtype=float)[-WINDOW:].mean(),
             "episodes": float(len(runs)),

@@ -27,7 +27,7 @@ from skidnav.studies.hardware.study import (
     load_study,
     run_study,
 )
-from skidnav.studies.hardware.trial import run_config
+from skidnav.studies.hardware.trial import RealtimeOutcome, run_config
 from tests.realtime.realtime_helpers import write_config
 from tests.realtime.test_run import small_room_map
 
@@ -151,7 +151,7 @@ def test_the_study_is_a_config_that_skidnav_run_runs_resumes_and_reports(
     )
 
 
-FakeRun = Callable[[RunSpec[Any], Path, Callable[[str], None]], tuple[int, list[EpisodeResult]]]
+FakeRun = Callable[[RunSpec[Any], Path, Callable[[str], None]], RealtimeOutcome]
 
 
 def fake_realtime(calls: list[str], interrupt_at: int = 0) -> FakeRun:
@@ -159,9 +159,7 @@ def fake_realtime(calls: list[str], interrupt_at: int = 0) -> FakeRun:
     other episode from a phase of the world seed), a file in the run's folder, and an
     interruption at the ``interrupt_at``-th call (1-based; 0: never)."""
 
-    def run(
-        spec: RunSpec[Any], out: Path, progress: Callable[[str], None]
-    ) -> tuple[int, list[EpisodeResult]]:
+    def run(spec: RunSpec[Any], out: Path, progress: Callable[[str], None]) -> RealtimeOutcome:
         calls.append(spec.run_id)
         (out / "run.jsonl").write_text("{}\n")
         config = run_config(spec)
@@ -171,8 +169,8 @@ def fake_realtime(calls: list[str], interrupt_at: int = 0) -> FakeRun:
             for e in range(config.run.episodes)
         ]
         if len(calls) == interrupt_at:
-            return EXIT_INTERRUPTED, results[:1]
-        return 0, results
+            return RealtimeOutcome(EXIT_INTERRUPTED, results[:1], {})
+        return RealtimeOutcome(0, results, {})
 
     return run
 

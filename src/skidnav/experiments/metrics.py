@@ -41,6 +41,9 @@ Episodes are numbered from 1. Definitions (also in docs/experiments.md and in ev
   all 5) and every later evaluation too, with at least W evaluations of evidence — the
   convergence rule above (:func:`convergence_episode`) at level 1 on "≥ 90 % reached" instead
   of a pass. Either time is **censored** (NaN, "not reached") when the run never got there.
+  A robot has no greedy evaluations: there sustained success is the last episode of the first
+  10 consecutive training episodes with at least 9 goals (:func:`window_success_episode`,
+  :func:`training_driving_metrics`).
 """
 
 from __future__ import annotations
@@ -293,16 +296,59 @@ def sustained_success_episode(greedy_success: np.ndarray, window: int) -> float:
     return float(episode) if reached else math.nan
 
 
+SUSTAINED_WINDOW = 10
+"""Consecutive training episodes over which sustained success is judged where there are no
+greedy evaluations (a robot's episodes: :func:`window_success_episode`)."""
+
+
+def window_success_episode(success: np.ndarray, window: int = SUSTAINED_WINDOW) -> float:
+    """The first 1-based episode that ends ``window`` consecutive episodes of which at least
+    :data:`SUSTAINED_SUCCESS` reached the goal (9 of 10 by default); NaN when none (also with
+    fewer than ``window`` episodes). Sustained success of a learner judged by its own training
+    episodes, exploration included, where there are no greedy evaluations (the robot).
+
+    >>> window_success_episode(np.array([0, 1, 1, 1, 1, 1, 1, 1, 1, 0, 1, 1]))
+    11.0
+    >>> window_success_episode(np.array([0, 1, 1, 0, 1, 1, 1]), 4)
+    nan
+    """
+    flags = np.asarray(success, dtype=np.float64)
+    need = math.ceil(SUSTAINED_SUCCESS * window - SHARE_MARGIN)
+    if flags.size < window:
+        return math.nan
+    ends = np.flatnonzero(np.convolve(flags, np.ones(window), "valid") >= need)
+    return float(ends[0] + window) if ends.size else math.nan
+
+
 def driving_metrics(episodes: dict[str, np.ndarray], clock: DrivingClock) -> dict[str, float]:
     """The seconds-of-driving columns of a run (module docs) from its ``length``, ``success``
     and ``greedy_success`` per episode, shape (N,) each: ``action_duration`` [s],
     ``driving_seconds`` (the whole run), ``episodes_to_first_success`` and
     ``seconds_to_first_success``, ``episodes_to_success90`` and ``seconds_to_success90`` (NaN
     when not reached: censored)."""
-    lengths, duration = episodes["length"], float(clock.action_duration)
+    to_success90 = sustained_success_episode(episodes["greedy_success"], clock.window)
+    return _driving_columns(episodes, to_success90, float(clock.action_duration))
+
+
+def training_driving_metrics(
+    episodes: dict[str, np.ndarray], action_duration: float, window: int = SUSTAINED_WINDOW
+) -> dict[str, float]:
+    """The columns of :func:`driving_metrics` for a run without greedy evaluations (a robot's),
+    from its ``length`` and ``success`` per episode, shape (N,) each: sustained success is
+    :func:`window_success_episode` of the training episodes themselves; ``action_duration``
+    [s] per action (NaN: the seconds NaN)."""
+    to_success90 = window_success_episode(episodes["success"], window)
+    return _driving_columns(episodes, to_success90, float(action_duration))
+
+
+def _driving_columns(
+    episodes: dict[str, np.ndarray], to_success90: float, duration: float
+) -> dict[str, float]:
+    """:data:`DRIVING_COLUMNS` of a run whose sustained success came at episode
+    ``to_success90`` (NaN: never), its actions lasting ``duration`` [s]."""
+    lengths = episodes["length"]
     first = np.flatnonzero(np.asarray(episodes["success"]) > 0)
     to_first = float(first[0] + 1) if first.size else math.nan
-    to_success90 = sustained_success_episode(episodes["greedy_success"], clock.window)
     return {
         "action_duration": duration,
         "driving_seconds": driving_seconds(lengths, len(lengths), duration),

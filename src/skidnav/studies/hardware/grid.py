@@ -2,6 +2,10 @@
 it runs (:class:`StudySettings`, the ``[study]`` table) over a real-time config's presets, as the
 runner's grid (:class:`StudyGrid`, a :class:`~skidnav.experiments.runs.Grid`): agents × the
 config's ``[run] map`` × presets × seeds from the ``[run] seed``.
+
+With ``sim_episodes`` every agent runs once per value: from scratch (0, labelled by its name) or
+pre-trained for N episodes in the kinematic simulator first (``NAME+simN``,
+:mod:`skidnav.studies.hardware.pretraining`); every arm of a (preset, seed) meets the same world.
 """
 
 from __future__ import annotations
@@ -9,7 +13,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -27,6 +31,7 @@ from skidnav.realtime.config import (
     with_overrides,
 )
 from skidnav.realtime.drivers import require_driver_extras
+from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import MAP_KINDS
 
@@ -40,6 +45,8 @@ class StudySettings:
         seeds: runs per (agent, preset).
         episodes: episodes per run (None: the preset's ``[run] episodes``).
         time_scale: robot s per wall s (None: the preset's ``[run] time_scale``).
+        sim_episodes: episodes of pre-training in the kinematic simulator, one arm per value
+            (0: from scratch on the robot).
     """
 
     agents: tuple[str, ...] = ("q-learning", "dyna-kinematic")
@@ -52,6 +59,7 @@ class StudySettings:
     seeds: int = 1
     episodes: int | None = None
     time_scale: float | None = None
+    sim_episodes: tuple[int, ...] = (0,)
 
     def __post_init__(self) -> None:
         for name in ("agents", "presets"):
@@ -67,6 +75,30 @@ class StudySettings:
         scale = self.time_scale
         if scale is not None and not (isinstance(scale, int | float) and 0 < scale < math.inf):
             raise ValueError(f"expected a finite time_scale > 0, got {shown(scale)}")
+        _check_sim_episodes(self.sim_episodes)
+
+
+def _check_sim_episodes(values: object) -> None:
+    """ValueError unless ``values`` is a tuple of distinct integers in [0, MAX_EPISODES]."""
+    counts = isinstance(values, tuple) and all(
+        isinstance(n, int) and not isinstance(n, bool) and 0 <= n <= MAX_EPISODES for n in values
+    )
+    if not (counts and isinstance(values, tuple) and values and len(set(values)) == len(values)):
+        raise ValueError(
+            f"expected sim_episodes to be one or more distinct integers in [0, "
+            f"{MAX_EPISODES:,}], got {shown(values)}"
+        )
+
+
+def arm_label(agent: str, sim_episodes: int) -> str:
+    """The label of agent ``agent`` pre-trained for ``sim_episodes`` simulator episodes: its
+    name from scratch (0), ``NAME+simN`` otherwise."""
+    return agent if sim_episodes == 0 else f"{agent}+sim{sim_episodes}"
+
+
+def agent_specs(names: Sequence[str], sim_episodes: Sequence[int]) -> tuple[AgentSpec, ...]:
+    """The grid's agents: every name × every pre-training, name-major."""
+    return tuple(AgentSpec(name, arm_label(name, n)) for name in names for n in sim_episodes)
 
 
 def _check_root_seed(name: str, value: object) -> None:
@@ -88,6 +120,7 @@ def study_settings(values: Mapping[str, Any], where: str) -> StudySettings:
     for key in ("agents", "presets"):
         if isinstance(study.get(key), str):
             study[key] = [name.strip() for name in study[key].split(",") if name.strip()]
+    for key in ("agents", "presets", "sim_episodes"):
         if key in study and isinstance(study[key], list | tuple):
             study[key] = tuple(study[key])
     return build_dataclass(StudySettings, study, where)
@@ -99,13 +132,15 @@ class StudyGrid:
     statistics' settings (:class:`~skidnav.experiments.report.analysis.StatsSettings`).
 
     Attributes:
-        agents: one per agent name (label = name; hyperparameters: ``configs``' ``agents``).
+        agents: one per agent name and pre-training (:func:`agent_specs`; hyperparameters:
+            ``configs``' ``agents``).
         maps: the one map of every run, the config's ``[run] map``.
         presets: preset names; ``configs``: the config of each, with the study's episodes and
             time scale (its ``[run] map`` and ``seed`` are the study's; a run's seed comes from
             its world stream).
         seeds: runs per (agent, preset). root_seed: the config's ``[run] seed``.
         bootstrap_samples, confidence: of every interval of the tables.
+        sim_episodes: the pre-trainings of every agent (``(0,)``: none).
     """
 
     agents: tuple[AgentSpec, ...]
@@ -117,12 +152,38 @@ class StudyGrid:
     name: str = "robot-study"
     bootstrap_samples: int = 2000
     confidence: float = 0.95
+    sim_episodes: tuple[int, ...] = (0,)
 
     def __post_init__(self) -> None:
         if not (self.agents and len(self.maps) == 1 and len(self.configs) == len(self.presets)):
             raise ValueError("expected agents, one map and one config per preset")
         _check_count("seeds", self.seeds, MAX_SEEDS)
         _check_root_seed("root_seed", self.root_seed)
+        _check_sim_episodes(self.sim_episodes)
+        if self.agents != agent_specs(self.agent_names, self.sim_episodes):
+            raise ValueError("expected the agents of agent_specs(names, sim_episodes)")
+
+    @property
+    def agent_names(self) -> list[str]:
+        """The distinct agent names, in grid order."""
+        return list(dict.fromkeys(agent.name for agent in self.agents))
+
+    def pretraining(self, label: str) -> int:
+        """Simulator episodes of the arm labelled ``label`` before it drives (KeyError if none
+        is)."""
+        arms = {arm_label(name, n): n for name in self.agent_names for n in self.sim_episodes}
+        return arms[label]
+
+    def references(self) -> dict[str, str]:
+        """Arm → the arm it is compared with: a pre-trained arm with its agent from scratch
+        (when the grid has that arm), any other arm but the baseline with the baseline."""
+        pairs = {}
+        for agent in self.agents:
+            scratch = agent.name if 0 in self.sim_episodes else self.baseline
+            reference = scratch if self.pretraining(agent.label) else self.baseline
+            if reference != agent.label:
+                pairs[agent.label] = reference
+        return pairs
 
     @property
     def agent_labels(self) -> list[str]:
@@ -153,10 +214,12 @@ class StudyGrid:
 
 
 def grid_to_dict(grid: StudyGrid) -> dict[str, Any]:
-    """The grid as a JSON-ready dict (inverse of :func:`grid_from_dict`)."""
-    return {
+    """The grid as a JSON-ready dict (inverse of :func:`grid_from_dict`); ``sim_episodes`` only
+    when the grid pre-trains (a study without keeps its fingerprint)."""
+    pretraining = {} if grid.sim_episodes == (0,) else {"sim_episodes": list(grid.sim_episodes)}
+    return pretraining | {
         "name": grid.name,
-        "agents": [agent.name for agent in grid.agents],
+        "agents": grid.agent_names,
         "map": {"label": grid.maps[0].label, "kind": grid.maps[0].kind, "file": grid.maps[0].file},
         "presets": [
             {"name": preset, "run": asdict(c.run), "sim": asdict(c.sim), "agents": dict(c.agents)}
@@ -178,8 +241,9 @@ def grid_from_dict(data: dict[str, Any]) -> StudyGrid:
         )
         for p in presets
     )
+    sim_episodes = tuple(data.get("sim_episodes", (0,)))
     return StudyGrid(
-        agents=tuple(AgentSpec(name, name) for name in data["agents"]),
+        agents=agent_specs(data["agents"], sim_episodes),
         maps=(MapSpec(**data["map"]),),
         presets=tuple(str(p["name"]) for p in presets),
         configs=configs,
@@ -188,6 +252,7 @@ def grid_from_dict(data: dict[str, Any]) -> StudyGrid:
         name=data["name"],
         bootstrap_samples=data["bootstrap_samples"],
         confidence=data["confidence"],
+        sim_episodes=sim_episodes,
     )
 
 
@@ -196,7 +261,8 @@ def build_grid(tables: Mapping[str, Any], settings: StudySettings) -> StudyGrid:
 
     Raises:
         UserError: an unknown agent or preset, invalid hyperparameters, an unreadable map, a
-            negative root seed, or a preset that sets ``[run] map``, ``seed`` or manual reset.
+            negative root seed, a preset that sets ``[run] map``, ``seed`` or manual reset, or
+            pre-training with a preset whose actions are not the simulator's.
     """
     from skidnav.agents.tabular.registry import make_config
 
@@ -212,14 +278,30 @@ def build_grid(tables: Mapping[str, Any], settings: StudySettings) -> StudyGrid:
         for agent in settings.agents:
             make_config(agent, config.agents.get(agent))  # UserError if unknown or invalid
     arena_map(base.map, seed, Discretization())  # UserError if unreadable
+    if any(settings.sim_episodes):
+        for preset, config in zip(settings.presets, configs, strict=True):
+            _check_simulator_actions(preset, config)
     return StudyGrid(
-        agents=tuple(AgentSpec(name, name) for name in settings.agents),
+        agents=agent_specs(settings.agents, settings.sim_episodes),
         maps=(_map_spec(base.map),),
         presets=settings.presets,
         configs=configs,
         seeds=settings.seeds,
         root_seed=seed,
+        sim_episodes=settings.sim_episodes,
     )
+
+
+def _check_simulator_actions(preset: str, config: RealtimeConfig) -> None:
+    """UserError unless an action of ``preset`` (``[run] period × substeps``) lasts as long as
+    the simulator's (the robot's ``dt × substeps``), which pre-training teaches."""
+    simulated = RobotParams().action_duration
+    robot = config.run.period * config.run.substeps
+    if abs(robot - simulated) > 1e-9:
+        raise UserError(
+            f"[presets.{preset}]: sim_episodes pre-trains on the simulator's actions of "
+            f"{simulated:g} s; this preset's [run] period × substeps is {robot:g} s"
+        )
 
 
 def _preset_config(

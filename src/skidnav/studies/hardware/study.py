@@ -39,6 +39,8 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, NamedTuple
 
+import pandas as pd
+
 from skidnav.errors import UserError, first_line, shown
 from skidnav.experiments.configfile import parse_tables
 from skidnav.experiments.report.page import markdown_html
@@ -58,6 +60,7 @@ from skidnav.studies.hardware.grid import (
     study_settings,
 )
 from skidnav.studies.hardware.report import markdown_report
+from skidnav.studies.hardware.speed import speed_report
 from skidnav.studies.hardware.trial import EPISODE_COLUMNS, RealtimeTrial, ignore
 from skidnav.studies.kind import Study
 
@@ -203,9 +206,16 @@ def write_report(store: ResultStore, grid: StudyGrid, *, consolidate: bool = Fal
     if not store.finished():
         return 0
     summaries = store.consolidate()[1] if consolidate else store.load_tables()[1]
-    text = markdown_report(summaries, grid, grid.conditions())
+    text = study_markdown(summaries, grid)
     write_user_file(store.root / "study.md", text.encode("utf-8"), "report")
     return len(summaries)
+
+
+def study_markdown(summaries: pd.DataFrame, grid: StudyGrid) -> str:
+    """The study's tables (``study.md``): success and episode length
+    (:func:`~skidnav.studies.hardware.report.markdown_report`), then the robot episodes to
+    success (:func:`~skidnav.studies.hardware.speed.speed_report`)."""
+    return markdown_report(summaries, grid, grid.conditions()) + speed_report(summaries, grid)
 
 
 class HardwareStudy:
@@ -230,7 +240,7 @@ class HardwareStudy:
         store = ResultStore(run_dir, STUDY_LAYOUT)
         grid: StudyGrid = store.config()
         summaries = store.load_tables()[1]
-        text = markdown_report(summaries, grid, grid.conditions())
+        text = study_markdown(summaries, grid)
         return "<h2>Hardware-in-the-loop study</h2>" + markdown_html(text)
 
 

@@ -7,10 +7,13 @@ stream, acts in real time (:class:`~skidnav.realtime.control.loop.RealtimeLoop`)
 driver, which starts its own server on a free loopback port with the root seed drawn from the
 run's world stream (its :data:`~skidnav.seeding.ARENA_ROLES` children: map, slip field, robot
 noise, dropped poses; the same for every agent of a preset and seed). The agent draws from the
-``agent`` child of the run stream (:data:`~skidnav.seeding.RUN_ROLES`), as in an experiment. The
-loop's files (``run.jsonl``, ``checkpoints/``, ``sim-server.jsonl``) go to
-``OUT/runs/AGENT/PRESET/seed-N/``; the per-episode results (:data:`EPISODE_COLUMNS`) and the
-run's metrics (:func:`run_summary`) go back to the runner, which stores them.
+``agent`` child of the run stream (:data:`~skidnav.seeding.RUN_ROLES`), as in an experiment; an
+arm with pre-training trains it in the kinematic simulator first
+(:mod:`skidnav.studies.hardware.pretraining`). The loop's files (``run.jsonl``,
+``checkpoints/``, ``sim-server.jsonl``) go to ``OUT/runs/AGENT/PRESET/seed-N/`` (AGENT: the
+arm's label); the per-episode results (:data:`EPISODE_COLUMNS`) and the run's metrics
+(:func:`run_summary` and the pre-training's :data:`~skidnav.studies.hardware.pretraining.
+SIM_COLUMNS`) go back to the runner, which stores them.
 """
 
 from __future__ import annotations
@@ -20,10 +23,11 @@ import shutil
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
+from skidnav.experiments.metrics import training_driving_metrics
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import TrialResult
 from skidnav.realtime.arena import arena_map
@@ -35,6 +39,7 @@ from skidnav.robot.params import RobotParams
 from skidnav.seeding import RUN_ROLES, child_sequences, seed_int
 from skidnav.statistics.formatting import readable
 from skidnav.studies.hardware.grid import StudyGrid
+from skidnav.studies.hardware.pretraining import pretrain
 from skidnav.world.discretization import Discretization
 
 EPISODE_COLUMNS = ("return", "length", "success", "collisions", "aborted", "wall_time")
@@ -84,11 +89,12 @@ class RealtimeTrial:
         if directory.exists():
             shutil.rmtree(directory)  # left by an unfinished run
         directory.mkdir(parents=True)
-        code, results = realtime_run(spec, directory, self.progress)
+        code, results, pretraining = realtime_run(spec, directory, self.progress)
         if code == EXIT_INTERRUPTED:
             raise KeyboardInterrupt
         episodes = episode_arrays(results)
-        summary = run_summary(episodes, code)
+        run = run_config(spec).run
+        summary = run_summary(episodes, code, run.period * run.substeps) | pretraining
         self.announce(
             f"{spec.agent.label} {spec.preset} seed {spec.seed}: {summary['successes']}/"
             f"{summary['episodes']} goals, {readable(summary['mean_length'], 1)} actions/episode, "
@@ -97,11 +103,21 @@ class RealtimeTrial:
         return TrialResult(spec.run_id, spec.coordinates, episodes, summary, {})
 
 
+class RealtimeOutcome(NamedTuple):
+    """What :func:`realtime_run` did: the loop's exit code, the robot episodes' results, and
+    the pre-training's :data:`~skidnav.studies.hardware.pretraining.SIM_COLUMNS`."""
+
+    code: int
+    results: list[EpisodeResult]
+    pretraining: dict[str, float]
+
+
 def realtime_run(
     spec: RunSpec[StudyGrid], out: Path, progress: Callable[[str], None]
-) -> tuple[int, list[EpisodeResult]]:
+) -> RealtimeOutcome:
     """One real-time run of a new agent (drawing from the run stream's ``agent`` child) on the
-    ``sim`` driver, its files in ``out``; (exit code, episode results)."""
+    ``sim`` driver, its files in ``out``, after the arm's pre-training in the simulator (none
+    for an arm from scratch)."""
     config = run_config(spec)
     robot, grid = RobotParams(), Discretization()
     grid_map = arena_map(config.run.map, config.run.seed, grid)
@@ -110,10 +126,12 @@ def realtime_run(
     rng = np.random.default_rng(child_sequences(spec.run_seed.sequence(), RUN_ROLES)["agent"])
     agent = new_agent(name, config, context, grid, rng)
     warm_up_agent(name, config, context, grid.n_states)
+    episodes = spec.config.pretraining(spec.agent.label)
+    pretraining = pretrain(agent, spec, config, (robot, grid, grid_map), episodes)
     code, loop = drive(
         "sim", agent, grid_map, config, out, robot=robot, grid=grid, progress=progress
     )
-    return code, loop.results
+    return RealtimeOutcome(code, loop.results, pretraining)
 
 
 def episode_arrays(results: Sequence[EpisodeResult]) -> dict[str, np.ndarray]:
@@ -132,13 +150,17 @@ def _mean(values: np.ndarray) -> float:
     return float(values.mean()) if values.size else float("nan")
 
 
-def run_summary(episodes: Mapping[str, np.ndarray], code: int) -> dict[str, float]:
+def run_summary(
+    episodes: Mapping[str, np.ndarray], code: int, action_duration: float = float("nan")
+) -> dict[str, float]:
     """A study run's metrics: episodes, successes, success rate (all episodes; the last half,
     the odd middle one included, where the agent has learned most), mean episode length
     [actions], return and collisions per episode (goal, truncated at ``max_actions`` and aborted
-    episodes alike), aborted episodes, wall time [s] and the loop's exit code (3: ended by a
-    safety trip it could not recover from; 4: every episode aborted). Rates are NaN without
-    episodes."""
+    episodes alike), aborted episodes, wall time [s], the loop's exit code (3: ended by a
+    safety trip it could not recover from; 4: every episode aborted), and the episodes and seconds of driving (actions ×
+    ``action_duration`` [s], homing not counted) to the first success and to sustained success
+    (:func:`~skidnav.experiments.metrics.training_driving_metrics`: 9 goals in 10 consecutive
+    episodes; NaN when not reached). Rates are NaN without episodes."""
     success = episodes["success"]
     late = success[len(success) // 2 :]
     return {
@@ -154,4 +176,4 @@ def run_summary(episodes: Mapping[str, np.ndarray], code: int) -> dict[str, floa
         "aborted": int(episodes["aborted"].sum()),
         "wall_time": float(episodes["wall_time"].sum()),
         "exit_code": code,
-    }
+    } | training_driving_metrics(dict(episodes), action_duration)
