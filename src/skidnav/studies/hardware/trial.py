@@ -157,8 +157,9 @@ def run_summary(
     the odd middle one included, where the agent has learned most), mean episode length
     [actions], return and collisions per episode (goal, truncated at ``max_actions`` and aborted
     episodes alike), aborted episodes, wall time [s], the loop's exit code (3: ended by a
-    safety trip it could not recover from; 4: every episode aborted), and the episodes and seconds of driving (actions ×
-    ``action_duration`` [s], homing not counted) to the first success and to sustained success
+    safety trip it could not recover from; 4: every episode aborted), and the episodes and
+    seconds of driving (actions × ``action_duration`` [s], homing not counted) to the first
+    success and to sustained success
     (:func:`~skidnav.experiments.metrics.training_driving_metrics`: 9 goals in 10 consecutive
     episodes; NaN when not reached). Rates are NaN without episodes."""
     success = episodes["success"]
