@@ -18,8 +18,14 @@ from skidnav.cli import main
 from skidnav.errors import UserError
 from skidnav.studies.hardware import trial
 from skidnav.studies.hardware.speed import speed_report
-from skidnav.studies.hardware.study import grid_from_dict, grid_to_dict, load_study
+from skidnav.studies.hardware.study import (
+    grid_from_dict,
+    grid_to_dict,
+    load_study,
+    study_config_text,
+)
 from skidnav.studies.hardware.trial import run_summary
+from tests.cli_support import exit_code
 from tests.realtime.realtime_helpers import write_config
 from tests.realtime.test_study import _cells
 
@@ -107,6 +113,20 @@ def test_sim_episodes_errors_are_one_line_and_the_fingerprint_unchanged_without(
         "[presets.rough]: sim_episodes pre-trains on the simulator's actions of 1 s; this "
         "preset's [run] period × substeps is 0.5 s"
     ), lines
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_command_line_takes_sim_episodes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    config = write_config(tmp_path, STUDY)
+    assert "sim_episodes = [0, 200]" in study_config_text(config, {"sim_episodes": [0, 200]})
+    argv = ["robot", "study", "--config", str(config), "--out", str(tmp_path / "out")]
+    assert exit_code([*argv, "--sim-episodes", "0,x"]) == 2
+    line = capsys.readouterr().err.strip()
+    assert line.endswith("argument --sim-episodes: expected comma-separated integers, got '0,x'")
+    assert exit_code([*argv, "--sim-episodes", "0,0"]) == 2
+    assert "expected sim_episodes to be one or more distinct" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
 
 

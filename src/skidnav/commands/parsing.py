@@ -88,3 +88,20 @@ def path_argument(text: str) -> Path:
     if not text.strip():
         raise argparse.ArgumentTypeError("expected a path, got an empty one")
     return Path(text)
+
+
+def comma_integers(text: str) -> list[int]:
+    """Comma-separated integers, for an argument's ``type`` (their range is the config's to
+    check).
+
+    >>> comma_integers("0,200")
+    [0, 200]
+    >>> comma_integers("0,x")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: expected comma-separated integers, got '0,x'
+    """
+    words = [word.strip() for word in text.split(",")]
+    if not all(word.isascii() and word.isdigit() for word in words):
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text[:40]!r}")
+    return [int(word) for word in words]

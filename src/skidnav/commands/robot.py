@@ -19,7 +19,7 @@ from pathlib import Path
 from types import FrameType
 from typing import IO, Any
 
-from skidnav.commands.parsing import path_argument, positive_number
+from skidnav.commands.parsing import comma_integers, path_argument, positive_number
 from skidnav.errors import UserError
 from skidnav.files.outputs import check_output_dir
 
@@ -272,6 +272,12 @@ def _add_study(commands: Any) -> None:
     study.add_argument("--episodes", type=int, help="episodes per run (default: the preset's)")
     study.add_argument("--time-scale", type=float, help="robot s per wall s of the sim server")
     study.add_argument("--seeds", type=int, help="runs per agent × preset ([study] seeds)")
+    study.add_argument(
+        "--sim-episodes",
+        type=comma_integers,
+        help="episodes of pre-training in the simulator, one arm per value, e.g. 0,1000 "
+        "([study] sim_episodes)",
+    )
     study.add_argument("--out", type=path_argument, required=True, help="output directory")
     study.add_argument("--quiet", action="store_true", help="no live progress line")
     study.set_defaults(func=_run_study)
@@ -286,6 +292,7 @@ def _run_study(args: argparse.Namespace) -> int:
         "episodes": args.episodes,
         "time_scale": args.time_scale,
         "seeds": args.seeds,
+        "sim_episodes": args.sim_episodes,
     }
     grid, text = load_study(args.config, overrides)
     check_output_dir(args.out)
