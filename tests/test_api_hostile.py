@@ -128,10 +128,10 @@ def test_each_hostile_call_is_one_line_naming_the_argument(
 @pytest.mark.parametrize(
     ("param", "value", "message"),
     [
-        ("alpha", True, "expected alpha to be a float, got True"),
-        ("alpha", "0.5", "expected alpha to be a float, got '0.5'"),
+        ("alpha", True, "expected alpha to be a number, got True"),
+        ("alpha", "0.5", "expected alpha to be a number, got '0.5'"),
         ("alpha", NAN, "expected alpha in (0, 1], got nan"),
-        ("epsilon", None, "expected epsilon to be a float, got None"),
+        ("epsilon", None, "expected epsilon to be a number, got None"),
         ("planning_steps", 2.5, "expected an integer planning_steps in [0, 10,000,000], got 2.5"),
     ],
 )

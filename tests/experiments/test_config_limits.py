@@ -66,7 +66,7 @@ CASES: dict[str, tuple[str, str]] = {
     ),
     "a bool for a number": (
         TINY_TOML.replace(PARAMS, "params = { planning_steps = 5, alpha = true }"),
-        "agent 'dyna-q': expected alpha to be a float, got True",
+        "agent 'dyna-q': expected alpha to be a number, got True",
     ),
     "an unknown env option": (
         TINY_TOML + "\n[env]\nbogus_key = 3\n",

@@ -21,11 +21,11 @@ from typing import Any, Generic
 
 from numpy.random import SeedSequence
 
-from skidnav.agents.config import check_field_types
 from skidnav.agents.family import AgentT, Env, Family, Params, asks_for, constructor_context
 from skidnav.agents.interface import Agent, AgentConfig
 from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog
 from skidnav.errors import UserError, first_line, shown
+from skidnav.files.configtables import check_types
 
 FAMILY_MODULES: tuple[str, ...] = (
     "skidnav.agents.tabular.family",
@@ -117,21 +117,19 @@ class AgentEntry(Generic[AgentT]):
     def config(self, params: Params) -> AgentConfig:
         """The agent's config from ``params`` (e.g. an ``[[agents]]`` table's ``params``),
         validated as a new agent would: by its own checks first (their messages name the
-        range), and each value's type (:func:`~skidnav.agents.config.check_field_types`: a bool
+        range), and each value's type (:func:`~skidnav.files.configtables.check_types`: a bool
         or a float its checks let through, a string they trip on); UserError naming the agent
-        otherwise. A missing
-        extra is its own UserError, unchanged."""
-        config_class = self.config_class
+        otherwise. A missing extra is its own UserError, unchanged."""
+        config_class, where = self.config_class, f"agent {self.name!r}"
         try:
-            try:
-                config = config_class.from_mapping(dict(params))
-            except TypeError:  # its checks compared a value of another type: name it
-                check_field_types(config_class, dict(params))
-                raise
-            check_field_types(config_class, dict(params))
-            return config
-        except (ValueError, TypeError, UserError) as error:
-            raise UserError(f"agent {self.name!r}: {first_line(error)}") from None
+            config = config_class.from_mapping(dict(params))
+        except TypeError as error:  # its checks compared a value of another type: name it
+            check_types(config_class, dict(params), where)
+            raise UserError(f"{where}: {first_line(error)}") from None
+        except (ValueError, UserError) as error:
+            raise UserError(f"{where}: {first_line(error)}") from None
+        check_types(config_class, dict(params), where)
+        return config
 
     def env_observation(self, requested: object) -> str:
         """The skid-steer env's ``observation`` for this agent when a config asks for

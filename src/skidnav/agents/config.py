@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import typing
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, TypeVar
@@ -28,30 +27,6 @@ C = TypeVar("C", bound="QLearningConfig")
 def check(condition: bool, expected: str, value: object) -> None:
     if not condition:
         raise ValueError(f"expected {expected}, got {shown(value)}")
-
-
-SCALAR_KINDS: Mapping[object, tuple[type, ...]] = {
-    bool: (bool,),
-    int: (int,),
-    float: (int, float),
-    str: (str,),
-}
-"""What a config field of each annotated scalar type accepts (a bool is only a bool)."""
-
-
-def check_field_types(config_class: type, values: Mapping[str, Any]) -> None:
-    """ValueError ``"expected NAME to be a float, got True"`` for a value of ``values`` whose
-    config field (a dataclass field of ``config_class`` annotated ``bool``, ``int``, ``float``
-    or ``str``) takes another type: ``alpha = true`` is not α = 1, ``planning_steps = 2.5``
-    not 2. Fields of other annotations, and keys that are no field, are left to the config."""
-    hints = typing.get_type_hints(config_class)
-    for key, value in values.items():
-        kinds = SCALAR_KINDS.get(hints.get(key))
-        wrong_bool = isinstance(value, bool) and bool not in kinds if kinds else False
-        if kinds and (wrong_bool or not isinstance(value, kinds)):
-            expected = hints[key].__name__
-            raise ValueError(f"expected {key} to be {'an' if expected == 'int' else 'a'} "
-                             f"{expected}, got {shown(value)}")  # fmt: skip
 
 
 @dataclass(frozen=True)
