@@ -97,6 +97,31 @@ def test_a_hostile_config_is_one_line_and_writes_nothing(
     assert sorted(tmp_path.iterdir()) == [config]
 
 
+def test_a_tuning_map_whose_oracle_does_not_fit_is_refused_when_read(tmp_path: Path) -> None:
+    config = tmp_path / "tune.toml"
+    big = '\n[[tune.maps]]\nkind = "free"\nlabel = "big"\noptions = { shape = [1000, 1000] }\n'
+    config.write_text(TINY_TOML.replace("oracle_samples = 4", "oracle_samples = 64") + TUNE + big)
+    with pytest.raises(UserError, match=r"\[\[tune.maps\]\] 'big': its oracle would need 19.1 GiB"):
+        load_tune_config(config)
+
+
+def test_the_oracle_refuses_a_world_beyond_the_budget_before_allocating(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The last guard, for a world no config check saw (here: a budget made tiny)."""
+    import gymnasium
+
+    from skidnav.experiments import memory
+    from skidnav.experiments.reference.oracle import compute_oracle
+
+    monkeypatch.setattr(memory, "MEMORY_BUDGET", 2**20)
+    env = gymnasium.make("skidnav/SkidSteerNav-v0", map_kind="free")
+    with pytest.raises(
+        UserError, match=r"^the world: its oracle would need 0.0 GiB \(12,500 states"
+    ):
+        compute_oracle(env, 64, 0, [0], 10)
+
+
 def test_a_tuning_table_without_seeds_is_named_not_a_constructor_error(tmp_path: Path) -> None:
     config = tmp_path / "tune.toml"
     config.write_text(TINY_TOML + TUNE.replace("seeds = 2\n", ""))

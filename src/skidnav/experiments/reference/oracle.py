@@ -60,7 +60,8 @@ import numpy as np
 from skidnav.agents.tabular.fast_training import evaluate_q_fast
 from skidnav.agents.training import greedy_run
 from skidnav.envs.wrappers import fine_grid
-from skidnav.errors import CorruptFileError
+from skidnav.errors import CorruptFileError, UserError
+from skidnav.experiments.memory import check_oracle_memory
 from skidnav.experiments.reference.finegrid import TablePolicy, goal_states, refined_task
 from skidnav.files.atomic import remove_stale_temporaries, write_npz_atomic
 from skidnav.files.saved import ArraySpec, SavedArchive
@@ -243,6 +244,11 @@ def compute_oracle(
     if n_samples < 1:
         raise ValueError(f"expected n_samples >= 1, got {n_samples}")
     grid = fine_grid(env)
+    n_states = grid.n_states if grid is not None else int(env.observation_space.n)
+    try:  # a world's config is checked when read; this is the last guard before allocating
+        check_oracle_memory("the world", n_states, n_samples)
+    except ValueError as error:
+        raise UserError(str(error)) from None
     solution = solve(env.unwrapped, n_samples, np.random.default_rng(seed), grid)
     lengths, _ = _rollouts(env, solution.q, seeds, max_steps, grid)
     cost_lengths, costs = _rollouts(env, solution.cost_q, seeds, max_steps, grid)

@@ -42,6 +42,7 @@ from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec
 # with the same messages.
 from skidnav.experiments.configfile import config_from_tables, parse_tables, read_map
 from skidnav.experiments.limits import check_range
+from skidnav.experiments.memory import check_oracle_memory, map_states
 from skidnav.files.configtables import check_keys, table, table_array
 from skidnav.files.saved import read_config_text
 
@@ -306,6 +307,9 @@ def parse_tune(value: Any, config: ExperimentConfig, path: Path) -> TuneConfig:
         tables = table_array(tune["maps"], "tune.maps")
         where = "[[tune.maps]] #{}"
         maps = tuple(read_map(t, where.format(n + 1), path.parent) for n, t in enumerate(tables))
+        for spec in maps:  # as the experiment's [[maps]] are when read
+            label = f"[[tune.maps]] {spec.label!r}"
+            check_oracle_memory(label, map_states(spec), config.oracle_samples)
     if "space" not in tune:
         raise ValueError("[tune]: missing table [tune.space.<agent label>]")
     if "seeds" not in tune:
