@@ -227,3 +227,44 @@ def test_a_path_argument_refused_writes_nothing(world: dict[str, Any], tmp_path:
     before = sorted(tmp_path.iterdir())
     _refused(world, "save_agent", "path", [tmp_path / "a"])
     assert sorted(tmp_path.iterdir()) == before
+
+
+NOT_AN_OBJECT_OF_THE_API = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(),
+    st.floats(),
+    st.binary(max_size=5),
+    st.lists(st.integers(), max_size=3),
+    st.dictionaries(st.text(max_size=3), st.integers(), max_size=2),
+)
+"""Values that are no env, agent, training log, name or path."""
+TYPED = [
+    ("make_env", "map"),
+    ("make_agent", "name"),
+    ("make_agent", "env"),
+    ("train", "agent"),
+    ("train", "env"),
+    ("evaluate", "agent"),
+    ("evaluate", "env"),
+    ("save_agent", "agent"),
+    ("save_agent", "path"),
+    ("load_agent", "path"),
+    ("convergence_episode", "log"),
+    ("convergence_episode", "env"),
+    ("reference_length", "env"),
+    ("run_config", "config"),
+]
+"""Every argument of the API that takes an object, a name or a path."""
+
+
+@pytest.mark.parametrize(("function", "argument"), TYPED)
+def test_property_any_value_of_another_type_is_refused_in_time(
+    world: dict[str, Any], function: str, argument: str
+) -> None:
+    @PROPERTY
+    @given(NOT_AN_OBJECT_OF_THE_API)
+    def refused(value: object) -> None:
+        _refused(world, function, argument, value)
+
+    refused()

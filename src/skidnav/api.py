@@ -249,8 +249,10 @@ def load_agent(path: SavedPath, env: Env | None = None) -> Agent:
     the pair it returned), of any family
     (:func:`skidnav.agents.saved.load_saved_agent`; a deep agent needs the ``env`` it acts in).
     """
-    pair = isinstance(path, list | tuple) and all(isinstance(p, str | Path) for p in path)
-    if not (isinstance(path, str | Path) or pair):
+    pair = isinstance(path, list | tuple) and len(path) == 2
+    if not (
+        isinstance(path, str | Path) or (pair and all(isinstance(p, str | Path) for p in path))
+    ):
         raise UserError(
             f"load_agent: expected path to be a path or a pair of paths, got {shown(path)}"
         )
