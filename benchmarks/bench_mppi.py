@@ -101,12 +101,15 @@ def kernel_costs(agent: MPPIKinematicAgent, pose: np.ndarray, controls: np.ndarr
     return out
 
 
-def numpy_batch(planner: MPPIPlanner) -> tuple[np.ndarray, np.ndarray, RolloutDraws]:
-    """Steps 1–2 of :mod:`skidnav.agents.mpc.planner` and the draws in NumPy, from the
-    planner's Generator: the sequences, their perturbations and the rollouts' draws, the
-    numbers of :meth:`MPPIPlanner.sample`."""
+def numpy_batch(
+    planner: MPPIPlanner, rng: np.random.Generator | None = None
+) -> tuple[np.ndarray, np.ndarray, RolloutDraws]:
+    """Steps 1–2 of :mod:`skidnav.agents.mpc.planner` and the draws in NumPy, from ``rng``
+    (default: the planner's Generator): the sequences, their perturbations and the rollouts'
+    draws, the numbers of :meth:`MPPIPlanner.sample` (the tests hold the two equal)."""
     config, limit = planner.config, planner.robot.wheel_speed
-    white = planner.rng.standard_normal((config.samples, config.horizon, 2))
+    rng = planner.rng if rng is None else rng
+    white = rng.standard_normal((config.samples, config.horizon, 2))
     white *= config.noise_std
     beta = config.noise_correlation
     if beta > 0.0:
@@ -118,7 +121,7 @@ def numpy_batch(planner: MPPIPlanner) -> tuple[np.ndarray, np.ndarray, RolloutDr
     rollouts = config.samples * config.model_draws
     shape = ((rollouts, 5), (rollouts, config.horizon, 3))
     if config.sample_uncertainty:
-        model, noise = (planner.rng.standard_normal(each) for each in shape)
+        model, noise = (rng.standard_normal(each) for each in shape)
         scale = 1.0 / math.sqrt(planner.robot.substeps)
     else:
         (model, noise), scale = (np.zeros(each) for each in shape), 0.0

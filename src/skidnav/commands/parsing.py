@@ -12,36 +12,22 @@ argument, and the words after it are not printed (:func:`~skidnav.errors.unknown
 from __future__ import annotations
 
 import argparse
-import math
 import sys
-from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import NoReturn
 
-from skidnav.errors import unknown_arguments
+from skidnav.arguments import StrictParser
+from skidnav.arguments import positive_number as positive_number
 
 
-class OneLineParser(argparse.ArgumentParser):
+class OneLineParser(StrictParser):
     """An argument parser whose errors are the one line ``skidnav: error: …`` (exit code 2),
-    and which takes no abbreviation of an option (``allow_abbrev`` is always False).
+    and which takes no abbreviation of an option (:class:`~skidnav.arguments.StrictParser`).
 
     The subcommand's path is named in the line (``skidnav: error: robot run: …``), except for the
     top-level parser. A command group called without its verb (bare ``skidnav``, ``skidnav
     study``) prints its usage, which lists the verbs, before that line.
     """
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        kwargs["allow_abbrev"] = False
-        super().__init__(*args, **kwargs)
-
-    def parse_args(  # type: ignore[override]
-        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
-    ) -> argparse.Namespace:
-        """argparse's, the unknown arguments named by :func:`~skidnav.errors.unknown_arguments`."""
-        parsed, extras = self.parse_known_args(args, namespace)
-        if extras:
-            self.error(f"unrecognized arguments: {unknown_arguments(extras)}")
-        return parsed
 
     def error(self, message: str) -> NoReturn:
         if self._subparsers is not None and message.startswith(MISSING_ARGUMENTS):
@@ -53,25 +39,6 @@ class OneLineParser(argparse.ArgumentParser):
 
 MISSING_ARGUMENTS = "the following arguments are required"
 """How argparse's message for a missing required argument (a group's verb among them) starts."""
-
-
-def positive_number(text: str) -> float:
-    """A finite number > 0, for an argument's ``type`` (``nan``, ``inf``, 0 refused in one line).
-
-    >>> positive_number("2.5")
-    2.5
-    >>> positive_number("nan")
-    Traceback (most recent call last):
-    ...
-    argparse.ArgumentTypeError: expected a finite number > 0, got 'nan'
-    """
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not 0 < value < math.inf:
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
-    return value
 
 
 def path_argument(text: str) -> Path:

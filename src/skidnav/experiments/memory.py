@@ -27,8 +27,6 @@ N_ACTIONS = 4
 """The discrete actions an oracle samples."""
 OUTCOME_BYTES = 4
 """One sampled next state (int32)."""
-DEFAULT_SIDES = (25, 25)
-"""A generated map's cells without a ``shape`` option."""
 
 
 def oracle_bytes(n_states: int, samples: int) -> int:
@@ -52,15 +50,16 @@ def map_states(spec: MapSpec) -> int:
     """States of the env on map ``spec``: its cells (a file's, or a generated map's ``shape``
     option) times the env's heading bins; 0 for a ``shape`` that is not two integers (the map's
     own checks name it)."""
+    grid = Discretization()  # the env's state grid without one of its own
     if spec.file:
         sides: object = load_map_file(spec.file).grid.shape
     else:
-        sides = dict(spec.options).get("shape", DEFAULT_SIDES)
+        sides = dict(spec.options).get("shape", (grid.n_x, grid.n_y))
     if not (
         isinstance(sides, tuple) and len(sides) == 2 and all(isinstance(n, int) for n in sides)
     ):
         return 0
-    return int(sides[0]) * int(sides[1]) * Discretization().n_headings
+    return int(sides[0]) * int(sides[1]) * grid.n_headings
 
 
 def check_memory(config: ExperimentConfig) -> None:

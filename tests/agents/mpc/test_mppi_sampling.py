@@ -6,34 +6,20 @@ the rollouts, advanced side by side in blocks, cost each rollout as it costs alo
 from __future__ import annotations
 
 import copy
-import math
+import importlib
+import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
-from skidnav.agents.mpc.planner import MPPIPlanner
 from skidnav.agents.mpc.rollouts import BLOCK, RolloutDraws, rollout_costs
 from tests.agents.mpc.support import agent_for, nav_env
 
-
-def numpy_sample(planner: MPPIPlanner, rng: np.random.Generator) -> tuple[np.ndarray, ...]:
-    """Sequences, perturbations, model draws and noise as NumPy expressions, from ``rng``."""
-    config, limit = planner.config, planner.robot.wheel_speed
-    white = rng.standard_normal((config.samples, config.horizon, 2))
-    white *= config.noise_std
-    beta = config.noise_correlation
-    if beta > 0.0:
-        innovation = math.sqrt(1.0 - beta * beta)
-        for t in range(1, config.horizon):
-            white[:, t] = beta * white[:, t - 1] + innovation * white[:, t]
-    white[0] = 0.0
-    controls = np.clip(planner.plan + white, -limit, limit)
-    rollouts = config.samples * config.model_draws
-    model, noise = np.zeros((rollouts, 5)), np.zeros((rollouts, config.horizon, 3))
-    if config.sample_uncertainty:
-        model, noise = rng.standard_normal(model.shape), rng.standard_normal(noise.shape)
-    return controls, controls - planner.plan, model, noise
+BENCHMARKS = Path(__file__).resolve().parents[3] / "benchmarks"
+sys.path.insert(0, str(BENCHMARKS))  # the benchmark scripts import one another by name
+bench_mppi = importlib.import_module("bench_mppi")  # its NumPy twin: the sampling as NumPy does it
 
 
 @pytest.mark.parametrize(
@@ -53,9 +39,10 @@ def test_the_compiled_sampling_draws_numpys_numbers(options: dict[str, Any]) -> 
         twin = copy.deepcopy(planner.rng)
         drawn = planner.sample()
         sampled = (drawn[0], drawn[1], drawn[2].model, drawn[2].noise)
+        controls, perturbation, draws = bench_mppi.numpy_batch(planner, twin)
         for name, got, expected in zip(
             ("controls", "perturbation", "model", "noise"), sampled,
-            numpy_sample(planner, twin), strict=True,
+            (controls, perturbation, draws.model, draws.noise), strict=True,
         ):  # fmt: skip
             assert got.tobytes() == expected.tobytes(), name
         assert planner.rng.bit_generator.state == twin.bit_generator.state

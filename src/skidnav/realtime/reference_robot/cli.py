@@ -19,7 +19,8 @@ from collections.abc import Sequence
 from types import FrameType
 from typing import Any, NoReturn
 
-from skidnav.errors import UserError, unknown_arguments
+from skidnav.arguments import StrictParser, positive_number
+from skidnav.errors import UserError
 from skidnav.realtime.reference_robot.interfaces import Transport
 from skidnav.realtime.reference_robot.loop import run
 from skidnav.realtime.reference_robot.rules import MAX_LEASE_LIMIT
@@ -30,35 +31,13 @@ from skidnav.realtime.reference_robot.tcp import TcpTransport
 PROG = "reference-robot"
 
 
-class _Parser(argparse.ArgumentParser):
+class _Parser(StrictParser):
     """Errors in one line, ``reference-robot: error: …``, exit code 2; no abbreviation of an
     option taken (``--secret X`` is not ``--secret-file X``), and the words after an unknown
     option not printed (:func:`~skidnav.errors.unknown_arguments`)."""
 
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        kwargs["allow_abbrev"] = False
-        super().__init__(*args, **kwargs)
-
-    def parse_args(  # type: ignore[override]
-        self, args: Sequence[str] | None = None, namespace: argparse.Namespace | None = None
-    ) -> argparse.Namespace:
-        parsed, extras = self.parse_known_args(args, namespace)
-        if extras:
-            self.error(f"unrecognized arguments: {unknown_arguments(extras)}")
-        return parsed
-
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{PROG}: error: {message}\n")
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not 0 < value < math.inf:
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
-    return value
 
 
 def _finite(text: str) -> float:
@@ -90,11 +69,11 @@ def parser() -> argparse.ArgumentParser:
     where.add_argument("--serial", metavar="DEVICE", help="serve a serial port (pyserial)")
     parse.add_argument("--baudrate", type=int, default=115200, help="serial speed [bit/s]")
     parse.add_argument("--secret-file", help="the link secret (else $SKIDNAV_LINK_SECRET)")
-    parse.add_argument("--period", type=_positive, default=0.1, help="control period [s]")
+    parse.add_argument("--period", type=positive_number, default=0.1, help="control period [s]")
     parse.add_argument("--name", default="skidnav-reference", help="name sent in hello")
-    parse.add_argument("--max-lease", type=_positive, default=0.5, help="longest lease [s]")
-    parse.add_argument("--link-timeout", type=_positive, default=0.5, help="wheels stop [s]")
-    parse.add_argument("--idle-timeout", type=_positive, default=2.0, help="host dropped [s]")
+    parse.add_argument("--max-lease", type=positive_number, default=0.5, help="longest lease [s]")
+    parse.add_argument("--link-timeout", type=positive_number, default=0.5, help="wheels stop [s]")
+    parse.add_argument("--idle-timeout", type=positive_number, default=2.0, help="host dropped [s]")
     parse.add_argument(
         "--pose", type=_finite, nargs=3, default=(0.3, 0.25, 0.0), metavar=("X", "Y", "HEADING"),
         help="start pose of the simulated base [m, m, rad]",
