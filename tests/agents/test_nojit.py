@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
+
+from tests.nojit_support import script_arrays
 
 TRAINING = """
 import sys
@@ -34,12 +33,7 @@ np.savez(sys.argv[1], **tables)
 
 
 def run(out: Path, disable_jit: bool) -> dict[str, np.ndarray]:
-    env = dict(os.environ)
-    env["PYTHONPATH"] = str(Path(__file__).resolve().parents[2] / "src")
-    env["NUMBA_DISABLE_JIT"] = "1" if disable_jit else "0"
-    subprocess.run([sys.executable, "-c", TRAINING, str(out)], check=True, env=env, timeout=240)
-    with np.load(out) as archive:
-        return {key: archive[key] for key in archive.files}
+    return script_arrays(TRAINING, out, disable_jit=disable_jit, timeout=240)
 
 
 def test_results_are_bit_identical_without_jit(tmp_path: Path) -> None:

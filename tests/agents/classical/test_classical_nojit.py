@@ -3,12 +3,11 @@
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
+
+from tests.nojit_support import script_arrays
 
 DRIVE = """
 import sys
@@ -36,13 +35,7 @@ np.savez(
 
 
 def run(out: Path, disable_jit: bool) -> dict[str, np.ndarray]:
-    root = Path(__file__).resolve().parents[3]
-    env = dict(os.environ)
-    env["PYTHONPATH"] = f"{root / 'src'}{os.pathsep}{root}"
-    env["NUMBA_DISABLE_JIT"] = "1" if disable_jit else "0"
-    subprocess.run([sys.executable, "-c", DRIVE, str(out)], check=True, env=env, timeout=600)
-    with np.load(out) as archive:
-        return {key: archive[key] for key in archive.files}
+    return script_arrays(DRIVE, out, disable_jit=disable_jit, timeout=600)
 
 
 def test_same_actions_and_maps_without_jit(tmp_path: Path) -> None:

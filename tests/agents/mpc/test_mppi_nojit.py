@@ -5,12 +5,11 @@ cost maps, the lattice, the model's refits, the lidar's evidence."""
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
+
+from tests.nojit_support import script_arrays
 
 TRAINING = """
 import dataclasses
@@ -83,12 +82,7 @@ np.savez(sys.argv[1], **results)
 
 
 def run(out: Path, disable_jit: bool) -> dict[str, np.ndarray]:
-    env = dict(os.environ)
-    env["PYTHONPATH"] = str(Path(__file__).resolve().parents[3] / "src")
-    env["NUMBA_DISABLE_JIT"] = "1" if disable_jit else "0"
-    subprocess.run([sys.executable, "-c", TRAINING, str(out)], check=True, env=env, timeout=600)
-    with np.load(out) as archive:
-        return {key: archive[key] for key in archive.files}
+    return script_arrays(TRAINING, out, disable_jit=disable_jit, timeout=600)
 
 
 def test_same_actions_and_numbers_without_jit(tmp_path: Path) -> None:
