@@ -84,6 +84,8 @@ CATALOG: list[tuple[str, str, object, str]] = [
     ("train", "agent", "q-learning", "expected agent to be an agent (skidnav.make_agent)"),
     ("train", "env", None, "expected env to be a Gymnasium env (skidnav.make_env), got None"),
     ("train", "eval_env", "free", "expected eval_env to be a Gymnasium env or None"),
+    ("train", "callback", 3, "expected callback to be a function of an episode's info or None"),
+    ("train", "progress", 1, "expected progress to be true or false, got 1"),
     ("evaluate", "rollouts", 10**9, "expected rollouts to be an integer in [1, 100]"),
     ("evaluate", "max_steps", 0, "expected max_steps to be an integer in [1, 1000000], got 0"),
     ("evaluate", "seed", None, "expected seed to be an integer in [0, 9223372036854775807]"),

@@ -2,7 +2,8 @@
 
 Importing the package registers the Gymnasium environment ``skidnav/SkidSteerNav-v0``. The
 Python API (:mod:`skidnav.api`: ``make_env``, ``make_agent``, ``train``, ``evaluate``,
-``save_agent``, ``load_agent``, ``convergence_episode``, ``run_config``, ``agent_names``) is
+``save_agent``, ``load_agent``, ``convergence_episode``, ``run_config``, ``agent_names``, and
+the training callback's ``EpisodeInfo`` and ``StopTraining``) is
 available from the package itself and imported only when first used, so ``import skidnav``
 stays fast.
 """
@@ -17,7 +18,9 @@ from skidnav.version import __version__
 register_envs()
 
 if TYPE_CHECKING:  # what type checkers see; at run time the module is imported on first use
+    from skidnav.api import EpisodeInfo as EpisodeInfo
     from skidnav.api import RunResults as RunResults
+    from skidnav.api import StopTraining as StopTraining
     from skidnav.api import agent_names as agent_names
     from skidnav.api import convergence_episode as convergence_episode
     from skidnav.api import evaluate as evaluate
@@ -30,7 +33,9 @@ if TYPE_CHECKING:  # what type checkers see; at run time the module is imported 
     from skidnav.api import train as train
 
 API = (
+    "EpisodeInfo",
     "RunResults",
+    "StopTraining",
     "agent_names",
     "convergence_episode",
     "evaluate",

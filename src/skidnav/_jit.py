@@ -59,10 +59,20 @@ def _use_versioned_cache() -> None:
 _use_versioned_cache()
 
 
+KERNELS: list[Any] = []
+"""Every function made by :func:`jit` and :func:`inline_jit`, as imported so far (numba's
+dispatchers; the plain functions with ``NUMBA_DISABLE_JIT=1``)."""
+
+
+def _kept(kernel: F) -> F:
+    KERNELS.append(kernel)
+    return kernel
+
+
 def jit(function: F) -> F:
     """Compile ``function`` in nopython mode with an on-disk cache (no fastmath: results must match
     the interpreter bit for bit)."""
-    return numba.njit(cache=True, nogil=True)(function)  # type: ignore[return-value]
+    return _kept(numba.njit(cache=True, nogil=True)(function))  # type: ignore[return-value]
 
 
 def inline_jit(function: F) -> F:
@@ -76,7 +86,7 @@ def inline_jit(function: F) -> F:
     (no row views) and take only the few arrays they read. Called from Python it behaves like
     any compiled function, and with ``NUMBA_DISABLE_JIT=1`` it is the plain function.
     """
-    return numba.njit(inline="always", cache=True, nogil=True)(function)  # type: ignore[return-value]
+    return _kept(numba.njit(inline="always", cache=True, nogil=True)(function))  # type: ignore[return-value]
 
 
 def dispatch_on_type(registry: dict[type, Any]) -> Callable[[F], F]:
@@ -116,3 +126,30 @@ def uncached(function: Any) -> Any:
 def jit_disabled() -> bool:
     """True when ``NUMBA_DISABLE_JIT`` is set, i.e. kernels run as plain Python."""
     return bool(getattr(numba.config, "DISABLE_JIT", False))
+
+
+def _has_code(kernel: Any) -> bool:
+    """True if ``kernel`` needs no compiling: it is compiled in this process, or numba's on-disk
+    cache of this source version has an index for it, or it is not a dispatcher (JIT off)."""
+    signatures = getattr(kernel, "signatures", None)
+    if signatures is None or signatures:
+        return True
+    try:
+        index = Path(kernel._cache._cache_file._index_path)  # numba's cache (0.6x) internals
+    except AttributeError:  # another numba: say nothing rather than guess
+        return True
+    return index.exists()
+
+
+def first_compile(packages: tuple[str, ...]) -> bool:
+    """True when code of one of ``packages`` (module name prefixes, e.g.
+    ``"skidnav.agents.tabular"``) will be compiled before it runs: none of its imported kernels
+    (:data:`KERNELS`) is compiled in this process or cached on disk for this source version —
+    the first run after installing or changing skidnav. A cheap check by file names: it misses
+    the shorter compile of a kernel for new argument types (a new agent of a family whose other
+    agents have run) and says nothing with ``NUMBA_DISABLE_JIT=1``."""
+    for package in packages:
+        kernels = [k for k in KERNELS if getattr(k, "__module__", "").startswith(package + ".")]
+        if kernels and not any(_has_code(kernel) for kernel in kernels):
+            return True
+    return False

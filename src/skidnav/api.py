@@ -25,14 +25,21 @@ same numbers every time.
 from __future__ import annotations
 
 import dataclasses
+import math
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import gymnasium
 import pandas as pd
+from tqdm import tqdm
 
 from skidnav import API
+from skidnav._jit import first_compile
+from skidnav.agents.callbacks import EpisodeCallback, listening
+from skidnav.agents.callbacks import EpisodeInfo as EpisodeInfo
+from skidnav.agents.callbacks import StopTraining as StopTraining
 from skidnav.agents.catalog import CatalogEntry, entry
 from skidnav.agents.catalog import agent_names as agent_names
 from skidnav.agents.interface import Agent
@@ -178,20 +185,35 @@ def train(
     max_steps: int | None = None,
     rollouts: int = 5,
     eval_env: Env | None = None,
+    callback: EpisodeCallback | None = None,
+    progress: bool = False,
 ) -> TrainingLog:
     """Train ``agent`` for ``episodes`` episodes on ``env`` (a deep agent: on the env it was made
     for), as its family trains (compiled for a tabular agent), and evaluate its greedy policy
     after every episode: ``rollouts`` rollouts on ``eval_env`` (default: a twin of ``env``, the
     same world), each from a reset seed of ``seed``, the same after every episode.
 
+    Before a training whose compiled code is not cached yet (the first run after installing or
+    changing skidnav: :func:`skidnav._jit.first_compile`), one line ``compiling (first run
+    only)…`` goes to stderr.
+
     Args:
         seed: the training episodes' first reset and the evaluation seeds; None: the env's own
             generator, and one evaluation rollout that continues the twin's.
         max_steps: actions per episode, training and evaluation (default: the env's limit).
+        callback: called after each episode (every family, the compiled tabular trainer
+            included) with an :class:`~skidnav.agents.callbacks.EpisodeInfo` (its number from
+            1, length [actions], return, success, seconds of computing, seconds since the start,
+            simulated seconds of driving); returning ``False`` or raising
+            :class:`~skidnav.agents.callbacks.StopTraining` stops training after that episode,
+            as Stable-Baselines3's ``BaseCallback._on_step`` returning ``False`` does (CMA-ES
+            after the generation under way). A callback that never stops changes no number.
+        progress: a tqdm progress bar over the episodes on stderr (Stable-Baselines3's
+            ``progress_bar=True``).
 
     Returns:
         The per-episode :class:`~skidnav.agents.training.TrainingLog` (returns, lengths,
-        greedy evaluations, …): :func:`convergence_episode` reads it.
+        greedy evaluations, …) of the episodes run: :func:`convergence_episode` reads it.
 
     Raises:
         UserError: an argument of the wrong type, or beyond the experiment config's limit
@@ -199,6 +221,12 @@ def train(
             ≤ 10⁶, ``rollouts`` ≤ 100), one line naming it.
     """
     _check_run("train", agent, env)
+    if callback is not None and not callable(callback):
+        raise UserError(
+            f"train: expected callback to be a function of an episode's info or None, "
+            f"got {shown(callback)}"
+        )
+    _check_type("train", "progress", progress, bool, "true or false")
     _check_setting("train", "episodes", episodes, "episodes")
     _check_setting("train", "rollouts", rollouts, "eval_rollouts")
     if seed is not None:
@@ -213,7 +241,31 @@ def train(
         env.reset(seed=seed_int(child_sequences(seed, TRAINING_ROLES)["episodes"]))
     built = entry(agent.name).bind(agent)
     measured = Evaluation(None if evaluation is None else evaluation.unwrapped, seeds)
-    return built.train(env.unwrapped, episodes, max_steps=limit, evaluation=measured)
+    if first_compile((type(agent).__module__.rpartition(".")[0], "skidnav.sim")):
+        print("compiling (first run only)…", file=sys.stderr, flush=True)
+    if callback is None and not progress:
+        return built.train(env.unwrapped, episodes, max_steps=limit, evaluation=measured)
+    with (
+        tqdm(total=episodes, unit="episode", disable=not progress, file=sys.stderr) as bar,
+        listening(_told(bar, callback), _seconds_per_action(env)),
+    ):
+        return built.train(env.unwrapped, episodes, max_steps=limit, evaluation=measured)
+
+
+def _told(bar: tqdm[Any], callback: EpisodeCallback | None) -> EpisodeCallback:
+    """The listener of :func:`train`: advance ``bar``, then ask ``callback`` (if any)."""
+
+    def heard(info: EpisodeInfo) -> object:
+        bar.update(1)
+        return None if callback is None else callback(info)
+
+    return heard
+
+
+def _seconds_per_action(env: Env) -> float:
+    """Simulated seconds per action of the skid-steer env ``env`` [s]; NaN for another env."""
+    robot = getattr(env.unwrapped, "robot", None)
+    return float(getattr(robot, "action_duration", math.nan))
 
 
 def _twin(env: Env) -> Env | None:

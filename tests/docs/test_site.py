@@ -6,7 +6,9 @@ image loads, and the console shows no error."""
 
 from __future__ import annotations
 
+import json
 import os
+import re
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -15,6 +17,7 @@ from typing import Any
 
 import pytest
 
+import skidnav
 from tests.browser_support import (
     broken_images,
     missing_tool,
@@ -76,6 +79,16 @@ def test_api_reference_shows_docstrings_as_markdown(site: Path) -> None:
     assert "<blockquote>" not in envs
     for page in (site / "reference" / "api").glob("*.html"):
         assert ":func:`" not in page.read_text(encoding="utf-8"), page.name
+
+
+def test_the_search_finds_every_name_of_the_python_api(site: Path) -> None:
+    index = json.loads((site / "search" / "search_index.json").read_text(encoding="utf-8"))
+    assert re.split(index["config"]["separator"], "make_env") == ["make_env"]  # one search word
+    titles = {entry["location"]: entry["title"] for entry in index["docs"]}
+    for name in skidnav.API:
+        assert titles.get(f"reference/api/python.html#skidnav.api.{name}", "").startswith(name)
+    listed = (ROOT / "docs" / "reference" / "api" / "index.md").read_text(encoding="utf-8")
+    assert re.findall(r"^\| \[[^]]+\]\(([\w.]+)\)", listed, flags=re.MULTILINE)[0] == "python.md"
 
 
 def test_cli_reference_has_every_command(site: Path) -> None:

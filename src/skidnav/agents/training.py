@@ -22,6 +22,7 @@ from typing import Any, NamedTuple, Protocol, TypeAlias, runtime_checkable
 import gymnasium as gym
 import numpy as np
 
+from skidnav.agents.callbacks import current_listener
 from skidnav.errors import UserError
 
 
@@ -365,8 +366,9 @@ def train_episodes(
     2. Run ``episodes`` episodes (``run``), the first from ``reset(seed=seed)``, the others
        continuing the env's own generator, as Gymnasium intends; each is timed.
     3. After each, record the greedy evaluation (:meth:`Evaluation.run`; after the first
-       episode, :meth:`Evaluation.start` seeds the evaluation env with ``seed + 1``).
-    4. Return the :class:`TrainingLog`.
+       episode, :meth:`Evaluation.start` seeds the evaluation env with ``seed + 1``), and stop
+       if a training callback asks (:mod:`skidnav.agents.callbacks`).
+    4. Return the :class:`TrainingLog` of the episodes run.
     """
     if episodes < 0 or (max_steps is not None and max_steps < 1):
         raise ValueError(f"expected episodes >= 0 and max_steps >= 1, got {episodes}, {max_steps}")
@@ -379,12 +381,16 @@ def train_episodes(
         if episode == 0:
             evaluation.start(seed)
         rows.add(result, wall_time, evaluation.run(evaluate, limit))
+        if rows.stopped:
+            break
     return rows.log()
 
 
 class LogRows:
     """A :class:`TrainingLog` written one episode at a time (:meth:`add`), each evaluation of
-    ``n_rollouts`` rollouts."""
+    ``n_rollouts`` rollouts: every family's loop records its episodes here, so the training
+    callback (:func:`skidnav.agents.callbacks.listening`, read when the rows are made) is told
+    of each here, and :attr:`stopped` says when it asked to stop."""
 
     dtypes = (
         np.float64, np.int64, np.bool_, np.int64, np.int64, np.float64, np.int64, np.float64,
@@ -396,6 +402,9 @@ class LogRows:
     def __init__(self, n_rollouts: int) -> None:
         self.n_rollouts = n_rollouts
         self.columns: dict[str, list[Any]] = {name: [] for name in TrainingLog._fields}
+        self.listener = current_listener()
+        self.stopped = False
+        """True once the training callback asked to stop (it is not called again)."""
 
     def __len__(self) -> int:
         """Episodes recorded."""
@@ -409,6 +418,10 @@ class LogRows:
         self.columns["wall_time"].append(wall_time)
         self.columns["greedy_lengths"].append([rollout.length for rollout in rollouts])
         self.columns["greedy_costs"].append([rollout.cost for rollout in rollouts])
+        if self.listener is not None and not self.stopped:
+            self.stopped = self.listener.tell(
+                len(self), episode.length, episode.total, episode.terminated, wall_time
+            )
 
     def log(self) -> TrainingLog:
         """The arrays of the episodes recorded so far."""

@@ -327,7 +327,8 @@ def episode_recorder(
     episodes: int, rows: LogRows, evaluate: Callable[[], list[Rollout]]
 ) -> BaseCallback:
     """A Stable-Baselines3 callback that adds each finished episode to ``rows`` (``evaluate()``
-    gives its greedy rollouts) and stops training after ``episodes`` of them."""
+    gives its greedy rollouts) and stops training after ``episodes`` of them, or earlier when a
+    training callback asks (:attr:`~skidnav.agents.training.LogRows.stopped`)."""
     from stable_baselines3.common.callbacks import BaseCallback
 
     class EpisodeRecorder(BaseCallback):
@@ -351,7 +352,7 @@ def episode_recorder(
             rows.add(episode, wall_time, evaluate())
             self.total, self.length, self.collisions = 0.0, 0, 0
             self.start = time.perf_counter()
-            if len(rows) < episodes:
+            if len(rows) < episodes and not rows.stopped:
                 return True
             finish_step(self.model, self.locals)
             return False

@@ -120,6 +120,8 @@ class CMAESAgent:
                 )  # fmt: skip
                 rows.add(episode, seconds, after if row == per_generation - 1 else before)
             before = after
+            if rows.stopped:  # a training callback asked: the generation's episodes all ran
+                break
         return rows.log()
 
     def save(self, path: str | Path) -> tuple[Path, Path]:
