@@ -150,3 +150,18 @@ def test_configs_reference_has_one_row_per_shipped_config() -> None:
 def test_header_comment(comment: str, expected: str) -> None:
     assert load_tool("generated_pages").header_comment(comment) == expected
 
+
+def test_the_agents_reference_describes_the_deep_agents_without_pytorch(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from skidnav import extras
+
+    # As in the venv of `make docs` (the core and the docs extra): the deep extra is not found.
+    monkeypatch.setitem(extras.EXTRAS, "deep", ("skidnav_no_such_module",))
+    assert not extras.installed("deep")
+    text = load_tool("generated_pages").agents_reference()
+    for name in ("dqn", "ppo", "sac"):
+        row = next(line for line in text.splitlines() if line.startswith(f"| `{name}` |"))
+        assert "Stable-Baselines3" in row and "not described" not in row, row
+        assert f'??? note "`{name}`: its `params`' in text
+    assert not extras.installed("deep")  # the check is back once the reference is written
