@@ -2,10 +2,13 @@
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
-# Two installs in the one .venv: the core package alone (what `make demo` needs), and everything
+# Three installs in the one .venv: the core package alone (what `make demo` needs), the core and
+# the docs extra (`make docs`: the site needs no PyTorch, pyproject.toml), and everything
 # (every extra and the dev tools: `make test`, `make lint`, `make bench`). Each has its stamp, so
-# `make demo` then `make test` adds the rest, and `make test` then `make demo` installs nothing.
+# `make demo` then `make test` adds the rest, and `make test` then `make demo` or `make docs`
+# installs nothing.
 CORE_STAMP := $(VENV)/.core-stamp
+DOCS_STAMP := $(VENV)/.docs-stamp
 STAMP := $(VENV)/.installed-stamp
 # The CPU build of PyTorch, pinned and installed before the extras so that pip never resolves
 # a newer (CUDA, several-GB) torch for Stable-Baselines3.
@@ -24,7 +27,11 @@ $(CORE_STAMP): pyproject.toml | $(PY)
 $(STAMP): pyproject.toml | $(PY)
 	$(PY) -m pip install $(TORCH)
 	$(PY) -m pip install -e ".[all,dev]" $(TORCH)
-	touch $(STAMP) $(CORE_STAMP)
+	touch $(STAMP) $(CORE_STAMP) $(DOCS_STAMP)
+
+$(DOCS_STAMP): pyproject.toml | $(PY)
+	$(PY) -m pip install -e ".[docs]"
+	touch $(DOCS_STAMP) $(CORE_STAMP)
 
 venv: $(STAMP)
 
@@ -67,7 +74,8 @@ test: lint gl browser
 
 # The documentation site, into site/ (mkdocs.yml): every warning, a broken link, anchor or image
 # among them, is an error. (Not --quiet: it would silence the warnings that --strict counts.)
-docs: $(STAMP)
+# Open site/index.html from disk or serve site/: both work, search included.
+docs: $(DOCS_STAMP)
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict
 
 lint: $(STAMP)

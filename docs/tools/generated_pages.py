@@ -26,6 +26,7 @@ import os
 import re
 import sys
 import tomllib
+import unittest.mock
 from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
@@ -259,6 +260,16 @@ def family_facts(family: Any, module: str, answers: set[str]) -> str:
     return " ".join(facts)
 
 
+def described_classes(family: Any, name: str) -> tuple[type, type]:
+    """Agent ``name``'s class and config class, also where its family's extra is missing
+    (``make docs`` installs the core and the docs extra alone): the check that refuses an agent
+    of a missing extra up front (:func:`skidnav.extras.require`) is lifted while they are
+    looked up, since the deep agents' modules import PyTorch only when an agent is built. A
+    module that imports its extra all the same still raises ``MissingExtraError``."""
+    with unittest.mock.patch("skidnav.extras.missing_module", return_value=None):
+        return family.agent_class(name), family.config_class(name)
+
+
 def family_section(family: Any, module: str) -> str:
     """One family (its descriptor ``FAMILY`` in ``module``): a heading, what it is, its table of
     agents, their settings."""
@@ -269,9 +280,9 @@ def family_section(family: Any, module: str) -> str:
     for name in family.agents:
         link = f"[{family.page(name)}]({family.page(name)}.md)"
         try:
-            cls, config = family.agent_class(name), family.config_class(name)
-        except MissingExtraError:
-            missing = f"(described when the `{family.extra}` extra is installed)"
+            cls, config = described_classes(family, name)
+        except MissingExtraError as error:
+            missing = f"(not described in this build: {error})"
             rows.append(f"| `{name}` | {missing} | | {link} |")
             continue
         actions = agent_actions(cls, family)

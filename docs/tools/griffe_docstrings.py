@@ -3,14 +3,20 @@
 skidnav's docstrings name other objects the Sphinx way (``:func:`train_agent```,
 ``:class:`~skidnav.envs.step_info.StepInfo```) and carry doctests (``>>>`` lines) that pytest
 runs. Markdown knows neither: a role would print as its raw text and a ``>>>`` line would open
-three nested quotes. This extension rewrites each docstring before it is rendered: a role becomes
-a code span of its target (``~`` keeps the last name only) and each doctest block a fenced
-``pycon`` block. The source files are not touched.
+three nested quotes; and a docstring's plain ``L*`` would open italics up to the next star. This
+extension rewrites each docstring before it is rendered: a role becomes a code span of its target
+(``~`` keeps the last name only), each doctest block a fenced ``pycon`` block, and each bare
+starred symbol outside code is escaped (``L\\*``, the convention of docs/tools/site_check.py). The
+source files are not touched.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import re
+import sys
+from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import griffe
@@ -48,6 +54,25 @@ def fence_doctests(text: str) -> str:
     return "\n".join(out)
 
 
+def site_check() -> ModuleType:
+    """docs/tools/site_check.py (where the starred-symbol convention lives), imported once by
+    file path: the tools are not a package."""
+    name = "skidnav_docs_site_check"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(
+            name, Path(__file__).with_name("site_check.py")
+        )
+        assert spec is not None and spec.loader is not None
+        sys.modules[name] = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(sys.modules[name])
+    return sys.modules[name]
+
+
+def rewrite(docstring: str) -> str:
+    """``docstring`` as the API reference renders it (see the module docstring)."""
+    return site_check().escape_starred(fence_doctests(ROLE.sub(role_as_code, docstring)))
+
+
 class SphinxRolesAndDoctests(griffe.Extension):
     """Rewrite every docstring griffe loads (see the module docstring)."""
 
@@ -55,4 +80,4 @@ class SphinxRolesAndDoctests(griffe.Extension):
         """Called by griffe once per object (module, class, function, attribute) of the loaded
         tree."""
         if obj.docstring is not None:
-            obj.docstring.value = fence_doctests(ROLE.sub(role_as_code, obj.docstring.value))
+            obj.docstring.value = rewrite(obj.docstring.value)

@@ -30,7 +30,7 @@ EXTRAS: dict[str, tuple[str, ...]] = {
     "tuning": ("optuna",),
     "search": ("cmaes", "threadpoolctl"),
     "gp": ("sklearn",),
-    "docs": ("mkdocs", "material", "mkdocstrings"),
+    "docs": ("mkdocs", "material", "mkdocstrings", "mkdocs_jupyter"),
     "logging": ("tensorboard",),
     "video": ("moviepy",),
     "notebook": ("nbmake",),

@@ -2,7 +2,8 @@
 --strict``: a broken link, anchor or image, or a docstring the API reference cannot read, fails
 the build), served over HTTP on 127.0.0.1 and opened in headless chromium (the ``browser``
 fixture, tests/docs/conftest.py): each page renders its title, heading and navigation, every
-image loads, and the console shows no error."""
+image loads, and the console shows no error; the notebook's page shows its stored outputs; and
+opened from disk (file://), as a reader who built it would, the site's search finds a page."""
 
 from __future__ import annotations
 
@@ -29,6 +30,11 @@ ROOT = Path(__file__).resolve().parents[2]
 PAGES = {
     "index.html": ("skidnav", "skidnav", 1),
     "guide/getting-started.html": ("Getting started - skidnav", "Getting started", 0),
+    "guide/tutorial.html": (
+        "skidnav in one notebook: train, compare, plot, drive - skidnav",
+        "skidnav in one notebook: train, compare, plot, drive",
+        3,
+    ),
     "reference/cli.html": ("Command line - skidnav", "Command line", 0),
     "reference/configs.html": ("Configs - skidnav", "Configs", 0),
     "reference/api/agents.html": ("Agents - skidnav", "Agents", 0),
@@ -140,3 +146,31 @@ def test_the_checks_see_a_broken_page(
         driver.get(base_url + "broken.html")
         assert broken_images(driver) == [base_url + "missing.png"]
         assert any("missing.png" in message for message in severe_console_messages(driver))
+
+
+def test_the_notebook_page_shows_its_stored_outputs(site: Path) -> None:
+    page = (site / "guide" / "tutorial.html").read_text(encoding="utf-8")
+    assert page.count('src="data:image/png;base64,') == 3  # the arena and two figures
+    assert "convergence episode</th>" in page  # a table the notebook printed
+    assert "L* = " in page  # a stored printout (the text cells write L\*)
+    assert "L<em>" not in page
+
+
+def test_search_works_on_the_site_opened_from_disk(site: Path, browser: Any) -> None:
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    driver = browser(1280, 900)
+    driver.get((site / "index.html").as_uri())  # without the offline plugin: box hidden
+    box = driver.find_element(By.CSS_SELECTOR, "input.md-search__input")
+    WebDriverWait(driver, 30).until(lambda d: box.is_displayed())
+    box.click()
+    box.send_keys("make_env")
+
+    links = WebDriverWait(driver, 30).until(
+        lambda d: [
+            result.get_attribute("href")
+            for result in d.find_elements(By.CSS_SELECTOR, "li.md-search-result__item > a")
+        ]
+    )
+    assert all(link.startswith(site.as_uri() + "/") for link in links), links
