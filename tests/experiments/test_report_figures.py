@@ -67,13 +67,24 @@ def test_registered_agents_have_distinct_palette_colours_in_catalog_order() -> N
     assert colours == list(PALETTE[: len(names)])
 
 
-def test_an_unknown_label_has_a_fixed_colour_of_its_own() -> None:
-    colour = agent_colour("dyna-full[kinematic_model=learned]")
-    assert colour == agent_colour("dyna-full[kinematic_model=learned]")
-    assert colour != agent_colour("dyna-full[kinematic_model=prior]")
-    assert all(0.0 <= channel <= 1.0 for channel in colour)
-    # SHA-256, not Python's per-process hash(): the same on every run
-    assert np.allclose(agent_colour("my-agent"), agent_colour("my-agent"))
+def test_the_agents_of_one_report_never_share_a_colour() -> None:
+    variants = [f"mppi-kinematic[kinematic_model={model}]" for model in ("learned", "prior")]
+    labels = agent_names()[:15] + variants + ["dyna-full-expected", "my-agent", "another"]
+    colours = agent_colours(labels)
+    assert len(set(colours.values())) == len(labels) == len(PALETTE)
+    assert all(colours[name] == agent_colour(name) for name in agent_names()[:15])
+    assert agent_colours(reversed(labels)) == colours  # not the order the figure lists them in
+
+
+def test_an_unknown_label_keeps_its_colour_beside_other_agents() -> None:
+    label = "dyna-full-expected"
+    alone = agent_colour(label)
+    others = [name for name in agent_names() if agent_colour(name) != alone]
+    assert agent_colours([others[0], label])[label] == alone
+    assert agent_colours([label, *others[1:4], "x"])[label] == alone
+    # where a registered agent of the same report has its colour, it takes another one
+    owner = next(name for name in agent_names() if agent_colour(name) == alone)
+    assert agent_colours([owner, label])[label] != alone
 
 
 def _run(agent: str, values: np.ndarray) -> TrialResult:

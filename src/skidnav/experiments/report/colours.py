@@ -2,14 +2,15 @@
 figure of a report (:mod:`skidnav.experiments.report.plots`) and of the docs' figure scripts
 (``docs/tools/*.py``).
 
-An agent keeps its colour from one figure to the next and from one report to another, whatever
-other agents are drawn beside it: the colour is a function of the label alone
-(:func:`agent_colour`). A registered agent name (:func:`skidnav.agents.catalog.agent_names`) takes
+An agent keeps its colour from one figure to the next (each figure asks for the colours of all
+the report's agents, :func:`agent_colours`) and from one report to another. A registered agent
+name (:func:`skidnav.agents.catalog.agent_names`) takes
 the :data:`PALETTE` entry at its place in the catalog, so ``q-learning`` is always the first
-colour (blue) and ``dyna-full`` the seventh (pink); any other label (``dyna-full-expected``,
-``dyna-full[kinematic_model=learned]``) takes a hue drawn from a hash of its text (SHA-256, the
-same on every machine and Python version) at a fixed saturation and brightness. Two hashed hues
-can lie close; the registered names' colours are all different.
+colour (blue) and ``dyna-full`` the seventh (pink), in every report. Any other label
+(``dyna-full-expected``, ``dyna-full[kinematic_model=learned]``) takes one of the nine
+``tab10`` colours of the palette from a hash of its text, the same in every report unless an
+agent of the same report already has that colour: then the next free one
+(:func:`agent_colours`). So the agents of one report never share a colour (up to 20 of them).
 """
 
 from __future__ import annotations
@@ -26,24 +27,27 @@ matplotlib.use("Agg")
 import numpy as np
 from matplotlib import colormaps
 from matplotlib.axes import Axes
-from matplotlib.colors import hsv_to_rgb
 
 from skidnav.agents.catalog import agent_names
 
 Colour = tuple[float, float, float]
 """Matplotlib's (red, green, blue), each in [0, 1]."""
 
+
+def _colours(name: str, indices: Iterable[int]) -> list[Colour]:
+    """The colours at ``indices`` of the matplotlib colour map ``name``, as (r, g, b)."""
+    return [tuple(float(c) for c in colormaps[name](index)[:3]) for index in indices]  # type: ignore[misc]
+
+
 PALETTE: tuple[Colour, ...] = tuple(
-    tuple(float(channel) for channel in colormaps["tab20"](index)[:3])  # type: ignore[misc]
-    for index in (*range(0, 20, 2), *range(1, 20, 2))
+    _colours("tab10", (0, 1, 2, 3, 4, 5, 6, 8, 9))
+    + _colours("tab20b", (0, 4, 8, 12, 16, 2, 6, 10, 14, 18))
+    + _colours("tab20c", (4,))
 )
-"""The registered agents' colours in catalog order: matplotlib's ten ``tab10`` colours, then
-their ten lighter twins of ``tab20`` (one per registered agent; a catalog longer than this wraps
-round)."""
-HASHED_SATURATION = 0.75
-"""Saturation of the hashed colours of labels that are not registered names (0–1)."""
-HASHED_BRIGHTNESS = 0.7
-"""Brightness (HSV value) of the hashed colours (0–1): dark enough to read on white."""
+"""The 20 agent colours, the registered agents' in catalog order: matplotlib's ``tab10`` without
+its grey (grey is for reference lines), then the darkest and the middle shade of each of the five
+hues of ``tab20b`` and a dark orange of ``tab20c``: every one dark enough for a thin line on
+white (one per registered agent; a catalog longer than this wraps round)."""
 
 
 @functools.cache
@@ -52,27 +56,53 @@ def _catalog_places() -> dict[str, int]:
     return {name: place for place, name in enumerate(agent_names())}
 
 
-def agent_colour(label: str) -> Colour:
-    """The colour of the agent ``label`` in every figure: a registered name's catalog colour
-    (:data:`PALETTE`), else a hue from the SHA-256 of ``label``.
+STRONG = 9
+"""The first places of :data:`PALETTE` (``tab10``'s colours), the most distinct: a label that is
+not a registered name is given one of them while one is free."""
 
-    >>> agent_colour("q-learning") == PALETTE[0]
-    True
-    >>> agent_colour("my-agent") == agent_colour("my-agent")
-    True
-    """
-    place = _catalog_places().get(label)
-    if place is not None:
-        return PALETTE[place % len(PALETTE)]
+
+def _places_to_try(label: str) -> list[int]:
+    """The :data:`PALETTE` places a label that is not a registered name may take, in order: the
+    :data:`STRONG` places from the one the SHA-256 of its text picks (the same on every machine,
+    unlike Python's ``hash``) round, then the others."""
     digest = hashlib.sha256(label.encode("utf-8")).digest()
-    hue = int.from_bytes(digest[:8], "big") / 2.0**64
-    red, green, blue = hsv_to_rgb((hue, HASHED_SATURATION, HASHED_BRIGHTNESS))
-    return float(red), float(green), float(blue)
+    first = int.from_bytes(digest[:8], "big") % STRONG
+    return [(first + step) % STRONG for step in range(STRONG)] + list(range(STRONG, len(PALETTE)))
 
 
 def agent_colours(labels: Iterable[str]) -> dict[str, Colour]:
-    """``label`` → :func:`agent_colour` for each of ``labels``, in their order."""
-    return {label: agent_colour(label) for label in labels}
+    """The colour of each agent of ``labels`` (the agents of one report), all different while
+    there are no more than :data:`PALETTE` has: a registered name's catalog colour, the same in
+    every report; any other label the :data:`STRONG` colour its text hashes to, or, when an agent of
+    ``labels`` has that one, the next free one (:func:`_places_to_try`; labels taken in sorted
+    order, so the same set gives the same colours in every figure).
+
+    >>> colours = agent_colours(["dyna-full", "q-learning", "my-agent"])
+    >>> colours["q-learning"] == PALETTE[0] and colours["dyna-full"] == PALETTE[6]
+    True
+    >>> colours["my-agent"] in (colours["q-learning"], colours["dyna-full"])
+    False
+    """
+    labels = list(dict.fromkeys(labels))
+    catalog = _catalog_places()
+    places = {label: catalog[label] % len(PALETTE) for label in labels if label in catalog}
+    taken = set(places.values())
+    for label in sorted(set(labels) - set(places)):
+        free = [place for place in _places_to_try(label) if place not in taken]
+        places[label] = free[0] if free else _places_to_try(label)[0]
+        taken.add(places[label])
+    return {label: PALETTE[places[label]] for label in labels}
+
+
+def agent_colour(label: str) -> Colour:
+    """The colour of the agent ``label`` drawn alone or with registered agents only
+    (:func:`agent_colours`); a figure of several agents asks :func:`agent_colours` for all of
+    the report's agents at once.
+
+    >>> agent_colour("q-learning") == PALETTE[0]
+    True
+    """
+    return agent_colours([label])[label]
 
 
 BAND_ALPHA = 0.1

@@ -47,6 +47,7 @@ from skidnav.experiments.report.analysis import (
     survival_columns,
 )
 from skidnav.experiments.report.cells import Part, cell_parts, figure
+from skidnav.experiments.report.colours import agent_colours
 from skidnav.experiments.report.definitions import definitions
 from skidnav.experiments.report.learning_value import learning_value_section
 from skidnav.experiments.report.page import (
@@ -160,7 +161,8 @@ def profile_figure(
         )  # fmt: skip
         profiles[agent] = (episodes, performance_profile(times, seen, episodes), low, high)
     title = f"converged by episode e · {map_label} · {preset}"
-    return plots.performance_profiles(profiles, config.episodes, title)
+    colours = agent_colours(config.agent_labels)
+    return plots.performance_profiles(profiles, config.episodes, title, colours)
 
 
 def budget_section(

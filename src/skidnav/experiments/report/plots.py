@@ -28,7 +28,7 @@ from matplotlib.figure import Figure
 
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.metrics import moving_average
-from skidnav.experiments.report.colours import Colour, agent_colour, agent_colours, draw_band
+from skidnav.experiments.report.colours import Colour, agent_colours, draw_band
 from skidnav.statistics.intervals import curve_band
 
 DPI = 90
@@ -275,7 +275,8 @@ def surface_bars(surfaces: pd.DataFrame) -> bytes:
     positions = np.arange(len(rows))
     labels = [f"{r.agent}\n{r.map}" for r in rows.itertuples()]
     error = np.vstack([rows["ratio"] - rows["ratio_low"], rows["ratio_high"] - rows["ratio"]])
-    colours = [agent_colour(agent) for agent in rows["agent"]]
+    by_agent = agent_colours(rows["agent"])
+    colours = [by_agent[agent] for agent in rows["agent"]]
     axes.bar(positions, rows["ratio"], yerr=error, capsize=4, color=colours, alpha=0.8)
     axes.axhline(1.0, color="grey", linewidth=1)
     axes.axhline(2.0, color="C3", linewidth=1, linestyle="--", label="thesis: ≈ 2×")
@@ -289,6 +290,7 @@ def performance_profiles(
     profiles: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
     horizon: int,
     title: str,
+    colours: Mapping[str, Colour] | None = None,
 ) -> bytes:
     """Share of runs converged by each episode (Agarwal et al. (2021) performance profiles over
     convergence episodes), one step curve with its bootstrap band per agent.
@@ -299,9 +301,13 @@ def performance_profiles(
             :func:`~skidnav.statistics.survival.profile_band`.
         horizon: the last episode of the runs (the dashed line; censored runs stop there).
         title: figure title.
+        colours: agent label → colour, by default
+            :func:`~skidnav.experiments.report.colours.agent_colours` of the profiles' labels
+            (a report passes its agents' colours, so an agent missing from one cell does not
+            change another's colour).
     """
     figure, axes = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
-    colors = agent_colours(profiles)
+    colors = colours if colours is not None else agent_colours(profiles)
     for label, (episodes, share, low, high) in profiles.items():
         color = colors[label]
         axes.step(episodes, share, where="post", color=color, label=label, linewidth=1.6)
