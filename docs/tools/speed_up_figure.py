@@ -3,7 +3,7 @@ docs/results.md: the speed-up of each of the thesis's model-based agents over Q-
 its 95 % bootstrap interval, on the 30 worlds of ``configs/claims.toml`` (100 planning updates per
 real step, both planning targets), in episodes and in real actions.
 
-    python docs/tools/speed_up_figure.py      # rewrites docs/data/claims-speed-up.png
+    PYTHONPATH=src python docs/tools/speed_up_figure.py   # rewrites docs/data/claims-speed-up.png
 
 The numbers plotted are stored in the PNG's metadata (key ``numbers``, JSON), so a test can tell
 whether the figure still shows what docs/results.md says.
@@ -95,21 +95,26 @@ def measured_rows(text: str) -> list[tuple[str, Row, Row]]:
 
 
 def draw(measured: list[tuple[str, Row, Row]], path: Path) -> None:
-    """Two panels (episodes, real actions): per agent both targets with their intervals."""
+    """Two panels (episodes, real actions): per agent both targets with their intervals, in the
+    agent's colour of every report (:mod:`skidnav.experiments.report.colours`); the target by
+    marker (most-probable: filled circle, expected: open square)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from skidnav.experiments.report.colours import agent_colours
+
+    colours = agent_colours(agent for agent, _, _ in measured)
     figure, axes = plt.subplots(1, 2, figsize=(9, 3.6), sharey=True, layout="constrained")
     for axis, unit in zip(axes, ("episodes", "actions"), strict=True):
-        for position, (_, probable, expected) in enumerate(measured):
+        for position, (agent, probable, expected) in enumerate(measured):
             for offset, row, style in ((0.15, probable, "o"), (-0.15, expected, "s")):
                 speed_up: SpeedUp = getattr(row, unit)
                 axis.errorbar(
                     speed_up.value, position + offset, capsize=3, fmt=style,
                     xerr=[[speed_up.value - speed_up.low], [speed_up.high - speed_up.value]],
-                    color="tab:orange" if style == "o" else "tab:blue",
+                    color=colours[agent], mfc=colours[agent] if style == "o" else "white",
                 )  # fmt: skip
         axis.axvline(1.0, color="grey", linewidth=1)
         axis.axvline(THESIS_CLAIM, color="black", linestyle="--", linewidth=1)
@@ -122,10 +127,12 @@ def draw(measured: list[tuple[str, Row, Row]], path: Path) -> None:
         axis.set_title(f"speed-up over Q-learning, {title}", fontsize=10)
         axis.grid(axis="x", alpha=0.3)
     axes[0].set_yticks(range(len(measured)), labels=[agent for agent, _, _ in measured])
+    for tick, (agent, _, _) in zip(axes[0].get_yticklabels(), measured, strict=True):
+        tick.set_color(colours[agent])
     axes[0].invert_yaxis()
     handles = [
-        plt.Line2D([], [], marker="o", linestyle="", color="tab:orange"),
-        plt.Line2D([], [], marker="s", linestyle="", color="tab:blue"),
+        plt.Line2D([], [], marker="o", linestyle="", color="black"),
+        plt.Line2D([], [], marker="s", linestyle="", color="black", mfc="white"),
         plt.Line2D([], [], linestyle="--", color="black"),
     ]
     labels = ["most-probable target (thesis)", "expected target (default)", "thesis: up to 16×"]

@@ -34,7 +34,7 @@ def test_the_first_screen_shows_the_verdict_and_the_speed_up_table(
         top, height = verdict.rect["y"], verdict.rect["height"]
         assert top >= 0 and top + height <= visible, (top, height, visible)
         heading = driver.find_element(By.XPATH, "//h2[text()='Convergence']")
-        speedups = heading.find_element(By.XPATH, "following-sibling::table[1]")
+        speedups = heading.find_element(By.XPATH, "following-sibling::div[1]/table")
         assert "speed-up" in speedups.find_element(By.TAG_NAME, "thead").text
         assert speedups.rect["y"] < visible, f"the speed-up table starts at {speedups.rect['y']}"
         assert severe_console_messages(driver) == []

@@ -47,6 +47,7 @@ from skidnav.experiments.report.analysis import (
     survival_columns,
 )
 from skidnav.experiments.report.cells import Part, cell_parts, figure
+from skidnav.experiments.report.colours import agent_colours
 from skidnav.experiments.report.definitions import definitions
 from skidnav.experiments.report.learning_value import learning_value_section
 from skidnav.experiments.report.page import (
@@ -133,23 +134,35 @@ def calibration_text(summaries: pd.DataFrame) -> str:
 def performance_profiles(summaries: pd.DataFrame, config: ExperimentConfig) -> str:
     """Per cell, the share of runs converged by each episode, per agent, with bootstrap bands."""
     parts = []
-    horizon = config.episodes
-    episodes = np.unique(np.geomspace(1, horizon, 200).round())
-    for map_label, preset, rows in cells(summaries):
-        profiles = {}
-        for agent in config.agent_labels:
-            if rows[rows["agent"] == agent].empty:
-                continue
-            times, seen = survival_columns(rows, agent)
-            rng = stats_rng(config, map_label, preset, agent, "profile")
-            low, high = profile_band(
-                times, seen, episodes, rng, n_resamples=config.bootstrap_samples,
-                confidence=config.confidence,
-            )  # fmt: skip
-            profiles[agent] = (episodes, performance_profile(times, seen, episodes), low, high)
+    for map_label, preset, _ in cells(summaries):
         title = f"converged by episode e · {map_label} · {preset}"
-        parts.append(image(plots.performance_profiles(profiles, horizon, title), title))
+        parts.append(image(profile_figure(summaries, config, (map_label, preset)), title))
     return "".join(parts)
+
+
+def profile_figure(
+    summaries: pd.DataFrame, config: ExperimentConfig, cell: tuple[str, str]
+) -> bytes:
+    """PNG bytes of one cell's performance profiles (:func:`plots.performance_profiles`): per
+    agent the share of its runs converged by each episode, with its bootstrap band (also drawn
+    for the docs by ``docs/tools/convergence_figure.py``)."""
+    map_label, preset = cell
+    rows = summaries[(summaries["map"] == map_label) & (summaries["preset"] == preset)]
+    episodes = np.unique(np.geomspace(1, config.episodes, 200).round())
+    profiles = {}
+    for agent in config.agent_labels:
+        if rows[rows["agent"] == agent].empty:
+            continue
+        times, seen = survival_columns(rows, agent)
+        rng = stats_rng(config, map_label, preset, agent, "profile")
+        low, high = profile_band(
+            times, seen, episodes, rng, n_resamples=config.bootstrap_samples,
+            confidence=config.confidence,
+        )  # fmt: skip
+        profiles[agent] = (episodes, performance_profile(times, seen, episodes), low, high)
+    title = f"converged by episode e · {map_label} · {preset}"
+    colours = agent_colours(config.agent_labels)
+    return plots.performance_profiles(profiles, config.episodes, title, colours)
 
 
 def budget_section(

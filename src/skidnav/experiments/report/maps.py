@@ -4,7 +4,9 @@ state values with preferred headings and the greedy actions of each run's world
 :mod:`skidnav.studies.continuity.trajectory_plot`).
 
 Every picture draws the start cell green and the goal cell red (:mod:`skidnav.world.colours`,
-the convention of every picture of a world) and names them in its legend.
+the convention of every picture of a world) and names them in its legend. The panels of one
+figure share one colour scale: the slip shading of the trajectories (η from 0 to
+:func:`eta_ceiling`), the values of the value maps (:func:`value_limits`, with one colour bar).
 """
 
 from __future__ import annotations
@@ -38,8 +40,21 @@ def landmark_handles() -> list[Artist]:
     return [Patch(color=unit_rgb(colour), label=label) for label, colour in LANDMARKS]
 
 
-def draw_arena(axes: Axes, run: TrialResult, *, slip: bool = True) -> None:
-    """Walls, slip regions (η shading), start (green), goal (red) of one run's world."""
+ETA_SHADING_CEILING = 1.7
+"""The slip shading's darkest η unless a world has more (:func:`eta_ceiling`)."""
+
+
+def eta_ceiling(runs: list[TrialResult]) -> float:
+    """The η drawn darkest in a figure of ``runs``' worlds: :data:`ETA_SHADING_CEILING`, or the
+    largest η of any of them if larger, so every panel shades alike."""
+    return max([ETA_SHADING_CEILING, *(float(run.arrays["slip_eta"].max()) for run in runs)])
+
+
+def draw_arena(
+    axes: Axes, run: TrialResult, *, slip: bool = True, eta_max: float | None = None
+) -> None:
+    """Walls, slip regions (η shading from 0 to ``eta_max``, default :func:`eta_ceiling` of this
+    run), start (green), goal (red) of one run's world."""
     occupancy = run.arrays["occupancy"].astype(bool)
     if slip:
         eta = run.arrays["slip_eta"]
@@ -49,7 +64,7 @@ def draw_arena(axes: Axes, run: TrialResult, *, slip: bool = True) -> None:
             origin="lower",
             cmap="Oranges",
             vmin=0.0,
-            vmax=max(1.7, eta.max()),
+            vmax=eta_max if eta_max is not None else eta_ceiling([run]),
             extent=(0, eta.shape[0] * region_w, 0, eta.shape[1] * region_h),
             alpha=0.6,
         )
@@ -103,8 +118,9 @@ def _grid(count: int) -> tuple[Figure, list[Axes]]:
 def trajectories(runs: list[TrialResult], title: str) -> bytes:
     """The final greedy trajectory of each run (one panel per run) on its arena."""
     figure, axes = _grid(len(runs))
+    eta_max = eta_ceiling(runs)
     for ax, run in zip(axes, runs, strict=True):
-        draw_arena(ax, run)
+        draw_arena(ax, run, eta_max=eta_max)
         poses = run.arrays["greedy_poses"]
         ax.plot(poses[:, 0], poses[:, 1], color=unit_rgb(TRAIL), linewidth=1.5)
         ax.plot(poses[-1:, 0], poses[-1:, 1], "o", color=unit_rgb(TRAIL), markersize=4)
@@ -124,9 +140,24 @@ def trajectories(runs: list[TrialResult], title: str) -> bytes:
     return to_png(figure)
 
 
-def value_maps(runs: list[TrialResult], title: str) -> bytes:
-    """State values (max over headings and actions) and preferred headings per cell."""
+def value_limits(runs: list[TrialResult]) -> tuple[float, float]:
+    """(lowest, highest) finite state value over every run's ``value_map``: the one colour scale
+    of a value-map figure, so a colour means the same value in every panel ((0, 1) when no value
+    is finite; widened by ±0.5 when all are equal)."""
+    values = np.concatenate([np.ravel(run.arrays["value_map"]) for run in runs] or [np.zeros(0)])
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        return 0.0, 1.0
+    low, high = float(values.min()), float(values.max())
+    return (low, high) if high > low else (low - 0.5, high + 0.5)
+
+
+def value_maps_figure(runs: list[TrialResult], title: str) -> Figure:
+    """The figure of :func:`value_maps`, open (its panels' images share :func:`value_limits` and
+    one colour bar)."""
     figure, axes = _grid(len(runs))
+    low, high = value_limits(runs)
+    image = None
     for ax, run in zip(axes, runs, strict=True):
         draw_arena(ax, run, slip=False)
         value = run.arrays["value_map"]
@@ -136,26 +167,40 @@ def value_maps(runs: list[TrialResult], title: str) -> bytes:
             np.ma.masked_invalid(value).T,
             origin="lower",
             cmap="viridis",
+            vmin=low,
+            vmax=high,
             extent=(0, n_x * cell_w, 0, n_y * cell_h),
         )
-        heading = run.arrays["heading_map"]
-        n_headings = max(int(heading.max()) + 1, 20)
-        angle = -math.pi + (heading + 0.5) * 2 * math.pi / n_headings
-        ii, jj = np.nonzero(heading >= 0)
-        ax.quiver(
-            (ii + 0.5) * cell_w,
-            (jj + 0.5) * cell_h,
-            np.cos(angle[ii, jj]),
-            np.sin(angle[ii, jj]),
-            scale=40,
-            width=0.003,
-            color="white",
-        )
-        figure.colorbar(image, ax=ax, fraction=0.04)
+        _heading_arrows(ax, run.arrays["heading_map"], cell_w, cell_h)
         ax.set_title(f"{run.coordinates['agent']} (seed {run.coordinates['seed']})", fontsize=9)
+    if image is not None:
+        figure.colorbar(image, ax=axes, fraction=0.03, label="state value (max over actions)")
     _legend(figure, landmark_handles())
     figure.suptitle(title)
-    return to_png(figure)
+    return figure
+
+
+def _heading_arrows(ax: Axes, heading: np.ndarray, cell_w: float, cell_h: float) -> None:
+    """The preferred heading of each cell (``heading`` (n_x, n_y) bin indices, −1: none) as a
+    white arrow; cells ``cell_w`` × ``cell_h`` [m]."""
+    n_headings = max(int(heading.max()) + 1, 20)
+    angle = -math.pi + (heading + 0.5) * 2 * math.pi / n_headings
+    ii, jj = np.nonzero(heading >= 0)
+    ax.quiver(
+        (ii + 0.5) * cell_w,
+        (jj + 0.5) * cell_h,
+        np.cos(angle[ii, jj]),
+        np.sin(angle[ii, jj]),
+        scale=40,
+        width=0.003,
+        color="white",
+    )
+
+
+def value_maps(runs: list[TrialResult], title: str) -> bytes:
+    """State values (max over headings and actions) and preferred headings per cell, one panel
+    per run on one colour scale (:func:`value_maps_figure`)."""
+    return to_png(value_maps_figure(runs, title))
 
 
 ACTION_GLYPHS = (

@@ -30,11 +30,14 @@ body{font-family:system-ui,sans-serif;max-width:1250px;margin:1.2em auto;padding
 h1{font-size:26px;margin:0.2em 0 0.4em}
 #verdict{font-size:17px;line-height:1.4;margin:0 0 0.8em;padding:0.5em 0.8em;
  background:#eef6ee;border-left:5px solid #17631b}
-table{border-collapse:collapse;font-size:13px;margin:0.6em 0;font-variant-numeric:tabular-nums;
- display:block;max-width:100%;overflow-x:auto}
-td,th{border:1px solid #ccc;padding:3px 7px;text-align:right;vertical-align:top}
+.scroll{overflow-x:auto;max-width:100%;margin:0.6em 0}
+table{border-collapse:separate;border-spacing:0;font-size:13px;font-variant-numeric:tabular-nums;
+ border-top:1px solid #ccc;border-left:1px solid #ccc}
+td,th{border-right:1px solid #ccc;border-bottom:1px solid #ccc;padding:3px 7px;text-align:right;
+ vertical-align:top;background:#fff}
 td:first-child{min-width:9em}
 th{background:#f0f0f0} td:first-child,th:first-child{text-align:left}
+td:first-child,th:first-child{position:sticky;left:0;z-index:1;box-shadow:1px 0 0 #999}
 table.prose td,table.prose th{text-align:left;max-width:42em}
 table.labels-2 td:nth-child(-n+2),table.labels-2 th:nth-child(-n+2),
 table.labels-3 td:nth-child(-n+3),table.labels-3 th:nth-child(-n+3){text-align:left}
@@ -44,9 +47,11 @@ img{max-width:100%} pre{background:#f6f6f6;padding:0.8em;overflow-x:auto;font-si
 .yes{color:#17631b;font-weight:600} .no{color:#9b1c1c;font-weight:600}
 .note{color:#555;font-size:13px}
 """
-"""The report's style: numbers right-aligned in their columns (a table wider than the page
-scrolls), text left-aligned: the first column, the first two or three of a table of class
-``labels-2`` or ``labels-3``, every column of one of class ``prose``."""
+"""The report's style: numbers right-aligned in their columns, text left-aligned: the first
+column, the first two or three of a table of class ``labels-2`` or ``labels-3``, every column of
+one of class ``prose``. A table wider than the page scrolls sideways in its ``scroll`` box
+(:func:`page` puts every table in one) with its first column, the row labels, fixed at the left
+edge (``position: sticky``)."""
 
 
 INTERVAL = re.compile(r"([\[(][^\[\]()<>\s]{1,40}), ([^\[\]()<>\s]{1,40}[\])])")
@@ -123,22 +128,36 @@ def sessions_table(metadata: dict[str, object]) -> str:
     return warning + table(pd.DataFrame.from_records(rows))
 
 
+TABLE = re.compile(r"<table\b.*?</table>", re.DOTALL)
+"""An HTML table, from its opening tag to its end (a report's tables never nest)."""
+
+
 def page(title: str, body: Iterable[str]) -> str:
     """One self-contained HTML page: ``title`` and the ``body`` fragments, in the report's
-    style."""
+    style, every table in a box that scrolls sideways (``<div class='scroll'>``, :data:`STYLE`),
+    whoever wrote it (the report's :func:`table` or a study's own).
+
+    >>> "<div class='scroll'><table><tr><td>1</td></tr></table></div>" in page(
+    ...     "t", ["<table><tr><td>1</td></tr></table>"]
+    ... )
+    True
+    """
+    text = TABLE.sub(lambda table: f"<div class='scroll'>{table.group(0)}</div>", "".join(body))
     return (
         "<!DOCTYPE html><html><head><meta charset='utf-8'><link rel='icon' href='data:,'>"
         f"<title>{html.escape(title)}</title><style>{STYLE}</style></head>"
-        f"<body>{''.join(body)}</body></html>"
+        f"<body>{text}</body></html>"
     )
 
 
 def config_and_provenance(config: dict[str, Any], metadata: dict[str, Any]) -> list[str]:
-    """The closing sections of a report: the resolved ``config`` (as saved in ``config.json``)
-    and the provenance of ``metadata.json`` (sessions, package versions)."""
+    """The closing sections of a report: the resolved ``config`` (as saved in ``config.json``),
+    folded, and the provenance of ``metadata.json`` (sessions, package versions)."""
+    text = json.dumps(config, indent=2)
     return [
         "<h2>Config (resolved)</h2>",
-        f"<pre>{html.escape(json.dumps(config, indent=2))}</pre>",
+        "<details class='config'><summary>the resolved config, as saved in config.json "
+        f"({text.count(chr(10)) + 1} lines)</summary><pre>{html.escape(text)}</pre></details>",
         "<h2>Provenance</h2>",
         sessions_table(metadata),
         f"<pre>{html.escape(json.dumps(metadata.get('versions', {}), indent=2))}</pre>",

@@ -1,10 +1,13 @@
-"""Figures of an experiment, as PNG bytes (with :mod:`skidnav.experiments.report.maps` and
-:mod:`skidnav.studies.continuity.trajectory_plot`, the only modules of skidnav that import
-matplotlib).
+"""Figures of an experiment, as PNG bytes (with :mod:`skidnav.experiments.report.maps`,
+:mod:`skidnav.experiments.report.colours` and :mod:`skidnav.studies.continuity.trajectory_plot`,
+the only modules of skidnav that import matplotlib).
 
 Every figure function takes the tidy tables (or run arrays) and returns PNG bytes, so the report
 embeds them without touching matplotlib. The Agg backend is forced: no display is needed. Every
 figure is cropped to what it draws (:func:`to_png`), so no tick label or legend is cut off.
+An agent has one colour in every figure (:func:`~skidnav.experiments.report.colours.agent_colour`),
+and an interval band is a light fill with its edges drawn
+(:func:`~skidnav.experiments.report.colours.draw_band`).
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from matplotlib.figure import Figure
 
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.metrics import moving_average
+from skidnav.experiments.report.colours import Colour, agent_colours, draw_band
 from skidnav.statistics.intervals import curve_band
 
 DPI = 90
@@ -57,11 +61,13 @@ def line_plot(
     x0 + 1, … (the figures of ``skidnav study reproduce``), or (x (n,), y (n,)) points, marked
     (a policy search's evaluations, :mod:`skidnav.studies.policy_search.report`)."""
     figure, axes = plt.subplots(figsize=(6, 4))
+    colours = agent_colours(curves)
     for label, values in curves.items():
         if isinstance(values, tuple):
-            axes.plot(*values, label=label, marker="o", markersize=3)
+            axes.plot(*values, label=label, marker="o", markersize=3, color=colours[label])
         else:
-            axes.plot(np.arange(x0, x0 + len(values)), values, label=label)
+            x = np.arange(x0, x0 + len(values))
+            axes.plot(x, values, label=label, color=colours[label])
     axes.set_xlabel(xlabel)
     axes.set_ylabel(ylabel)
     axes.legend()
@@ -69,23 +75,18 @@ def line_plot(
     return to_png(figure, dpi=100)
 
 
-def _colors(labels: list[str]) -> dict[str, tuple[float, ...]]:
-    cmap = plt.get_cmap("tab10")
-    return {label: tuple(cmap(n % 10)) for n, label in enumerate(labels)}
-
-
 def _band(
     axes: Axes,
     curves: np.ndarray,
     rng: np.random.Generator,
     label: str,
-    color: tuple[float, ...],
+    colour: Colour,
     confidence: float,
 ) -> None:
     mean, low, high = curve_band(curves, rng, confidence=confidence)
     episodes = np.arange(1, curves.shape[1] + 1)
-    axes.plot(episodes, mean, color=color, label=label, linewidth=1.4)
-    axes.fill_between(episodes, low, high, color=color, alpha=0.2, linewidth=0)
+    axes.plot(episodes, mean, color=colour, label=label, linewidth=1.6)
+    draw_band(axes, episodes, low, high, colour)
 
 
 def learning_curves(
@@ -97,7 +98,7 @@ def learning_curves(
     window = max(1, round(config.episodes / 20))
     panels = (("return", "episode return"), ("success", f"success (moving average, {window} ep.)"))
     figure, axes = plt.subplots(1, 2, figsize=(11, 3.8), layout="constrained")
-    colors = _colors(config.agent_labels)
+    colors = agent_colours(config.agent_labels)
     rng = np.random.default_rng([config.root_seed, 0xC0])
     for agent in config.agent_labels:
         rows = cell[cell["agent"] == agent]
@@ -149,7 +150,7 @@ def greedy_lengths(
     values, relative, cap = _capped_lengths(rows, summaries)
     edges = np.unique(np.geomspace(1, config.episodes + 1, GREEDY_BINS).round())
     figure, axes = plt.subplots(figsize=(7.5, 4.2), layout="constrained")
-    colors = _colors(config.agent_labels)
+    colors = agent_colours(config.agent_labels)
     for agent in config.agent_labels:
         mine = (rows["agent"] == agent).to_numpy()
         if mine.any():
@@ -157,7 +158,7 @@ def greedy_lengths(
                 rows["episode"].to_numpy()[mine], values[mine], edges
             )
             axes.plot(x, median, color=colors[agent], linewidth=1.6, label=f"{agent}: median")
-            axes.fill_between(x, low, high, color=colors[agent], alpha=0.2, linewidth=0)
+            draw_band(axes, x, low, high, colors[agent])
     _greedy_axes(axes, config, relative, cap)
     unit = "× L*" if relative else "actions"
     axes.set_title(
@@ -209,10 +210,11 @@ def _strip(
     title: str,
 ) -> None:
     rng = np.random.default_rng(0)  # jitter only
+    colours = agent_colours(labels)
     for position, agent in enumerate(labels):
         values = summaries[summaries["agent"] == agent][column].to_numpy(float)
         jitter = rng.uniform(-0.15, 0.15, size=values.size)
-        axes.scatter(position + jitter, values, s=10, alpha=0.5, color="grey")
+        axes.scatter(position + jitter, values, s=10, alpha=0.6, color=colours[agent])
         row = aggregates[(aggregates["agent"] == agent) & (aggregates["metric"] == column)]
         if not row.empty:
             r = row.iloc[0]
@@ -221,7 +223,7 @@ def _strip(
                 r["mean"],
                 yerr=[[r["mean"] - r["mean_low"]], [r["mean_high"] - r["mean"]]],
                 fmt="o",
-                color="C3",
+                color="black",
                 capsize=3,
             )
             axes.errorbar(
@@ -229,7 +231,8 @@ def _strip(
                 r["iqm"],
                 yerr=[[r["iqm"] - r["iqm_low"]], [r["iqm_high"] - r["iqm"]]],
                 fmt="s",
-                color="C0",
+                mfc="white",
+                color="black",
                 capsize=3,
             )
     axes.set_xticks(range(len(labels)), labels, rotation=30, ha="right", fontsize=8)
@@ -243,8 +246,9 @@ def metric_strips(
     map_label: str,
     preset: str,
 ) -> bytes:
-    """Per-seed convergence episodes, success rates and final lengths per agent, with the mean
-    (red circle) and IQM (blue square) and their bootstrap intervals."""
+    """Per-seed convergence episodes, success rates and final lengths per agent (dots in the
+    agent's colour), with the mean (black circle) and IQM (open square) and their bootstrap
+    intervals."""
     cell = summaries[(summaries["map"] == map_label) & (summaries["preset"] == preset)]
     aggs = aggregates[(aggregates["map"] == map_label) & (aggregates["preset"] == preset)]
     panels = (
@@ -258,7 +262,7 @@ def metric_strips(
     for ax, (column, title) in zip(axes, panels, strict=True):
         _strip(ax, cell, column, config.agent_labels, aggs, title)
     figure.suptitle(
-        f"{map_label} · {preset}: seeds (grey), mean ● and IQM ■ with "
+        f"{map_label} · {preset}: seeds (dots), mean ● and IQM □ with "
         f"{config.confidence:.0%} intervals"
     )
     return to_png(figure)
@@ -271,7 +275,9 @@ def surface_bars(surfaces: pd.DataFrame) -> bytes:
     positions = np.arange(len(rows))
     labels = [f"{r.agent}\n{r.map}" for r in rows.itertuples()]
     error = np.vstack([rows["ratio"] - rows["ratio_low"], rows["ratio_high"] - rows["ratio"]])
-    axes.bar(positions, rows["ratio"], yerr=error, capsize=4, color="C2", alpha=0.8)
+    by_agent = agent_colours(rows["agent"])
+    colours = [by_agent[agent] for agent in rows["agent"]]
+    axes.bar(positions, rows["ratio"], yerr=error, capsize=4, color=colours, alpha=0.8)
     axes.axhline(1.0, color="grey", linewidth=1)
     axes.axhline(2.0, color="C3", linewidth=1, linestyle="--", label="thesis: ≈ 2×")
     axes.set_xticks(positions, labels, fontsize=8)
@@ -284,6 +290,7 @@ def performance_profiles(
     profiles: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
     horizon: int,
     title: str,
+    colours: Mapping[str, Colour] | None = None,
 ) -> bytes:
     """Share of runs converged by each episode (Agarwal et al. (2021) performance profiles over
     convergence episodes), one step curve with its bootstrap band per agent.
@@ -294,13 +301,17 @@ def performance_profiles(
             :func:`~skidnav.statistics.survival.profile_band`.
         horizon: the last episode of the runs (the dashed line; censored runs stop there).
         title: figure title.
+        colours: agent label → colour, by default
+            :func:`~skidnav.experiments.report.colours.agent_colours` of the profiles' labels
+            (a report passes its agents' colours, so an agent missing from one cell does not
+            change another's colour).
     """
     figure, axes = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
-    colors = _colors(list(profiles))
+    colors = colours if colours is not None else agent_colours(profiles)
     for label, (episodes, share, low, high) in profiles.items():
         color = colors[label]
-        axes.step(episodes, share, where="post", color=color, label=label, linewidth=1.4)
-        axes.fill_between(episodes, low, high, step="post", color=color, alpha=0.2, linewidth=0)
+        axes.step(episodes, share, where="post", color=color, label=label, linewidth=1.6)
+        draw_band(axes, episodes, low, high, color, step="post")
     axes.axvline(horizon, color="grey", linewidth=1, linestyle="--", label="horizon")
     axes.set_xscale("log")
     axes.set_xlim(1, horizon * 1.05)
@@ -320,7 +331,7 @@ def _error(center: pd.Series, low: pd.Series, high: pd.Series) -> np.ndarray:
     return bars
 
 
-def _speedup_panel(axes: Axes, rows: pd.DataFrame, color: tuple[float, ...], label: str) -> None:
+def _speedup_panel(axes: Axes, rows: pd.DataFrame, color: Colour, label: str) -> None:
     axes.errorbar(
         rows["planning_steps"],
         rows["speedup"],
@@ -352,7 +363,7 @@ def speedup_vs_budget(rows: pd.DataFrame) -> bytes:
     """
     figure, (left, right) = plt.subplots(1, 2, figsize=(12, 4.2), layout="constrained")
     labels = list(dict.fromkeys(rows["algorithm"]))
-    colors = _colors(labels)
+    colors = agent_colours(labels)
     for label in labels:
         part = rows[rows["algorithm"] == label].sort_values("planning_steps")
         _speedup_panel(left, part, colors[label], label)
