@@ -18,13 +18,15 @@ core, and per agent:
 * **planning updates/s** and **real steps/s** over all its training, for comparison with the
   update rates of ``bench_agents.py`` and ``bench_training.py``.
 
-Usage (from the repository root): ``PYTHONPATH=src python benchmarks/time_to_learn.py``.
+Usage (from the repository root): ``PYTHONPATH=src python benchmarks/time_to_learn.py [CONFIG]``
+(default :data:`CONFIG`).
 ``make bench`` records these figures per commit (``benchmarks/history.py``).
 """
 
 from __future__ import annotations
 
 import math
+import sys
 import tempfile
 from pathlib import Path
 from typing import NamedTuple
@@ -73,6 +75,11 @@ def budget(config_path: Path = CONFIG) -> tuple[int, str]:
     limit = f" of ≤ {config.max_steps} actions" if config.max_steps else ""
     runs = config.seeds * len(config.maps) * len(config.presets)
     return runs, f"{config.episodes} episodes{limit}"
+
+
+def confidence(config_path: Path = CONFIG) -> float:
+    """The level of the intervals of ``config_path``, e.g. 0.95."""
+    return load_config(config_path).confidence
 
 
 def time_to_learn(config_path: Path = CONFIG) -> dict[str, Learned]:
@@ -138,8 +145,9 @@ def with_interval(interval: Interval, unit: str = "") -> str:
 
 
 def main() -> None:
-    print(f"time to learn ({CONFIG.name}):")
-    for label, figures in time_to_learn().items():
+    config_path = Path(sys.argv[1]) if len(sys.argv) > 1 else CONFIG
+    print(f"time to learn ({config_path.name}):")
+    for label, figures in time_to_learn(config_path).items():
         print(
             f"  {label:22s} converged {figures.converged}/{figures.runs}, median episode "
             f"{with_interval(figures.episode)}, {with_interval(figures.seconds, ' s')} of "
