@@ -14,6 +14,8 @@ import key_figures
 import time_to_learn
 from history import MACHINE, RESULTS, Figures, Record
 
+from skidnav.statistics.intervals import Interval
+
 ROOT = Path(__file__).resolve().parents[1]
 TARGETS = (ROOT / "docs" / "speed.md",)
 BEGIN = "<!-- speed table: written by `make bench` (benchmarks/speed_table.py) -->"
@@ -50,6 +52,20 @@ def key_table(figures: Figures) -> list[str]:
     return rows
 
 
+def unbounded(value: float) -> float:
+    """A recorded median or interval end: NaN (asv's "not measured") stands for ∞, since every
+    agent has at least two runs (a NaN interval only with one)."""
+    return math.inf if math.isnan(value) else value
+
+
+def with_interval(figures: Figures, name: str, agent: str, unit: str = "") -> str:
+    """The recorded median ``name`` of ``agent`` with its interval, e.g. "0.48 s [0.31 s, ∞]"."""
+    estimate, low, high = (
+        unbounded(figures[LEARNING.format(name + end), agent]) for end in ("", "_low", "_high")
+    )
+    return time_to_learn.with_interval(Interval(estimate, low, high), unit)
+
+
 def learning_table(figures: Figures) -> list[str]:
     """One row per agent of ``time_to_learn.toml``: how long it took to learn."""
     runs, _ = time_to_learn.budget()
@@ -61,13 +77,12 @@ def learning_table(figures: Figures) -> list[str]:
     for agent in time_to_learn.agent_labels():
         value = {
             name: figures[LEARNING.format(name), agent]
-            for name in ("seconds", "episodes", "unconverged_runs", "time_per_update",
-                         "time_per_step")
-        }  # fmt: skip
+            for name in ("unconverged_runs", "time_per_update", "time_per_step")
+        }
         rows.append(
             f"| {agent} | {runs - value['unconverged_runs']:.0f}/{runs} "
-            f"| {time_to_learn.describe(value['episodes'])} "
-            f"| **{time_to_learn.describe(value['seconds'], ' s')}** "
+            f"| {with_interval(figures, 'episodes', agent)} "
+            f"| **{with_interval(figures, 'seconds', agent, ' s')}** "
             f"| {rate(1e9 / value['time_per_update'])} | {rate(1e6 / value['time_per_step'])} |"
         )
     return rows
@@ -92,7 +107,10 @@ def table(record: Record) -> str:
         "",
         f"Time to learn (`benchmarks/{time_to_learn.CONFIG.name}`: the demo's arena, 25 × 25 × "
         f"20 with obstacles, thesis slip; {runs} runs per agent of {given}, one after another on "
-        "one core; training time only, Kaplan–Meier medians over the runs):",
+        "one core; training time only; Kaplan–Meier medians over the runs with their "
+        f"{time_to_learn.confidence():.0%} "
+        "percentile-bootstrap intervals, ∞ where more than half of the runs in a resample did "
+        "not converge):",
         "",
         *learning_table(record.figures),
         END,

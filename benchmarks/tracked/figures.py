@@ -44,7 +44,8 @@ class KeyFigures:
 
 
 class TimeToLearn:
-    """How long each agent of ``time_to_learn.toml`` takes to learn."""
+    """How long each agent of ``time_to_learn.toml`` takes to learn: the Kaplan–Meier medians
+    and the ends of their intervals (∞ recorded as NaN: asv's "not measured")."""
 
     params = tuple(time_to_learn.agent_labels())
     param_names = ("agent",)
@@ -57,14 +58,34 @@ class TimeToLearn:
         }
 
     def track_seconds(self, learned: Learned, agent: str) -> float:
-        return finite(learned[agent]["seconds"])
+        return finite(learned[agent]["seconds"][0])
 
     track_seconds.unit = "s"  # type: ignore[attr-defined]
 
+    def track_seconds_low(self, learned: Learned, agent: str) -> float:
+        return finite(learned[agent]["seconds"][1])
+
+    track_seconds_low.unit = "s"  # type: ignore[attr-defined]
+
+    def track_seconds_high(self, learned: Learned, agent: str) -> float:
+        return finite(learned[agent]["seconds"][2])
+
+    track_seconds_high.unit = "s"  # type: ignore[attr-defined]
+
     def track_episodes(self, learned: Learned, agent: str) -> float:
-        return finite(learned[agent]["episode"])
+        return finite(learned[agent]["episode"][0])
 
     track_episodes.unit = "episodes"  # type: ignore[attr-defined]
+
+    def track_episodes_low(self, learned: Learned, agent: str) -> float:
+        return finite(learned[agent]["episode"][1])
+
+    track_episodes_low.unit = "episodes"  # type: ignore[attr-defined]
+
+    def track_episodes_high(self, learned: Learned, agent: str) -> float:
+        return finite(learned[agent]["episode"][2])
+
+    track_episodes_high.unit = "episodes"  # type: ignore[attr-defined]
 
     def track_unconverged_runs(self, learned: Learned, agent: str) -> float:
         return float(learned[agent]["runs"] - learned[agent]["converged"])

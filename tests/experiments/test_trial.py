@@ -99,6 +99,40 @@ def test_warm_up_compiles_everything_before_the_clock_starts() -> None:
         assert entry["new"] == [], entry
 
 
+# The refit kernels of a learned kinematic model run only when its schedule asks for a refit
+# (500 new samples by default), which the warm-up's few actions never reach on their own.
+REFIT_KERNELS = """
+import sys
+from skidnav.agents import planner_learning
+from skidnav.experiments import trial
+from skidnav.experiments.configfile import parse_config
+from skidnav.experiments.runs import expand_runs
+from skidnav.models import bayesian_ridge, kinematic_moments
+
+trial.warm_up(expand_runs(parse_config(sys.argv[1]))[-1])
+kernels = {  # the refit's entry points, and the episode end without a refit
+    "sync_moments": kinematic_moments.sync_moments,
+    "newest_moments": kinematic_moments.newest_moments,
+    "evidence_loop": bayesian_ridge._evidence_loop,
+    "refresh_stale": planner_learning.refresh_stale,
+}
+print(" ".join(name for name, kernel in kernels.items() if not kernel.signatures))
+"""
+
+
+@pytest.mark.skipif(jit_disabled(), reason="nothing is compiled with NUMBA_DISABLE_JIT=1")
+def test_warm_up_compiles_the_kinematic_refit_and_the_episode_end_without_one() -> None:
+    text = TINY_TOML + '\n[[agents]]\nname = "dyna-full"\n'
+    result = subprocess.run(
+        [sys.executable, "-c", REFIT_KERNELS, text],
+        capture_output=True, text=True, env=cli_env(), timeout=600,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    # Compiled, or loaded from numba's cache, by the warm-up: a signature each (their helpers
+    # are compiled into them, so a cache hit leaves theirs empty).
+    assert result.stdout.split() == [], result.stdout
+
+
 def test_policy_map_is_the_greedy_action_at_the_heading() -> None:
     rng = np.random.default_rng(5)
     walls = np.zeros((4, 3), dtype=bool)
