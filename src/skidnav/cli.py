@@ -10,11 +10,12 @@ from __future__ import annotations
 import errno
 import importlib
 import logging
+import shlex
 import sys
 from collections.abc import Sequence
 
 from skidnav.commands.parsing import OneLineParser
-from skidnav.errors import EXIT_RUNS_FAILED, RunsFailedError, UserError
+from skidnav.errors import EXIT_RUNS_FAILED, Interrupted, RunsFailedError, UserError
 from skidnav.experiments.provenance import skidnav_version
 
 COMMANDS: dict[str, str | dict[str, str]] = {
@@ -109,9 +110,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = f"{error.filename}: " if error.filename else ""
         print(f"skidnav: error: {where}cannot write ({error.strerror})", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("skidnav: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as interrupt:
+        print(interrupted_line(interrupt, arguments), file=sys.stderr)
         return 130
+
+
+def interrupted_line(interrupt: KeyboardInterrupt, arguments: Sequence[str]) -> str:
+    """What ``skidnav`` prints when stopped by Ctrl-C (or SIGTERM, in ``skidnav run``): for a
+    sweep, how many runs were saved where and the command that resumes it (the same one).
+
+    >>> print(interrupted_line(Interrupted(7, 18, "runs/q"), ["run", "configs/q.toml"]))
+    skidnav: interrupted: 7 of 18 runs saved in runs/q; resume with: skidnav run configs/q.toml
+    """
+    if not isinstance(interrupt, Interrupted):
+        return "skidnav: interrupted"
+    return f"skidnav: interrupted: {interrupt}; resume with: {shlex.join(['skidnav', *arguments])}"
 
 
 if __name__ == "__main__":

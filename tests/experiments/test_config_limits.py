@@ -50,7 +50,7 @@ CASES: dict[str, tuple[str, str]] = {
     ),
     "long unknown key": (
         TINY_TOML.replace("episodes = 6", f"{'k' * 10_000} = 6"),
-        "[experiment]: unknown key \"'kkkk",
+        "unknown key \"'kkkk",
     ),
     "a generated map whose oracle does not fit": (
         TINY_TOML.replace(

@@ -114,10 +114,10 @@ def test_the_report_is_the_study_s_in_the_report_page(serial_run: Path, tmp_path
     ("old", "new", "message"),
     [
         ('learners = ["q-learning",', 'learners = ["dqn",', "[continuity]: expected learners"),
-        ("seeds = 2", "seeds = 2\nepisods = 3", "[continuity]: unknown key 'episods'"),
+        ("seeds = 2", "seeds = 2\nepisods = 3", "unknown key 'episods' in [continuity]"),
         ("seeds = 2", "seeds = 0", "expected seeds to be an integer in [1, 1000], got 0"),
         ('kind = "continuity"', 'kind = "continuty"', "kind: expected one of"),
-        ("[continuity]", "[extra]\n[continuity]", "top level: unknown key 'extra'"),
+        ("[continuity]", "[extra]\n[continuity]", "unknown key 'extra' in top level"),
     ],
 )
 def test_a_bad_study_config_is_one_line(

@@ -111,7 +111,7 @@ def test_the_report_section_is_the_table(serial: Path) -> None:
 @pytest.mark.parametrize(
     ("line", "message"),
     [
-        ("seedz = 2", "unknown key 'seedz' (expected one of kind, name, models, seeds"),
+        ("seedz = 2", "(did you mean 'seeds'? expected one of kind, name, models, seeds"),
         ("seeds = 0", "expected seeds to be an integer in [1, 1000], got 0"),
         ('models = ["ridge", "lasso"]', "expected models to be distinct names among ridge, gp"),
         ('slip = "ice"', "expected slip to be one of thesis, slippery"),
