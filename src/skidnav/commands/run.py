@@ -18,6 +18,7 @@ from types import FrameType
 from typing import Any
 
 from skidnav.commands.parsing import path_argument
+from skidnav.commands.verbs import HELP
 from skidnav.envs.registration import allow_env_modules
 from skidnav.experiments.runner import BACKENDS, RunOutcome
 from skidnav.experiments.tensorboard_log import TensorBoardLog
@@ -32,7 +33,7 @@ def add_parser(subparsers: Any) -> None:
     """Add the ``run`` subcommand."""
     parser = subparsers.add_parser(
         "run",
-        help="run an experiment or study config (agents × maps × presets × seeds); resumable",
+        help=HELP["run"],
         description="Run every run of an experiment config, or of a study config (its top-level "
         "'kind' names the study). Started again on the same --out directory it skips the runs "
         "already finished; a second run on a directory in use is refused.",
