@@ -48,7 +48,8 @@ def one_error_line(capsys: pytest.CaptureFixture[str]) -> str:
         ("[serial]\nbaudrate = 0\n", "[serial]: expected baudrate to be an integer >= 1, got 0"),
         (
             "[serial]\nbaud = 9600\n",
-            "unknown key 'baud' in {config}: [serial] (expected one of url, ",
+            "unknown key 'baud' in {config}: [serial] (did you mean 'baudrate'? expected one "
+            "of url, ",
         ),
         ('[sim]\nlockstep = "yes"\n', "[sim]: expected lockstep to be true or false, got 'yes'"),
         ('[sim]\nlatency = "0.1"\n', "[sim]: expected latency to be a number, got '0.1'"),

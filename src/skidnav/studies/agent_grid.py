@@ -173,7 +173,7 @@ def read_grid(cls: type[GridT], document: Mapping[str, Any], path: Path, kind: s
         try:
             return cls(agents=agents, **settings)
         except (ValueError, TypeError) as error:
-            raise ValueError(f"[{kind}]: {error}") from None
+            raise within(error, f"[{kind}]") from None
     except (UserError, ValueError) as error:
         raise within(error, str(path)) from None
 
