@@ -111,15 +111,20 @@ def process_pool(jobs: int) -> Iterator[ProcessPoolExecutor]:
             yield executor
         except KeyboardInterrupt:
             stop_workers(executor)
+            executor.shutdown(wait=True)  # the broken pool fails every future at once
             raise
-        finally:
+        except BaseException:
             executor.shutdown(wait=True, cancel_futures=True)
+            raise
+        executor.shutdown(wait=True, cancel_futures=True)
 
 
 def stop_workers(executor: ProcessPoolExecutor) -> None:
     """End the workers of ``executor`` now (SIGTERM), their runs unfinished: on Ctrl-C the
     sweep stops at once instead of awaiting the runs in progress (a run is written only by this
-    process, once finished, so a resume starts them again)."""
+    process, once finished, so a resume starts them again). The pool is then broken and fails
+    every future not done; none may be cancelled meanwhile (Python 3.11's executor then dies on
+    setting the cancelled future's exception, and whoever waits for the others waits forever)."""
     for process in list(executor._processes.values()):  # no public way before Python 3.14
         process.terminate()
 
@@ -130,15 +135,18 @@ def _submitted(
     """Outcomes of ``runs`` on ``executor`` as they finish; when the caller stops early, the
     pending runs are cancelled and the running ones awaited, so the pool is free again."""
     futures = {executor.submit(trial, spec): spec for spec in runs}
+    interrupted = False
     try:
         for future in as_completed(futures):
             yield attempt(futures[future], future.result)
     except KeyboardInterrupt:
+        interrupted = True
         stop_workers(executor)  # not awaited: their runs are lost, the finished ones written
         raise
     finally:
-        for future in futures:
-            future.cancel()
+        if not interrupted:  # after stop_workers the broken pool fails them all, uncancelled
+            for future in futures:
+                future.cancel()
         wait(futures)
 
 
