@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from skidnav.errors import EXCERPT_CHARS, UserError
+from skidnav.errors import EXCERPT_CHARS, ConfigKeyError, UserError, first_line, within
 from skidnav.experiments.configfile import parse_config
 from skidnav.files.configtables import build_dataclass, check_keys, resolve_path, table, table_array
 from skidnav.realtime.config import config_from_mapping
@@ -43,7 +43,7 @@ def test_check_keys_names_the_first_unknown_key_and_the_known_ones() -> None:
     check_keys({"b": 1, "a": 2}, ("a", "b"), "[x]")
     with pytest.raises(UserError) as caught:
         check_keys({"a": 1, "zz": 2, "yy": 3}, ("a", "b"), "[x]")
-    assert str(caught.value) == "[x]: unknown key 'zz' (expected one of a, b)"
+    assert str(caught.value) == "unknown key 'zz' in [x] (expected one of a, b)"
 
 
 def test_a_long_or_hostile_unknown_key_is_quoted_in_part_on_one_line() -> None:
@@ -58,7 +58,7 @@ def test_build_dataclass_checks_keys_then_the_class_validates() -> None:
     assert build_dataclass(Settings, {}, "[s]") == Settings()
     cases = {
         "[s]: expected a table, got 3": 3,
-        "[s]: unknown key 'size' (expected one of count, name)": {"size": 3},
+        "unknown key 'size' in [s] (expected one of count, name)": {"size": 3},
         "[s]: expected count >= 1, got 0": {"count": 0},
     }
     for message, value in cases.items():
@@ -82,8 +82,8 @@ def test_both_loaders_word_the_same_faults_alike() -> None:
         parse_config(TINY_TOML.replace("episodes = 6", "episods = 6"), "a.toml")
     with pytest.raises(UserError) as realtime:
         config_from_mapping({"run": {"episods": 6}})
-    assert str(experiment.value).startswith("a.toml: [experiment]: unknown key 'episods' (")
-    assert str(realtime.value).startswith("[run]: unknown key 'episods' (")
+    assert str(experiment.value).startswith("unknown key 'episods' in a.toml: [experiment] (did ")
+    assert str(realtime.value).startswith("unknown key 'episods' in [run] (did you mean 'epi")
     with pytest.raises(UserError, match=r"^a\.toml: \[env\]: expected a table, got 3$"):
         parse_config("env = 3\n" + TINY_TOML, "a.toml")
     with pytest.raises(UserError, match=r"^\[sim\]: expected a table, got 3$"):
@@ -117,3 +117,41 @@ def test_build_dataclass_checks_the_type_of_every_simple_field() -> None:
             build_dataclass(Typed, value, "[t]")
         assert str(caught.value) == message
     assert build_dataclass(Typed, {"items": ["x"]}, "[t]").items == ["x"]  # left to the class
+
+
+KEY_FIRST_CHARS = 60
+"""The misspelt key must show within this many characters of the command's one error line."""
+
+
+@pytest.mark.parametrize(
+    ("edit", "key", "guess"),
+    [
+        (("planning_steps = 5", "planing_steps = 5"), "planing_steps", "planning_steps"),
+        (("episodes = 6", "episods = 6"), "episods", "episodes"),
+        (('kind = "free"', 'kind = "free"\nlable = "m"'), "lable", "label"),
+        (('label = "dyna-q-5"', 'labl = "dyna-q-5"'), "labl", "label"),
+    ],
+)
+def test_a_misspelt_key_leads_the_error_line_however_long_the_path(
+    edit: tuple[str, str], key: str, guess: str, tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    from skidnav.cli import main
+
+    folder = tmp_path / ("a-long-folder-name-" * 8)
+    folder.mkdir()
+    config = folder / "experiment.toml"
+    config.write_text(TINY_TOML.replace(*edit))
+    assert main(["run", str(config), "--out", str(tmp_path / "out")]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "\n" not in line and line.index(f"unknown key {key!r}") < KEY_FIRST_CHARS, line
+    assert str(config) in line and f"did you mean {guess!r}?" in line
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_cut_of_a_long_error_keeps_the_key() -> None:
+    known = [f"option_number_{n}" for n in range(50)]
+    with pytest.raises(ConfigKeyError) as caught:
+        check_keys({"planing_steps": 1}, known, "[[agents]] #1 params")
+    error = within(within(caught.value, "agent 'dyna-full'"), "/very/long/" * 30 + "a.toml")
+    assert len(str(error)) > 600 and first_line(error).startswith("unknown key 'planing_steps' in")

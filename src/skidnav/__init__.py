@@ -1,6 +1,8 @@
 """skidnav: model-based reinforcement learning navigation for skid-steering mobile robots.
 
-Importing the package registers the Gymnasium environment ``skidnav/SkidSteerNav-v0``. The
+Importing the package registers the Gymnasium environment ``skidnav/SkidSteerNav-v0`` (and the
+grid mazes) as soon as Gymnasium is imported, without importing it
+(:mod:`skidnav.envs.on_import`). The
 Python API (:mod:`skidnav.api`: ``make_env``, ``make_agent``, ``train``, ``evaluate``,
 ``save_agent``, ``load_agent``, ``convergence_episode``, ``run_config``, ``agent_names``, and
 the training callback's ``EpisodeInfo`` and ``StopTraining``) is
@@ -12,10 +14,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from skidnav.envs.registration import register_envs
+from skidnav.envs.on_import import register_on_import
 from skidnav.version import __version__
 
-register_envs()
+register_on_import()
 
 if TYPE_CHECKING:  # what type checkers see; at run time the module is imported on first use
     from skidnav.api import EpisodeInfo as EpisodeInfo

@@ -10,11 +10,14 @@ from __future__ import annotations
 import errno
 import importlib
 import logging
+import shlex
 import sys
 from collections.abc import Sequence
+from typing import Any
 
 from skidnav.commands.parsing import OneLineParser
-from skidnav.errors import EXIT_RUNS_FAILED, RunsFailedError, UserError
+from skidnav.commands.verbs import HELP
+from skidnav.errors import EXIT_RUNS_FAILED, Interrupted, RunsFailedError, UserError
 from skidnav.experiments.provenance import skidnav_version
 
 COMMANDS: dict[str, str | dict[str, str]] = {
@@ -40,11 +43,6 @@ COMMANDS: dict[str, str | dict[str, str]] = {
 }
 """The command tree: a verb → the module that adds it (``add_parser(subparsers)``), or a group
 → its verbs and their modules (``skidnav study continuity …``)."""
-GROUP_HELP = {
-    "study": "questions asked of the runner: shortcuts that write a study config and run it",
-    "world": "maps, one simulated episode, floor presets, the BARN worlds",
-}
-"""One line of help per group of :data:`COMMANDS`."""
 DISK_FULL = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG})
 """``errno`` of a write that found no room: no space left, over quota, file too large."""
 
@@ -63,8 +61,8 @@ def requested_modules(argv: Sequence[str]) -> dict[str, str | dict[str, str]]:
     return {words[0]: entry}
 
 
-def build_parser(commands: dict[str, str | dict[str, str]] = COMMANDS) -> OneLineParser:
-    """The argument parser with the verbs of ``commands`` (default: every one)."""
+def _top_parser() -> tuple[OneLineParser, Any]:
+    """The ``skidnav`` parser with its own options, and its (empty) verbs."""
     parser = OneLineParser(
         prog="skidnav", description="Model-based RL navigation for skid-steer robots."
     )
@@ -73,15 +71,32 @@ def build_parser(commands: dict[str, str | dict[str, str]] = COMMANDS) -> OneLin
         "--version", action="version", version=f"skidnav {skidnav_version()}",
         help="print the installed version and exit",
     )  # fmt: skip
-    subparsers = parser.add_subparsers(dest="command", required=True)
+    return parser, parser.add_subparsers(dest="command", required=True)
+
+
+def build_parser(commands: dict[str, str | dict[str, str]] = COMMANDS) -> OneLineParser:
+    """The argument parser with the verbs of ``commands`` (default: every one), their modules
+    imported."""
+    parser, subparsers = _top_parser()
     for name, entry in commands.items():
         if isinstance(entry, str):
             importlib.import_module(entry).add_parser(subparsers)
             continue
-        group = subparsers.add_parser(name, help=GROUP_HELP[name], description=GROUP_HELP[name])
+        group = subparsers.add_parser(name, help=HELP[name], description=HELP[name])
         verbs = group.add_subparsers(dest=f"{name}_command", required=True)
         for module_name in entry.values():
             importlib.import_module(module_name).add_parser(verbs)
+    return parser
+
+
+def listing_parser() -> OneLineParser:
+    """The parser when no verb is named (``skidnav --help``, ``--version``, a typo): every verb
+    and group of :data:`COMMANDS` listed with its line of help
+    (:data:`~skidnav.commands.verbs.HELP`), no command module imported, so it answers in a
+    fraction of a second."""
+    parser, subparsers = _top_parser()
+    for name in COMMANDS:
+        subparsers.add_parser(name, help=HELP[name])
     return parser
 
 
@@ -89,7 +104,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the process exit code (0 ok, 1 failed runs, 2 user error, 130
     interrupted)."""
     arguments = sys.argv[1:] if argv is None else list(argv)
-    parser = build_parser(requested_modules(arguments))
+    requested = requested_modules(arguments)
+    parser = listing_parser() if requested is COMMANDS else build_parser(requested)
     args = parser.parse_args(arguments)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,
@@ -109,9 +125,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = f"{error.filename}: " if error.filename else ""
         print(f"skidnav: error: {where}cannot write ({error.strerror})", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("skidnav: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as interrupt:
+        print(interrupted_line(interrupt, arguments), file=sys.stderr)
         return 130
+
+
+def interrupted_line(interrupt: KeyboardInterrupt, arguments: Sequence[str]) -> str:
+    """What ``skidnav`` prints when stopped by Ctrl-C (or SIGTERM, in ``skidnav run``): for a
+    sweep, how many runs were saved where and the command that resumes it (the same one).
+
+    >>> print(interrupted_line(Interrupted(7, 18, "runs/q"), ["run", "configs/q.toml"]))
+    skidnav: interrupted: 7 of 18 runs saved in runs/q; resume with: skidnav run configs/q.toml
+    """
+    if not isinstance(interrupt, Interrupted):
+        return "skidnav: interrupted"
+    return f"skidnav: interrupted: {interrupt}; resume with: {shlex.join(['skidnav', *arguments])}"
 
 
 if __name__ == "__main__":

@@ -12,6 +12,43 @@ class UserError(Exception):
     """
 
 
+class ConfigKeyError(UserError, ValueError):
+    """A config's key that is wrong (unknown, misspelt). Its one line leads with the key, the
+    places it was found in after it (outermost first: file, table), then the details, so that
+    neither a long path nor the cut of :func:`first_line` hides the key::
+
+        unknown key 'planing_steps' in configs/quick.toml: agent 'dyna-full' (did you mean
+        'planning_steps'? expected one of …)
+
+    A :class:`ValueError` too, for the callers that catch a config class's ValueError.
+
+    Args:
+        lead: the problem, naming the key (``"unknown key 'planing_steps'"``).
+        places: where it was found, outermost first (each wrapper adds its own, :func:`within`).
+        detail: what would be right (the known keys), last.
+    """
+
+    def __init__(self, lead: str, places: tuple[str, ...] = (), detail: str = "") -> None:
+        self.lead, self.places, self.detail = lead, places, detail
+        where = f" in {': '.join(places)}" if places else ""
+        super().__init__(f"{lead}{where}" + (f" ({detail})" if detail else ""))
+
+
+def within(error: BaseException, place: str) -> UserError:
+    """``error`` (a config's) found in ``place`` (a file, a table) as one UserError: a
+    :class:`ConfigKeyError` keeps its key first and takes ``place`` as its outermost place; any
+    other reads ``"{place}: {error}"``.
+
+    >>> str(within(ConfigKeyError("unknown key 'x'", ("[run]",), "expected y"), "a.toml"))
+    "unknown key 'x' in a.toml: [run] (expected y)"
+    >>> str(within(ValueError("expected seeds ≥ 1, got 0"), "a.toml"))
+    'a.toml: expected seeds ≥ 1, got 0'
+    """
+    if isinstance(error, ConfigKeyError):
+        return ConfigKeyError(error.lead, (place, *error.places), error.detail)
+    return UserError(f"{place}: {error}")
+
+
 class CorruptFileError(UserError):
     """A saved file that is truncated, corrupt, or from an incompatible version."""
 
@@ -20,6 +57,15 @@ class RunsFailedError(Exception):
     """Runs of a sweep that raised while the others finished and were kept (each failure was
     logged in one line as it happened; :mod:`skidnav.experiments.failures`). The CLI prints the
     message as one line and exits with :data:`EXIT_RUNS_FAILED`."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """A sweep stopped by Ctrl-C or SIGTERM, with what it had saved: ``saved`` of ``total`` runs
+    in the results directory ``where`` (a rerun of the same command resumes from them)."""
+
+    def __init__(self, saved: int, total: int, where: str) -> None:
+        super().__init__(f"{saved} of {total} runs saved in {where}")
+        self.saved, self.total, self.where = saved, total, where
 
 
 EXIT_RUNS_FAILED = 1

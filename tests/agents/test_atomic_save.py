@@ -188,7 +188,7 @@ def _counter(meta: dict[str, Any]) -> None:
 QUOTING_CASES: dict[str, tuple[Callable[[dict[str, Any]], None], str]] = {
     "long planning mode": (_config("planning_mode", LONG), "expected planning_mode in"),
     "long alpha": (_config("alpha", LONG), "'<' not supported"),
-    "long unknown option": (_config(LONG, 1), "got unknown"),
+    "long unknown option": (_config(LONG, 1), "unknown key"),
     "long bit generator": (_rng({"bit_generator": LONG}), "unknown bit generator"),
     "text in the generator state": (
         _rng({"bit_generator": "SFC64", "state": {"state": [LONG] * 4, "counter": 0}}),

@@ -56,7 +56,7 @@ def test_an_unknown_name_is_refused_naming_the_known_agents() -> None:
     [
         ("dyna-q", {"planning_steps": -1}, "agent 'dyna-q': "),
         ("linear-q", {"n_tilings": 0}, "agent 'linear-q': "),
-        ("dqn", {"bogus": 1}, "agent 'dqn': dqn: unknown key 'bogus'"),
+        ("dqn", {"bogus": 1}, "unknown key 'bogus' in agent 'dqn': dqn"),
     ],
 )
 def test_bad_parameters_are_refused_in_one_line_naming_the_agent(

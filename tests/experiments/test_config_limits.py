@@ -50,7 +50,7 @@ CASES: dict[str, tuple[str, str]] = {
     ),
     "long unknown key": (
         TINY_TOML.replace("episodes = 6", f"{'k' * 10_000} = 6"),
-        "[experiment]: unknown key \"'kkkk",
+        "unknown key \"'kkkk",
     ),
     "a generated map whose oracle does not fit": (
         TINY_TOML.replace(
@@ -91,7 +91,7 @@ def test_a_hostile_config_is_one_line_and_writes_nothing(
     out = tmp_path / "out"
     assert main([command, str(config), "--out", str(out), "--backend", "serial"]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"skidnav: error: {config}"), lines
+    assert len(lines) == 1 and lines[0].startswith("skidnav: error: ") and str(config) in lines[0]
     assert message in lines[0], lines
     assert not re.search(r"(.)\1{40}", lines[0])  # an excerpt of a long value, not all of it
     assert sorted(tmp_path.iterdir()) == [config]

@@ -114,10 +114,10 @@ def test_the_report_is_the_study_s_in_the_report_page(serial_run: Path, tmp_path
     ("old", "new", "message"),
     [
         ('learners = ["q-learning",', 'learners = ["dqn",', "[continuity]: expected learners"),
-        ("seeds = 2", "seeds = 2\nepisods = 3", "[continuity]: unknown key 'episods'"),
+        ("seeds = 2", "seeds = 2\nepisods = 3", "bad.toml: [continuity] (did"),
         ("seeds = 2", "seeds = 0", "expected seeds to be an integer in [1, 1000], got 0"),
         ('kind = "continuity"', 'kind = "continuty"', "kind: expected one of"),
-        ("[continuity]", "[extra]\n[continuity]", "top level: unknown key 'extra'"),
+        ("[continuity]", "[extra]\n[continuity]", "bad.toml: top level (expected"),
     ],
 )
 def test_a_bad_study_config_is_one_line(
@@ -127,7 +127,7 @@ def test_a_bad_study_config_is_one_line(
     config.write_text(TINY.read_text().replace(old, new, 1))
     assert main(["run", str(config), "--out", str(tmp_path / "out")]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"skidnav: error: {config}"), lines
+    assert len(lines) == 1 and lines[0].startswith("skidnav: error: ") and str(config) in lines[0]
     assert message in lines[0]
     assert not (tmp_path / "out").exists()
 

@@ -199,9 +199,9 @@ def test_a_config_run_by_skidnav_run_gives_one_file_per_run_on_every_backend(
 @pytest.mark.parametrize(
     "text, expected",
     [
-        (TINY_CONFIG.replace("episodes =", "episods ="), "[generalisation]: unknown key 'episods'"),
-        (TINY_CONFIG + "[extra]\n", "top level: unknown key 'extra'"),
-        (TINY_CONFIG.replace("params =", "parms ="), "[[agents]] #1: unknown key 'parms'"),
+        (TINY_CONFIG.replace("episodes =", "episods ="), "bad.toml: [generalisation] (did"),
+        (TINY_CONFIG + "[extra]\n", "bad.toml: top level (expected"),
+        (TINY_CONFIG.replace("params =", "parms ="), "bad.toml: [[agents]] #1 (did"),
         (TINY_CONFIG.replace('"free"', '"moon"'), "expected map_kind one of free, obstacles"),
         (TINY_CONFIG.replace("tiles = [3]", "tiles = [0]"), "agent 'linear-q': expected tiles"),
         (TINY_CONFIG.replace('kind = "generalisation"', 'kind = "generalization"'), "kind:"),

@@ -3,13 +3,16 @@ few seeds, and the same line from ``skidnav run`` as in the report."""
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import shutil
 import subprocess
 from pathlib import Path
 
 import pandas as pd
+import pytest
 
+from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec
 from skidnav.experiments.report.analysis import compare_to_baseline
 from skidnav.experiments.report.verdict import verdict_text
 from tests.experiments.exp_support import cli_command, cli_env
@@ -20,20 +23,92 @@ def _verdict(summaries: pd.DataFrame) -> str:
     return verdict_text(compare_to_baseline(summaries, CONFIG), summaries, CONFIG)
 
 
-def test_the_verdict_names_the_largest_speed_up_with_its_interval() -> None:
+def test_the_verdict_gives_the_speed_up_with_its_interval() -> None:
     summaries = _summaries()
     slower = (summaries["agent"] == "D") & (summaries["preset"] == "slippery")
     summaries.loc[slower, "convergence_episode"] *= 2.0  # D: 4× on rough, 2× on slippery
     line = _verdict(summaries)
     match = re.fullmatch(
-        r"Verdict: D converges (\d+\.\d)× faster than Q \(95% interval \[(\d+\.\d), (\d+\.\d)\], "
-        r"30 seeds; median convergence episode, m · rough\); significantly faster in 2 of 2 "
-        r"comparisons \(agent × cell\)\.",
+        r"Verdict: D converges (\d+\.\d)× faster than Q \(significant: 95% interval "
+        r"\[(\d+\.\d), (\d+\.\d)\], 30 seeds; median convergence episode, m · rough\); "
+        r"significantly faster in 2, slower in 0, of 2 comparisons \(agent × cell\)\.",
         line,
     )
     assert match is not None, line
     estimate, low, high = (float(group) for group in match.groups())
     assert estimate == 4.0 and low <= estimate <= high
+
+
+THREE = ExperimentConfig(
+    "synthetic",
+    (AgentSpec("q-learning", "Q"), AgentSpec("dyna-q", "D"), AgentSpec("dyna-full", "F")),
+    (MapSpec("m", "free"),),
+    seeds=6,
+)
+
+
+def _table(*rows: tuple[str, float, float, float]) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """(comparisons, summaries) of agents against Q in one cell, 6 seeds each: rows of
+    (agent, speed-up, interval low, interval high)."""
+    comparisons = pd.DataFrame(
+        [
+            {"map": "m", "preset": "thesis", "agent": agent, "speedup": estimate,
+             "speedup_low": low, "speedup_high": high, "speedup_bound": ""}
+            for agent, estimate, low, high in rows
+        ]
+    )  # fmt: skip
+    summaries = pd.DataFrame(
+        [
+            {"map": "m", "preset": "thesis", "agent": agent, "seed": seed}
+            for agent in ("Q", *(row[0] for row in rows))
+            for seed in range(6)
+        ]
+    )
+    return comparisons, summaries
+
+
+def test_the_verdict_leads_with_the_thesis_agent_not_the_largest_estimate() -> None:
+    comparisons, summaries = _table(("D", 9.0, 6.0, 12.0), ("F", 3.0, 2.0, 4.5))
+    line = verdict_text(comparisons, summaries, THREE)
+    assert line.startswith("Verdict: F converges 3.0× faster than Q (significant: 95% interval "
+                           "[2.0, 4.5], 6 seeds;"), line  # fmt: skip
+    assert "9.0" not in line and line.endswith("faster in 2, slower in 0, of 2 comparisons "
+                                               "(agent × cell).")  # fmt: skip
+
+
+def test_the_verdict_leads_with_the_configured_headline() -> None:
+    comparisons, summaries = _table(("D", 2.0, 1.5, 2.5), ("F", 3.0, 2.0, 4.5))
+    chosen = dataclasses.replace(THREE, headline="D")
+    assert verdict_text(comparisons, summaries, chosen).startswith("Verdict: D converges 2.0×")
+    with pytest.raises(ValueError, match="headline"):
+        dataclasses.replace(THREE, headline="Q")  # the baseline is no headline
+    with pytest.raises(ValueError, match="headline"):
+        dataclasses.replace(THREE, headline="nobody")
+
+
+def test_a_bound_near_one_shows_its_side_of_one() -> None:
+    comparisons, summaries = _table(("F", 1.8, 1.004, 3.2))
+    line = verdict_text(comparisons, summaries, THREE)
+    assert "(significant: 95% interval [1.004, 3.2]" in line, line
+    comparisons, summaries = _table(("F", 1.8, 0.996, 3.2))
+    line = verdict_text(comparisons, summaries, THREE)
+    assert "(not significant: 95% interval [0.996, 3.2]" in line, line
+    assert "significantly faster in 0," in line
+
+
+def test_a_speed_up_under_one_is_said_as_slower() -> None:
+    comparisons, summaries = _table(("D", 5.0, 3.0, 8.0), ("F", 0.2, 0.1, 0.5))
+    line = verdict_text(comparisons, summaries, THREE)
+    assert line.startswith("Verdict: F converges 5.0× slower than Q (significant: 95% interval "
+                           "[2.0, 10.0], 6 seeds;"), line  # fmt: skip
+    assert "0.2×" not in line and "faster in 1, slower in 1, of 2" in line
+
+
+def test_an_interval_containing_one_is_not_significant() -> None:
+    comparisons, summaries = _table(("F", 1.6, 0.7, 2.9))
+    line = verdict_text(comparisons, summaries, THREE)
+    assert "F converges 1.6× faster than Q (not significant: 95% interval [0.7, 2.9]" in line
+    assert "significantly faster in 0, slower in 0, of 1 comparison" in line
 
 
 def test_two_seeds_give_a_caveat_instead_of_an_interval() -> None:

@@ -100,11 +100,17 @@ def test_a_config_run_by_skidnav_run_gives_one_file_per_run_on_every_backend(
 @pytest.mark.parametrize(
     "text, expected",
     [
-        (TINY_CONFIG.replace("rollouts =", "rollout ="), "[transfer]: unknown key 'rollout'"),
+        (
+            TINY_CONFIG.replace("rollouts =", "rollout ="),
+            "bad.toml: [transfer] (did you mean 'rollouts'?",
+        ),
         (TINY_CONFIG.replace('"thesis"', '"icy"'), "[transfer]: expected slip one of"),
         (TINY_CONFIG.replace('"dyna-q"', '"dqn"'), "[[agents]] name: expected a tabular agent"),
         (TINY_CONFIG.replace("seeds = 2", "seeds = 2.5"), "expected seeds to be an integer"),
-        (TINY_CONFIG.replace("[[agents]]", "[[agent]]"), "top level: unknown key 'agent'"),
+        (
+            TINY_CONFIG.replace("[[agents]]", "[[agent]]"),
+            "bad.toml: top level (did you mean 'agents'?",
+        ),
     ],
 )
 def test_a_bad_config_is_one_line_naming_the_file_and_key(

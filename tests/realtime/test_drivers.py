@@ -57,10 +57,14 @@ def test_ros2_driver_is_built_by_name_when_installed() -> None:
 def test_unknown_driver_and_unknown_tables_are_user_errors() -> None:
     with pytest.raises(UserError, match="unknown driver"):
         make_driver("carrier-pigeon", config_from_mapping({}))
-    with pytest.raises(UserError, match=r"^top level: unknown key 'rnu' \(expected one of run, "):
+    with pytest.raises(
+        UserError,
+        match=r"^unknown key 'rnu' in top level \(did you mean 'run'\? expected one of run, ",
+    ):
         config_from_mapping({"rnu": {}})
     with pytest.raises(
-        UserError, match=r"^\[run\]: unknown key 'episode' \(expected one of episodes, "
+        UserError,
+        match=r"^unknown key 'episode' in \[run\] \(did you mean 'episodes'\? expected one ",
     ):
         config_from_mapping({"run": {"episode": 3}})
 

@@ -20,7 +20,7 @@ from tests.cli_support import exit_code
 from tests.realtime.realtime_helpers import ServerThread, cli_env, write_config
 
 SECRET = "the lab's shared secret, 33 bytes"
-TCP_KEYS = "(expected one of host, port, secret_file, lockstep)"
+TCP_KEYS = "expected one of host, port, secret_file, lockstep)"
 
 
 def one_error_line(capsys: pytest.CaptureFixture[str]) -> str:
@@ -34,7 +34,10 @@ def one_error_line(capsys: pytest.CaptureFixture[str]) -> str:
 @pytest.mark.parametrize(
     ("text", "problem"),
     [
-        ('[tcp]\nsecret_fle = "robot.key"\n', f"[tcp]: unknown key 'secret_fle' {TCP_KEYS}"),
+        (
+            '[tcp]\nsecret_fle = "robot.key"\n',
+            "unknown key 'secret_fle' in {config}: [tcp] (did you mean 'secret_file'? " + TCP_KEYS,
+        ),
         ('[tcp]\nport = "abc"\n', "[tcp]: expected port to be an integer, got 'abc'"),
         ("[tcp]\nport = 70000\n", "[tcp]: expected port to be an integer in [1, 65535], got 70000"),
         ("[tcp]\nport = true\n", "[tcp]: expected port to be an integer, got True"),
@@ -43,13 +46,23 @@ def one_error_line(capsys: pytest.CaptureFixture[str]) -> str:
         ('[tcp]\nsecret_file = ""\n', "[tcp]: expected secret_file to be a non-empty string"),
         ("[serial]\nlockstep = 1\n", "[serial]: expected lockstep to be true or false, got 1"),
         ("[serial]\nbaudrate = 0\n", "[serial]: expected baudrate to be an integer >= 1, got 0"),
-        ("[serial]\nbaud = 9600\n", "[serial]: unknown key 'baud' (expected one of url, "),
+        (
+            "[serial]\nbaud = 9600\n",
+            "unknown key 'baud' in {config}: [serial] (did you mean 'baudrate'? expected one "
+            "of url, ",
+        ),
         ('[sim]\nlockstep = "yes"\n', "[sim]: expected lockstep to be true or false, got 'yes'"),
         ('[sim]\nlatency = "0.1"\n', "[sim]: expected latency to be a number, got '0.1'"),
         ('[ros2]\nport = "abc"\n', "[ros2]: expected port to be an integer, got 'abc'"),
         ('[ros2]\nstamped = "yes"\n', "[ros2]: expected stamped to be true or false, got 'yes'"),
-        ("[ros2]\nsecret_file = 3\n", "[ros2]: unknown key 'secret_file' (expected one of host, "),
-        ("[presets.lab.tcp]\nprot = 5757\n", f"preset 'lab': [tcp]: unknown key 'prot' {TCP_KEYS}"),
+        (
+            "[ros2]\nsecret_file = 3\n",
+            "unknown key 'secret_file' in {config}: [ros2] (expected one of host, ",
+        ),
+        (
+            "[presets.lab.tcp]\nprot = 5757\n",
+            "unknown key 'prot' in {config}: preset 'lab': [tcp] (did you mean 'port'? " + TCP_KEYS,
+        ),
     ],
 )
 def test_every_table_is_checked_whatever_the_driver(
@@ -58,7 +71,8 @@ def test_every_table_is_checked_whatever_the_driver(
     config, out = write_config(tmp_path, text), tmp_path / "out"
     argv = ["robot", "run", "--policy", "goal-tracker", "--config", str(config), "--out", str(out)]
     assert exit_code(argv) == 2  # the sim driver, which reads none of [tcp] …, and no preset
-    assert one_error_line(capsys).startswith(f"skidnav: error: {config}: {problem}")
+    expected = problem.format(config=config) if "{config}" in problem else f"{config}: {problem}"
+    assert one_error_line(capsys).startswith(f"skidnav: error: {expected}")
     assert not out.exists()
 
 

@@ -62,7 +62,7 @@ CONFIG_CASES: dict[str, tuple[str, str]] = {
         '[run]\nreset = "' + "x" * 10_000 + '"' + PRESET,
         "expected reset 'auto' or 'manual', got \"'xxxx",
     ),
-    "long unknown table": ("[" + "t" * 10_000 + "]" + PRESET, "top level: unknown key \"'tttt"),
+    "long unknown table": ("[" + "t" * 10_000 + "]" + PRESET, "unknown key \"'tttt"),
 }
 
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Any, TypeVar
 
 from skidnav.errors import shown
+from skidnav.files.configtables import check_keys
 from skidnav.models.kinematic_config import KinematicModelConfig
 
 KINEMATIC_MODELS = ("learned", "prior", "true")
@@ -74,12 +75,7 @@ class QLearningConfig:
         """Build from a mapping (e.g. a TOML table or a saved agent's JSON); unknown keys raise
         ValueError. Messages quote at most :data:`~skidnav.errors.EXCERPT_CHARS` characters of a
         value or key (:func:`~skidnav.files.saved.shown`)."""
-        known = {field.name for field in dataclasses.fields(cls)}
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise ValueError(
-                f"expected options among {sorted(known)}, got unknown {shown(unknown)}"
-            )
+        check_keys(values, sorted(field.name for field in dataclasses.fields(cls)))
         return cls(**dict(values))
 
 

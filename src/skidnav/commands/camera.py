@@ -24,6 +24,7 @@ from collections.abc import Callable
 from typing import Any
 
 from skidnav.commands.parsing import path_argument, positive_number
+from skidnav.commands.verbs import HELP
 from skidnav.extras import require
 from skidnav.realtime.camera.defaults import (
     BOARD_MARKER_SIZE,
@@ -49,7 +50,7 @@ def _action(verb: str) -> Callable[[argparse.Namespace], int]:
 
 def add_parser(subparsers: Any) -> None:
     """Add ``camera`` and its sub-subcommands to the ``skidnav`` parser."""
-    parser = subparsers.add_parser("camera", help="overhead-camera calibration and tracking")
+    parser = subparsers.add_parser("camera", help=HELP["camera"])
     actions = parser.add_subparsers(dest="camera_command", required=True)
 
     calib = actions.add_parser("calibrate", help="fit the floor homography from corner markers")

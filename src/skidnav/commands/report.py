@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from skidnav.commands.parsing import path_argument
+from skidnav.commands.verbs import HELP
 from skidnav.errors import UserError
 from skidnav.files.outputs import check_output_file
 
@@ -19,7 +20,7 @@ def add_parser(subparsers: Any) -> None:
     """Add the ``report`` subcommand."""
     parser = subparsers.add_parser(
         "report",
-        help="write one self-contained HTML report of a results directory",
+        help=HELP["report"],
         description="Aggregate a results directory written by 'skidnav run' (an experiment or "
         "a study, by the kind its config.json names) into one HTML file (tables, embedded "
         "figures, the config), written atomically: an interrupted report leaves the previous "

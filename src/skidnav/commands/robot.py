@@ -20,6 +20,7 @@ from types import FrameType
 from typing import IO, Any
 
 from skidnav.commands.parsing import comma_integers, path_argument, positive_number
+from skidnav.commands.verbs import HELP
 from skidnav.errors import UserError
 from skidnav.files.outputs import check_output_dir
 
@@ -37,7 +38,7 @@ def port_number(text: str) -> int:
 
 def add_parser(subparsers: Any) -> None:
     """Add ``robot`` with its ``sim-server``, ``run`` and ``study`` subcommands."""
-    robot = subparsers.add_parser("robot", help="run agents in real time on a robot or sim server")
+    robot = subparsers.add_parser("robot", help=HELP["robot"])
     commands = robot.add_subparsers(dest="robot_command", required=True)
     _add_sim_server(commands)
     _add_run(commands)

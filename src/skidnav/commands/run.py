@@ -10,10 +10,15 @@ same grid, runs, files and resume."""
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
+from collections.abc import Iterator
 from pathlib import Path
+from types import FrameType
 from typing import Any
 
 from skidnav.commands.parsing import path_argument
+from skidnav.commands.verbs import HELP
 from skidnav.envs.registration import allow_env_modules
 from skidnav.experiments.runner import BACKENDS, RunOutcome
 from skidnav.experiments.tensorboard_log import TensorBoardLog
@@ -28,7 +33,7 @@ def add_parser(subparsers: Any) -> None:
     """Add the ``run`` subcommand."""
     parser = subparsers.add_parser(
         "run",
-        help="run an experiment or study config (agents × maps × presets × seeds); resumable",
+        help=HELP["run"],
         description="Run every run of an experiment config, or of a study config (its top-level "
         "'kind' names the study). Started again on the same --out directory it skips the runs "
         "already finished; a second run on a directory in use is refused.",
@@ -107,6 +112,22 @@ def tensorboard_log(directory: Path | None) -> TensorBoardLog | None:
     return TensorBoardLog(check_output_dir(directory, "--tensorboard"))
 
 
+@contextlib.contextmanager
+def terminate_as_interrupt() -> Iterator[None]:
+    """SIGTERM stops the sweep as Ctrl-C does (a KeyboardInterrupt: the workers stopped, what
+    was saved said), instead of ending the process at once, which would leave the pool's
+    semaphores to the resource tracker's "leaked semaphore" warning."""
+
+    def interrupt(signum: int, frame: FrameType | None) -> None:
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def run_command(args: argparse.Namespace) -> int:
     """Run the experiment or study; print where the results are and, for a study with a verdict
     (:class:`~skidnav.studies.kind.VerdictStudy`: an experiment), its verdict line, with the
@@ -115,15 +136,16 @@ def run_command(args: argparse.Namespace) -> int:
     log = tensorboard_log(args.tensorboard)
     loaded = load_grid(args.config)
     out = check_output_dir(args.out if args.out is not None else Path("runs") / loaded.grid.name)
-    outcome = run_loaded(
-        loaded,
-        out,
-        backend=args.backend,
-        jobs=args.jobs,
-        scheduler=args.scheduler,
-        progress=not args.no_progress,
-        on_run=log,
-    )
+    with terminate_as_interrupt():
+        outcome = run_loaded(
+            loaded,
+            out,
+            backend=args.backend,
+            jobs=args.jobs,
+            scheduler=args.scheduler,
+            progress=not args.no_progress,
+            on_run=log,
+        )
     print(outcome_line(outcome))
     if log is not None:
         print(f"TensorBoard logs: {log.root} (tensorboard --logdir {log.root})")

@@ -10,6 +10,7 @@ from typing import Any
 
 from skidnav.commands.parsing import path_argument
 from skidnav.commands.run import add_backend_arguments, add_env_module_argument
+from skidnav.commands.verbs import HELP
 from skidnav.envs.registration import allow_env_modules
 from skidnav.errors import UserError
 from skidnav.extras import require
@@ -21,7 +22,7 @@ def add_parser(subparsers: Any) -> None:
     """Add the ``tune`` subcommand."""
     parser = subparsers.add_parser(
         "tune",
-        help="tune the agents' hyperparameters on tuning maps (Optuna); resumable",
+        help=HELP["tune"],
         description="Search the hyperparameters of every agent with a [tune.space.<label>] "
         "table of CONFIG, on tuning maps kept apart from the evaluation maps, and write the "
         "best ones to DIR/tuned.toml (an experiment config). Started again on the same --out "

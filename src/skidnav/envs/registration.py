@@ -122,3 +122,6 @@ def registered_env_id(env_id: str) -> str:
             "module's with --env-module MODULE)"
         )
     return name
+
+
+register_envs()  # importing this module imports Gymnasium: the envs are registered with it

@@ -204,6 +204,9 @@ class ExperimentConfig:
             :mod:`skidnav.experiments.reference.oracle`).
         baseline: label of the agent every other agent is compared to (default: the first
             agent named ``q-learning``, else the first agent).
+        headline: label of the agent the verdict leads with, not the baseline (default: the
+            first agent named ``dyna-full``, the thesis's, else the first agent after the
+            baseline; :mod:`skidnav.experiments.report.verdict`).
         bootstrap_samples: bootstrap resamples for every interval, ≥ 100.
         confidence: confidence level of every interval, in [0.5, 0.999].
         greedy_eval: evaluate the greedy policy after each episode (needed for the primary
@@ -241,6 +244,7 @@ class ExperimentConfig:
     eval_rollouts: int = 5
     oracle_samples: int = 64
     baseline: str = ""
+    headline: str = ""
     bootstrap_samples: int = 2000
     confidence: float = 0.95
     greedy_eval: bool = True
@@ -262,6 +266,11 @@ class ExperimentConfig:
             object.__setattr__(self, "baseline", (names or [self.agents[0].label])[0])
         if self.baseline not in self.agent_labels:
             raise ValueError(f"expected baseline to be an agent label, got {shown(self.baseline)}")
+        if self.headline and self.headline not in set(self.agent_labels) - {self.baseline}:
+            raise ValueError(
+                f"expected headline to be an agent label other than the baseline, got "
+                f"{shown(self.headline)}"
+            )
         _check_params("env", self.env_options)
         self._check_true_kinematics()
 
@@ -354,18 +363,20 @@ class ExperimentConfig:
 
 def config_to_dict(config: ExperimentConfig) -> dict[str, Any]:
     """The resolved config as a JSON-ready dict (inverse of :func:`config_from_dict`). The
-    optimum settings, ``save_agents`` and an agent's discretization appear only when set, so a
-    config without them keeps the dict, and the fingerprint, it had before they existed (a
-    resume that turns ``save_agents`` on is another config: the runs done lack their agents)."""
+    optimum settings, ``headline``, ``save_agents`` and an agent's discretization appear only
+    when set, so a config without them keeps the dict, and the fingerprint, it had before they
+    existed (a resume that turns ``save_agents`` on is another config: the runs done lack their
+    agents)."""
     data = _base_dict(config)
-    optimum = {
+    optional = {
+        "headline": config.headline,
         "optimum_grids": [list(levels) for levels in config.optimum_grids],
         "optimum_samples": config.optimum_samples,
         "optimum_rollouts": config.optimum_rollouts,
         "save_agents": config.save_agents,
     }
     defaults = {field.name: field.default for field in dataclasses.fields(config)}
-    data.update({k: v for k, v in optimum.items() if getattr(config, k) != defaults[k]})
+    data.update({k: v for k, v in optional.items() if getattr(config, k) != defaults[k]})
     for agent, saved in zip(config.agents, data["agents"], strict=True):
         if agent.discretization:
             saved["discretization"] = list(agent.discretization)

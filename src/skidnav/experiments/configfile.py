@@ -15,7 +15,7 @@ import itertools
 from pathlib import Path
 from typing import Any
 
-from skidnav.errors import UserError, shown
+from skidnav.errors import UserError, shown, within
 from skidnav.experiments.config import (
     DEFAULT_ENV_ID,
     AgentSpec,
@@ -50,6 +50,7 @@ EXPERIMENT_KEYS = (
     "eval_rollouts",
     "oracle_samples",
     "baseline",
+    "headline",
     "bootstrap_samples",
     "confidence",
     "greedy_eval",
@@ -100,7 +101,7 @@ def config_from_tables(data: dict[str, Any], path: Path | str) -> ExperimentConf
     try:
         return _build(data, Path(path))
     except (UserError, ValueError, TypeError) as error:
-        raise UserError(f"{path}: {error}") from None
+        raise within(error, str(path)) from None
 
 
 def _string(values: dict[str, Any], key: str, where: str, default: str | None = None) -> str:
@@ -117,7 +118,7 @@ def _build(data: dict[str, Any], path: Path) -> ExperimentConfig:
     experiment = table(data.get("experiment"), "[experiment]")
     check_keys(experiment, EXPERIMENT_KEYS, "[experiment]")
     values = dict(experiment)
-    for key in ("name", "description", "env_id", "baseline"):
+    for key in ("name", "description", "env_id", "baseline", "headline"):
         if key in values:
             values[key] = _string(values, key, "[experiment]")
     if "name" not in values:

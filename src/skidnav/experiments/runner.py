@@ -55,7 +55,7 @@ from tqdm import tqdm
 
 from skidnav._jit import jit_disabled
 from skidnav.childprocess import safe_path_children
-from skidnav.errors import RunsFailedError, UserError
+from skidnav.errors import Interrupted, RunsFailedError, UserError
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.dask_backend import dask_client, distributed_module
 from skidnav.experiments.failures import RunFailure, attempt, failed_runs_message
@@ -109,8 +109,24 @@ def process_pool(jobs: int) -> Iterator[ProcessPoolExecutor]:
         )
         try:
             yield executor
-        finally:
+        except KeyboardInterrupt:
+            stop_workers(executor)
+            executor.shutdown(wait=True)  # the broken pool fails every future at once
+            raise
+        except BaseException:
             executor.shutdown(wait=True, cancel_futures=True)
+            raise
+        executor.shutdown(wait=True, cancel_futures=True)
+
+
+def stop_workers(executor: ProcessPoolExecutor) -> None:
+    """End the workers of ``executor`` now (SIGTERM), their runs unfinished: on Ctrl-C the
+    sweep stops at once instead of awaiting the runs in progress (a run is written only by this
+    process, once finished, so a resume starts them again). The pool is then broken and fails
+    every future not done; none may be cancelled meanwhile (Python 3.11's executor then dies on
+    setting the cancelled future's exception, and whoever waits for the others waits forever)."""
+    for process in list(executor._processes.values()):  # no public way before Python 3.14
+        process.terminate()
 
 
 def _submitted(
@@ -119,12 +135,18 @@ def _submitted(
     """Outcomes of ``runs`` on ``executor`` as they finish; when the caller stops early, the
     pending runs are cancelled and the running ones awaited, so the pool is free again."""
     futures = {executor.submit(trial, spec): spec for spec in runs}
+    interrupted = False
     try:
         for future in as_completed(futures):
             yield attempt(futures[future], future.result)
+    except KeyboardInterrupt:
+        interrupted = True
+        stop_workers(executor)  # not awaited: their runs are lost, the finished ones written
+        raise
     finally:
-        for future in futures:
-            future.cancel()
+        if not interrupted:  # after stop_workers the broken pool fails them all, uncancelled
+            for future in futures:
+                future.cancel()
         wait(futures)
 
 
@@ -245,7 +267,9 @@ def run_experiment(
         UserError: bad backend options, or ``out_dir`` holds other results or is in use.
         RunsFailedError: at the end, when runs raised (each was logged in one line); the runs
             that finished are written, for a resume (:mod:`skidnav.experiments.failures`).
-        KeyboardInterrupt: from the trial; the runs written until then stay, for a resume.
+        Interrupted: a KeyboardInterrupt (Ctrl-C; SIGTERM in the ``skidnav`` command) with how
+            many runs were written until then, which stay, for a resume; the workers are
+            stopped at once (:func:`stop_workers`).
     """
     jobs = default_jobs() if jobs is None else jobs
     _check_backend(backend, jobs, scheduler)
@@ -268,9 +292,12 @@ def run_experiment(
                 for finished in store.iter_runs(records):
                     on_run(finished)
             execution = (trial, backend, jobs, client)
-            failures = _run_pending(
-                store, config, pending, records, session, execution, progress, on_run
-            )
+            try:
+                failures = _run_pending(
+                    store, config, pending, records, session, execution, progress, on_run
+                )
+            except KeyboardInterrupt:
+                raise Interrupted(len(records), len(runs), str(store.root)) from None
         if failures:
             raise RunsFailedError(failed_runs_message(failures, len(runs), store.root))
         store.consolidate()

@@ -47,7 +47,7 @@ from skidnav.envs.registration import (
     with_env_modules,
 )
 from skidnav.envs.wrappers import FineStates
-from skidnav.errors import UserError
+from skidnav.errors import UserError, within
 from skidnav.experiments.config import (
     CONVERGENCE_OBJECTIVES,
     AgentSpec,
@@ -430,7 +430,7 @@ def check_config(config: ExperimentConfig, path: Path | str | None = None) -> No
     except UserError as error:
         if path is None:
             raise
-        raise UserError(f"{path}: {error}") from None
+        raise within(error, str(path)) from None
 
 
 def _check_config(config: ExperimentConfig) -> None:

@@ -10,6 +10,7 @@ spells its values with :func:`toml_value` and :func:`toml_key`.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import json
 import math
 import re
@@ -19,7 +20,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
 
-from skidnav.errors import UserError, shown
+from skidnav.errors import ConfigKeyError, UserError, shown
 
 T = TypeVar("T")
 
@@ -66,20 +67,27 @@ def table_array(value: Any, name: str) -> list[dict[str, Any]]:
     return [table(item, f"[[{name}]] #{n + 1}") for n, item in enumerate(value)]
 
 
-def check_keys(values: Iterable[str], known: Iterable[str], where: str) -> None:
-    """UserError naming the first of ``values`` (a table's keys, in the file's order) that is not
-    in ``known``, and the known ones.
+def check_keys(values: Iterable[str], known: Iterable[str], where: str = "") -> None:
+    """:class:`~skidnav.errors.ConfigKeyError` naming the first of ``values`` (a table's keys,
+    in the file's order) that is not in ``known``, first, then ``where`` (the table, if given),
+    the closest known key, and the known ones.
 
     >>> check_keys({"episods": 6}, ("episodes", "seeds"), "[experiment]")
     Traceback (most recent call last):
     ...
-    skidnav.errors.UserError: [experiment]: unknown key 'episods' (expected one of episodes, seeds)
+    skidnav.errors.ConfigKeyError: unknown key 'episods' in [experiment] (did you mean \
+'episodes'? expected one of episodes, seeds)
     """
     allowed = tuple(known)
     for key in values:
         if key not in allowed:
-            names = ", ".join(allowed)
-            raise UserError(f"{where}: unknown key {shown(key)} (expected one of {names})")
+            close = difflib.get_close_matches(str(key), allowed, n=1)
+            guess = f"did you mean {close[0]!r}? " if close else ""
+            raise ConfigKeyError(
+                f"unknown key {shown(key)}",
+                (where,) if where else (),
+                f"{guess}expected one of {', '.join(allowed)}",
+            )
 
 
 def check_types(cls: type, values: Mapping[str, Any], where: str) -> None:

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from skidnav.errors import UserError, shown
+from skidnav.errors import UserError, shown, within
 from skidnav.files.configtables import build_dataclass, check_keys, resolve_path, table
 from skidnav.files.saved import parse_toml, read_config_text
 from skidnav.physics.materials import MATERIALS
@@ -296,7 +296,7 @@ def config_from_mapping(data: Mapping[str, Any], preset: str | None = None) -> R
     try:
         return _build(_merge(tables, table(presets[preset], f"[presets.{preset}]")))
     except UserError as error:
-        raise UserError(f"preset {preset!r}: {error}") from None
+        raise within(error, f"preset {preset!r}") from None
 
 
 def _build(tables: dict[str, Any]) -> RealtimeConfig:
@@ -363,7 +363,7 @@ def load_config(path: Path | None, preset: str | None = None) -> RealtimeConfig:
                 config_from_mapping(tables, other)  # every preset is checked, not only this one
         return config_from_mapping(tables, preset)
     except UserError as error:
-        raise UserError(f"{path}: {error}") from None
+        raise within(error, str(path)) from None
 
 
 def with_overrides(config: RealtimeConfig, **run_fields: Any) -> RealtimeConfig:

@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from skidnav.agents.training import TrainingLog
-from skidnav.errors import UserError, shown
+from skidnav.errors import UserError, shown, within
 from skidnav.experiments.config import AgentSpec, MapSpec, freeze_params
 from skidnav.experiments.store import ResultStore, RunLayout
 from skidnav.files.configtables import check_keys, table, table_array
@@ -173,9 +173,9 @@ def read_grid(cls: type[GridT], document: Mapping[str, Any], path: Path, kind: s
         try:
             return cls(agents=agents, **settings)
         except (ValueError, TypeError) as error:
-            raise ValueError(f"[{kind}]: {error}") from None
+            raise within(error, f"[{kind}]") from None
     except (UserError, ValueError) as error:
-        raise UserError(f"{path}: {error}") from None
+        raise within(error, str(path)) from None
 
 
 def training_episodes(log: TrainingLog) -> dict[str, np.ndarray]:

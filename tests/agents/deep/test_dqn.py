@@ -101,7 +101,7 @@ def test_a_damaged_or_foreign_dqn_file_is_one_line(
 def test_bad_settings_are_one_line() -> None:
     with pytest.raises(ValueError, match=r"dqn: gamma = 1\.5 is out of range"):
         DQNConfig(gamma=1.5)
-    with pytest.raises(ValueError, match="dqn: unknown key 'alpha'"):
+    with pytest.raises(ValueError, match="unknown key 'alpha' in dqn"):
         DQNConfig.from_mapping({"alpha": 0.1})
     with pytest.raises(ValueError, match="expected a Box observation"):
         DQNAgent(tiny_env(observation="discrete"))

@@ -195,7 +195,7 @@ def test_a_damaged_misshapen_or_foreign_file_is_one_line(
         (lambda: SACConfig(ent_coef="auto_0.1"), "sac: ent_coef = 'auto_0.1' is out of range"),
         (lambda: SACConfig(tau=float("nan")), "sac: tau = nan is out of range"),
         (lambda: SACConfig(hidden=(64, 0)), r"sac: hidden = \(64, 0\) is out of range"),
-        (lambda: SACConfig.from_mapping({"alpha": 0.2}), "sac: unknown key 'alpha'"),
+        (lambda: SACConfig.from_mapping({"alpha": 0.2}), "unknown key 'alpha' in sac"),
         (lambda: PPOAgent(tiny_env(observation="pose")), "ppo: expected the feature observation"),
         (lambda: SACAgent(tiny_env(action="discrete")), "sac: expected Box actions"),
     ],

@@ -128,7 +128,7 @@ def test_a_version_2_file_had_its_temperature_in_control_steps(
     [
         (lambda m: m.update(version=99), None, "not a skidnav mppi-kinematic agent file"),
         (lambda m: m["config"].update(samples=1), None, "samples"),
-        (lambda m: m["config"].update(colour=1), None, "unknown option 'colour'"),
+        (lambda m: m["config"].update(colour=1), None, "unknown key 'colour'"),
         (lambda m: m.pop("goal"), None, "missing 'goal'"),
         (lambda m: m.update(goal=[99, 0]), None, "goal cell"),
         (lambda m: m["counters"].update(steps=-1), None, "counter steps"),

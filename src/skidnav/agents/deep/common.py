@@ -51,6 +51,7 @@ from skidnav.agents.training import (
 )
 from skidnav.errors import CorruptFileError, first_line, shown
 from skidnav.files.atomic import write_atomic, write_npz_atomic
+from skidnav.files.configtables import check_keys
 from skidnav.files.saved import READ_ERRORS, ArraySpec, SavedArchive, read_json
 
 if TYPE_CHECKING:
@@ -124,12 +125,7 @@ class DeepConfig:
     @classmethod
     def from_mapping(cls, values: Mapping[str, Any]) -> Self:
         """A config from a mapping (e.g. a TOML table); unknown keys are refused in one line."""
-        known = {f.name for f in fields(cls)}  # type: ignore[arg-type]
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise ValueError(
-                f"{cls.agent_name}: unknown key {unknown[0]!r} (expected one of {sorted(known)})"
-            )
+        check_keys(values, sorted(f.name for f in fields(cls)), cls.agent_name)  # type: ignore[arg-type]
         return cls(**values)
 
 

@@ -18,6 +18,7 @@ from typing import Any
 from skidnav.agents.config import KinematicModelFields
 from skidnav.checks import check_integer, check_number
 from skidnav.errors import shown
+from skidnav.files.configtables import check_keys
 
 MAX_SAMPLES = 65_536
 """Most sampled wheel-speed sequences K per control step."""
@@ -197,10 +198,5 @@ class MPPIConfig(KinematicModelFields):
     def from_mapping(cls, values: Mapping[str, Any]) -> MPPIConfig:
         """A config from a mapping of its fields (a TOML table, a saved agent's JSON);
         ValueError in one line for an unknown key or a bad value."""
-        known = {field.name for field in dataclasses.fields(cls)}
-        unknown = sorted(set(values) - known)
-        if unknown:
-            raise ValueError(
-                f"unknown option {shown(unknown[0])}; expected one of {', '.join(sorted(known))}"
-            )
+        check_keys(values, sorted(field.name for field in dataclasses.fields(cls)))
         return cls(**dict(values))

@@ -5,10 +5,15 @@ interval, the first line of the report (``id="verdict"``) and the line ``skidnav
 The speed-up is the report's (:func:`~skidnav.experiments.report.analysis.compare_to_baseline`):
 the Kaplan–Meier median convergence episode of the baseline over the agent's, with its
 percentile-bootstrap interval over seeds, paired by seed (docs/experiments.md, "Statistics").
-The headline is the largest speed-up of any agent in any map × preset cell, then how many of the
-comparisons were significantly faster (interval above 1). Over fewer than
+The headline is the agent the experiment is about (:func:`headline_agent`: the config's
+``headline``, else the thesis's agent ``dyna-full``, else the first agent after the baseline),
+never the largest of several estimates, in its first map × preset cell with a known speed-up;
+a speed-up under 1 is said as a slow-down (its reciprocal, "slower"). "Significant" means the
+interval excludes 1, and an interval's ends are printed with enough digits to show which side
+of 1 they are on (:func:`ratio_text`). Then how many of the comparisons were significantly
+faster (interval above 1) or slower (below 1). Over fewer than
 :data:`~skidnav.statistics.formatting.MIN_INTERVAL_SEEDS` seeds the interval is replaced by a
-caveat.
+caveat and nothing is called significant.
 """
 
 from __future__ import annotations
@@ -26,6 +31,79 @@ from skidnav.statistics.formatting import MIN_INTERVAL_SEEDS, plural, readable, 
 from skidnav.statistics.survival import SpeedupInterval
 
 PREFIX = "Verdict: "
+THESIS_AGENT = "dyna-full"
+"""The agent of the thesis the project reproduces: the headline when the config names none."""
+MOST_DIGITS = 4
+"""Most decimals :func:`ratio_text` prints to show on which side of 1 a ratio is."""
+
+
+def ratio_text(value: float, digits: int = 1) -> str:
+    """A ratio with ``digits`` decimals, or more (up to :data:`MOST_DIGITS`) when fewer would
+    round a value that is not 1 to 1: which side of 1 it is stays visible.
+
+    >>> [ratio_text(value) for value in (5.23, 1.004, 0.996, 1.0, math.inf)]
+    ['5.2', '1.004', '0.996', '1.0', '∞']
+    """
+    if math.isfinite(value) and value != 1.0:
+        while digits < MOST_DIGITS and round(value, digits) == 1.0:
+            digits += 1
+    return readable(value, digits)
+
+
+def slowdown(speedup: SpeedupInterval) -> SpeedupInterval:
+    """The reciprocal of a speed-up: how many times slower (a bound's side swaps).
+
+    >>> slowdown(SpeedupInterval(0.25, 0.2, 0.5))
+    SpeedupInterval(estimate=4.0, low=2.0, high=5.0, bound='')
+    >>> slowdown(SpeedupInterval(0.5, 0.0, 0.9, "upper"))
+    SpeedupInterval(estimate=2.0, low=1.1111111111111112, high=inf, bound='lower')
+    """
+
+    def inverse(value: float) -> float:
+        return math.inf if value == 0.0 else 1.0 / value
+
+    side = {"lower": "upper", "upper": "lower"}.get(speedup.bound, speedup.bound)
+    return SpeedupInterval(
+        inverse(speedup.estimate), inverse(speedup.high), inverse(speedup.low), side
+    )
+
+
+def speedup_words(speedup: SpeedupInterval, seeds: int, confidence: float) -> tuple[str, str]:
+    """(the estimate, what backs it): ``("5.2×", "95% interval [3.1, 9.8], 6 seeds")``; ≥ / ≤
+    for a bound (:class:`~skidnav.statistics.survival.SpeedupInterval`), the caveat instead of the
+    interval over too few seeds; ends near 1 with the digits that tell their side
+    (:func:`ratio_text`).
+
+    >>> speedup_words(SpeedupInterval(5.23, 3.1, 9.8), 6, 0.95)
+    ('5.2×', '95% interval [3.1, 9.8], 6 seeds')
+    >>> speedup_words(SpeedupInterval(4.0, 2.5, math.inf, "lower"), 6, 0.95)
+    ('≥ 4.0×', '95% interval [2.5, ∞), 6 seeds')
+    >>> speedup_words(SpeedupInterval(1.8, 1.004, 3.2), 6, 0.95)
+    ('1.8×', '95% interval [1.004, 3.2], 6 seeds')
+    >>> speedup_words(SpeedupInterval(4.0, 2.5, 7.0), 2, 0.95)
+    ('4.0×', '2 seeds: too few for an interval')
+    """
+    sign = {"lower": "≥ ", "upper": "≤ "}.get(speedup.bound, "")
+    estimate = f"{sign}{ratio_text(speedup.estimate)}×"
+    if seeds < MIN_INTERVAL_SEEDS:
+        return estimate, seeds_caveat(seeds)
+    if math.isnan(speedup.low) or math.isnan(speedup.high):
+        return estimate, plural(seeds, "seed")
+    opening, low = ("(", "0") if speedup.bound == "upper" else ("[", ratio_text(speedup.low))
+    closing = ")" if math.isinf(speedup.high) else "]"
+    bounds = f"{opening}{low}, {ratio_text(speedup.high)}{closing}"
+    return estimate, f"{confidence:.0%} interval {bounds}, {plural(seeds, 'seed')}"
+
+
+def headline_agent(config: ExperimentConfig) -> str:
+    """The label of the agent the verdict leads with: the config's ``headline``, else the first
+    agent named :data:`THESIS_AGENT` (not the baseline), else the first agent after the
+    baseline (the config's order); the baseline itself when it is the only agent."""
+    if config.headline:
+        return config.headline
+    others = [agent for agent in config.agents if agent.label != config.baseline]
+    thesis = [agent.label for agent in others if agent.name == THESIS_AGENT]
+    return (thesis or [agent.label for agent in others] or [config.baseline])[0]
 
 
 def _seeds(summaries: pd.DataFrame, row: pd.Series) -> int:
@@ -37,29 +115,17 @@ def _seeds(summaries: pd.DataFrame, row: pd.Series) -> int:
     return int(mine["seed"].nunique())
 
 
-def speedup_words(speedup: SpeedupInterval, seeds: int, confidence: float) -> tuple[str, str]:
-    """(the estimate, what backs it): ``("5.2×", "95% interval [3.1, 9.8], 6 seeds")``; ≥ / ≤
-    for a bound (:class:`~skidnav.statistics.survival.SpeedupInterval`), the caveat instead of the
-    interval
-    over too few seeds.
-
-    >>> speedup_words(SpeedupInterval(5.23, 3.1, 9.8), 6, 0.95)
-    ('5.2×', '95% interval [3.1, 9.8], 6 seeds')
-    >>> speedup_words(SpeedupInterval(4.0, 2.5, math.inf, "lower"), 6, 0.95)
-    ('≥ 4.0×', '95% interval [2.5, ∞), 6 seeds')
-    >>> speedup_words(SpeedupInterval(4.0, 2.5, 7.0), 2, 0.95)
-    ('4.0×', '2 seeds: too few for an interval')
-    """
-    sign = {"lower": "≥ ", "upper": "≤ "}.get(speedup.bound, "")
-    estimate = f"{sign}{readable(speedup.estimate, 1)}×"
-    if seeds < MIN_INTERVAL_SEEDS:
-        return estimate, seeds_caveat(seeds)
-    if math.isnan(speedup.low) or math.isnan(speedup.high):
-        return estimate, plural(seeds, "seed")
-    opening, low = ("(", "0") if speedup.bound == "upper" else ("[", readable(speedup.low, 1))
-    closing = ")" if math.isinf(speedup.high) else "]"
-    bounds = f"{opening}{low}, {readable(speedup.high, 1)}{closing}"
-    return estimate, f"{confidence:.0%} interval {bounds}, {plural(seeds, 'seed')}"
+def _claim(speedup: SpeedupInterval, seeds: int, confidence: float) -> tuple[str, str]:
+    """(``"5.2× faster"`` or ``"4.0× slower"``, what backs it, led by whether it is
+    significant when there is an interval)."""
+    direction = "faster"
+    if speedup.estimate < 1.0:
+        speedup, direction = slowdown(speedup), "slower"
+    estimate, backing = speedup_words(speedup, seeds, confidence)
+    if seeds >= MIN_INTERVAL_SEEDS and not math.isnan(speedup.low):
+        excludes = speedup.low > 1.0 or speedup.high < 1.0
+        backing = f"{'significant' if excludes else 'not significant'}: {backing}"
+    return f"{estimate} {direction}", backing
 
 
 def verdict_text(
@@ -70,24 +136,30 @@ def verdict_text(
     base = config.baseline
     if comparisons.empty:
         return f"{PREFIX}one agent only ({base}): no speed-up to report."
-    known = comparisons[comparisons["speedup"].notna()]
+    agent = headline_agent(config)
+    mine = comparisons[comparisons["agent"] == agent]
+    known = mine[mine["speedup"].notna()]
     if known.empty:
         return (
-            f"{PREFIX}speed-up over {base} unknown: in every cell both it and the other agents "
-            "stayed unconverged in more than half of their runs."
+            f"{PREFIX}speed-up of {agent} over {base} unknown: in every cell both stayed "
+            "unconverged in more than half of their runs."
         )
-    best = known.iloc[int(known["speedup"].to_numpy().argmax())]
-    seeds = _seeds(summaries, best)
-    estimate, backing = speedup_words(speedup_of(best), seeds, config.confidence)
+    row = known.iloc[0]
+    seeds = _seeds(summaries, row)
+    claim, backing = _claim(speedup_of(row), seeds, config.confidence)
     line = (
-        f"{PREFIX}{best['agent']} converges {estimate} faster than {base} ({backing}; median "
-        f"convergence episode, {best['map']} · {best['preset']})"
+        f"{PREFIX}{agent} converges {claim} than {base} ({backing}; median convergence "
+        f"episode, {row['map']} · {row['preset']})"
     )
     if seeds < MIN_INTERVAL_SEEDS:
         return line + "."
     faster = int((comparisons["speedup_low"] > 1.0).sum())
+    slower = int((comparisons["speedup_high"] < 1.0).sum())
     compared = plural(len(comparisons), "comparison")
-    return f"{line}; significantly faster in {faster} of {compared} (agent × cell)."
+    return (
+        f"{line}; significantly faster in {faster}, slower in {slower}, of {compared} "
+        "(agent × cell)."
+    )
 
 
 def verdict_html(text: str) -> str:

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from skidnav.agents.catalog import CatalogEntry, entry
-from skidnav.errors import UserError
+from skidnav.errors import UserError, within
 from skidnav.experiments.config import AgentSpec
 from skidnav.extras import require
 from skidnav.studies.agent_grid import read_grid
@@ -98,7 +98,7 @@ def grid_from_document(document: Mapping[str, Any], path: Path) -> BarnGrid:
     try:
         check_agents(grid)
     except UserError as error:
-        raise UserError(f"{path}: {error}") from None
+        raise within(error, str(path)) from None
     if grid.dynamics == "mujoco":
         require("physics", "dynamics 'mujoco'")
     return grid

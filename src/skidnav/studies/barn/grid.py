@@ -37,6 +37,7 @@ from skidnav.checks import check_integer, check_names, check_number
 from skidnav.errors import shown
 from skidnav.experiments.config import MapSpec
 from skidnav.experiments.store import RunLayout
+from skidnav.files.configtables import check_keys
 from skidnav.files.saved import ArraySpec, up_to
 from skidnav.robot.slip import SLIP_PRESETS
 from skidnav.sim.features import MAX_LIDAR_RAYS
@@ -110,11 +111,7 @@ def expand_worlds(value: object) -> tuple[int, ...]:
     (3, 1)
     """
     if isinstance(value, Mapping):
-        unknown = [key for key in value if key not in RANGE_KEYS]
-        if unknown:
-            raise ValueError(
-                f"worlds: unknown key {shown(unknown[0])} (expected one of {', '.join(RANGE_KEYS)})"
-            )
+        check_keys(value, RANGE_KEYS, "worlds")
         bounds = {"start": 0, "step": 1, **value}
         if "stop" not in value:
             raise ValueError("expected worlds to have a stop, e.g. { start = 0, stop = 300 }")

@@ -36,7 +36,7 @@ from typing import Any
 from skidnav.agents.policies.search.config import MAX_SEED, SearchConfig
 from skidnav.agents.policies.search.curve import COUNTS, GenerationRecord
 from skidnav.checks import check_integer
-from skidnav.errors import UserError, shown
+from skidnav.errors import UserError, shown, within
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.experiments.store import RunLayout
 from skidnav.files.configtables import check_keys, table, toml_value
@@ -168,7 +168,7 @@ def grid_from_document(document: Mapping[str, Any], path: Path | str) -> PolicyS
     try:
         return PolicySearchGrid(search, presets, **top)
     except (TypeError, ValueError) as error:
-        raise UserError(f"{path}: {error}") from None
+        raise within(error, str(path)) from None
 
 
 def grid_toml(grid: PolicySearchGrid) -> str:

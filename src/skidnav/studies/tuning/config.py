@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from skidnav.errors import UserError, shown
+from skidnav.errors import UserError, shown, within
 from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec
 
 # The [[maps]] schema lives in configfile; reusing it keeps [[tune.maps]] and [[maps]] one schema,
@@ -291,7 +291,7 @@ def load_tune_config_and_text(path: Path | str) -> tuple[ExperimentConfig, TuneC
     try:
         return config, parse_tune(data["tune"], config, Path(path)), text
     except (UserError, ValueError, TypeError) as error:
-        raise UserError(f"{path}: {error}") from None
+        raise within(error, str(path)) from None
 
 
 def parse_tune(value: Any, config: ExperimentConfig, path: Path) -> TuneConfig:

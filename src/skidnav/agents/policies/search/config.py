@@ -19,6 +19,7 @@ from skidnav.agents.policies.search.tanh_policy import MAX_HIDDEN, MAX_LIDAR_RAY
 from skidnav.checks import check_integer, check_number
 from skidnav.envs.navigation import with_control_period
 from skidnav.envs.vector import NOISE_ACTIONS
+from skidnav.files.configtables import check_keys
 from skidnav.robot.params import RobotParams
 from skidnav.robot.slip import SLIP_PRESETS
 
@@ -173,10 +174,7 @@ class SearchConfig:
     @classmethod
     def from_mapping(cls, values: Mapping[str, Any]) -> SearchConfig:
         """A config from a mapping of its fields; ValueError naming an unknown key."""
-        known = [field.name for field in fields(cls)]
-        unknown = sorted(set(values) - set(known))
-        if unknown:
-            raise ValueError(f"unknown key {unknown[0]!r} (expected one of {', '.join(known)})")
+        check_keys(values, [field.name for field in fields(cls)])
         return cls(**values)
 
     def resumes(self, saved: SearchConfig) -> bool:
