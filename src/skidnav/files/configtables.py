@@ -1,8 +1,9 @@
 """The conventions every TOML config loader follows (experiments, tuning, real-time runs, studies).
 
-A problem is one :class:`~skidnav.errors.UserError` line ``"WHERE: PROBLEM"``, where ``WHERE``
-names the table (``[run]``, ``[[maps]] #2``, ``[tune.space.q-learning] alpha``) and a value read
-from the file is quoted in part (:func:`~skidnav.errors.shown`). A path in a config is relative to
+A problem is one :class:`~skidnav.errors.UserError` line, a bad key or value named first
+(:class:`~skidnav.errors.ConfigError`: ``"PROBLEM in WHERE"``), where ``WHERE`` names the file and
+the table (``[run]``, ``[[maps]] #2``, ``[tune.space.q-learning]``) and a value read from the
+file is quoted in part (:func:`~skidnav.errors.shown`). A path in a config is relative to
 the config file's folder. A config the code writes (``tuned.toml``, a study shortcut's config)
 spells its values with :func:`toml_value` and :func:`toml_key`.
 """
@@ -91,7 +92,7 @@ def check_keys(values: Iterable[str], known: Iterable[str], where: str = "") -> 
 
 
 def check_types(cls: type, values: Mapping[str, Any], where: str) -> None:
-    """UserError ``"{where}: expected KEY to be …, got …"`` for the first of ``values`` whose
+    """ConfigError ``"expected KEY to be …, got … in {where}"`` for the first of ``values`` whose
     field of the dataclass ``cls`` is annotated ``bool``, ``int``, ``float`` or ``str`` (or a
     union of them, with None or not) and that is not of that type: a bool is neither an integer
     nor a number, an integer is a number. Fields of other types are left to the class.

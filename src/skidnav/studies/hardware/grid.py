@@ -115,7 +115,7 @@ def _check_count(name: str, value: object, most: int) -> None:
 
 def study_settings(values: Mapping[str, Any], where: str) -> StudySettings:
     """The settings of a ``[study]`` table's ``values`` (agents and presets as lists, or as one
-    comma-separated string); UserError ``"{where}: …"`` if invalid."""
+    comma-separated string); a one-line UserError naming the key and ``where`` if invalid."""
     study = dict(values)
     for key in ("agents", "presets"):
         if isinstance(study.get(key), str):
