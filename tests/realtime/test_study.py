@@ -340,10 +340,13 @@ def test_study_settings_and_one_line_errors(
         assert len(lines) == 1 and message in lines[0], lines
     text = config.read_text()
     broken = {
-        "[presets.rough-stationary]: a study runs every preset on the [run] map": (
+        f"expected no [run] map, seed or reset in {config}: [presets.rough-stationary] (a "
+        "study runs every preset on the [run] map": (
             text + '\n[presets.rough-stationary.run]\nmap = "free"\n'
         ),
-        "agent 'dyna-q': ": text.replace("planning_steps = 5", "planning_steps = -1"),
+        f"got -1 in {config}: agent 'dyna-q'": text.replace(
+            "planning_steps = 5", "planning_steps = -1"
+        ),
         "expected [run] seed to be an integer >= 0, got -1": text.replace(
             "[run]\n", "[run]\nseed = -1\n"
         ),
