@@ -121,7 +121,7 @@ def test_the_report_is_the_study_s_in_the_report_page(serial_run: Path, tmp_path
         ),
         ("seeds = 2", "seeds = 2\nepisods = 3", "bad.toml: [continuity] (did"),
         ("seeds = 2", "seeds = 0", "expected seeds to be an integer in [1, 1000], got 0"),
-        ('kind = "continuity"', 'kind = "continuty"', "kind: expected one of"),
+        ('kind = "continuity"', 'kind = "continuty"', "expected kind to be one of"),
         ("[continuity]", "[extra]\n[continuity]", "bad.toml: top level (expected"),
     ],
 )
