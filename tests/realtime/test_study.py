@@ -146,9 +146,12 @@ def test_the_study_is_a_config_that_skidnav_run_runs_resumes_and_reports(
     mixed = tmp_path / "mixed.toml"
     mixed.write_text(f'kind = "robot-study"\n[study]\nconfig = "{config}"\n[sim]\nslip = "rough"\n')
     assert main(["run", str(mixed), "--out", str(tmp_path / "mixed")]) == 2
-    assert "[study] config: expected the name of a real-time config and no other table" in (
-        capsys.readouterr().err
+    error = capsys.readouterr().err
+    assert error.startswith(
+        "skidnav: error: expected config to be the name of a real-time config and no other "
+        "table here, got "
     )
+    assert error.endswith(f" and sim in {mixed}: [study]\n"), error
 
 
 FakeRun = Callable[[RunSpec[Any], Path, Callable[[str], None]], RealtimeOutcome]
