@@ -144,7 +144,7 @@ def test_agent_hyperparameters_take_their_own_type(
     with pytest.raises(UserError) as refused, within(SECONDS):
         skidnav.make_agent(name, world["env"], **{param: value})
     text = str(refused.value)
-    assert text == f"agent {name!r}: {message}"
+    assert text == f"{message} in agent {name!r}"
 
 
 def test_an_unknown_env_option_is_named_without_the_envs_arguments() -> None:

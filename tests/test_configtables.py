@@ -59,13 +59,13 @@ def test_build_dataclass_checks_keys_then_the_class_validates() -> None:
     cases = {
         "[s]: expected a table, got 3": 3,
         "unknown key 'size' in [s] (expected one of count, name)": {"size": 3},
-        "[s]: expected count >= 1, got 0": {"count": 0},
+        "expected count >= 1, got 0 in [s]": {"count": 0},
     }
     for message, value in cases.items():
         with pytest.raises(UserError) as caught:
             build_dataclass(Settings, value, "[s]")
         assert str(caught.value) == message
-    with pytest.raises(UserError, match=r"^\[s\]: "):  # a TypeError of the class, one line
+    with pytest.raises(UserError, match=r" in \[s\]$"):  # a TypeError of the class, one line
         build_dataclass(Settings, {"count": "many"}, "[s]")
 
 
@@ -84,7 +84,7 @@ def test_both_loaders_word_the_same_faults_alike() -> None:
         config_from_mapping({"run": {"episods": 6}})
     assert str(experiment.value).startswith("unknown key 'episods' in a.toml: [experiment] (did ")
     assert str(realtime.value).startswith("unknown key 'episods' in [run] (did you mean 'epi")
-    with pytest.raises(UserError, match=r"^a\.toml: \[env\]: expected a table, got 3$"):
+    with pytest.raises(UserError, match=r"^\[env\]: expected a table, got 3 in a\.toml$"):
         parse_config("env = 3\n" + TINY_TOML, "a.toml")
     with pytest.raises(UserError, match=r"^\[sim\]: expected a table, got 3$"):
         config_from_mapping({"sim": 3})
@@ -104,13 +104,13 @@ def test_build_dataclass_checks_the_type_of_every_simple_field() -> None:
     values = {"count": 2, "scale": 3, "flag": True, "name": "b", "limit": None, "items": (1,)}
     assert build_dataclass(Typed, values, "[t]") == Typed(2, 3, True, "b", None, (1,))
     cases = {
-        "[t]: expected count to be an integer, got True": {"count": True},
-        "[t]: expected count to be an integer, got 2.0": {"count": 2.0},
-        "[t]: expected scale to be a number, got '1.5'": {"scale": "1.5"},
-        "[t]: expected flag to be true or false, got 'yes'": {"flag": "yes"},
-        "[t]: expected flag to be true or false, got 1": {"flag": 1},
-        "[t]: expected name to be a string, got 3": {"name": 3},
-        "[t]: expected limit to be a number, got 'none'": {"limit": "none"},
+        "expected count to be an integer, got True in [t]": {"count": True},
+        "expected count to be an integer, got 2.0 in [t]": {"count": 2.0},
+        "expected scale to be a number, got '1.5' in [t]": {"scale": "1.5"},
+        "expected flag to be true or false, got 'yes' in [t]": {"flag": "yes"},
+        "expected flag to be true or false, got 1 in [t]": {"flag": 1},
+        "expected name to be a string, got 3 in [t]": {"name": 3},
+        "expected limit to be a number, got 'none' in [t]": {"limit": "none"},
     }
     for message, value in cases.items():
         with pytest.raises(UserError) as caught:

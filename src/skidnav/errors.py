@@ -12,18 +12,23 @@ class UserError(Exception):
     """
 
 
-class ConfigKeyError(UserError, ValueError):
-    """A config's key that is wrong (unknown, misspelt). Its one line leads with the key, the
-    places it was found in after it (outermost first: file, table), then the details, so that
-    neither a long path nor the cut of :func:`first_line` hides the key::
+LEAD_CHARS = 160
+"""Most characters of a wrapped error's own message (:func:`within`), so that its places still
+fit in the one line :func:`first_line` prints."""
 
-        unknown key 'planing_steps' in configs/quick.toml: agent 'dyna-full' (did you mean
-        'planning_steps'? expected one of …)
+
+class ConfigError(UserError, ValueError):
+    """A config's error, its one line leading with what is wrong (the key, the value and its
+    limit), the places it was found in after it (outermost first: file, table), then the
+    details, so that neither a long path nor the cut of :func:`first_line` hides what is
+    wrong::
+
+        expected alpha in (0, 1], got 5 in configs/quick.toml: agent 'dyna-full'
 
     A :class:`ValueError` too, for the callers that catch a config class's ValueError.
 
     Args:
-        lead: the problem, naming the key (``"unknown key 'planing_steps'"``).
+        lead: the problem, naming the key or value (``"expected alpha in (0, 1], got 5"``).
         places: where it was found, outermost first (each wrapper adds its own, :func:`within`).
         detail: what would be right (the known keys), last.
     """
@@ -34,19 +39,28 @@ class ConfigKeyError(UserError, ValueError):
         super().__init__(f"{lead}{where}" + (f" ({detail})" if detail else ""))
 
 
-def within(error: BaseException, place: str) -> UserError:
-    """``error`` (a config's) found in ``place`` (a file, a table) as one UserError: a
-    :class:`ConfigKeyError` keeps its key first and takes ``place`` as its outermost place; any
-    other reads ``"{place}: {error}"``.
+class ConfigKeyError(ConfigError):
+    """A config's key that is wrong (unknown, misspelt), named first::
+
+    unknown key 'planing_steps' in configs/quick.toml: agent 'dyna-full' (did you mean
+    'planning_steps'? expected one of …)
+    """
+
+
+def within(error: BaseException, place: str) -> ConfigError:
+    """``error`` (a config's) found in ``place`` (a file, a table) as one :class:`ConfigError`
+    that still leads with what is wrong and takes ``place`` as its outermost place.
 
     >>> str(within(ConfigKeyError("unknown key 'x'", ("[run]",), "expected y"), "a.toml"))
     "unknown key 'x' in a.toml: [run] (expected y)"
     >>> str(within(ValueError("expected seeds ≥ 1, got 0"), "a.toml"))
-    'a.toml: expected seeds ≥ 1, got 0'
+    'expected seeds ≥ 1, got 0 in a.toml'
     """
-    if isinstance(error, ConfigKeyError):
-        return ConfigKeyError(error.lead, (place, *error.places), error.detail)
-    return UserError(f"{place}: {error}")
+    if isinstance(error, ConfigError):
+        return type(error)(error.lead, (place, *error.places), error.detail)
+    lines = str(error).splitlines()
+    lead = lines[0] if lines else type(error).__name__
+    return ConfigError(lead[:LEAD_CHARS] + ("…" if len(lead) > LEAD_CHARS else ""), (place,))
 
 
 class CorruptFileError(UserError):

@@ -54,8 +54,12 @@ def test_an_unknown_name_is_refused_naming_the_known_agents() -> None:
 @pytest.mark.parametrize(
     ("name", "params", "message"),
     [
-        ("dyna-q", {"planning_steps": -1}, "agent 'dyna-q': "),
-        ("linear-q", {"n_tilings": 0}, "agent 'linear-q': "),
+        (
+            "dyna-q",
+            {"planning_steps": -1},
+            r"^expected an integer planning_steps .* in agent 'dyna-q'$",
+        ),
+        ("linear-q", {"n_tilings": 0}, r"^expected an integer n_tilings .* in agent 'linear-q'$"),
         ("dqn", {"bogus": 1}, "unknown key 'bogus' in agent 'dqn': dqn"),
     ],
 )

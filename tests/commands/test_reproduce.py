@@ -127,11 +127,18 @@ def test_one_run_file_per_run_the_same_on_both_backends(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("line", "message"),
     [
-        ("runz = 2", "unknown key 'runz' (expected one of kind, name, examples, runs, root_seed"),
-        ("runs = 0", "expected runs to be an integer in [1, 1000], got 0"),
+        (
+            "runz = 2",
+            "unknown key 'runz' in {config} (did you mean 'runs'? expected one of kind, name, "
+            "examples, runs, root_seed",
+        ),
+        ("runs = 0", "expected runs to be an integer in [1, 1000], got 0 in {config}\n"),
         ('examples = ["dyna-maze", "cliff"]', "expected examples to be distinct names among"),
-        ("planning_steps = [5, 5]", "expected planning_steps to be distinct integers"),
-        ("scales = [0]", "expected scales to be an integer in [1, 10], got 0"),
+        (
+            "planning_steps = [5, 5]",
+            "expected planning_steps to be distinct integers, got [5, 5] in {config}\n",
+        ),
+        ("scales = [0]", "expected scales to be an integer in [1, 10], got 0 in {config}\n"),
         ("root_seed = -1", "expected root_seed to be an integer in [0, "),
     ],
 )
@@ -142,7 +149,9 @@ def test_a_bad_config_is_one_line_and_exit_code_2(
     config.write_text(f'kind = "sutton-barto-checks"\n{line}\n')
     assert exit_code(["run", str(config), "--out", str(tmp_path / "out")]) == 2
     error = capsys.readouterr().err
-    assert error.count("\n") == 1 and f"{config}: " in error and message in error, error
+    assert error.count("\n") == 1 and error.startswith("skidnav: error: "), error
+    assert error.removeprefix("skidnav: error: ").startswith(message.format(config=config)), error
+    assert error.rstrip().endswith(str(config)) or f" in {config} (" in error, error
     assert not (tmp_path / "out").exists()
 
 

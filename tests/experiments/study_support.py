@@ -49,11 +49,12 @@ def check_serial_and_process_agree(config: Path, tmp_path: Path, n_runs: int) ->
 def check_bad_key_is_one_line(
     config: Path, text: str, expected: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """``skidnav run`` on config ``text`` ends in one line naming the file and ``expected``,
-    exit code 2."""
+    """``skidnav run`` on config ``text`` ends in one line naming the file and ``expected``
+    (``{config}`` in it: the file), exit code 2."""
     config.write_text(text)
     assert main(["run", str(config), "--out", str(config.parent / "out")]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
+    expected = expected.replace("{config}", str(config))
     assert len(lines) == 1 and str(config) in lines[0] and expected in lines[0], lines
     assert not (config.parent / "out").exists()
 

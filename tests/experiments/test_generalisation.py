@@ -203,8 +203,15 @@ def test_a_config_run_by_skidnav_run_gives_one_file_per_run_on_every_backend(
         (TINY_CONFIG + "[extra]\n", "bad.toml: top level (expected"),
         (TINY_CONFIG.replace("params =", "parms ="), "bad.toml: [[agents]] #1 (did"),
         (TINY_CONFIG.replace('"free"', '"moon"'), "expected map_kind one of free, obstacles"),
-        (TINY_CONFIG.replace("tiles = [3]", "tiles = [0]"), "agent 'linear-q': expected tiles"),
-        (TINY_CONFIG.replace('kind = "generalisation"', 'kind = "generalization"'), "kind:"),
+        (
+            TINY_CONFIG.replace("tiles = [3]", "tiles = [0]"),
+            "expected tiles as a non-empty list of integers >= 1, got (0,) "
+            "in {config}: [[agents]]: agent 'linear-q'",
+        ),
+        (
+            TINY_CONFIG.replace('kind = "generalisation"', 'kind = "generalization"'),
+            "expected kind to be one of",
+        ),
     ],
 )
 def test_a_bad_config_is_one_line_naming_the_file_and_key(

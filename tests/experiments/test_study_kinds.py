@@ -43,7 +43,7 @@ def test_a_config_without_a_kind_is_the_experiment_study(kind_line: str) -> None
 
 def test_an_experiment_config_is_checked_when_loaded() -> None:
     text = TINY_TOML.replace('name = "dyna-q"', 'name = "dyna-z"')
-    with pytest.raises(UserError, match=r"^tiny.toml: .*unknown agent 'dyna-z'"):
+    with pytest.raises(UserError, match=r"^unknown agent 'dyna-z'; .* in tiny\.toml$"):
         parse_grid(text, Path("tiny.toml"))
 
 

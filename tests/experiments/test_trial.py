@@ -168,13 +168,16 @@ def test_invalid_agent_params_name_the_config_file(
     path = tmp_path / "bad-params.toml"
     path.write_text(TINY_TOML.replace("planning_steps = 5", "planning_steps = -1"))
     config = parse_config(path.read_text(), path)
-    with pytest.raises(UserError, match=rf"^{path}: agent 'dyna-q': .*planning_steps"):
+    with pytest.raises(
+        UserError, match=rf"^expected .*planning_steps.* in {path}: agent 'dyna-q'$"
+    ):
         run_experiment(config, tmp_path / "out", backend="serial", config_path=path)
     assert not (tmp_path / "out").exists()
     code = cli.main(["run", str(path), "--out", str(tmp_path / "out"), "--no-progress"])
     lines = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(lines) == 1
-    assert lines[0].startswith(f"skidnav: error: {path}: agent 'dyna-q'")
+    assert lines[0].startswith("skidnav: error: expected an integer planning_steps ")
+    assert lines[0].endswith(f" in {path}: agent 'dyna-q'")
 
 
 def test_an_evaluation_costs_the_mean_of_its_rollouts_that_reached_the_goal() -> None:

@@ -35,8 +35,10 @@ def test_mppi_with_the_true_model_is_refused_at_load() -> None:
     with pytest.raises(UserError) as error:
         parse_grid(CONFIG.format(agent="mppi-kinematic", model="true"), Path("c.toml"))
     message = str(error.value)
-    assert "\\n" not in message and message.startswith("c.toml: agent 'planner'")
-    assert "kinematic_model 'true'" in message and "mppi-kinematic cannot take" in message
+    assert "\n" not in message and message.startswith(
+        "expected kinematic_model 'learned' or 'prior', got 'true' in c.toml: agent 'planner' ("
+    )
+    assert message.endswith("which mppi-kinematic cannot take)")
 
 
 def test_the_learned_and_prior_models_load() -> None:

@@ -75,7 +75,12 @@ def test_command_writes_one_row_per_agent_and_seed(tmp_path: Path) -> None:
     [
         ("--seeds", "0", "expected seeds to be an integer in [1, 1,000], got 0"),
         ("--rollouts", "1000", "expected rollouts to be an integer in [1, 100], got 1000"),
-        ("--planning-steps", "-1", "agent 'dyna-full': expected an integer planning_steps"),
+        (
+            "--planning-steps",
+            "-1",
+            "error: expected an integer planning_steps in [0, 10,000,000], got -1 "
+            "in <flags>: [[agents]]: agent 'dyna-full'\n",
+        ),
     ],
 )
 def test_bad_arguments_are_one_line(flag: str, value: str, expected: str) -> None:
@@ -104,8 +109,15 @@ def test_a_config_run_by_skidnav_run_gives_one_file_per_run_on_every_backend(
             TINY_CONFIG.replace("rollouts =", "rollout ="),
             "bad.toml: [transfer] (did you mean 'rollouts'?",
         ),
-        (TINY_CONFIG.replace('"thesis"', '"icy"'), "[transfer]: expected slip one of"),
-        (TINY_CONFIG.replace('"dyna-q"', '"dqn"'), "[[agents]] name: expected a tabular agent"),
+        (
+            TINY_CONFIG.replace('"thesis"', '"icy"'),
+            "expected slip one of thesis, slippery, rough, nominal, rough-physics, "
+            "slippery-physics, ice-physics, got 'icy' in {config}: [transfer]",
+        ),
+        (
+            TINY_CONFIG.replace('"dyna-q"', '"dqn"'),
+            "expected name to be a tabular agent, got 'dqn' in {config}: [[agents]] (tabular",
+        ),
         (TINY_CONFIG.replace("seeds = 2", "seeds = 2.5"), "expected seeds to be an integer"),
         (
             TINY_CONFIG.replace("[[agents]]", "[[agent]]"),

@@ -308,8 +308,8 @@ def test_bad_policy_settings_and_files_are_one_line_errors(
     argv = ["robot", "run", "--driver", "tcp", "--out", str(tmp_path / "out")]
     assert main([*argv, "--config", str(config), "--policy", "goal-tracker"]) == 2
     assert capsys.readouterr().err.strip() == (
-        "skidnav: error: [policies.goal-tracker]: expected turn_gain to be a finite number > 0, "
-        "got -1.0"
+        "skidnav: error: expected turn_gain to be a finite number > 0, got -1.0 "
+        "in [policies.goal-tracker]"
     )
     saved = tmp_path / "policy.json"
     for content, message in [

@@ -322,7 +322,7 @@ def test_ros2_table_options_reach_the_driver_and_bad_ones_end_in_one_line() -> N
         "header",
         True,
     )
-    with pytest.raises(UserError, match=r"^\[ros2\]: expected distro in .*got 'foxy'$"):
+    with pytest.raises(UserError, match=r"^expected distro in .*got 'foxy' in \[ros2\]$"):
         driver_by_name("ros2", config_from_mapping({"ros2": {"distro": "foxy"}}))
 
 

@@ -112,7 +112,7 @@ def test_bad_config_is_a_one_line_user_error(
     config = write_config(tmp_path, "[run]\nepisodes = 0\n")
     assert main(["robot", "run", "--agent", "q-learning", "--config", str(config)]) == 2
     assert capsys.readouterr().err.strip().splitlines() == [
-        f"skidnav: error: {config}: [run]: expected episodes to be an integer >= 1, got 0"
+        f"skidnav: error: expected episodes to be an integer >= 1, got 0 in {config}: [run]"
     ]
 
 

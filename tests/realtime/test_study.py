@@ -146,9 +146,12 @@ def test_the_study_is_a_config_that_skidnav_run_runs_resumes_and_reports(
     mixed = tmp_path / "mixed.toml"
     mixed.write_text(f'kind = "robot-study"\n[study]\nconfig = "{config}"\n[sim]\nslip = "rough"\n')
     assert main(["run", str(mixed), "--out", str(tmp_path / "mixed")]) == 2
-    assert "[study] config: expected the name of a real-time config and no other table" in (
-        capsys.readouterr().err
+    error = capsys.readouterr().err
+    assert error.startswith(
+        "skidnav: error: expected config to be the name of a real-time config and no other "
+        "table here, got "
     )
+    assert error.endswith(f" and sim in {mixed}: [study]\n"), error
 
 
 FakeRun = Callable[[RunSpec[Any], Path, Callable[[str], None]], RealtimeOutcome]
@@ -340,10 +343,13 @@ def test_study_settings_and_one_line_errors(
         assert len(lines) == 1 and message in lines[0], lines
     text = config.read_text()
     broken = {
-        "[presets.rough-stationary]: a study runs every preset on the [run] map": (
+        f"expected no [run] map, seed or reset in {config}: [presets.rough-stationary] (a "
+        "study runs every preset on the [run] map": (
             text + '\n[presets.rough-stationary.run]\nmap = "free"\n'
         ),
-        "agent 'dyna-q': ": text.replace("planning_steps = 5", "planning_steps = -1"),
+        f"got -1 in {config}: agent 'dyna-q'": text.replace(
+            "planning_steps = 5", "planning_steps = -1"
+        ),
         "expected [run] seed to be an integer >= 0, got -1": text.replace(
             "[run]\n", "[run]\nseed = -1\n"
         ),

@@ -109,10 +109,10 @@ def test_sim_episodes_errors_are_one_line_and_the_fingerprint_unchanged_without(
     config.write_text(STUDY + "\n[presets.rough.run]\nsubsteps = 5\n")
     assert main(["robot", "study", "--config", str(config), "--out", str(tmp_path / "out")]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].endswith(
-        "[presets.rough]: sim_episodes pre-trains on the simulator's actions of 1 s; this "
-        "preset's [run] period × substeps is 0.5 s"
-    ), lines
+    assert lines == [
+        "skidnav: error: expected [run] period × substeps to be 1 s, got 0.5 s "
+        f"in {config}: [presets.rough] (sim_episodes pre-trains on the simulator's actions of 1 s)"
+    ], lines
     assert not (tmp_path / "out").exists()
 
 

@@ -110,7 +110,10 @@ def test_the_report_section_has_the_curves_and_the_final_scores(serial: Path) ->
         ("seeds = 0\n" + SEARCH, "expected seeds to be an integer in [1, 1000], got 0"),
         ('presets = ["ice"]\n' + SEARCH, "expected presets to be distinct slip presets among"),
         ('presets = "thesis"\n' + SEARCH, "expected presets to be distinct slip presets"),
-        (SEARCH + 'slip = "rough"\n', "[search]: slip is set per run"),
+        (
+            SEARCH + 'slip = "rough"\n',
+            "key 'slip' is set per run in {config}: [search] (list presets, give root_seed)\n",
+        ),
         (SEARCH + "populaton = 4\n", "bad.toml: [search] (did you mean 'population'?"),
         (SEARCH.replace("population = 6", "population = 1"), "expected population to be an"),
     ],
@@ -122,5 +125,6 @@ def test_a_bad_config_is_one_line_and_exit_code_2(
     config.write_text(f'kind = "policy-search"\n{text}')
     assert exit_code(["run", str(config), "--out", str(tmp_path / "out")]) == 2
     error = capsys.readouterr().err
+    message = message.replace("{config}", str(config))
     assert error.count("\n") == 1 and str(config) in error and message in error, error
     assert not (tmp_path / "out").exists()

@@ -24,7 +24,7 @@ from numpy.random import SeedSequence
 from skidnav.agents.family import AgentT, Env, Family, Params, asks_for, constructor_context
 from skidnav.agents.interface import Agent, AgentConfig
 from skidnav.agents.training import NO_EVALUATION, Evaluation, TrainingLog
-from skidnav.errors import ConfigKeyError, UserError, first_line, shown, within
+from skidnav.errors import UserError, shown, within
 from skidnav.files.configtables import check_types
 
 FAMILY_MODULES: tuple[str, ...] = (
@@ -125,11 +125,9 @@ class AgentEntry(Generic[AgentT]):
             config = config_class.from_mapping(dict(params))
         except TypeError as error:  # its checks compared a value of another type: name it
             check_types(config_class, dict(params), where)
-            raise UserError(f"{where}: {first_line(error)}") from None
-        except ConfigKeyError as error:  # a misspelt key: named first
             raise within(error, where) from None
-        except (ValueError, UserError) as error:
-            raise UserError(f"{where}: {first_line(error)}") from None
+        except (ValueError, UserError) as error:  # what is wrong first, then where
+            raise within(error, where) from None
         check_types(config_class, dict(params), where)
         return config
 

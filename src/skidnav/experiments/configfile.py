@@ -15,7 +15,7 @@ import itertools
 from pathlib import Path
 from typing import Any
 
-from skidnav.errors import UserError, shown, within
+from skidnav.errors import ConfigError, UserError, shown, within
 from skidnav.experiments.config import (
     DEFAULT_ENV_ID,
     AgentSpec,
@@ -107,9 +107,9 @@ def config_from_tables(data: dict[str, Any], path: Path | str) -> ExperimentConf
 def _string(values: dict[str, Any], key: str, where: str, default: str | None = None) -> str:
     value = values.get(key, default)
     if value is None:
-        raise ValueError(f"{where}: missing key {key!r}")
+        raise ConfigError(f"missing key {key!r}", (where,))
     if not isinstance(value, str):
-        raise ValueError(f"{where} {key}: expected a string, got {shown(value)}")
+        raise ConfigError(f"expected {key} to be a string, got {shown(value)}", (where,))
     return value
 
 
@@ -125,14 +125,15 @@ def _build(data: dict[str, Any], path: Path) -> ExperimentConfig:
         values["name"] = path.stem
     presets = values.get("presets", ["thesis"])
     if not isinstance(presets, list) or not all(isinstance(p, str) for p in presets):
-        raise ValueError(f"[experiment] presets: expected a list of strings, got {shown(presets)}")
+        problem = f"expected presets to be a list of strings, got {shown(presets)}"
+        raise ConfigError(problem, ("[experiment]",))
     values["presets"] = tuple(presets)
     grids = values.get("optimum_grids", [])
     if not isinstance(grids, list) or not all(isinstance(levels, list) for levels in grids):
-        raise ValueError(
-            f"[experiment] optimum_grids: expected a list of [n_x, n_y, n_headings], got "
-            f"{shown(grids)}"
+        problem = (
+            f"expected optimum_grids to be a list of [n_x, n_y, n_headings], got {shown(grids)}"
         )
+        raise ConfigError(problem, ("[experiment]",))
     values["optimum_grids"] = tuple(tuple(levels) for levels in grids)
     agents = tuple(
         itertools.chain.from_iterable(
@@ -145,7 +146,7 @@ def _build(data: dict[str, Any], path: Path) -> ExperimentConfig:
     try:
         config = ExperimentConfig(agents=agents, maps=maps, env_options=env, **values)
     except ValueError as error:
-        raise ValueError(f"[experiment]: {error}") from None
+        raise within(error, "[experiment]") from None
     if config.env_id == DEFAULT_ENV_ID:
         check_memory(config)
     return config
@@ -160,16 +161,14 @@ def _agents(agent: dict[str, Any], where: str) -> list[AgentSpec]:
     sweep = table(agent.get("sweep", {}), f"{where} sweep")
     levels = agent.get("discretization", [])
     if not isinstance(levels, list):
-        raise ValueError(
-            f"{where} discretization: expected [n_x, n_y, n_headings], got {shown(levels)}"
-        )
+        problem = f"expected discretization to be [n_x, n_y, n_headings], got {shown(levels)}"
+        raise ConfigError(problem, (where,))
     for key, values in sweep.items():
         if not isinstance(values, list) or not values:
-            raise ValueError(
-                f"{where} sweep.{shown(key)}: expected a non-empty list, got {shown(values)}"
-            )
+            problem = f"expected sweep.{shown(key)} to be a non-empty list, got {shown(values)}"
+            raise ConfigError(problem, (where,))
         if key in params:
-            raise ValueError(f"{where}: {shown(key)} is both in params and in sweep")
+            raise ConfigError(f"key {shown(key)} is both in params and in sweep", (where,))
     keys = sorted(sweep)
     agents = []
     for combination in itertools.product(*(sweep[key] for key in keys)):
@@ -181,7 +180,7 @@ def _agents(agent: dict[str, Any], where: str) -> list[AgentSpec]:
                 AgentSpec(name, full_label, freeze_params({**params, **chosen}), tuple(levels))
             )
         except ValueError as error:
-            raise ValueError(f"{where}: {error}") from None
+            raise within(error, where) from None
     return agents
 
 
@@ -203,14 +202,15 @@ def read_map(spec: dict[str, Any], where: str, folder: Path) -> MapSpec:
     if file:
         resolved = resolve_path(file, folder)
         if not _is_file(resolved):
-            raise ValueError(f"{where} file: no such map file {shown(file)} in {folder.resolve()}")
+            problem = f"no such map file {shown(file)}"
+            raise ConfigError(problem, (where,), f"looked in {folder.resolve()}")
         file = str(resolved)
     label = _string(spec, "label", where, default=kind or Path(file).stem)
     options = freeze_params(table(spec.get("options", {}), f"{where} options"))
     try:
         return MapSpec(label=label, kind=kind, file=file, options=options)
     except ValueError as error:
-        raise ValueError(f"{where}: {error}") from None
+        raise within(error, where) from None
 
 
 def _is_file(path: Path) -> bool:

@@ -47,7 +47,7 @@ from skidnav.envs.registration import (
     with_env_modules,
 )
 from skidnav.envs.wrappers import FineStates
-from skidnav.errors import UserError, within
+from skidnav.errors import ConfigError, UserError, within
 from skidnav.experiments.config import (
     CONVERGENCE_OBJECTIVES,
     AgentSpec,
@@ -445,6 +445,8 @@ def _check_config(config: ExperimentConfig) -> None:
             grid_map = config_map(map_spec, np.random.default_rng(0))
             check_grids(config, grid_map, map_spec.label, entries)
         trial_env(first, grid_map, 0).close()
+    except ConfigError:  # a grid the map refuses, named already
+        raise
     except gymnasium.error.Error as error:
         raise UserError(f"environment {config.env_id!r}: {error}") from None
     except (TypeError, ValueError) as error:
@@ -462,10 +464,11 @@ def _check_agents(config: ExperimentConfig) -> dict[str, CatalogEntry]:
         params = agent.params_dict()
         described.config(params)
         if params.get("kinematic_model") == "true" and not described.asks_for("true_kinematics"):
-            raise UserError(
-                f"agent {agent.label!r}: kinematic_model 'true' plans with the simulator's "
-                f"expected velocities of the discrete actions, which {agent.name} cannot take "
-                "(expected 'learned' or 'prior')"
+            raise ConfigError(
+                "expected kinematic_model 'learned' or 'prior', got 'true'",
+                (f"agent {agent.label!r}",),
+                "'true' plans with the simulator's expected velocities of the discrete actions, "
+                f"which {agent.name} cannot take",
             )
         if config.env_id == SKID_ENV_ID:
             described.env_observation(requested)

@@ -1,8 +1,9 @@
 """The conventions every TOML config loader follows (experiments, tuning, real-time runs, studies).
 
-A problem is one :class:`~skidnav.errors.UserError` line ``"WHERE: PROBLEM"``, where ``WHERE``
-names the table (``[run]``, ``[[maps]] #2``, ``[tune.space.q-learning] alpha``) and a value read
-from the file is quoted in part (:func:`~skidnav.errors.shown`). A path in a config is relative to
+A problem is one :class:`~skidnav.errors.UserError` line, a bad key or value named first
+(:class:`~skidnav.errors.ConfigError`: ``"PROBLEM in WHERE"``), where ``WHERE`` names the file and
+the table (``[run]``, ``[[maps]] #2``, ``[tune.space.q-learning]``) and a value read from the
+file is quoted in part (:func:`~skidnav.errors.shown`). A path in a config is relative to
 the config file's folder. A config the code writes (``tuned.toml``, a study shortcut's config)
 spells its values with :func:`toml_value` and :func:`toml_key`.
 """
@@ -20,7 +21,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any, TypeVar
 
-from skidnav.errors import ConfigKeyError, UserError, shown
+from skidnav.errors import ConfigError, ConfigKeyError, UserError, shown, within
 
 T = TypeVar("T")
 
@@ -91,7 +92,7 @@ def check_keys(values: Iterable[str], known: Iterable[str], where: str = "") -> 
 
 
 def check_types(cls: type, values: Mapping[str, Any], where: str) -> None:
-    """UserError ``"{where}: expected KEY to be …, got …"`` for the first of ``values`` whose
+    """ConfigError ``"expected KEY to be …, got … in {where}"`` for the first of ``values`` whose
     field of the dataclass ``cls`` is annotated ``bool``, ``int``, ``float`` or ``str`` (or a
     union of them, with None or not) and that is not of that type: a bool is neither an integer
     nor a number, an integer is a number. Fields of other types are left to the class.
@@ -103,14 +104,15 @@ def check_types(cls: type, values: Mapping[str, Any], where: str) -> None:
     >>> check_types(Link, {"port": 6000, "lockstep": "yes"}, "[tcp]")
     Traceback (most recent call last):
     ...
-    skidnav.errors.UserError: [tcp]: expected lockstep to be true or false, got 'yes'
+    skidnav.errors.ConfigError: expected lockstep to be true or false, got 'yes' in [tcp]
     """
     hints = typing.get_type_hints(cls)
     for key, value in values.items():
         kinds = _simple_kinds(hints.get(key))
         if kinds and not any(_is_kind(value, kind) for kind in kinds):
             expected = " or ".join(_KINDS[kind] for kind in kinds if kind in _KINDS)
-            raise UserError(f"{where}: expected {key} to be {expected}, got {shown(value)}")
+            problem = f"expected {key} to be {expected}, got {shown(value)}"
+            raise ConfigError(problem, (where,) if where else ())
 
 
 def _simple_kinds(hint: Any) -> tuple[type, ...]:
@@ -138,15 +140,16 @@ def _is_kind(value: Any, kind: type) -> bool:
 def build_dataclass(cls: type[T], value: Any, where: str) -> T:
     """The dataclass ``cls`` built from a TOML table of its fields (each key one field, of the
     field's type as :func:`check_types` checks it; the class validates the values on
-    construction); UserError ``"{where}: …"`` for a value that is not a table, an unknown key,
-    a value of the wrong type, or a value the class refuses (ValueError or TypeError)."""
+    construction); a one-line UserError, what is wrong first and ``where`` after it, for a
+    value that is not a table, an unknown key, a value of the wrong type, or a value the class
+    refuses (ValueError or TypeError)."""
     values = table(value, where)
     check_keys(values, (f.name for f in dataclasses.fields(cls)), where)  # type: ignore[arg-type]
     check_types(cls, values, where)
     try:
         return cls(**values)
     except (ValueError, TypeError) as error:
-        raise UserError(f"{where}: {error}") from None
+        raise within(error, where) from None
 
 
 def resolve_path(value: str, folder: Path) -> Path:

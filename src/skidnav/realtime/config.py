@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from skidnav.errors import UserError, shown, within
+from skidnav.errors import ConfigError, UserError, shown, within
 from skidnav.files.configtables import build_dataclass, check_keys, resolve_path, table
 from skidnav.files.saved import parse_toml, read_config_text
 from skidnav.physics.materials import MATERIALS
@@ -291,8 +291,9 @@ def config_from_mapping(data: Mapping[str, Any], preset: str | None = None) -> R
         return _build(tables)
     presets = table(data.get("presets", {}), "[presets]")
     if preset not in presets:
-        names = ", ".join(shown(name) for name in presets) or "none (no [presets] table)"
-        raise UserError(f"unknown preset {shown(preset)}; expected one of {names}")
+        names = ", ".join(shown(name) for name in presets)
+        known = f"expected one of {names}" if names else "no [presets] table"
+        raise ConfigError(f"unknown preset {shown(preset)}", (), known)
     try:
         return _build(_merge(tables, table(presets[preset], f"[presets.{preset}]")))
     except UserError as error:

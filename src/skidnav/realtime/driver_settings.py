@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from skidnav.checks import check_integer
-from skidnav.errors import UserError, shown
+from skidnav.errors import ConfigError, shown
 from skidnav.realtime.link.auth import SECRET_ENV
 from skidnav.realtime.link.ros2_config import Ros2Config
 
@@ -97,14 +97,15 @@ def refuse_inline_secrets(data: Mapping[str, Any], where: str = "") -> None:
     >>> refuse_inline_secrets({"presets": {"lab": {"tcp": {"secret": "s"}}}})  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    skidnav.errors.UserError: [presets.lab.tcp]: secret: a link secret does not belong in a ...
+    skidnav.errors.ConfigError: key 'secret': a link secret ... in [presets.lab.tcp] (put it ...
     """
     for key, value in data.items():
         if key == INLINE_SECRET_KEY:
-            raise UserError(
-                f"{f'[{where}]' if where else 'top level'}: {key}: a link secret does not belong "
-                "in a config file; put it in a file only you can read and name that with "
-                f"secret_file in [tcp] or [serial], or set {SECRET_ENV} (docs/protocol.md)"
+            raise ConfigError(
+                f"key {key!r}: a link secret does not belong in a config file",
+                (f"[{where}]" if where else "top level",),
+                "put it in a file only you can read and name that with secret_file in [tcp] or "
+                f"[serial], or set {SECRET_ENV}; see docs/protocol.md",
             )
         if isinstance(value, Mapping):
             refuse_inline_secrets(value, f"{where}.{key}" if where else str(key))

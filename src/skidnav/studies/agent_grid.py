@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from skidnav.agents.training import TrainingLog
-from skidnav.errors import UserError, shown, within
+from skidnav.errors import ConfigError, UserError, shown, within
 from skidnav.experiments.config import AgentSpec, MapSpec, freeze_params
 from skidnav.experiments.store import ResultStore, RunLayout
 from skidnav.files.configtables import check_keys, table, table_array
@@ -147,12 +147,13 @@ def read_agents(value: Any, where: str = "agents") -> tuple[AgentSpec, ...]:
         name, label = item.get("name"), item.get("label", item.get("name"))
         for key, text in (("name", name), ("label", label)):
             if not isinstance(text, str) or not text:
-                raise ValueError(f"{place} {key}: expected a non-empty string, got {shown(text)}")
+                problem = f"expected {key} to be a non-empty string, got {shown(text)}"
+                raise ConfigError(problem, (place,))
         params = table(item.get("params", {}), f"{place} params")
         try:
             agents.append(AgentSpec(str(name), str(label), freeze_params(params)))
         except ValueError as error:
-            raise ValueError(f"{place}: {error}") from None
+            raise within(error, place) from None
     return tuple(agents)
 
 

@@ -28,7 +28,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
-from skidnav.errors import UserError
+from skidnav.errors import ConfigError, UserError
 from skidnav.experiments.runner import BACKENDS, TrialFunction
 from skidnav.experiments.runs import Grid
 from skidnav.experiments.store import RunLayout
@@ -128,7 +128,8 @@ def study_kind(document: Mapping[str, Any], path: Path | str) -> str:
     """
     kind = document.get("kind", EXPERIMENT_KIND)
     if not isinstance(kind, str) or kind not in STUDY_MODULES:
-        raise UserError(f"{path}: kind: expected one of {', '.join(STUDY_MODULES)}, got {kind!r}")
+        problem = f"expected kind to be one of {', '.join(STUDY_MODULES)}, got {kind!r}"
+        raise ConfigError(problem, (str(path),))
     return kind
 
 

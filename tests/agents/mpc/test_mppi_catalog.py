@@ -43,7 +43,9 @@ def test_its_entry_describes_the_family_observation_and_config() -> None:
     assert described.env_observation("features") == "features"
     assert described.config_class is MPPIConfig
     assert described.config({"samples": 8}) == MPPIConfig(samples=8)
-    with pytest.raises(UserError, match=r"^agent 'mppi-kinematic': expected samples") as error:
+    with pytest.raises(
+        UserError, match=r"^expected samples .* in agent 'mppi-kinematic'$"
+    ) as error:
         described.config({"samples": 1})
     assert "\n" not in str(error.value)
 

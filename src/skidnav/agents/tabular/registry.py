@@ -23,7 +23,7 @@ import numpy as np
 from skidnav.agents.config import KinematicModelFields, QLearningConfig
 from skidnav.agents.saving import save_paths
 from skidnav.agents.tabular.agent import SAVE_FORMAT, SAVE_VERSION, TabularAgent
-from skidnav.errors import CorruptFileError, UserError, shown
+from skidnav.errors import CorruptFileError, UserError, shown, within
 from skidnav.files.saved import READ_ERRORS, ArraySpec, SavedArchive, loading, read_json, up_to
 
 AGENT_MODULES: dict[str, str] = {
@@ -69,7 +69,7 @@ def make_config(name: str, config: QLearningConfig | Mapping[str, Any] | None) -
     try:
         return cls.from_mapping(config)
     except (ValueError, TypeError) as error:
-        raise UserError(f"agent {name!r}: {error}") from None
+        raise within(error, f"agent {name!r}") from None
 
 
 def make_agent(

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from skidnav.agents.catalog import CatalogEntry
-from skidnav.errors import UserError
+from skidnav.errors import UserError, within
 from skidnav.experiments.config import DEFAULT_ENV_ID, ExperimentConfig
 from skidnav.sim.navigation import NavigationTask
 from skidnav.sim.task import build_task
@@ -113,7 +113,7 @@ def check_grids(
         try:
             refine_map(grid_map, (levels[0], levels[1]))
         except ValueError as error:
-            raise UserError(f"{what} on map {map_label!r}: {error}") from None
+            raise within(error, f"{what} on map {map_label!r}") from None
         fine = refines_positions(levels, grid_map)
         if described is not None and fine and described.asks_for("task"):
             raise UserError(

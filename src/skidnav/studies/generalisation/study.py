@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from skidnav.agents.catalog import entry
-from skidnav.errors import UserError
+from skidnav.errors import UserError, within
 from skidnav.experiments.runner import TrialFunction
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import RunLayout, TrialResult
@@ -58,7 +58,7 @@ class GeneralisationStudy:
             try:
                 entry(agent.name).config(agent.params_dict())
             except UserError as error:
-                raise UserError(f"{path}: [[agents]] {error}") from None
+                raise within(within(error, "[[agents]]"), str(path)) from None
         return grid
 
     def trial(self, grid: GeneralisationGrid, out: Path) -> TrialFunction:

@@ -18,7 +18,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from skidnav.errors import UserError, shown
+from skidnav.errors import ConfigError, UserError, shown
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.experiments.limits import MAX_EPISODES, MAX_SEEDS
 from skidnav.files.configtables import build_dataclass
@@ -115,7 +115,7 @@ def _check_count(name: str, value: object, most: int) -> None:
 
 def study_settings(values: Mapping[str, Any], where: str) -> StudySettings:
     """The settings of a ``[study]`` table's ``values`` (agents and presets as lists, or as one
-    comma-separated string); UserError ``"{where}: …"`` if invalid."""
+    comma-separated string); a one-line UserError naming the key and ``where`` if invalid."""
     study = dict(values)
     for key in ("agents", "presets"):
         if isinstance(study.get(key), str):
@@ -298,9 +298,10 @@ def _check_simulator_actions(preset: str, config: RealtimeConfig) -> None:
     simulated = RobotParams().action_duration
     robot = config.run.period * config.run.substeps
     if abs(robot - simulated) > 1e-9:
-        raise UserError(
-            f"[presets.{preset}]: sim_episodes pre-trains on the simulator's actions of "
-            f"{simulated:g} s; this preset's [run] period × substeps is {robot:g} s"
+        raise ConfigError(
+            f"expected [run] period × substeps to be {simulated:g} s, got {robot:g} s",
+            (f"[presets.{preset}]",),
+            f"sim_episodes pre-trains on the simulator's actions of {simulated:g} s",
         )
 
 
@@ -312,9 +313,11 @@ def _preset_config(
     config = config_from_mapping(tables, preset)
     run = config.run
     if (run.map, run.seed, run.reset) != (base.map, base.seed, "auto"):
-        raise UserError(
-            f"[presets.{preset}]: a study runs every preset on the [run] map from the [run] "
-            "seed, resetting automatically; this preset sets [run] map, seed or reset"
+        raise ConfigError(
+            "expected no [run] map, seed or reset",
+            (f"[presets.{preset}]",),
+            "a study runs every preset on the [run] map from the [run] seed, resetting "
+            "automatically",
         )
     # the sim driver reads no driver table: theirs stay at the defaults
     config = RealtimeConfig(

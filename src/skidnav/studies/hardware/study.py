@@ -41,7 +41,7 @@ from typing import Any, NamedTuple
 
 import pandas as pd
 
-from skidnav.errors import UserError, first_line, shown
+from skidnav.errors import ConfigError, UserError, first_line, shown, within
 from skidnav.experiments.configfile import parse_tables
 from skidnav.experiments.report.page import markdown_html
 from skidnav.experiments.runner import TrialFunction, run_experiment
@@ -97,9 +97,10 @@ def study_grid(document: Mapping[str, Any], path: Path) -> StudyGrid:
     if source is None:
         resolve_map_paths(data, path.parent)
     elif not isinstance(source, str) or data:
-        raise UserError(
-            f"{where} config: expected the name of a real-time config and no other table "
-            f"here, got {shown(source)} and {', '.join(data) or 'none'}"
+        raise ConfigError(
+            "expected config to be the name of a real-time config and no other table here, "
+            f"got {shown(source)} and {', '.join(data) or 'none'}",
+            (where,),
         )
     else:
         tables_path = resolve_path(source, path.parent)
@@ -109,7 +110,7 @@ def study_grid(document: Mapping[str, Any], path: Path) -> StudyGrid:
     try:
         return build_grid(data, settings)
     except UserError as error:
-        raise UserError(f"{tables_path}: {error}") from None
+        raise within(error, str(tables_path)) from None
 
 
 def study_config_text(config: Path, overrides: Mapping[str, Any]) -> str:

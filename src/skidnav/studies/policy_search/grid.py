@@ -36,7 +36,7 @@ from typing import Any
 from skidnav.agents.policies.search.config import MAX_SEED, SearchConfig
 from skidnav.agents.policies.search.curve import COUNTS, GenerationRecord
 from skidnav.checks import check_integer
-from skidnav.errors import UserError, shown, within
+from skidnav.errors import ConfigError, shown, within
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.experiments.store import RunLayout
 from skidnav.files.configtables import check_keys, table, toml_value
@@ -155,7 +155,8 @@ def grid_from_document(document: Mapping[str, Any], path: Path | str) -> PolicyS
     settings = dict(table(document.get("search", {}), where))
     for key in RUN_FIELDS:
         if key in settings:
-            raise UserError(f"{where}: {key} is set per run (list presets, give root_seed)")
+            problem = f"key {key!r} is set per run"
+            raise ConfigError(problem, (where,), "list presets, give root_seed")
     check_keys(settings, SEARCH_KEYS, where)
     presets = document.get("presets", PolicySearchGrid.presets)
     if isinstance(presets, list):
@@ -163,7 +164,7 @@ def grid_from_document(document: Mapping[str, Any], path: Path | str) -> PolicyS
     try:
         search = SearchConfig(**settings)  # its slip and seed: set per run
     except (TypeError, ValueError) as error:
-        raise UserError(f"{where}: {error}") from None
+        raise within(error, where) from None
     top = {key: document[key] for key in ("name", "seeds", "root_seed") if key in document}
     try:
         return PolicySearchGrid(search, presets, **top)

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from skidnav.agents.catalog import entry, family
-from skidnav.errors import UserError
+from skidnav.errors import ConfigError, UserError, shown, within
 from skidnav.experiments.runner import TrialFunction
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import RunLayout, TrialResult
@@ -64,14 +64,13 @@ class TransferStudy:
         known = family("tabular").agents
         for agent in grid.agents:
             if agent.name not in known:
-                raise UserError(
-                    f"{path}: [[agents]] name: expected a tabular agent ({', '.join(known)}), "
-                    f"got {agent.name!r}"
-                )
+                problem = f"expected name to be a tabular agent, got {shown(agent.name)}"
+                detail = f"tabular agents: {', '.join(known)}"
+                raise ConfigError(problem, (str(path), "[[agents]]"), detail)
             try:
                 entry(agent.name).config(agent.params_dict())
             except UserError as error:
-                raise UserError(f"{path}: [[agents]] {error}") from None
+                raise within(within(error, "[[agents]]"), str(path)) from None
         return grid
 
     def trial(self, grid: TransferGrid, out: Path) -> TrialFunction:

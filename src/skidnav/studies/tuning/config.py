@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from skidnav.errors import UserError, shown, within
+from skidnav.errors import ConfigError, UserError, shown, within
 from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec
 
 # The [[maps]] schema lives in configfile; reusing it keeps [[tune.maps]] and [[maps]] one schema,
@@ -311,31 +311,32 @@ def parse_tune(value: Any, config: ExperimentConfig, path: Path) -> TuneConfig:
             label = f"[[tune.maps]] {spec.label!r}"
             check_oracle_memory(label, map_states(spec), config.oracle_samples)
     if "space" not in tune:
-        raise ValueError("[tune]: missing table [tune.space.<agent label>]")
+        raise ConfigError("missing table [tune.space.<agent label>]", ("[tune]",))
     if "seeds" not in tune:
-        raise ValueError("[tune]: missing key 'seeds' (tuning seeds per trial)")
+        raise ConfigError("missing key 'seeds'", ("[tune]",), "tuning seeds per trial")
     spaces = tuple(
         (label, _space(label, ranges))
         for label, ranges in table(tune["space"], "[tune.space]").items()
     )
     for label, _ in spaces:
         if label not in config.agent_labels:
-            raise ValueError(
-                f"[tune.space]: unknown agent label {shown(label)} "
-                f"(expected one of {', '.join(config.agent_labels)})"
+            raise ConfigError(
+                f"unknown agent label {shown(label)}",
+                ("[tune.space]",),
+                f"expected one of {', '.join(config.agent_labels)}",
             )
     values = {key: tune[key] for key in TUNE_KEYS if key in tune and key not in {"maps", "space"}}
     try:
         return TuneConfig(maps=maps, spaces=spaces, **values)
     except ValueError as error:
-        raise ValueError(f"[tune]: {error}") from None
+        raise within(error, "[tune]") from None
 
 
 def _space(label: str, value: Any) -> tuple[ParamRange, ...]:
     where = f"[tune.space.{label}]"
     space = table(value, where)
     if not space:
-        raise ValueError(f"{where}: expected at least one hyperparameter")
+        raise ConfigError("expected at least one hyperparameter", (where,))
     ranges = []
     for name, spec in space.items():
         spec = table(spec, f"{where} {name}")
@@ -343,12 +344,13 @@ def _space(label: str, value: Any) -> tuple[ParamRange, ...]:
         values = dict(spec)
         if "choices" in values:
             if not isinstance(values["choices"], list):
-                raise ValueError(f"{where} {name}: expected a list of choices")
+                problem = f"expected {name} choices to be a list, got {shown(values['choices'])}"
+                raise ConfigError(problem, (where,))
             values["choices"] = tuple(values["choices"])
         try:
             ranges.append(ParamRange(name, **values))
         except ValueError as error:
-            raise ValueError(f"{where} {error}") from None
+            raise within(error, where) from None
     return tuple(ranges)
 
 
@@ -359,15 +361,15 @@ def check_tuning(config: ExperimentConfig, tune: TuneConfig, path: Path | str | 
     from skidnav.experiments.trial import check_config
 
     check_config(dataclasses.replace(config, maps=tune.maps, seeds=tune.seeds), path)
-    prefix = f"{path}: " if path is not None else ""
     for agent in config.agents:
         for param in tune.space(agent.label):
             for corner in param.corners():
                 try:
                     make_config(agent.name, {**agent.params_dict(), param.name: corner})
                 except UserError as error:
-                    where = f"{prefix}[tune.space.{agent.label}] {param.name}"
-                    raise UserError(f"{where} = {shown(corner)}: {error}") from None
+                    where = f"[tune.space.{agent.label}] {param.name} = {shown(corner)}"
+                    wrapped = within(error, where)
+                    raise (wrapped if path is None else within(wrapped, str(path))) from None
 
 
 def default_point(agent: AgentSpec, space: Sequence[ParamRange]) -> dict[str, Any] | None:
