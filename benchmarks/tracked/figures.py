@@ -7,6 +7,7 @@ its twin's (1 / its ratio), not the ratio."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import key_figures
@@ -19,6 +20,18 @@ Learned = dict[str, dict[str, Any]]
 def finite(value: float) -> float:
     """``value``, or NaN (asv: not measured) for ∞."""
     return value if math.isfinite(value) else math.nan
+
+
+def interval_tracker(figure: str, index: int, unit: str) -> Callable[..., float]:
+    """An asv ``track_`` function reading one end (``index`` 0: the median, 1: the low end,
+    2: the high end) of the time to learn's ``figure`` (``"seconds"`` or ``"episode"``), in
+    ``unit``; ∞ as NaN."""
+
+    def track(self: object, learned: Learned, agent: str) -> float:
+        return finite(learned[agent][figure][index])
+
+    track.unit = unit  # type: ignore[attr-defined]
+    return track
 
 
 class KeyFigures:
@@ -57,35 +70,13 @@ class TimeToLearn:
             for label, figures in time_to_learn.time_to_learn().items()
         }
 
-    def track_seconds(self, learned: Learned, agent: str) -> float:
-        return finite(learned[agent]["seconds"][0])
-
-    track_seconds.unit = "s"  # type: ignore[attr-defined]
-
-    def track_seconds_low(self, learned: Learned, agent: str) -> float:
-        return finite(learned[agent]["seconds"][1])
-
-    track_seconds_low.unit = "s"  # type: ignore[attr-defined]
-
-    def track_seconds_high(self, learned: Learned, agent: str) -> float:
-        return finite(learned[agent]["seconds"][2])
-
-    track_seconds_high.unit = "s"  # type: ignore[attr-defined]
-
-    def track_episodes(self, learned: Learned, agent: str) -> float:
-        return finite(learned[agent]["episode"][0])
-
-    track_episodes.unit = "episodes"  # type: ignore[attr-defined]
-
-    def track_episodes_low(self, learned: Learned, agent: str) -> float:
-        return finite(learned[agent]["episode"][1])
-
-    track_episodes_low.unit = "episodes"  # type: ignore[attr-defined]
-
-    def track_episodes_high(self, learned: Learned, agent: str) -> float:
-        return finite(learned[agent]["episode"][2])
-
-    track_episodes_high.unit = "episodes"  # type: ignore[attr-defined]
+    # the medians and the ends of their intervals: (figure, index in its triple, unit)
+    track_seconds = interval_tracker("seconds", 0, "s")
+    track_seconds_low = interval_tracker("seconds", 1, "s")
+    track_seconds_high = interval_tracker("seconds", 2, "s")
+    track_episodes = interval_tracker("episode", 0, "episodes")
+    track_episodes_low = interval_tracker("episode", 1, "episodes")
+    track_episodes_high = interval_tracker("episode", 2, "episodes")
 
     def track_unconverged_runs(self, learned: Learned, agent: str) -> float:
         return float(learned[agent]["runs"] - learned[agent]["converged"])

@@ -26,7 +26,7 @@ from skidnav.extras import require
 from skidnav.files.outputs import check_output_dir
 from skidnav.statistics.formatting import plural
 from skidnav.studies.kind import VerdictStudy
-from skidnav.studies.loading import load_grid, run_loaded
+from skidnav.studies.loading import LoadedConfig, load_grid, run_loaded
 
 
 def add_parser(subparsers: Any) -> None:
@@ -128,13 +128,12 @@ def terminate_as_interrupt() -> Iterator[None]:
         signal.signal(signal.SIGTERM, previous)
 
 
-def run_command(args: argparse.Namespace) -> int:
-    """Run the experiment or study; print where the results are and, for a study with a verdict
-    (:class:`~skidnav.studies.kind.VerdictStudy`: an experiment), its verdict line, with the
-    report when asked."""
-    allow_env_modules(args.env_module)
-    log = tensorboard_log(args.tensorboard)
-    loaded = load_grid(args.config)
+def run_with_arguments(
+    loaded: LoadedConfig, args: argparse.Namespace, on_run: TensorBoardLog | None = None
+) -> RunOutcome:
+    """Run a loaded config as the command-line ``args`` ask (``--out``, default
+    ``runs/<name>``, checked first; ``--backend``, ``--jobs``, ``--scheduler``,
+    ``--no-progress``), SIGTERM stopping it as Ctrl-C does; prints what was run."""
     out = check_output_dir(args.out if args.out is not None else Path("runs") / loaded.grid.name)
     with terminate_as_interrupt():
         outcome = run_loaded(
@@ -144,9 +143,20 @@ def run_command(args: argparse.Namespace) -> int:
             jobs=args.jobs,
             scheduler=args.scheduler,
             progress=not args.no_progress,
-            on_run=log,
+            on_run=on_run,
         )
     print(outcome_line(outcome))
+    return outcome
+
+
+def run_command(args: argparse.Namespace) -> int:
+    """Run the experiment or study; print where the results are and, for a study with a verdict
+    (:class:`~skidnav.studies.kind.VerdictStudy`: an experiment), its verdict line, with the
+    report when asked."""
+    allow_env_modules(args.env_module)
+    log = tensorboard_log(args.tensorboard)
+    loaded = load_grid(args.config)
+    outcome = run_with_arguments(loaded, args, on_run=log)
     if log is not None:
         print(f"TensorBoard logs: {log.root} (tensorboard --logdir {log.root})")
     if args.report:

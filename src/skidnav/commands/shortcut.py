@@ -11,11 +11,10 @@ from pathlib import Path
 from typing import Any
 
 from skidnav.commands.parsing import path_argument
-from skidnav.commands.run import add_backend_arguments, outcome_line
+from skidnav.commands.run import add_backend_arguments, run_with_arguments
 from skidnav.experiments.runner import RunOutcome
 from skidnav.files.configtables import toml_document
-from skidnav.files.outputs import check_output_dir
-from skidnav.studies.loading import LoadedConfig, parse_grid, run_loaded
+from skidnav.studies.loading import LoadedConfig, parse_grid
 
 FLAGS = Path("<flags>")
 """Where a shortcut's config comes from, as its errors name it."""
@@ -44,17 +43,7 @@ def run_text(text: str, args: argparse.Namespace) -> tuple[LoadedConfig, RunOutc
             one holding another config's results.
     """
     loaded = parse_grid(text, FLAGS)
-    out = check_output_dir(args.out if args.out is not None else Path("runs") / loaded.grid.name)
-    outcome = run_loaded(
-        loaded,
-        out,
-        backend=args.backend,
-        jobs=args.jobs,
-        scheduler=args.scheduler,
-        progress=not args.no_progress,
-    )
-    print(outcome_line(outcome))
-    return loaded, outcome
+    return loaded, run_with_arguments(loaded, args)
 
 
 def run_document(document: Mapping[str, Any], args: argparse.Namespace) -> tuple[Any, RunOutcome]:
