@@ -12,7 +12,14 @@ from tests.docs.docs_tools import ROOT
 DOCS = ROOT / "docs"
 IMAGE = re.compile(r"!\[[^\]]*\]\((data/[^)\s]+\.png)\)")
 """A markdown image of docs/data."""
-HEADLINE_PAGES = ("summary.md", "results.md", "continuity.md", "kinematic-value.md")
+HEADLINE_PAGES = (
+    "summary.md",
+    "results.md",
+    "continuity.md",
+    "kinematic-value.md",
+    "kinematic-model.md",
+    "sutton-barto.md",
+)
 """Results pages that must show at least one figure."""
 
 
