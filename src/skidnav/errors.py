@@ -47,15 +47,26 @@ class ConfigKeyError(ConfigError):
     """
 
 
-def within(error: BaseException, place: str) -> ConfigError:
+class SetupError(UserError):
+    """What this installation lacks (an extra not installed), not a fault of the file it was
+    met in: :func:`within` leaves it as it is, its one line ending with the command that fixes
+    it."""
+
+
+def within(error: BaseException, place: str) -> UserError:
     """``error`` (a config's) found in ``place`` (a file, a table) as one :class:`ConfigError`
-    that still leads with what is wrong and takes ``place`` as its outermost place.
+    that still leads with what is wrong and takes ``place`` as its outermost place; a
+    :class:`SetupError` unchanged.
 
     >>> str(within(ConfigKeyError("unknown key 'x'", ("[run]",), "expected y"), "a.toml"))
     "unknown key 'x' in a.toml: [run] (expected y)"
     >>> str(within(ValueError("expected seeds ≥ 1, got 0"), "a.toml"))
     'expected seeds ≥ 1, got 0 in a.toml'
+    >>> str(within(SetupError('agent needs the deep extra: pip install "skidnav[deep]"'), "a"))
+    'agent needs the deep extra: pip install "skidnav[deep]"'
     """
+    if isinstance(error, SetupError):
+        return error
     if isinstance(error, ConfigError):
         return type(error)(error.lead, (place, *error.places), error.detail)
     lines = str(error).splitlines()

@@ -18,7 +18,7 @@ from __future__ import annotations
 import importlib.util
 from types import ModuleType
 
-from skidnav.errors import UserError
+from skidnav.errors import SetupError
 
 EXTRAS: dict[str, tuple[str, ...]] = {
     "physics": ("mujoco",),
@@ -39,7 +39,7 @@ EXTRAS: dict[str, tuple[str, ...]] = {
 provides, the ones skidnav imports."""
 
 
-class MissingExtraError(UserError):
+class MissingExtraError(SetupError):
     """A part of skidnav was asked for whose extra is not installed (one line, exit code 2)."""
 
 

@@ -16,14 +16,13 @@ import os
 import sys
 from types import ModuleType
 
-from skidnav.errors import UserError
-from skidnav.extras import install_hint, missing_message, missing_module
+from skidnav.extras import MissingExtraError, install_hint, missing_message, missing_module
 
 INSTALL_HINT = install_hint("physics")
 """How MuJoCo is installed: ``pip install "skidnav[physics]"``."""
 
 
-class PhysicsUnavailable(UserError):
+class PhysicsUnavailable(MissingExtraError):
     """MuJoCo is not installed (or does not import); the message is one line (a user error:
     the command line prints it and exits with code 2)."""
 
