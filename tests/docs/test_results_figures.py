@@ -19,6 +19,7 @@ HEADLINE_PAGES = (
     "kinematic-value.md",
     "kinematic-model.md",
     "sutton-barto.md",
+    "discretization-gap.md",
 )
 """Results pages that must show at least one figure."""
 
