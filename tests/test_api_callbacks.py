@@ -5,6 +5,7 @@ when it returns False or raises StopTraining, and changes no number when it does
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 import numba
@@ -92,15 +93,19 @@ def test_callback_and_progress_are_checked_in_one_line() -> None:
 
 
 def test_the_compile_notice_is_for_kernels_neither_compiled_nor_cached(
-    monkeypatch: pytest.MonkeyPatch,
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
     def double(x: float) -> float:
         return 2 * x
 
     double.__module__ = "probe.kernels"
+    # an empty cache of its own: the user's cache may hold this probe from an earlier run
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
     kernel = numba.njit(cache=True)(double)
     if not hasattr(kernel, "signatures"):
         pytest.skip("NUMBA_DISABLE_JIT: nothing compiles")
+    assert Path(kernel._cache._cache_file._index_path).is_relative_to(tmp_path)
     monkeypatch.setattr(_jit, "KERNELS", [kernel])
     assert _jit.first_compile(("probe",)) and not _jit.first_compile(("elsewhere",))
     assert kernel(1.5) == 3.0
