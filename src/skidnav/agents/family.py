@@ -141,12 +141,19 @@ def observation_space(name: str, env: Env, wanted: type[S]) -> S:
     return space
 
 
+def action_space(name: str, env: Env, wanted: type[S]) -> S:
+    """``env``'s action space if it is a ``wanted``; UserError naming agent ``name`` otherwise."""
+    space = env.action_space
+    if not isinstance(space, wanted):
+        raise UserError(
+            f"agent {name!r} takes {wanted.__name__} actions, the env gives {space} (set [env] action)"
+        )
+    return space
+
+
 def discrete_actions(name: str, env: Env) -> int:
     """The number of ``env``'s discrete actions; UserError for another action space."""
-    space = env.action_space
-    if not isinstance(space, gymnasium.spaces.Discrete):
-        raise UserError(f"agent {name!r} takes Discrete actions, the env gives {space}")
-    return int(space.n)
+    return int(action_space(name, env, gymnasium.spaces.Discrete).n)
 
 
 def asks_for(cls: type, argument: str) -> bool:

@@ -205,6 +205,24 @@ def test_bad_settings_are_one_line(make: Any, message: str) -> None:
         make()
 
 
+@pytest.mark.parametrize(
+    ("name", "action", "wanted"),
+    [("ppo", "discrete", "Box"), ("sac", "discrete", "Box"), ("dqn", "continuous", "Discrete")],
+)
+def test_the_api_refuses_an_env_of_other_actions_in_one_line(
+    name: str, action: str, wanted: str
+) -> None:
+    import skidnav
+    from skidnav.errors import UserError
+
+    env = skidnav.make_env("free", observation="features", action=action)
+    with pytest.raises(UserError) as refused:
+        skidnav.make_agent(name, env)
+    message = str(refused.value)
+    assert message.startswith(f"agent {name!r} takes {wanted} actions, the env gives ")
+    assert message.endswith("(set [env] action)") and "\n" not in message
+
+
 def test_a_saved_policy_loads_without_its_world(
     trained: tuple[str, WheelSpeedAgent[Any], Any, Any], tmp_path: Path
 ) -> None:

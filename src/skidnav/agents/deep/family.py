@@ -19,7 +19,14 @@ import gymnasium
 from gymnasium.wrappers import TimeLimit
 from numpy.random import SeedSequence
 
-from skidnav.agents.family import Env, Family, Params, observation_space, train_own_loop
+from skidnav.agents.family import (
+    Env,
+    Family,
+    Params,
+    action_space,
+    observation_space,
+    train_own_loop,
+)
 from skidnav.agents.interface import AgentConfig, EpisodeTrainingAgent
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import CorruptFileError, UserError
@@ -57,6 +64,7 @@ def _make(
 ) -> EpisodeTrainingAgent:
     observation_space(name, env, gymnasium.spaces.Box)
     module = _module(name)
+    action_space(name, env, module.AGENT_CLASS.action_space_class)
     try:
         config = module.CONFIG_CLASS.from_mapping(dict(params))
     except (ValueError, TypeError) as error:
