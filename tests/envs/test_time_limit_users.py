@@ -12,7 +12,7 @@ import pytest
 import skidnav  # noqa: F401  (registers the env)
 from skidnav.cli import main
 from skidnav.errors import UserError
-from skidnav.experiments import trial
+from skidnav.experiments import config_checks, trial
 from skidnav.experiments.configfile import parse_config
 from skidnav.experiments.runs import expand_runs
 from skidnav.world.grid import GridMap, border_walls
@@ -68,7 +68,7 @@ def test_a_bad_env_limit_is_one_line() -> None:
         )
     )
     with pytest.raises(UserError, match="max_episode_steps to be an integer >= 1"):
-        trial.check_config(config)
+        config_checks.check_config(config)
 
 
 def test_a_run_on_the_unwrapped_env_truncates_at_the_limit() -> None:

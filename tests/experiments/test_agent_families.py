@@ -7,11 +7,11 @@ from pathlib import Path
 import pytest
 
 from skidnav.errors import UserError
+from skidnav.experiments.config_checks import check_config
 from skidnav.experiments.configfile import parse_config
 from skidnav.experiments.report.html import build_report
 from skidnav.experiments.runner import run_experiment
 from skidnav.experiments.store import ResultStore
-from skidnav.experiments.trial import check_config
 
 FAMILIES = """
 [experiment]

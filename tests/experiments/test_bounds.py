@@ -42,7 +42,7 @@ def test_out_of_range_numbers_are_refused(extra: str, planning: int, message: st
     text = BASE.format(extra=extra, planning=planning).replace("seeds = 2\nseeds", "seeds")
     with pytest.raises(UserError, match=message) as error:
         config = parse_config(text)
-        from skidnav.experiments.trial import check_config
+        from skidnav.experiments.config_checks import check_config
 
         check_config(config)
     assert "\n" not in str(error.value)

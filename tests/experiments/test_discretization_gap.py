@@ -14,6 +14,7 @@ from skidnav.commands.report import write_results_report
 from skidnav.envs.wrappers import FineStates
 from skidnav.errors import UserError
 from skidnav.experiments.config import config_from_dict, config_to_dict
+from skidnav.experiments.config_checks import check_config
 from skidnav.experiments.configfile import parse_config
 from skidnav.experiments.reference.finegrid import state_grid
 from skidnav.experiments.reference.optimum import Optimum, compute_optimum, optimum_columns
@@ -21,7 +22,6 @@ from skidnav.experiments.reference.oracle import compute_oracle, solve
 from skidnav.experiments.report.html import build_report
 from skidnav.experiments.runner import run_experiment
 from skidnav.experiments.store import ResultStore
-from skidnav.experiments.trial import check_config
 from skidnav.studies.gap import gap_rows, gap_section, optimum_rows
 from skidnav.world.discretization import Discretization
 from skidnav.world.grid import GridMap, border_walls, generate_map

@@ -14,9 +14,10 @@ import pytest
 from skidnav.cli import main
 from skidnav.envs import registration
 from skidnav.errors import UserError
+from skidnav.experiments.config_checks import check_config
 from skidnav.experiments.configfile import load_config, parse_config
 from skidnav.experiments.runs import expand_runs
-from skidnav.experiments.trial import check_config, default_trial, run_trial
+from skidnav.experiments.trial import default_trial, run_trial
 from tests.experiments.exp_support import cli_command, cli_env
 
 CONFIG = """

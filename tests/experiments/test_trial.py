@@ -22,6 +22,7 @@ from skidnav.experiments.reference.world import WorldReference
 from skidnav.experiments.runner import run_experiment
 from skidnav.experiments.runs import expand_runs
 from skidnav.experiments.store import TrialResult
+from skidnav.experiments.value_maps import policy_map
 from skidnav.world.grid import GridMap
 from tests.experiments.exp_support import TINY_TOML, cli_env
 
@@ -141,7 +142,7 @@ def test_policy_map_is_the_greedy_action_at_the_heading() -> None:
     n_headings = 5
     q = rng.normal(size=(4 * 3 * n_headings, 4))
     q[(3 * 3 + 0) * n_headings + 2] = 0.0  # cell (3, 0) at heading 2: never updated
-    actions = trial.policy_map(q, grid_map, 2)
+    actions = policy_map(q, grid_map, 2)
     assert actions.shape == (4, 3) and actions.dtype == np.int64
     for i in range(4):
         for j in range(3):

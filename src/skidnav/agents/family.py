@@ -146,7 +146,8 @@ def action_space(name: str, env: Env, wanted: type[S]) -> S:
     space = env.action_space
     if not isinstance(space, wanted):
         raise UserError(
-            f"agent {name!r} takes {wanted.__name__} actions, the env gives {space} (set [env] action)"
+            f"agent {name!r} takes {wanted.__name__} actions, the env gives {space} "
+            "(set [env] action)"
         )
     return space
 

@@ -4,9 +4,9 @@ Every problem raises :class:`skidnav.errors.UserError` naming the file and the k
 ``configs/a.toml: [experiment]: unknown key 'episods' (expected one of …)`` or
 ``configs/a.toml:4:9: malformed TOML: Invalid value``. Tables, keys and map paths (relative to
 the config file) follow :mod:`skidnav.files.configtables`. Agent names and hyperparameters are
-checked
-against the agents package by :func:`skidnav.experiments.trial.check_config`, which the runner
-calls before any run starts.
+checked against the agents package by
+:func:`skidnav.experiments.config_checks.check_config`, which the runner calls before any run
+starts.
 """
 
 from __future__ import annotations

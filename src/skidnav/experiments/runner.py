@@ -311,7 +311,8 @@ def run_experiment(
 def _default_trial(config: Grid, config_path: Path | str | None) -> TrialFunction:
     """:func:`skidnav.experiments.trial.run_trial`, after checking the experiment ``config``
     (only an :class:`ExperimentConfig` has a default trial)."""
-    from skidnav.experiments.trial import check_config, default_trial
+    from skidnav.experiments.config_checks import check_config
+    from skidnav.experiments.trial import default_trial
 
     if not isinstance(config, ExperimentConfig):
         raise TypeError(f"a {type(config).__name__} grid needs its own trial function")

@@ -105,7 +105,7 @@ class TrialResult(NamedTuple):
             the start heading, ``start_heading`` () [rad], ``occupancy`` (n_x, n_y) bool,
             ``start`` and ``goal`` (2,), ``slip_eta`` (regions_x, regions_y) [rad/s]. Cells
             without a learned value (walls, never updated) are NaN / −1 (see
-            :func:`skidnav.experiments.trial.value_maps`).
+            :func:`skidnav.experiments.value_maps.value_maps`).
         files: files kept beside the run file, ``runs/<run_id>/<name>``, by name: the trained
             agent of a config with ``save_agents`` (:func:`skidnav.experiments.trial.agent_files`);
             empty otherwise.

@@ -35,19 +35,17 @@ from typing import Any
 import gymnasium
 import numpy as np
 
-from skidnav.agents.catalog import CatalogAgent, CatalogEntry, entry
+from skidnav.agents.catalog import CatalogAgent, entry
 from skidnav.agents.interface import Agent
 from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.agents.trained_world import trained_world
 from skidnav.agents.training import Evaluation, TrainingLog, greedy_path
 from skidnav.envs.registration import (
     allowed_env_modules,
-    creation_error,
     registered_env_id,
     with_env_modules,
 )
 from skidnav.envs.wrappers import FineStates
-from skidnav.errors import ConfigError, UserError, within
 from skidnav.experiments.config import (
     CONVERGENCE_OBJECTIVES,
     AgentSpec,
@@ -61,14 +59,14 @@ from skidnav.experiments.metrics import (
     evaluation_summary,
     run_metrics,
 )
-from skidnav.experiments.reference.finegrid import check_grids, refines_positions, state_grid
+from skidnav.experiments.reference.finegrid import refines_positions, state_grid
 from skidnav.experiments.reference.world import warm_up_references, world_reference
-from skidnav.experiments.runs import RunSpec, expand_runs
+from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import EPISODE_COLUMNS, TrialResult
+from skidnav.experiments.value_maps import policy_map, value_maps
 from skidnav.seeding import RUN_ROLES, WORLD_ROLES, child_sequences, seed_int
 from skidnav.world.discretization import Discretization, heading_bin
 from skidnav.world.grid import GridMap, border_walls, refine_map
-from skidnav.world.mapfile import load_map
 from skidnav.world.maps import build_map
 
 logger = logging.getLogger(__name__)
@@ -173,47 +171,6 @@ def action_duration(env: gymnasium.Env[Any, Any]) -> float:
     robot = getattr(env.unwrapped, "robot", None)
     duration = getattr(robot, "action_duration", None)
     return float(duration) if isinstance(duration, int | float) else math.nan
-
-
-def value_maps(q: np.ndarray, grid_map: GridMap) -> tuple[np.ndarray, np.ndarray]:
-    """(value, preferred heading bin) per cell from a Q table, each shape (n_x, n_y).
-
-    value = max over headings and actions of Q; the preferred heading is the heading bin where that
-    maximum is reached. Walls and cells whose Q entries were never changed (all equal) are
-    NaN / −1.
-    """
-    n_x, n_y = grid_map.occupancy.shape
-    per_cell = q.reshape(n_x, n_y, -1)
-    per_heading = q.max(axis=1).reshape(n_x, n_y, -1)
-    value = per_heading.max(axis=2)
-    heading = per_heading.argmax(axis=2).astype(np.int64)
-    blank = grid_map.occupancy | (per_cell.max(axis=2) == per_cell.min(axis=2))
-    value[blank] = np.nan
-    heading[blank] = -1
-    return value, heading
-
-
-def policy_map(q: np.ndarray, grid_map: GridMap, heading_index: int) -> np.ndarray:
-    """Greedy action per cell at one heading bin, shape (n_x, n_y) int64.
-
-    The action the agent's greedy policy takes with the robot in the cell at heading bin
-    ``heading_index`` (the lowest index among the maxima, as ``TabularAgent.greedy_action``);
-    −1 on walls and where the Q values of that state were never changed (all equal).
-
-    >>> walls = np.zeros((3, 3), dtype=bool)
-    >>> walls[2, 0] = True
-    >>> q = np.zeros((3 * 3 * 2, 4))  # 3 × 3 cells, 2 heading bins, 4 actions
-    >>> q[(0 * 3 + 0) * 2 + 1, 2] = 0.5  # cell (0, 0), heading bin 1: turn left is best
-    >>> actions = policy_map(q, GridMap(walls, (0, 0), (1, 1)), 1)
-    >>> int(actions[0, 0]), int(actions[0, 1]), int(actions[2, 0])  # learned, untouched, wall
-    (2, -1, -1)
-    """
-    n_x, n_y = grid_map.occupancy.shape
-    at_heading = q.reshape(n_x, n_y, -1, q.shape[1])[:, :, heading_index, :]
-    action = at_heading.argmax(axis=2).astype(np.int64)
-    action[grid_map.occupancy | (at_heading.max(axis=2) == at_heading.min(axis=2))] = -1
-    result: np.ndarray = action
-    return result
 
 
 def _world_arrays(
@@ -419,57 +376,3 @@ def agent_files(agent: Agent, env: gymnasium.Env[Any, Any]) -> dict[str, bytes]:
     if world is not None:
         files.update(world.files())
     return files
-
-
-def check_config(config: ExperimentConfig, path: Path | str | None = None) -> None:
-    """Check what only the library knows before any run starts: agent names and hyperparameters,
-    environment options, map files. Raises UserError naming the problem (and the config file
-    ``path`` when given)."""
-    try:
-        _check_config(config)
-    except UserError as error:
-        if path is None:
-            raise
-        raise within(error, str(path)) from None
-
-
-def _check_config(config: ExperimentConfig) -> None:
-    registered_env_id(config.env_id)
-    entries = _check_agents(config)
-    for map_spec in config.maps:
-        if map_spec.file:
-            load_map(map_spec.file)
-    first = expand_runs(config)[0]
-    try:
-        for map_spec in config.maps:
-            grid_map = config_map(map_spec, np.random.default_rng(0))
-            check_grids(config, grid_map, map_spec.label, entries)
-        trial_env(first, grid_map, 0).close()
-    except ConfigError:  # a grid the map refuses, named already
-        raise
-    except gymnasium.error.Error as error:
-        raise UserError(f"environment {config.env_id!r}: {error}") from None
-    except (TypeError, ValueError) as error:
-        raise UserError(f"environment or map options: {creation_error(error)}") from None
-
-
-def _check_agents(config: ExperimentConfig) -> dict[str, CatalogEntry]:
-    """The catalog entry of each agent name of ``config``, asked once, its parameters (a true
-    kinematic model only for an agent that takes the simulator's) and (on the skid-steer env)
-    the observation it would learn over checked; UserError otherwise."""
-    entries: dict[str, CatalogEntry] = {}
-    requested = dict(config.env_options).get("observation")
-    for agent in config.agents:
-        described = entries.setdefault(agent.name, entry(agent.name))
-        params = agent.params_dict()
-        described.config(params)
-        if params.get("kinematic_model") == "true" and not described.asks_for("true_kinematics"):
-            raise ConfigError(
-                "expected kinematic_model 'learned' or 'prior', got 'true'",
-                (f"agent {agent.label!r}",),
-                "'true' plans with the simulator's expected velocities of the discrete actions, "
-                f"which {agent.name} cannot take",
-            )
-        if config.env_id == SKID_ENV_ID:
-            described.env_observation(requested)
-    return entries

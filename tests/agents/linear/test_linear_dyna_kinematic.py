@@ -22,10 +22,10 @@ from skidnav.agents.linear.dyna_kinematic import LinearDynaKinematicAgent
 from skidnav.agents.linear.registry import load_linear_agent, make_linear_agent
 from skidnav.agents.training import train_agent
 from skidnav.errors import CorruptFileError, UserError
+from skidnav.experiments.config_checks import check_config
 from skidnav.experiments.configfile import parse_config
 from skidnav.experiments.runner import run_experiment
 from skidnav.experiments.store import ResultStore
-from skidnav.experiments.trial import check_config
 from tests.saved_file_support import arrays_of, write_npz
 
 from .support import make, small_pose_env

@@ -34,12 +34,12 @@ class ExperimentStudy:
     def grid(self, document: Mapping[str, Any], path: Path) -> ExperimentConfig:
         """The experiment of the config ``document`` read from ``path``, its agents,
         environment options and map files checked
-        (:func:`~skidnav.experiments.trial.check_config`).
+        (:func:`~skidnav.experiments.config_checks.check_config`).
 
         Raises:
             UserError: one line naming ``path`` and what is wrong.
         """
-        from skidnav.experiments.trial import check_config
+        from skidnav.experiments.config_checks import check_config
 
         config = config_from_tables(dict(document), path)
         check_config(config, path)

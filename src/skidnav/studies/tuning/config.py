@@ -358,7 +358,7 @@ def check_tuning(config: ExperimentConfig, tune: TuneConfig, path: Path | str | 
     """Check with the agents package, before anything runs: the tuning maps and environment,
     and every agent's config at each corner of its space (bounds, choices)."""
     from skidnav.agents.tabular.registry import make_config
-    from skidnav.experiments.trial import check_config
+    from skidnav.experiments.config_checks import check_config
 
     check_config(dataclasses.replace(config, maps=tune.maps, seeds=tune.seeds), path)
     for agent in config.agents:
