@@ -83,6 +83,28 @@ def _linear_agent(folder: Path) -> tuple[Path, list[Path]]:
     return folder / "linear", [json_path, npz]
 
 
+def _linear_policy(folder: Path) -> tuple[Path, list[Path]]:
+    """A linear agent over the feature observation (two rays): a wheel-speed policy."""
+    from gymnasium.spaces import Box
+
+    from skidnav.agents.linear.registry import make_linear_agent
+    from skidnav.sim.features import feature_bounds
+
+    space = Box(*feature_bounds((0.2, 0.2), 2, 0.1), dtype=np.float64)
+    params = {"tiles": [3], "n_tilings": 2, "dimensions": [4, 5, 6]}
+    npz, json_path = make_linear_agent("linear-q", space, 4, params).save(folder / "linear")
+    return json_path, [json_path, npz]
+
+
+def _dqn_policy(folder: Path) -> tuple[Path, list[Path]]:
+    from skidnav.agents.deep.dqn import DQNAgent, DQNConfig
+    from tests.agents.deep.test_dqn import tiny_env
+
+    agent = DQNAgent(tiny_env("features"), DQNConfig(buffer_size=100, hidden=(8,)))
+    npz, json_path = agent.save(folder / "dqn")
+    return json_path, [json_path, npz]
+
+
 def _kinematic_model(folder: Path) -> tuple[Path, list[Path]]:
     from skidnav.models.kinematic import KinematicModel
     from skidnav.models.kinematic_config import KinematicModelConfig
@@ -233,6 +255,8 @@ def _import(target: str) -> Callable[[Path], Any]:
     return call
 
 
+DEEP_LOADERS = ("ppo policy", "dqn policy")
+"""The loaders whose files need the ``deep`` extra to be made."""
 LOADERS: dict[str, Loader] = {
     "experiment config": Loader(
         _experiment_config, _import("skidnav.experiments.configfile:load_config")
@@ -247,6 +271,8 @@ LOADERS: dict[str, Loader] = {
     "kinematic model": Loader(_kinematic_model, _load_kinematic_model),
     "tanh policy": Loader(_tanh_policy, _import("skidnav.agents.saved:load_policy")),
     "ppo policy": Loader(_ppo_policy, _import("skidnav.agents.saved:load_policy")),
+    "linear policy": Loader(_linear_policy, _import("skidnav.agents.saved:load_policy")),
+    "dqn policy": Loader(_dqn_policy, _import("skidnav.agents.saved:load_policy")),
     "CMA-ES checkpoint": Loader(_cma_checkpoint, _load_cma_checkpoint),
     "real-time checkpoint": Loader(_realtime_checkpoint, _latest_checkpoint),
     "calibration": Loader(

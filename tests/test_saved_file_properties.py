@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from skidnav.errors import UserError
 from tests.saved_file_support import within
-from tests.saved_loaders import LOADERS, fresh_copy, pristine
+from tests.saved_loaders import DEEP_LOADERS, LOADERS, fresh_copy, pristine
 
 MAX_SECONDS = 10.0
 """Longest a load may take (the slowest valid one takes well under a second)."""
@@ -63,7 +63,7 @@ def _fresh(name: str, tmp_path: Path) -> tuple[Path, list[Path]]:
 
 @pytest.mark.parametrize("name", LOADERS)
 def test_a_damaged_file_loads_or_is_one_line(name: str, tmp_path: Path) -> None:
-    if name == "ppo policy":
+    if name in DEEP_LOADERS:
         pytest.importorskip("stable_baselines3")
     _, _, files = pristine(name)
 
@@ -80,7 +80,7 @@ def test_a_damaged_file_loads_or_is_one_line(name: str, tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("name", LOADERS)
 def test_random_bytes_load_or_are_one_line(name: str, tmp_path: Path) -> None:
-    if name == "ppo policy":
+    if name in DEEP_LOADERS:
         pytest.importorskip("stable_baselines3")
     _, _, files = pristine(name)
 

@@ -25,7 +25,7 @@ from skidnav.files import user as userfile
 from skidnav.files.saved import MAX_DIRECTORY_BYTES, MAX_MEMBERS, ArraySpec, SavedArchive
 from skidnav.files.user import open_user_file, read_limited
 from tests.saved_file_support import replace_with, within, write_npz
-from tests.saved_loaders import LOADERS, fresh_copy
+from tests.saved_loaders import DEEP_LOADERS, LOADERS, fresh_copy
 
 KINDS = ("fifo", "socket", "device", "directory")
 REFUSED = {
@@ -41,7 +41,8 @@ PIPE_READERS = ("experiment config", "tune config", "realtime config")
 def _cases() -> list[tuple[str, int]]:
     """(loader, index of the file to replace): every file of every loader (the counts are
     those of :mod:`tests.saved_loaders`' valid files)."""
-    pairs = {"tabular agent", "linear agent", "kinematic model", "tanh policy", "ppo policy"}
+    pairs = {"tabular agent", "linear agent", "kinematic model", "tanh policy", *DEEP_LOADERS}
+    pairs |= {"linear policy"}
     pairs |= {"CMA-ES checkpoint", "real-time checkpoint", "tidy tables"}
     return [(name, index) for name in LOADERS for index in range(2 if name in pairs else 1)]
 
@@ -51,7 +52,7 @@ def _cases() -> list[tuple[str, int]]:
 def test_a_special_file_is_refused_in_one_line_at_once(
     name: str, index: int, kind: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    if name == "ppo policy":
+    if name in DEEP_LOADERS:
         pytest.importorskip("stable_baselines3")
     monkeypatch.setattr(userfile, "PIPE_TIMEOUT_S", 0.2)
     path, files = fresh_copy(name, tmp_path / "copy")

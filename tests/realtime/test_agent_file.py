@@ -173,11 +173,12 @@ def test_an_agent_of_another_robot_or_grid_is_refused(
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
-def test_a_saved_frozen_policy_acts_and_a_linear_agent_is_refused(
+def test_a_saved_frozen_policy_acts_and_an_agent_of_the_pose_is_refused(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """A family that does not learn on the robot drives frozen, as --policy-file runs it; one
-    that does not drive by wheel speeds is refused in one line."""
+    """A family that does not learn on the robot drives frozen, as --policy-file runs it; a
+    discrete-action agent that observes the pose, which the robot's loop does not compute, is
+    refused in one line."""
     tracker = GoalTrackerAgent(GoalTracker(GoalTrackerConfig(), RobotParams()))
     (tmp_path / "tracker").mkdir()
     saved = tracker.save(tmp_path / "tracker" / "agent")[1]
@@ -201,7 +202,8 @@ def test_a_saved_frozen_policy_acts_and_a_linear_agent_is_refused(
     argv[-1] = str(tmp_path / "linear-run")  # a new run: the first one's folder holds it
     assert main([*argv, "--agent-file", str(linear_file)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
-    assert len(lines) == 1 and "a saved linear agent does not run on the robot" in lines[0], lines
+    assert len(lines) == 1 and "it observes the pose (x, y, heading)" in lines[0], lines
+    assert "linear" in lines[0] and not (tmp_path / "linear-run").exists()
 
 
 def test_a_saved_classical_navigator_drives_frozen(tmp_path: Path) -> None:

@@ -98,7 +98,9 @@ class Family(Generic[AgentT]):
         save_formats: the ``"format"`` values of its saved ``.json`` files.
         load: how a saved file becomes an agent again (:data:`Loader`).
         policy: how a saved file becomes a frozen wheel-speed policy on the robot
-            (:data:`PolicyLoader`); None when its agents do not drive by wheel speeds.
+            (:data:`PolicyLoader`): by its own wheel speeds, or by those of its greedy discrete
+            actions (:mod:`skidnav.agents.discrete_policy`); None when its agents do not act
+            frozen on the robot (the tabular family's learn there).
         box_observation: the env's ``Box`` observation for its agents when a config names none.
         extra: the optional dependency its agents need (:mod:`skidnav.extras`), or None.
     """

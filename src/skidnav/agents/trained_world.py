@@ -194,6 +194,22 @@ def trained_world(agent: str, env: Any) -> TrainedWorld | None:
     return TrainedWorld(agent, robot, grid, robot.action_duration, grid_map)
 
 
+def world_beside(json_path: Path, agent: str) -> TrainedWorld | None:
+    """The ``world.json`` beside the saved agent ``json_path`` (its registry name ``agent``), or
+    None when there is none; CorruptFileError in one line naming it when it is not a trained
+    world or is that of another agent."""
+    world_path = json_path.parent / WORLD_FILE
+    if not world_path.is_file():
+        return None
+    trained = read_trained_world(world_path)
+    if trained.agent != agent:
+        raise CorruptFileError(
+            f"{world_path}: the world of agent {trained.agent!r}, not of {json_path.name}'s "
+            f"{agent!r}"
+        )
+    return trained
+
+
 def read_trained_world(path: Path) -> TrainedWorld:
     """The ``world.json`` at ``path``; CorruptFileError in one line naming it when it is not
     one."""

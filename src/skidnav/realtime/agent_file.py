@@ -4,10 +4,13 @@
 The file's ``"format"`` names its family (:func:`skidnav.agents.saved.saved_family`), and the
 family says what it does on the robot: a tabular agent keeps learning online from its saved
 tables (:mod:`.control.loop`), ``mppi-kinematic`` keeps learning its kinematic model and its map
-(:mod:`.control.mppi_loop`), and an agent of a family that drives by wheel speeds without
-learning online (deep, policy search, the named policies' files) acts frozen, as
-``--policy-file`` runs it (:mod:`.control.policy_loop`). A family that does neither (the linear
-agents: discrete actions over continuous observations) is refused.
+(:mod:`.control.mppi_loop`), and an agent of every other family acts frozen through its family's
+policy loader (:attr:`~skidnav.agents.family.Family.policy`), as ``--policy-file`` runs it
+(:mod:`.control.policy_loop`): the deep ``ppo`` and ``sac``, policy search and the named
+policies' files by their wheel speeds, the linear agents and ``dqn`` (discrete actions over the
+feature observation) by the wheel speeds of their greedy actions
+(:mod:`skidnav.agents.discrete_policy`). A family that neither learns on the robot nor has a
+policy loader would be refused; every registered family does one or the other.
 
 Before anything moves, the run must be the world the agent was trained for: ``world.json``
 beside the file, when ``skidnav run`` wrote one (:mod:`skidnav.agents.trained_world`), or
@@ -22,7 +25,7 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 from skidnav.agents.saved import saved_family
-from skidnav.agents.trained_world import WORLD_FILE, agent_mismatch, read_trained_world
+from skidnav.agents.trained_world import agent_mismatch, world_beside
 from skidnav.errors import CorruptFileError, UserError, shown
 from skidnav.robot.kinematics import N_ACTIONS
 from skidnav.robot.params import RobotParams
@@ -63,27 +66,21 @@ def open_agent_file(path: Path, world: RunWorld) -> SavedPilot:
     Raises:
         CorruptFileError: the file (or its ``world.json``) unreadable or not a saved agent.
         UserError: the agent was trained for another robot, arena/grid, goal or action
-            duration, or its family neither learns on the robot nor drives by wheel speeds.
+            duration, or its family neither learns on the robot nor has a policy loader.
     """
     json_path, meta, family = saved_family(path)
     name = meta.get("agent", family.name)
     if not isinstance(name, str):
         raise CorruptFileError(f"{json_path}: expected an agent name, got {shown(name)}")
-    world_path = json_path.parent / WORLD_FILE
-    if world_path.is_file():
-        trained = read_trained_world(world_path)
-        if trained.agent != name:
-            raise CorruptFileError(
-                f"{world_path}: the world of agent {trained.agent!r}, not of {json_path.name}'s "
-                f"{name!r}"
-            )
+    trained = world_beside(json_path, name)
+    if trained is not None:
         problem = trained.mismatch(*world)
         if problem is not None:
             raise UserError(f"{json_path}: {problem}")
     if family.name not in LEARNING_FAMILIES and family.policy is None:
         raise UserError(
             f"{json_path}: a saved {family.name} agent does not run on the robot (expected a "
-            "tabular agent, mppi-kinematic, or a policy that drives by wheel speeds)"
+            "tabular agent, mppi-kinematic, or an agent of a family with a policy loader)"
         )
     return SavedPilot(family.name, name, json_path)
 

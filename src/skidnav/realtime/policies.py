@@ -71,8 +71,17 @@ def check_policy(
     (UserError) before anything moves. A policy that plans for one goal and one action
     duration (``goal`` (i, j) and ``control_period`` [s] attributes: ``mppi-kinematic``'s
     frozen planner) is refused on a run whose map has another goal cell or whose actions
-    (``action_duration`` = ``[run] period × substeps`` [s]) last otherwise."""
+    (``action_duration`` = ``[run] period × substeps`` [s]) last otherwise; one that records
+    the arena its observations were bounded in (``arena`` (W, H) [m]: a saved discrete-action
+    agent, :mod:`skidnav.agents.discrete_policy`) on a run of another arena."""
     _check_plan(policy, label, grid_map, action_duration)
+    arena = getattr(policy, "arena", None)
+    run_arena = (grid.arena_width, grid.arena_height)
+    if arena is not None and not np.allclose(arena, run_arena, rtol=1e-9, atol=0.0):
+        raise UserError(
+            f"policy {label}: it observes an arena of {arena[0]:g} × {arena[1]:g} m, the run's "
+            f"is {run_arena[0]:g} × {run_arena[1]:g} m"
+        )
     try:
         features = PoseFeatures(grid_map, grid, policy.lidar_rays, policy.lidar_range)
         x, y = grid.cell_centre(*grid_map.start)

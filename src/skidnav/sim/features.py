@@ -128,6 +128,22 @@ def fill_features(
     lidar_scan(occupancy, arena[0], arena[1], x, y, heading, max_range, field_of_view, out[7:])
 
 
+def feature_bounds(
+    arena: tuple[float, float], lidar_rays: int, lidar_range: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """(low, high), float64 (7 + k,) each: the bounds of the feature observation (module doc) in
+    an ``arena`` (W, H) [m] with k = ``lidar_rays`` readings of at most ``lidar_range`` [m].
+
+    >>> [float(v) for v in feature_bounds((3.0, 4.0), 1, 0.3)[1]]
+    [3.0, 4.0, 1.0, 1.0, 5.0, 1.0, 1.0, 0.3]
+    """
+    width, height = arena
+    low = [0.0, 0.0, -1.0, -1.0, 0.0, -1.0, -1.0] + [0.0] * lidar_rays
+    high = [width, height, 1.0, 1.0, length(width, height), 1.0, 1.0]
+    high += [lidar_range] * lidar_rays
+    return np.array(low, dtype=np.float64), np.array(high, dtype=np.float64)
+
+
 class PoseFeatures:
     """The feature observation of one arena (its walls, goal and size), see the module doc.
 
@@ -181,11 +197,8 @@ class PoseFeatures:
 
     def space(self) -> spaces.Box:
         """The ``Box`` float64 (7 + k,) of the observations, with the bounds of the module doc."""
-        width, height = self.arena
-        low = [0.0, 0.0, -1.0, -1.0, 0.0, -1.0, -1.0] + [0.0] * self.lidar_rays
-        high = [width, height, 1.0, 1.0, length(width, height), 1.0, 1.0]
-        high += [self.lidar_range] * self.lidar_rays
-        return spaces.Box(low=np.array(low), high=np.array(high), dtype=np.float64)
+        low, high = feature_bounds(self.arena, self.lidar_rays, self.lidar_range)
+        return spaces.Box(low=low, high=high, dtype=np.float64)
 
     def __call__(self, pose: np.ndarray) -> np.ndarray:
         """The observation, float64 (7 + k,), of ``pose`` (x [m], y [m], heading [rad]) in the

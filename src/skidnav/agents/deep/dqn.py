@@ -9,7 +9,9 @@ frozen config, one root seed, one thread, observations rescaled to [−1, 1], tr
 episodes, saved files that are not pickle: the Q network's weights).
 
 The observation must be a ``Box`` (``observation="pose"``, or ``"features"`` for the goal and
-range readings); the action space is the env's ``Discrete(4)``.
+range readings); the action space is the env's ``Discrete(4)``. A saved agent over the
+features drives the robot frozen, by the wheel speeds of its greedy actions
+(:func:`policy_from_file`).
 """
 
 from __future__ import annotations
@@ -22,6 +24,9 @@ import gymnasium
 import numpy as np
 
 from skidnav.agents.deep.common import DeepAgent, DeepConfig, load_agent
+from skidnav.agents.deep.spaces import SavedSpaces
+from skidnav.agents.discrete_policy import DiscreteActionPolicy, discrete_policy
+from skidnav.errors import CorruptFileError, first_line
 
 if TYPE_CHECKING:
     import torch
@@ -122,6 +127,22 @@ def load_dqn(path: str | Path, env: gymnasium.Env[Any, Any]) -> DQNAgent:
     """A :class:`DQNAgent` on ``env`` with the weights of ``agent.save(path)``; CorruptFileError
     naming the file when it is missing, damaged or does not fit ``env`` or its config."""
     return load_agent(DQNAgent, path, env)
+
+
+def policy_from_file(json_path: Path, meta: dict[str, Any]) -> DiscreteActionPolicy:
+    """The agent saved by :meth:`DQNAgent.save` (``meta``: its parsed ``.json``), frozen,
+    driving by the wheel speeds of its greedy actions
+    (:func:`~skidnav.agents.discrete_policy.discrete_policy`), without an env;
+    CorruptFileError in one line naming the file, UserError for an agent the robot cannot run."""
+    try:
+        spaces = SavedSpaces(meta)
+    except (KeyError, TypeError, ValueError, OverflowError) as error:  # overflow: a huge integer
+        raise CorruptFileError(f"{json_path}: cannot load agent: {first_line(error)}") from None
+    space = spaces.observation_space
+    return discrete_policy(  # its network is built once the observation is checked
+        lambda: load_dqn(json_path, spaces), json_path, AGENT_NAME, (space.low, space.high),
+        int(getattr(spaces.action_space, "n", 0)),
+    )  # fmt: skip
 
 
 AGENT_CLASS = DQNAgent

@@ -3,7 +3,8 @@
 Stable-Baselines3 owns the loop: an agent trains itself by episodes on the env it was built with
 (:meth:`~skidnav.agents.deep.common.DeepAgent.train_episodes`) with the same greedy evaluations
 and log as every family. ``ppo`` and ``sac`` drive wheel speeds (the env's
-``action="continuous"``); their saved files also run as frozen policies on the robot. Nothing
+``action="continuous"``); their saved files also run as frozen policies on the robot, as do a
+saved ``dqn``'s, by the wheel speeds of its greedy actions. Nothing
 here imports PyTorch: an agent's module is imported when it is asked for, after the ``deep``
 extra is checked.
 """
@@ -37,8 +38,8 @@ DEEP_AGENTS: dict[str, str] = {
     "ppo": "skidnav.agents.deep.ppo",
     "sac": "skidnav.agents.deep.sac",
 }
-"""Registry name → module defining ``AGENT_NAME``, ``AGENT_CLASS`` and ``CONFIG_CLASS`` (and
-``policy_from_file`` for the agents that drive wheel speeds)."""
+"""Registry name → module defining ``AGENT_NAME``, ``AGENT_CLASS``, ``CONFIG_CLASS`` and
+``policy_from_file`` (a saved agent as a frozen wheel-speed policy)."""
 FORMATS = {f"skidnav-{name}": name for name in DEEP_AGENTS}
 """The ``format`` of a saved deep agent's ``.json`` → its registry name."""
 
@@ -99,12 +100,10 @@ def _load(json_path: Path, meta: Mapping[str, Any], env: Env | None) -> EpisodeT
 
 
 def _policy(json_path: Path, meta: Mapping[str, Any]) -> WheelSpeedPolicy:
-    """The frozen wheel-speed policy of a saved ``ppo`` or ``sac``; UserError for ``dqn``."""
+    """The frozen wheel-speed policy of a saved deep agent: that of a ``ppo`` or ``sac``, or a
+    ``dqn`` driving by the wheel speeds of its greedy actions."""
     name = _saved_name(json_path, meta)
-    loader = getattr(_module(name), "policy_from_file", None)
-    if loader is None:
-        raise UserError(f"{json_path}: a {name} agent takes discrete actions, not wheel speeds")
-    policy: WheelSpeedPolicy = loader(json_path, dict(meta))
+    policy: WheelSpeedPolicy = _module(name).policy_from_file(json_path, dict(meta))
     return policy
 
 

@@ -24,6 +24,7 @@ from skidnav.agents.deep.common import (
     load_agent,
     observation_scaler,
 )
+from skidnav.agents.deep.spaces import SavedSpaces
 from skidnav.errors import CorruptFileError, first_line
 
 
@@ -76,7 +77,7 @@ class WheelSpeedAgent(DeepAgent[ConfigT]):
         super().__init__(env, config, seed)
 
     def extra_meta(self) -> dict[str, Any]:
-        """The range readings of the observation, saved for :class:`SavedSpaces`."""
+        """The range readings of the observation, saved for :class:`SavedWheelSpaces`."""
         return {"lidar_rays": self.lidar_rays, "lidar_range": self.lidar_range}
 
     def greedy_action(self, observation: np.ndarray) -> np.ndarray:
@@ -93,26 +94,21 @@ class WheelSpeedAgent(DeepAgent[ConfigT]):
 WheelAgentT = TypeVar("WheelAgentT", bound=WheelSpeedAgent[Any])
 
 
-class SavedSpaces(gymnasium.Env[np.ndarray, np.ndarray]):
-    """Only the spaces of a saved agent's ``.json``: enough to rebuild its network away from the
-    world it learned in (the real-time loop); it cannot be stepped."""
+class SavedWheelSpaces(SavedSpaces):
+    """The spaces of a saved wheel-speed agent's ``.json``, with the range readings its feature
+    observation carries (``features``: ``lidar_rays``, ``lidar_range``), as the agent asks its
+    env for them."""
 
     def __init__(self, meta: dict[str, Any]) -> None:
-        low, high = (
-            np.asarray(meta[k], dtype=np.float64) for k in ("observation_low", "observation_high")
-        )
-        slowest, fastest = (
-            np.asarray(meta[k], dtype=np.float32) for k in ("action_low", "action_high")
-        )
+        if "action_low" not in meta:
+            raise ValueError("expected the bounds of the wheel speeds")
+        super().__init__(meta)
+        high = self.observation_space.high
         rays, reach = meta["lidar_rays"], meta["lidar_range"]
-        if type(rays) is not int or rays < 0 or low.shape != (7 + rays,) or high.shape != low.shape:
+        if type(rays) is not int or rays < 0 or high.shape != (7 + rays,):
             raise ValueError("expected the bounds of a feature observation with its lidar_rays")
-        if not ((low < high).all() and (slowest < fastest).all()):
-            raise ValueError("expected lower bounds below upper ones")
         if type(reach) is not float or not reach > 0 or (rays > 0 and reach != high[-1]):
             raise ValueError("expected lidar_range to be the bound of the range readings")
-        self.observation_space = gymnasium.spaces.Box(low, high, dtype=np.float64)
-        self.action_space = gymnasium.spaces.Box(slowest, fastest, dtype=np.float32)
         self.features = SimpleNamespace(lidar_rays=rays, lidar_range=float(reach))
 
 
@@ -122,7 +118,7 @@ def saved_policy(
     """The frozen policy of an ``agent_class`` saved at ``json_path`` (``meta``: its parsed
     content), without the env it learned in; CorruptFileError in one line naming the file."""
     try:
-        spaces = SavedSpaces(meta)
+        spaces = SavedWheelSpaces(meta)
     except (KeyError, TypeError, ValueError, OverflowError) as error:  # overflow: a huge integer
         raise CorruptFileError(f"{json_path}: cannot load policy: {first_line(error)}") from None
     return load_agent(agent_class, json_path, spaces).policy()

@@ -2,7 +2,9 @@
 
 Semi-gradient Q-learning and SARSA, Linear Dyna with its linear model, and Linear Dyna planning
 through the learned kinematic model (``linear-dyna-kinematic``), trained by the plain loop
-(:func:`~skidnav.agents.training.train_agent`).
+(:func:`~skidnav.agents.training.train_agent`). A saved agent over the feature observation drives
+the robot frozen, by the wheel speeds of its greedy actions
+(:mod:`skidnav.agents.discrete_policy`).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import gymnasium
 import numpy as np
 from numpy.random import SeedSequence
 
+from skidnav.agents.discrete_policy import discrete_policy
 from skidnav.agents.family import (
     Env,
     Family,
@@ -33,6 +36,7 @@ from skidnav.agents.linear.registry import (
     make_linear_agent,
 )
 from skidnav.agents.training import train_agent
+from skidnav.agents.wheel_policy import WheelSpeedPolicy
 
 GOAL_DIMENSIONS = 3
 """How many of the steering features (:meth:`~skidnav.sim.features.PoseFeatures.
@@ -75,6 +79,14 @@ def _load(json_path: Path, meta: Mapping[str, Any], env: Env | None) -> LinearAg
     return load_linear_agent(json_path)
 
 
+def _policy(json_path: Path, meta: Mapping[str, Any]) -> WheelSpeedPolicy:
+    """The saved agent, frozen, driving by the wheel speeds of its greedy actions
+    (:func:`~skidnav.agents.discrete_policy.discrete_policy`)."""
+    agent = load_linear_agent(json_path)  # its loader bounds the file's sizes
+    bounds = (agent.low, agent.high)
+    return discrete_policy(lambda: agent, json_path, agent.name, bounds, agent.n_actions)
+
+
 FAMILY: Family[LinearAgent] = Family(
     name="linear",
     summary="tile-coded features of the continuous pose or of the goal and laser features, "
@@ -88,6 +100,7 @@ FAMILY: Family[LinearAgent] = Family(
     train=train_agent,
     save_formats=(SAVE_FORMAT,),
     load=_load,
+    policy=_policy,
     documentation={"linear-sarsa": "linear-q", "linear-dyna-kinematic": "linear-dyna"},
 )
 """The linear family (:class:`~skidnav.agents.family.Family`)."""
