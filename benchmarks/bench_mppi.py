@@ -126,7 +126,8 @@ def numpy_batch(
     else:
         (model, noise), scale = (np.zeros(each) for each in shape), 0.0
     draws = RolloutDraws(model, noise, scale, config.model_draws)
-    return controls, controls - planner.plan, draws
+    perturbation = white if config.plan_update == "drawn" else controls - planner.plan
+    return controls, perturbation, draws
 
 
 def numpy_control_step(agent: MPPIKinematicAgent, pose: np.ndarray) -> tuple[float, float]:

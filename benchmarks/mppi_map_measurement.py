@@ -1,7 +1,9 @@
 """mppi-kinematic on the maze and obstacle worlds (docs/agents/mppi-kinematic.md, "Measured on
 the maze and obstacle worlds"): per world, one agent (seed 0) trained for E episodes of at most
 200 actions of 1 s on the slippery floor, feature observations (pose, goal, 8 lidar ranges), a
-horizon of 4 actions (4 s, as in the continuity study); after every episode its frozen planner
+horizon of 4 actions (4 s, as in the continuity study); ``--period 0.1`` makes the actions 0.1 s
+long, ten times as many per episode and in the horizon (the same 200 s and 4 s); after every
+episode its frozen planner
 is rolled out greedily on R evaluation seeds (``skidnav.train``). Prints one JSON line per world
 (success, episodes and seconds of driving to the first success, collisions per episode, greedy
 successes) and a summary.
@@ -13,7 +15,7 @@ after the last episode with the tracker's, start by start.
 
     python benchmarks/mppi_map_measurement.py [--worlds maze:3 maze:100 obstacles:0-9]
         [--episodes 30] [--rollouts 2] [--slip slippery] [--set name=value ...]
-        [--goal-tracker]
+        [--goal-tracker] [--period 1.0]
 """
 
 from __future__ import annotations
@@ -27,12 +29,10 @@ import numpy as np
 
 import skidnav
 
-MAX_STEPS = 200
-"""Actions per episode (training and evaluation): the continuity study's 200 s."""
-CONTROL_PERIOD = 1.0
-"""Seconds per action."""
-HORIZON = 4
-"""Control steps each sequence looks ahead (4 s)."""
+EPISODE_SECONDS = 200.0
+"""Seconds of driving per episode at most (training and evaluation): the continuity study's."""
+HORIZON_SECONDS = 4.0
+"""Seconds each sequence looks ahead (4 control steps of 1 s)."""
 
 
 def worlds(specs: list[str]) -> list[tuple[str, int]]:
@@ -61,16 +61,18 @@ def run(
     slip: str,
     params: dict[str, Any],
     goal_tracker: bool = False,
+    period: float = 1.0,
 ) -> dict[str, Any]:
     """One world's training run, seed 0, and what it measured (with ``goal_tracker``, also
-    :func:`against_goal_tracker`)."""
+    :func:`against_goal_tracker`), at actions of ``period`` seconds."""
+    max_steps, horizon = round(EPISODE_SECONDS / period), round(HORIZON_SECONDS / period)
     env = skidnav.make_env(
         kind, seed=world, slip=slip, observation="features", action="continuous",
-        control_period=CONTROL_PERIOD, max_episode_steps=MAX_STEPS,
+        control_period=period, max_episode_steps=max_steps,
     )  # fmt: skip
-    agent = skidnav.make_agent("mppi-kinematic", env, seed=0, horizon=HORIZON, **params)
+    agent = skidnav.make_agent("mppi-kinematic", env, seed=0, horizon=horizon, **params)
     start = time.perf_counter()
-    log = skidnav.train(agent, env, episodes, seed=0, max_steps=MAX_STEPS, rollouts=rollouts)
+    log = skidnav.train(agent, env, episodes, seed=0, max_steps=max_steps, rollouts=rollouts)
     wall_time = time.perf_counter() - start
     successes = log.successes.astype(bool)
     first = int(np.argmax(successes)) if successes.any() else None
@@ -80,31 +82,36 @@ def run(
         "success": round(float(successes.mean()), 3),
         "first_success": None if first is None else first + 1,
         "seconds_to_first": None
-        if first is None else float(log.lengths[: first + 1].sum() * CONTROL_PERIOD),
+        if first is None else float(log.lengths[: first + 1].sum() * period),
         "collisions_per_episode": round(float(log.collisions.mean()), 2),
         "first_episode_collisions": int(log.collisions[0]),
         "greedy_success": round(float(reached.mean()), 3),
         "greedy_success_last": round(float(reached[-1].mean()), 3),
         "lengths": log.lengths.tolist(), "collisions": log.collisions.tolist(),
         "wall_time": round(wall_time, 1),
-        **(against_goal_tracker(env, log.greedy_lengths[-1], rollouts) if goal_tracker else {}),
+        **(
+            against_goal_tracker(env, log.greedy_lengths[-1], rollouts, max_steps, period)
+            if goal_tracker else {}
+        ),
     }  # fmt: skip
 
 
-def against_goal_tracker(env: Any, lengths: np.ndarray, rollouts: int) -> dict[str, Any]:
+def against_goal_tracker(
+    env: Any, lengths: np.ndarray, rollouts: int, max_steps: int, period: float
+) -> dict[str, Any]:
     """The goal tracker's greedy rollouts from the evaluation starts of ``skidnav.train`` (seed
-    0, ``rollouts`` of them) against the trained planner's last ``lengths`` [actions] (−1: not
-    reached): both in seconds of driving, and the ratio of their means over the starts both
-    reached (NaN if none)."""
+    0, ``rollouts`` of them, at most ``max_steps`` actions of ``period`` seconds) against the
+    trained planner's last ``lengths`` [actions] (−1: not reached): both in seconds of driving,
+    and the ratio of their means over the starts both reached (NaN if none)."""
     tracker = skidnav.make_agent("goal-tracker", env, seed=0)
     reference = np.array(
-        [r.length for r in skidnav.evaluate(tracker, env, rollouts=rollouts, max_steps=MAX_STEPS)]
+        [r.length for r in skidnav.evaluate(tracker, env, rollouts=rollouts, max_steps=max_steps)]
     )
     both = (lengths > 0) & (reference > 0)
     ratio = lengths[both].mean() / reference[both].mean() if both.any() else float("nan")
     return {
-        "greedy_seconds": (lengths * CONTROL_PERIOD).tolist(),
-        "goal_tracker_seconds": (reference * CONTROL_PERIOD).tolist(),
+        "greedy_seconds": (lengths * period).tolist(),
+        "goal_tracker_seconds": (reference * period).tolist(),
         "time_ratio": round(float(ratio), 3),
     }
 
@@ -133,13 +140,14 @@ def main() -> None:
     parser.add_argument(
         "--goal-tracker", action="store_true", help="compare the time to goal with goal-tracker"
     )
+    parser.add_argument("--period", type=float, default=1.0, help="seconds per action")
     options = parser.parse_args()
     params = {name: parsed(value) for name, value in (each.split("=", 1) for each in options.set)}
     results = []
     for kind, world in worlds(options.worlds):
         result = run(
             kind, world, options.episodes, options.rollouts, options.slip, params,
-            options.goal_tracker,
+            options.goal_tracker, options.period,
         )  # fmt: skip
         print(json.dumps(result), flush=True)
         results.append(result)

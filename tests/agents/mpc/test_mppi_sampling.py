@@ -29,6 +29,8 @@ bench_mppi = importlib.import_module("bench_mppi")  # its NumPy twin: the sampli
         {"noise_correlation": 0.0},
         {"noise_correlation": 0.9, "model_draws": 3, "noise_std": 2.0},
         {"sample_uncertainty": False},
+        {"plan_update": "drawn"},
+        {"plan_update": "drawn", "noise_correlation": 0.0},
     ],
 )
 def test_the_compiled_sampling_draws_numpys_numbers(options: dict[str, Any]) -> None:
@@ -51,6 +53,12 @@ def test_the_compiled_sampling_draws_numpys_numbers(options: dict[str, Any]) -> 
     assert controls.max() == limit and controls.min() == -limit  # some clipped
     if options.get("sample_uncertainty", True):
         assert np.abs(drawn[2].noise).max() > 2.0  # normals, not zeros
+    clipped = controls - planner.plan
+    if options.get("plan_update") == "drawn":  # ε as drawn: beyond the limit where clipped
+        assert np.abs(drawn[1] - clipped).max() > 0.1
+        assert np.array_equal(drawn[1][0], np.zeros_like(drawn[1][0]))
+    else:
+        assert np.array_equal(drawn[1], clipped)
 
 
 def test_rollouts_in_blocks_cost_each_rollout_as_alone() -> None:

@@ -7,7 +7,9 @@ Each control step, from the robot's pose and the plan U (H, 2) [rad/s] kept from
    normal (β = 0: the white noise of Williams et al.; β > 0 samples smoother sequences, ours);
    sequence 0 is the plan itself (ε = 0);
 2. clip U + ε to the wheel-speed bounds ± Ω and keep the clipped perturbation
-   ε ← clip(U + ε) − U (the sequence the robot could drive);
+   ε ← clip(U + ε) − U (the sequence the robot could drive; ``plan_update = "drawn"`` keeps
+   ε as drawn for step 4, the rollouts still driving clip(U + ε):
+   :attr:`~skidnav.agents.mpc.config.MPPIConfig.plan_update`);
 3. roll every sequence out through each of its M draws of the learned model and cost it
    (:func:`~skidnav.agents.mpc.rollouts.rollout_costs`); its cost S_k is the mean of the M
    costs (``risk = "mean"``, the expected cost under the model's uncertainty, as the particles
@@ -17,7 +19,7 @@ Each control step, from the robot's pose and the plan U (H, 2) [rad/s] kept from
    0 by default: :attr:`~skidnav.agents.mpc.config.MPPIConfig.control_cost`);
 4. weigh the sequences w_k ∝ exp(−(S_k − min S) T / λ), S in control steps of T seconds and
    the temperature λ in seconds (so the weights do not depend on the control period), and move
-   the plan: U ← U + Σ_k w_k ε_k;
+   the plan: U ← clip(U + Σ_k w_k ε_k, −Ω, Ω);
 5. command U_0, then shift the plan by one step for the next control step (warm start), the
    last step repeated.
 
@@ -97,7 +99,7 @@ class MPPIPlanner:
         sample_batch(
             self.rng, self.plan, config.noise_std, config.noise_correlation,
             self.robot.wheel_speed, controls, perturbation, draws.model, draws.noise,
-            config.sample_uncertainty,
+            config.sample_uncertainty, config.plan_update == "drawn",
         )  # fmt: skip
         return self._batch
 

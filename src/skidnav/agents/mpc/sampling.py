@@ -29,6 +29,7 @@ def sample_sequences(
     limit: float,
     controls: np.ndarray,
     perturbation: np.ndarray,
+    drawn: bool,
 ) -> None:
     """Steps 1–2 of :mod:`~skidnav.agents.mpc.planner`: K perturbation sequences of standard
     normals n, ε_t = β ε_{t−1} + √(1 − β²) σ n_t (β = ``correlation``; white for β = 0),
@@ -39,7 +40,9 @@ def sample_sequences(
         plan: float64 (H, 2) U, the planned wheel speeds [rad/s].
         noise_std: σ [rad/s]. correlation: β in [0, 1). limit: Ω [rad/s].
         controls: float64 (K, H, 2) receives clip(U + ε, −Ω, Ω) [rad/s].
-        perturbation: float64 (K, H, 2) receives the clipped perturbation, controls − U [rad/s].
+        perturbation: float64 (K, H, 2) receives the clipped perturbation, controls − U
+            [rad/s], or with ``drawn`` the perturbation ε as drawn
+            (:attr:`~skidnav.agents.mpc.config.MPPIConfig.plan_update`).
     """
     innovation = math.sqrt(1.0 - correlation * correlation)
     for k in range(controls.shape[0]):
@@ -57,8 +60,11 @@ def sample_sequences(
             clipped_left = min(max(plan_left + new_left, -limit), limit)
             clipped_right = min(max(plan_right + new_right, -limit), limit)
             controls[k, t, 0], controls[k, t, 1] = clipped_left, clipped_right
-            perturbation[k, t, 0] = clipped_left - plan_left
-            perturbation[k, t, 1] = clipped_right - plan_right
+            if drawn:
+                perturbation[k, t, 0], perturbation[k, t, 1] = new_left, new_right
+            else:
+                perturbation[k, t, 0] = clipped_left - plan_left
+                perturbation[k, t, 1] = clipped_right - plan_right
 
 
 @inline_jit
@@ -82,12 +88,13 @@ def sample_batch(
     model: np.ndarray,
     noise: np.ndarray,
     sample_model: bool,
+    drawn: bool,
 ) -> None:
     """One batch's numbers in the module doc's order: :func:`sample_sequences` (arguments as
     there), then, if ``sample_model``, the standard normals of the model draws ``model``
     float64 (K · M, 5) and of the noise ``noise`` float64 (K · M, H, 3) (else they are left as
     they are: zeros)."""
-    sample_sequences(rng, plan, noise_std, correlation, limit, controls, perturbation)
+    sample_sequences(rng, plan, noise_std, correlation, limit, controls, perturbation, drawn)
     if sample_model:
         standard_normals(rng, model)
         standard_normals(rng, noise)
