@@ -169,7 +169,8 @@ class IcrEstimates:
         weight = self.prior_weight
         total = self.sums.sum(axis=0)
         pooled = (weight * self.nominal + total[0]) / (weight + total[1])
-        return (weight * pooled + self.sums[:, 0]) / (weight + self.sums[:, 1])
+        values: np.ndarray = (weight * pooled + self.sums[:, 0]) / (weight + self.sums[:, 1])
+        return values
 
 
 def reward_of(
