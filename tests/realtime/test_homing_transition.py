@@ -6,11 +6,15 @@ import itertools
 import math
 import subprocess
 import sys
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from skidnav.realtime.arena import arena_map, seed_streams, start_pose
+from skidnav.realtime.config import load_config
+from skidnav.realtime.control.episodes import EpisodeLoop
 from skidnav.realtime.control.homing import HomingController
 from skidnav.realtime.control.transition import IcrEstimates, WheelSpeedStats, log_row, reward_of
 from skidnav.realtime.link.interface import Pose
@@ -189,11 +193,39 @@ def test_homing_with_the_estimated_icr_reaches_the_start_on_a_shifted_floor() ->
     assert seen.sum() >= 2
     assert estimates.values()[seen] == pytest.approx(-0.03, abs=0.005)
     unseen = estimates.sums[:, 1] == 0.0
-    assert np.all(estimates.values()[unseen] == RobotParams().x_icr)  # the prior there
+    assert estimates.values()[unseen] == pytest.approx(-0.03, abs=0.005)  # the pooled estimate
     grid_map = arena_map("free", 2, GRID)
     controller = HomingController(grid_map, GRID, 1.7, tolerance=0.008, x_icr=estimates.values())
     x, y = GRID.cell_centre(grid_map.start[0] + 6, grid_map.start[1] + 5)
     robot.pose = (x, y, 2.0)
+    home(robot, controller)
+    assert GRID.state(*robot.pose) == GRID.state(*start_pose(grid_map, GRID))
+
+
+@pytest.mark.parametrize("offset", [(-3, 5), (4, 5), (8, 5)])
+def test_homing_crosses_into_regions_the_robot_never_turned_in(offset: tuple[int, int]) -> None:
+    """The MuJoCo robot's floor, x_ICR 0 against the nominal 5 cm, its estimate from a spin at
+    the start only: homing from cells above it (regions without a row) reaches the start.
+    Shrunk towards the nominal value, those regions kept 5 cm and homing turned back and forth
+    at their border for the whole 300 s (each region shrunk to the pooled estimate instead)."""
+    robot = build_robot(
+        slip="rough",
+        drift=0.0,
+        drift_period=600.0,
+        map_spec="free",
+        seed=2,
+        config=SimRobotConfig(pose_noise=0.001),
+    )
+    robot.slip.x_icr[:] = 0.0
+    estimates = IcrEstimates(GRID.n_regions, RobotParams().x_icr)
+    estimates.add_rows(spin_rows(robot, 200))
+    grid_map = arena_map("free", 2, GRID)
+    start_i, start_j = grid_map.start
+    unseen = estimates.sums[:, 1] == 0.0
+    assert unseen[GRID.region(*GRID.cell_centre(start_i + offset[0], start_j + offset[1]))]
+    assert np.abs(estimates.values()).max() < 0.01
+    controller = HomingController(grid_map, GRID, 1.7, tolerance=0.008, x_icr=estimates.values())
+    robot.pose = (*GRID.cell_centre(start_i + offset[0], start_j + offset[1]), 0.0)
     home(robot, controller)
     assert GRID.state(*robot.pose) == GRID.state(*start_pose(grid_map, GRID))
 
@@ -222,3 +254,31 @@ def test_the_loop_scoring_kernels_are_compiled_before_the_robot_is_contacted() -
     )
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "[]"
+
+
+class IdleDriver:
+    """A driver never connected: the loop is built, not run."""
+
+    lockstep = False
+    on_fault = None
+
+
+def test_the_bumper_predicts_with_the_estimated_icr() -> None:
+    """Beside a wall, a turn in place away from it: with the nominal x_ICR (5 cm) the bumper
+    predicts the body to slide into the wall and stops it; once the rows show x_ICR ≈ 0 (the
+    MuJoCo robot's) it lets the turn go. Driving into the wall is stopped either way."""
+    grid_map = arena_map("free", 0, GRID)
+    grid_map.occupancy[12, 5:20] = True
+    with tempfile.TemporaryDirectory() as out:
+        loop = EpisodeLoop(IdleDriver(), grid_map, load_config(None), Path(out))  # type: ignore[arg-type]
+        wall_x = 12 * GRID.cell_width
+        beside = Pose(0.0, wall_x - 0.001, GRID.cell_centre(12, 12)[1], math.radians(60.0))
+        turn_away, ahead = (-1.7, 1.7), (1.7, 1.7)
+        assert loop._would_collide(beside, turn_away)
+        rows = np.zeros((400, 6))
+        rows[:, 0] = GRID.region(beside.x, beside.y)
+        rows[:, 5] = np.where(np.arange(400) % 2 == 0, 0.3, -0.3)  # turns, no sideways slide
+        loop.icr.add_rows(rows)
+        assert not loop._would_collide(beside, turn_away)
+        assert loop._would_collide(beside, ahead)
+        loop.log.close()

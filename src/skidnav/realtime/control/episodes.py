@@ -81,6 +81,16 @@ class EpisodeLoop(PeriodicControl):
         self.interrupted = False
         self.waiting_for_operator = False
 
+    def _x_icr(self, pose: Pose) -> float:
+        """x_ICR [m] of the virtual bumper at ``pose``: the estimate of its region (homing's,
+        :class:`IcrEstimates`), within the axles (−a ≤ x_ICR ≤ b). With the nominal 5 cm on the
+        MuJoCo robot (x_ICR ≈ 0) the bumper predicted a turn in place away from a wall beside
+        the robot to slide the body into it and stopped every such turn: the planner, whose
+        model had learned the turn, chose it again and the robot stood pressed against the wall
+        (docs/robot-learning.md, "Measured on the MuJoCo robot")."""
+        value = float(self.icr.values()[self.grid.region(pose.x, pose.y)])
+        return min(max(value, -self.robot.front_axle), self.robot.rear_axle)
+
     # --- what a subclass defines ---------------------------------------------------------
     def _play(self, result: EpisodeResult) -> None:
         """The actions of one episode from the current pose, counted into ``result``; raises

@@ -5,8 +5,9 @@ The layer every real-time loop drives through (:mod:`.loop` for the tabular agen
 re-sends a wheel command every control period of ``period`` seconds of robot time for
 ``substeps`` periods, periods being counted on the robot's own clock (the poses' stamps), and
 turns consecutive poses into kinematic log rows (realtime/control/transition.py). A virtual
-bumper predicts the next period's pose with the nominal kinematics: if it would enter a wall
-cell of the map, the wheels stop and the action is a collision, as in the env.
+bumper predicts the next period's pose with the nominal kinematics (x_ICR estimated on the floor,
+in the episode loop): if it would enter a wall cell of the map, the wheels stop and the action is
+a collision, as in the env.
 
 Lockstep (a driver with ``lockstep`` set, docs/realtime.md): each ``cmd`` is one period of robot
 time, acknowledged after its pose; the loop waits for each ``ack`` instead of a pose stamp, so
@@ -138,13 +139,19 @@ class PeriodicControl:
         inside = 0 <= x <= self.robot.arena_width and 0 <= y <= self.robot.arena_height
         return not inside or bool(self.grid_map.occupancy[self.grid.cell(x, y)])
 
+    def _x_icr(self, pose: Pose) -> float:
+        """x_ICR [m] the virtual bumper predicts with at ``pose``: the nominal one (the episode
+        loop's estimate, :meth:`~skidnav.realtime.control.episodes.EpisodeLoop._x_icr`)."""
+        return self.robot.x_icr
+
     def _would_collide(self, pose: Pose, command: tuple[float, float]) -> bool:
-        """Virtual bumper: the nominal pose after one period (no slip, nominal x_ICR, the robot's
-        integrator, not clipped to the arena) lies in a wall or outside (or already does)."""
+        """Virtual bumper: the pose after one period with the nominal wheel radius and half track
+        (no slip), the x_ICR of :meth:`_x_icr` and the robot's integrator, not clipped to the
+        arena, lies in a wall or outside (or already does)."""
         v_x, v_y, yaw_rate = body_velocities(
             command[0],
             command[1],
-            self.robot.x_icr,
+            self._x_icr(pose),
             self.robot.wheel_radius,
             self.robot.half_track,
         )

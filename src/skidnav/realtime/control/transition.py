@@ -134,12 +134,19 @@ class WheelSpeedStats:
 class IcrEstimates:
     """Per-region estimates of the longitudinal ICR offset x_ICR [m] from kinematic log rows:
     the skid-steer model says v_y = −x_ICR·ω (Kozłowski & Pazderski 2004), so x_ICR is the
-    least-squares slope of −v_y on ω, shrunk towards the nominal value (ridge regression with
-    ``prior_weight`` [rad²/s²], about a quarter of one turn action's rows).
+    least-squares slope of −v_y on ω, shrunk (ridge regression with ``prior_weight``
+    [rad²/s²], about a quarter of one turn action's rows) towards the pooled estimate: the same
+    slope over every region's rows, itself shrunk towards the nominal value (partial pooling,
+    Gelman & Hill 2007, §12). A region with few rows takes the floor's x_ICR seen so far, not
+    the datasheet's.
 
     The homing controller turns about the pivot this estimate puts under the robot; with the
     nominal x_ICR on a floor that shifts it, every turn moves the controller's pivot and homing
-    can circle for ever.
+    can circle for ever. Shrunk towards the nominal value alone, a region the robot had not
+    turned in kept the datasheet's 5 cm beside regions at about 0 (the MuJoCo robot): the pivot
+    jumped 4 cm as pose noise moved the robot across their border, a waypoint closer to the body
+    than that jump lay behind the pivot whichever way the robot turned, and homing turned back
+    and forth until it timed out (docs/robot-learning.md, "Measured on the MuJoCo robot").
 
     Attributes:
         sums: float64 (n_regions, 2): Σ −v_y·ω [m/s²] and Σ ω² [rad²/s²] per region.
@@ -158,9 +165,12 @@ class IcrEstimates:
             self.sums[region, 1] += yaw_rate * yaw_rate
 
     def values(self) -> np.ndarray:
-        """float64 (n_regions,): the estimate of every region [m]."""
+        """float64 (n_regions,): the estimate of every region [m] (class doc)."""
         weight = self.prior_weight
-        return (weight * self.nominal + self.sums[:, 0]) / (weight + self.sums[:, 1])
+        total = self.sums.sum(axis=0)
+        pooled = (weight * self.nominal + total[0]) / (weight + total[1])
+        values: np.ndarray = (weight * pooled + self.sums[:, 0]) / (weight + self.sums[:, 1])
+        return values
 
 
 def reward_of(
