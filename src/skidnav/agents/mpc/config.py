@@ -36,6 +36,15 @@ COST_TO_GO = ("states", "cells")
 """Values of :attr:`MPPIConfig.cost_to_go`."""
 ROUTE_SPEEDS = ("nominal", "learned")
 """Values of :attr:`MPPIConfig.route_speed`."""
+PRECISIONS = ("float64", "float32")
+"""Values of :attr:`MPPIConfig.precision`."""
+CHOICES = {
+    "risk": RISKS,
+    "cost_to_go": COST_TO_GO,
+    "route_speed": ROUTE_SPEEDS,
+    "precision": PRECISIONS,
+}
+"""The fields of :class:`MPPIConfig` that take one of a few names, and those names."""
 MAX_COST = 1e12
 """Greatest cost weight [cost units]: sums of costs stay far from overflow."""
 
@@ -136,6 +145,14 @@ class MPPIConfig(KinematicModelFields):
     (footprint 0 × 0, the thesis robot) stays a point."""
     kinematic_refit_every: int = 50
     """Minimum new sub-step samples between refits (checked after every real step)."""
+    precision: str = "float64"
+    """The numbers of the sampling and the rollouts: "float64", double precision, NumPy's
+    normals (the ziggurat) in NumPy's order and the C library's sine and cosine, the path every
+    measured table of docs/agents/mppi-kinematic.md drove; "float32", the fast path, single
+    precision, normals by Box–Muller from the Generator's uniforms, polynomial sine and cosine,
+    the rollouts vectorised over the samples (:mod:`~skidnav.agents.mpc.single`): other numbers
+    (the same with and without numba), a control step about twice as fast
+    (docs/agents/mppi-kinematic.md, "Speed")."""
 
     def __post_init__(self) -> None:
         check_integer("samples", self.samples, 2, MAX_SAMPLES)
@@ -147,8 +164,9 @@ class MPPIConfig(KinematicModelFields):
                 f"expected samples × horizon × model_draws at most {MAX_ROLLOUT_STEPS:,}, got "
                 f"{rollout_steps:,}"
             )
-        if self.risk not in RISKS:
-            raise ValueError(f"expected risk in {RISKS}, got {shown(self.risk)}")
+        for name, allowed in CHOICES.items():
+            if getattr(self, name) not in allowed:
+                raise ValueError(f"expected {name} in {allowed}, got {shown(getattr(self, name))}")
         check_number("temperature", self.temperature, 0.0, MAX_COST)
         check_number("noise_std", self.noise_std, 0.0, MAX_COST)
         correlation = self.noise_correlation
@@ -165,12 +183,6 @@ class MPPIConfig(KinematicModelFields):
             "heading_weight",
         ):
             check_number(name, getattr(self, name), 0.0, MAX_COST, closed=True)
-        if self.cost_to_go not in COST_TO_GO:
-            raise ValueError(f"expected cost_to_go in {COST_TO_GO}, got {shown(self.cost_to_go)}")
-        if self.route_speed not in ROUTE_SPEEDS:
-            raise ValueError(
-                f"expected route_speed in {ROUTE_SPEEDS}, got {shown(self.route_speed)}"
-            )
         durations = self.lattice_durations
         durations = tuple(durations) if isinstance(durations, list | tuple) else ()
         if not 1 <= len(durations) <= MAX_DURATIONS:
