@@ -263,24 +263,22 @@ def stops(
     """The scalar pass of a sub-step, over the moving rollouts that entered another cell (or
     all moving ones, for a robot with a footprint): a footprint's contact costs C and stops the
     rollout (row STOP); entering a cell costs C · p, and a blocked one stops it."""
-    footprint = robot.footprint_length > 0.0
-    if footprint:
+    if robot.footprint_length > 0.0:
         widened(scratch, size, NEW_X, poses)
-    for b in range(size):
-        entered = scratch[ENTERED * BLOCK + b] > F32(0.0)
-        if not (entered or (footprint and scratch[MOVING * BLOCK + b] > F32(0.0))):
-            continue
-        i, j = scratch[NEW_I * BLOCK + b], scratch[NEW_J * BLOCK + b]
-        if footprint and footprint_collides(
-            cost_map.blocked, grid, poses[0, b], poses[1, b], poses[2, b],
-            robot.footprint_length, robot.footprint_width,
-        ):  # fmt: skip
-            out[first + b] += costs.collision_cost
-            scratch[STOP * BLOCK + b] = F32(1.0)
-        elif entered:
-            out[first + b] += costs.collision_cost * cost_map.wall_probability[int(i), int(j)]
-            if cost_map.blocked[int(i), int(j)]:
+        for b in range(size):
+            if scratch[MOVING * BLOCK + b] > F32(0.0) and footprint_collides(
+                cost_map.blocked, grid, poses[0, b], poses[1, b], poses[2, b],
+                robot.footprint_length, robot.footprint_width,
+            ):  # fmt: skip
+                out[first + b] += costs.collision_cost
                 scratch[STOP * BLOCK + b] = F32(1.0)
+    for b in range(size):
+        if scratch[ENTERED * BLOCK + b] == F32(0.0) or scratch[STOP * BLOCK + b] > F32(0.0):
+            continue
+        i, j = int(scratch[NEW_I * BLOCK + b]), int(scratch[NEW_J * BLOCK + b])
+        out[first + b] += costs.collision_cost * cost_map.wall_probability[i, j]
+        if cost_map.blocked[i, j]:
+            scratch[STOP * BLOCK + b] = F32(1.0)
 
 
 @vector_inline_jit
