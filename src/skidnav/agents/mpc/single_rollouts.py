@@ -3,7 +3,8 @@
 clipped to the arena, the collision cost C · p on entering a cell, a blocked cell or a
 footprint's contact stopping the motion for the rest of the control step, 1 per control step,
 the goal cell ending a rollout, the terminal value), in single precision and in another loop
-order: a block of rollouts advances one sub-step together, in passes over the block.
+order: a block of rollouts advances one sub-step together, in passes over the block, and every
+block takes its control step t before any takes step t + 1 (the inputs then read in order).
 
 The passes of plain arithmetic (:mod:`~skidnav.agents.mpc.single`: the slip region, the twist,
 the sine and cosine, the new pose and its cell) read and write one scratch array at offsets
@@ -70,30 +71,51 @@ def single_rollout_costs(
         dynamics.mean.astype(np.float32), dynamics.factors.astype(np.float32),
         dynamics.offsets.astype(np.float32), dynamics.noise_std.astype(np.float32),
     )  # fmt: skip
-    scratch = np.zeros(ROWS * BLOCK, np.float32)
+    blocks = (out.shape[0] + BLOCK - 1) // BLOCK
+    scratch = np.zeros((blocks, ROWS * BLOCK), np.float32)  # a block's rows, one block a row
     present = np.zeros(dynamics.mean.shape[0], np.bool_)  # the slip regions of a block
     poses = np.zeros((3, BLOCK))  # float64 poses for the double-precision code
-    for first in range(0, out.shape[0], BLOCK):
-        size = min(BLOCK, out.shape[0] - first)
-        for b in range(size):
-            scratch[X * BLOCK + b] = F32(pose[0])
-            scratch[Y * BLOCK + b] = F32(pose[1])
-            scratch[HEADING * BLOCK + b] = F32(pose[2])
-            for row in range(5):
-                scratch[(MODEL + row) * BLOCK + b] = draws.model[row, first + b]
-            scratch[RUNNING * BLOCK + b] = F32(1.0)
-            scratch[STOP * BLOCK + b] = F32(0.0)
-            out[first + b] = 0.0
-        levels(scratch, size, grid, X, CELL_I)
-        for t in range(wheels.shape[0]):
+    for block in range(blocks):
+        first = block * BLOCK
+        start_block(first, min(BLOCK, out.shape[0] - first), pose, draws, grid, scratch[block], out)
+    for t in range(wheels.shape[0]):  # each step of every block: the inputs read in order
+        for block in range(blocks):
+            first = block * BLOCK
+            size = min(BLOCK, out.shape[0] - first)
             advance(first, size, t, wheels, draws, (tables, present, poses), cost_map, costs,
-                    robot, grid, scratch, out)  # fmt: skip
-        widened(scratch, size, X, poses)
+                    robot, grid, scratch[block], out)  # fmt: skip
+    for block in range(blocks):
+        first = block * BLOCK
+        size = min(BLOCK, out.shape[0] - first)
+        widened(scratch[block], size, X, poses)
         for b in range(size):
-            if scratch[RUNNING * BLOCK + b] > F32(0.0):
+            if scratch[block, RUNNING * BLOCK + b] > F32(0.0):
                 out[first + b] += terminal_value(
                     poses[0, b], poses[1, b], poses[2, b], cost_map, costs, grid
                 )  # fmt: skip
+
+
+@vector_inline_jit
+def start_block(
+    first: int,
+    size: int,
+    pose: np.ndarray,
+    draws: RolloutDraws,
+    grid: GridShape,
+    scratch: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """Rollouts ``first`` to ``first + size − 1`` at the start ``pose`` and its cell, running,
+    their model draws in their rows of ``scratch`` (the block's), their costs 0."""
+    for b in range(size):
+        scratch[X * BLOCK + b] = F32(pose[0])
+        scratch[Y * BLOCK + b] = F32(pose[1])
+        scratch[HEADING * BLOCK + b] = F32(pose[2])
+        for row in range(5):
+            scratch[(MODEL + row) * BLOCK + b] = draws.model[row, first + b]
+        scratch[RUNNING * BLOCK + b] = F32(1.0)
+        out[first + b] = 0.0
+    levels(scratch, size, grid, X, CELL_I)
 
 
 @vector_inline_jit
