@@ -2,11 +2,11 @@
 against its NumPy twin: the same control step with the Generator's uniforms drawn by NumPy
 (``rng.random(n)``), the Box–Muller normals, the AR(1) smoothing and the clip, the slip
 regions, twists, poses and cells as float32 NumPy arrays over all rollouts at once — the same
-float32 formulas (:mod:`~skidnav.agents.mpc.single`), run on arrays — then the planner's own
-update in NumPy. The twin draws the same sequences and rolls out the same poses bit for bit;
-its terminal value is :func:`bench_mppi.numpy_state_value`'s (double precision, summed in
-another order) and its update's sums are NumPy's, so its costs agree to 10⁻⁹ and its wheel
-speeds to 10⁻⁹.
+float32 formulas (:mod:`~skidnav.agents.mpc.single`), run on arrays — then the weights and
+the plan's update in NumPy (:func:`numpy_single_update`). The twin draws the same sequences
+and rolls out the same poses bit for bit; its terminal value is
+:func:`bench_mppi.numpy_state_value`'s (double precision, summed in another order) and its
+update's sums are NumPy's, so its costs agree to 10⁻⁹ and its wheel speeds to 10⁻⁹.
 
 Run alone (``make bench`` runs it), it prints the fast path's control step at K = 256, H = 40
 against its twin, against the default path and against the 0.3-ms target of 35 M
