@@ -22,6 +22,7 @@ from typing import NamedTuple
 import bench_agents
 import bench_env
 import bench_mppi
+import bench_mppi_single
 import bench_planning_targets
 import bench_sim
 import bench_training
@@ -128,6 +129,15 @@ FIGURES = {
     "mppi-real-time": KeyFigure(
         "mppi-kinematic, one whole control step (256 × 40)", "the 0.1-s control period",
         "control steps", 10.0, bench_mppi.real_time_rates, guarded=False,
+    ),
+    "mppi-step-float32": KeyFigure(
+        "mppi-kinematic's fast path (precision float32), one whole control step (256 × 40)",
+        "the same step in NumPy", "control steps", 5.0, bench_mppi_single.step_rates,
+    ),
+    "mppi-target-float32": KeyFigure(
+        "mppi-kinematic's fast path, one whole control step (256 × 40)",
+        "the target, 0.3 ms (35 M sample-steps/s)", "control steps", 1.0,
+        bench_mppi_single.target_rates, guarded=False,
     ),
 }  # fmt: skip
 """The key figures by name (the history's and the guard's parameter)."""

@@ -14,6 +14,7 @@ compiles everything afresh once (``make clean-cache`` removes old versions).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 from collections.abc import Callable
@@ -21,7 +22,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 import numba
-from numba.extending import overload
+from numba.extending import overload, register_jitable
 
 F = TypeVar("F", bound=Callable[..., Any])
 PACKAGE = Path(__file__).resolve().parent
@@ -75,6 +76,19 @@ def jit(function: F) -> F:
     return _kept(numba.njit(cache=True, nogil=True)(function))  # type: ignore[return-value]
 
 
+def vector_jit(function: F) -> F:
+    """Like :func:`jit`, with NumPy's error model: a float division by zero gives ±inf or NaN
+    instead of raising, so that the compiler can vectorise a loop that divides (the kernels of
+    the fast MPPI path, :mod:`skidnav.agents.mpc.single`; none of them divides by zero)."""
+    return _kept(numba.njit(cache=True, nogil=True, error_model="numpy")(function))  # type: ignore[return-value]
+
+
+def vector_inline_jit(function: F) -> F:
+    """:func:`vector_jit`, inlined into compiled callers like :func:`inline_jit`."""
+    compiled = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+    return _kept(compiled(function))  # type: ignore[return-value]
+
+
 def inline_jit(function: F) -> F:
     """Like :func:`jit`, but inlined into compiled callers at the numba IR level.
 
@@ -87,6 +101,29 @@ def inline_jit(function: F) -> F:
     any compiled function, and with ``NUMBA_DISABLE_JIT=1`` it is the plain function.
     """
     return _kept(numba.njit(inline="always", cache=True, nogil=True)(function))  # type: ignore[return-value]
+
+
+def elementwise(function: F) -> F:
+    """A helper of plain arithmetic that compiled callers compile into their own code (numba's
+    ``register_jitable``) and that stays the plain function when called from Python: the same
+    formula runs on float scalars in a compiled loop and on whole NumPy arrays (the fast
+    MPPI path and its NumPy twin, :mod:`skidnav.agents.mpc.single`)."""
+    jitable: F = register_jitable(inline="always", error_model="numpy")(function)
+    return jitable
+
+
+def compiled_as(compiled: Callable[..., Any]) -> Callable[[F], F]:
+    """Decorator: compiled callers of the decorated function run ``compiled`` (of the same
+    arguments) in its place, Python callers the function itself — for a NumPy function on arrays
+    whose scalar equivalent numba compiles to a vectorisable instruction (``np.sqrt`` and
+    ``math.sqrt``, ``np.where`` and a conditional expression)."""
+
+    def decorate(function: F) -> F:
+        typing = functools.wraps(compiled)(lambda *args: compiled)  # its signature
+        overload(function, inline="always", jit_options={"error_model": "numpy"})(typing)
+        return function
+
+    return decorate
 
 
 def dispatch_on_type(registry: dict[type, Any]) -> Callable[[F], F]:

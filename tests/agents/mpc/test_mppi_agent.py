@@ -156,6 +156,7 @@ def test_bad_settings_are_one_line_errors() -> None:
         ({"samples": 65_536, "horizon": 1000}, "samples × horizon × model_draws"),
         ({"model_draws": 0}, "model_draws"),
         ({"risk": "hope"}, "risk"),
+        ({"precision": "float16"}, "precision"),
         ({"colour": "red"}, "unknown"),
     ]:
         with pytest.raises(UserError, match=expected) as caught:

@@ -31,3 +31,5 @@ def test_a_plan_at_full_speed_where_full_speed_is_best(plan_update: str) -> None
 def test_plan_update_is_checked() -> None:
     with pytest.raises(ValueError, match="expected plan_update in"):
         MPPIConfig(plan_update="raw")
+    with pytest.raises(ValueError, match="expected plan_update 'clipped' with precision 'float32'"):
+        MPPIConfig(plan_update="drawn", precision="float32")

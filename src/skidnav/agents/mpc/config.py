@@ -38,11 +38,16 @@ ROUTE_SPEEDS = ("nominal", "learned")
 """Values of :attr:`MPPIConfig.route_speed`."""
 PLAN_UPDATES = ("clipped", "drawn")
 """Values of :attr:`MPPIConfig.plan_update`."""
+PRECISIONS = ("float64", "float32")
+"""Values of :attr:`MPPIConfig.precision`."""
 CHOICES = {
-    "risk": RISKS, "cost_to_go": COST_TO_GO, "route_speed": ROUTE_SPEEDS,
+    "risk": RISKS,
+    "cost_to_go": COST_TO_GO,
+    "route_speed": ROUTE_SPEEDS,
     "plan_update": PLAN_UPDATES,
-}  # fmt: skip
-"""The fields of :class:`MPPIConfig` that name one of a few choices, and their values."""
+    "precision": PRECISIONS,
+}
+"""The fields of :class:`MPPIConfig` that take one of a few names, and those names."""
 MAX_COST = 1e12
 """Greatest cost weight [cost units]: sums of costs stay far from overflow."""
 
@@ -151,6 +156,14 @@ class MPPIConfig(KinematicModelFields):
     (footprint 0 × 0, the thesis robot) stays a point."""
     kinematic_refit_every: int = 50
     """Minimum new sub-step samples between refits (checked after every real step)."""
+    precision: str = "float64"
+    """The numbers of the sampling and the rollouts: "float64", double precision, NumPy's
+    normals (the ziggurat) in NumPy's order and the C library's sine and cosine, the path every
+    measured table of docs/agents/mppi-kinematic.md drove; "float32", the fast path, single
+    precision, normals by Box–Muller from the Generator's uniforms, polynomial sine and cosine,
+    the rollouts vectorised over the samples (:mod:`~skidnav.agents.mpc.single`): other numbers
+    (the same with and without numba), a control step about twice as fast
+    (docs/agents/mppi-kinematic.md, "Speed")."""
 
     def __post_init__(self) -> None:
         check_integer("samples", self.samples, 2, MAX_SAMPLES)
@@ -161,6 +174,14 @@ class MPPIConfig(KinematicModelFields):
             raise ValueError(
                 f"expected samples × horizon × model_draws at most {MAX_ROLLOUT_STEPS:,}, got "
                 f"{rollout_steps:,}"
+            )
+        for name, allowed in CHOICES.items():
+            if getattr(self, name) not in allowed:
+                raise ValueError(f"expected {name} in {allowed}, got {shown(getattr(self, name))}")
+        if self.precision == "float32" and self.plan_update != "clipped":
+            raise ValueError(
+                f"expected plan_update 'clipped' with precision 'float32' (the fast path moves "
+                f"the plan by the clipped perturbations), got {shown(self.plan_update)}"
             )
         check_number("temperature", self.temperature, 0.0, MAX_COST)
         check_number("noise_std", self.noise_std, 0.0, MAX_COST)
@@ -178,9 +199,6 @@ class MPPIConfig(KinematicModelFields):
             "heading_weight",
         ):
             check_number(name, getattr(self, name), 0.0, MAX_COST, closed=True)
-        for name, allowed in CHOICES.items():
-            if getattr(self, name) not in allowed:
-                raise ValueError(f"expected {name} in {allowed}, got {shown(getattr(self, name))}")
         durations = self.lattice_durations
         durations = tuple(durations) if isinstance(durations, list | tuple) else ()
         if not 1 <= len(durations) <= MAX_DURATIONS:

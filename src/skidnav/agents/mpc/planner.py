@@ -41,6 +41,9 @@ from skidnav.agents.mpc.costmap import CostMap, MapCosts
 from skidnav.agents.mpc.dynamics import N_DRAWS, SampledDynamics
 from skidnav.agents.mpc.rollouts import RolloutDraws, rollout_costs
 from skidnav.agents.mpc.sampling import sample_batch
+from skidnav.agents.mpc.single_rollouts import single_rollout_costs
+from skidnav.agents.mpc.single_sampling import SingleBatch, sample_single, single_batch
+from skidnav.agents.mpc.single_update import update_plan
 from skidnav.robot.params import KinematicConstants
 from skidnav.world.discretization import GridShape
 
@@ -72,6 +75,9 @@ class MPPIPlanner:
         self.weights = np.zeros(config.samples)
         """float64 (K,): the last batch's weights (summing to 1)."""
         self._batch: tuple[np.ndarray, np.ndarray, RolloutDraws] | None = None
+        self._single: SingleBatch | None = None
+        self.single = config.precision == "float32"
+        """The fast path (``precision = "float32"``): its sequences are float32 (H, 2, K)."""
         self.temperature = config.temperature / (robot.dt * robot.substeps)
         """λ / T: the temperature in control steps (the costs' unit)."""
 
@@ -86,6 +92,8 @@ class MPPIPlanner:
         the plan itself, and the rollouts' model draws and noise (standard normals; zeros when
         the model is not sampled). The arrays are the planner's, overwritten by the next call."""
         config = self.config
+        if self.single:
+            return self.sample_single()
         if self._batch is None:  # allocated once, at the first plan
             shape = (config.samples, config.horizon, 2)
             rollouts = config.samples * config.model_draws
@@ -103,6 +111,21 @@ class MPPIPlanner:
         )  # fmt: skip
         return self._batch
 
+    def sample_single(self) -> tuple[np.ndarray, np.ndarray, RolloutDraws]:
+        """:meth:`sample` of the fast path (:mod:`~skidnav.agents.mpc.single_sampling`): the
+        sequences and their perturbations float32 (H, 2, K) [rad/s], the model draws float32
+        (5, K · M) and the noise float32 (H, 3, K · M)."""
+        config = self.config
+        if self._single is None:
+            scale = 1.0 / math.sqrt(self.robot.substeps) if config.sample_uncertainty else 0.0
+            self._single = single_batch(
+                config.samples, config.horizon, config.model_draws, scale,
+                config.sample_uncertainty,
+            )  # fmt: skip
+        scales = (config.noise_std, config.noise_correlation, self.robot.wheel_speed)
+        sample_single(self.rng, self.plan, scales, self._single)
+        return self._single.controls, self._single.perturbation, self._single.draws
+
     def step(
         self,
         pose: np.ndarray,
@@ -113,18 +136,37 @@ class MPPIPlanner:
         """Steps 1–5 of the module doc from ``pose`` (x [m], y [m], heading [rad]); returns
         the wheel speeds (ω_L, ω_R) [rad/s] to command now."""
         controls, perturbation, draws = self.sample()
-        rollout_costs(
-            np.asarray(pose, dtype=np.float64), controls, draws, dynamics, cost_map,
-            costs, self.robot, self.grid, self.draw_costs,
-        )  # fmt: skip
+        start = np.asarray(pose, dtype=np.float64)
+        if self.single:
+            per_sequence = draws.per_sequence
+            wheels = controls if per_sequence == 1 else np.repeat(controls, per_sequence, 2)
+            single_rollout_costs(
+                start, wheels, draws, dynamics, cost_map, costs, self.robot, self.grid,
+                self.draw_costs,
+            )  # fmt: skip
+        else:
+            rollout_costs(
+                start, controls, draws, dynamics, cost_map, costs, self.robot, self.grid,
+                self.draw_costs,
+            )  # fmt: skip
         return self.update(perturbation)
 
     def update(self, perturbation: np.ndarray) -> tuple[float, float]:
         """Steps 3 (from the rollouts' costs in :attr:`draw_costs`) to 5 for the clipped
         perturbations ``perturbation`` float64 (K, H, 2) [rad/s]: the sequences' costs, their
         weights, the plan moved and shifted; returns the wheel speeds (ω_L, ω_R) [rad/s] to
-        command now. In NumPy: its sums are NumPy's, whose order the numbers keep."""
+        command now. In NumPy: its sums are NumPy's, whose order the numbers keep. On the fast
+        path (perturbations float32 (H, 2, K)) the same steps compiled, each sum in a fixed
+        order (:func:`~skidnav.agents.mpc.single_update.update_plan`)."""
         config, limit = self.config, self.robot.wheel_speed
+        if self.single:
+            scales = (
+                config.risk == "worst", config.control_cost / config.noise_std**2,
+                self.temperature, limit, float(config.model_draws),
+            )  # fmt: skip
+            return update_plan(
+                self.draw_costs, perturbation, scales, self.plan, self.costs, self.weights
+            )
         per_sequence = self.draw_costs.reshape(config.samples, config.model_draws)
         if config.risk == "worst":
             per_sequence.max(axis=1, out=self.costs)
