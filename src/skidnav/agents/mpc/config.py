@@ -94,9 +94,10 @@ class MPPIConfig(KinematicModelFields):
     sequence's clip(U + ε) − U, the change the robot could drive; "drawn", each ε as drawn
     (Williams et al. 2017's update), the rollouts still driving the clipped sequences. At a
     wheel's limit only the inward half of the clipped perturbations is non-zero, so "clipped"
-    pulls a plan at full speed back inside the limit at every step (measured: 0.1-s actions on
-    the free map, 1.2–1.3× the goal tracker's time to the goal; "drawn": 0.97–1.07×,
-    docs/agents/mppi-kinematic.md, "The plan's update at the wheels' limits")."""
+    pulls a plan at full speed back inside the limit at every step (measured at 0.1-s actions
+    on 8 free maps: 1.06–1.32× the goal tracker's time to the goal, "drawn" 0.86–1.07×; in the
+    mazes at 1-s actions "drawn" is no better; docs/agents/mppi-kinematic.md, "The plan's
+    update at the wheels' limits")."""
     collision_cost: float = 10.0
     """C [cost units] of running into a cell known for certain to be a wall; a cell of wall
     probability p costs C · p on entering, in [0, 10¹²]."""
