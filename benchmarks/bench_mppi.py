@@ -26,7 +26,7 @@ import math
 import statistics
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NamedTuple
 
 import gymnasium
 import numpy as np
@@ -377,10 +377,22 @@ def report(agent: MPPIKinematicAgent, pose: np.ndarray, samples: int, horizon: i
             print(f"  map change, {name}: {seconds * 1e3:.1f} ms")
 
 
-def grid_table(agent: MPPIKinematicAgent, pose: np.ndarray) -> str:
+class PlannerPath(NamedTuple):
+    """How :func:`grid_table` measures one path of the planner: ``checked(agent, pose)`` asserts
+    it equals its NumPy twin, ``twin(agent, pose)`` runs the twin's control step, and
+    ``profile(agent, pose)`` times its parts (sampling, rollouts, update) [s]."""
+
+    checked: Callable[[MPPIKinematicAgent, np.ndarray], None]
+    twin: Callable[[MPPIKinematicAgent, np.ndarray], Any]
+    profile: Callable[[MPPIKinematicAgent, np.ndarray], dict[str, float]]
+
+
+def grid_table(agent: MPPIKinematicAgent, pose: np.ndarray, path: PlannerPath | None = None) -> str:
     """MPPI-Generic's grid (K of :data:`GRID_SAMPLES`, H = :data:`GRID_HORIZON`) planned by
     ``agent`` from ``pose``, as a Markdown table: a whole control step, its rate, its parts and
-    its NumPy twin, medians."""
+    its NumPy twin, medians; ``path`` (default: the double-precision path) names the twin and
+    the profile."""
+    path = path or PlannerPath(twin_checked, numpy_control_step, profile)
     lines = [
         "| K | one control step | sample-steps/s | sampling | rollouts | update | "
         "NumPy twin | ratio |",
@@ -388,11 +400,11 @@ def grid_table(agent: MPPIKinematicAgent, pose: np.ndarray) -> str:
     ]
     for samples in GRID_SAMPLES:
         resized(agent, samples, GRID_HORIZON)
-        twin_checked(agent, pose)
+        path.checked(agent, pose)
         repeats = REPEATS if samples <= 4096 else 7
         step = median_seconds(lambda: agent.act(pose), repeats)
-        twin = median_seconds(lambda: numpy_control_step(agent, pose), 3)
-        parts = list(profile(agent, pose).values())
+        twin = median_seconds(lambda: path.twin(agent, pose), 3)
+        parts = path.profile(agent, pose).values()
         cells = " | ".join(f"{seconds * 1e3:.3g} ms" for seconds in parts)
         rate = samples * GRID_HORIZON / step / 1e6
         lines.append(

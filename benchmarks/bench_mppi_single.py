@@ -27,11 +27,14 @@ from bench_mppi import (
     GRID_HORIZON,
     GRID_SAMPLES,
     REPEATS,
+    PlannerPath,
     cells,
     driven_agent,
     median_seconds,
     numpy_state_value,
-    resized,
+)
+from bench_mppi import (
+    grid_table as bench_mppi_grid_table,
 )
 
 from skidnav.agents.mpc.agent import MPPIKinematicAgent
@@ -248,25 +251,8 @@ def profile(agent: MPPIKinematicAgent, pose: np.ndarray) -> dict[str, float]:
 def grid_table(agent: MPPIKinematicAgent, pose: np.ndarray) -> str:
     """:func:`bench_mppi.grid_table` for the fast path: MPPI-Generic's grid planned by
     ``agent`` (``precision = "float32"``) from ``pose``, as a Markdown table."""
-    lines = [
-        "| K | one control step | sample-steps/s | sampling | rollouts | update | "
-        "NumPy twin | ratio |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for samples in GRID_SAMPLES:
-        resized(agent, samples, GRID_HORIZON)
-        single_twin_checked(agent, pose)
-        repeats = REPEATS if samples <= 4096 else 7
-        step = median_seconds(lambda: agent.act(pose), repeats)
-        twin = median_seconds(lambda: numpy_single_control_step(agent, pose), 3)
-        cells = " | ".join(f"{seconds * 1e3:.3g} ms" for seconds in profile(agent, pose).values())
-        rate = samples * GRID_HORIZON / step / 1e6
-        lines.append(
-            f"| {samples:,} | **{step * 1e3:.3g} ms** | {rate:.1f} M | {cells} | "
-            f"{twin * 1e3:.3g} ms | {twin / step:.1f}× |"
-        )
-        print(lines[-1], flush=True)
-    return "\n".join(lines)
+    path = PlannerPath(single_twin_checked, numpy_single_control_step, profile)
+    return bench_mppi_grid_table(agent, pose, path)
 
 
 def main() -> None:
