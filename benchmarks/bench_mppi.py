@@ -415,14 +415,19 @@ def grid_table(agent: MPPIKinematicAgent, pose: np.ndarray, path: PlannerPath | 
     return "\n".join(lines)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def grid_parser(description: str) -> argparse.ArgumentParser:
+    """A benchmark's command line with ``--grid``: time MPPI-Generic's grid instead."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument(
         "--grid", action="store_true",
         help=f"time MPPI-Generic's grid (K = {GRID_SAMPLES[0]} to {GRID_SAMPLES[-1]:,}, "
         f"H = {GRID_HORIZON}) instead, printed as a Markdown table",
     )  # fmt: skip
-    arguments = parser.parse_args()
+    return parser
+
+
+def main() -> None:
+    arguments = grid_parser(__doc__.splitlines()[0]).parse_args()
     agent, pose = driven_agent(256, 40)
     if arguments.grid:
         print(grid_table(agent, pose))

@@ -16,7 +16,6 @@ sample-steps/s (:data:`TARGET_STEP`), with a profile; ``--grid`` times MPPI-Gene
 
 from __future__ import annotations
 
-import argparse
 import copy
 import math
 from typing import Any
@@ -24,12 +23,11 @@ from typing import Any
 import numpy as np
 from bench_mppi import (
     CONTROL_PERIOD,
-    GRID_HORIZON,
-    GRID_SAMPLES,
     REPEATS,
     PlannerPath,
     cells,
     driven_agent,
+    grid_parser,
     median_seconds,
     numpy_state_value,
 )
@@ -256,14 +254,9 @@ def grid_table(agent: MPPIKinematicAgent, pose: np.ndarray) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument(
-        "--grid", action="store_true",
-        help=f"time MPPI-Generic's grid (K = {GRID_SAMPLES[0]} to {GRID_SAMPLES[-1]:,}, "
-        f"H = {GRID_HORIZON}) instead, printed as a Markdown table",
-    )  # fmt: skip
+    arguments = grid_parser(__doc__.splitlines()[0]).parse_args()
     agent, pose = driven_agent(256, 40, **FAST)
-    if parser.parse_args().grid:
+    if arguments.grid:
         print(grid_table(agent, pose))
         return
     single_twin_checked(agent, pose)
