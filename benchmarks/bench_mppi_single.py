@@ -1,9 +1,10 @@
 """mppi-kinematic's fast path (``precision = "float32"``, :mod:`skidnav.agents.mpc.single`)
-against its NumPy twin: the same control step with the Generator's uniforms drawn by NumPy
-(``rng.random(n)``), the Box–Muller normals, the AR(1) smoothing and the clip, the slip
-regions, twists, poses and cells as float32 NumPy arrays over all rollouts at once — the same
-float32 formulas (:mod:`~skidnav.agents.mpc.single`), run on arrays — then the weights and
-the plan's update in NumPy (:func:`numpy_single_update`). The twin draws the same sequences
+against its NumPy twin: the same control step with the counter-based uniforms computed by
+NumPy over all indices at once (the stream's key drawn from the Generator), the Box–Muller
+normals, the AR(1) smoothing and the clip, the slip regions, twists, poses and cells as float32
+NumPy arrays over all rollouts at once — the same float32 formulas
+(:mod:`~skidnav.agents.mpc.single`), run on arrays — then the weights and the plan's update in
+NumPy (:func:`numpy_single_update`). The twin draws the same sequences
 and rolls out the same poses bit for bit; its terminal value is
 :func:`bench_mppi.numpy_state_value`'s (double precision, summed in another order) and its
 update's sums are NumPy's, so its costs agree to 10⁻⁹ and its wheel speeds to 10⁻⁹.
@@ -40,10 +41,12 @@ from skidnav.agents.mpc.planner import MPPIPlanner
 from skidnav.agents.mpc.rollouts import RolloutDraws
 from skidnav.agents.mpc.single import (
     box_muller,
+    counter_uniform,
     float_parts,
     level,
     pose_step,
     sampled_twist,
+    stream_key,
     uniform_halves,
 )
 from skidnav.agents.mpc.single_rollouts import single_rollout_costs
@@ -66,7 +69,8 @@ def numpy_single_batch(
     rng = planner.rng if rng is None else rng
     samples, horizon, rollouts = config.samples, config.horizon, config.samples * config.model_draws
     words = (normal_count(samples, horizon, rollouts, config.sample_uncertainty) + 1) // 2
-    count, fraction = uniform_halves(rng.random(words))
+    indices = np.arange(1, words + 1, dtype=np.uint64)
+    count, fraction = uniform_halves(counter_uniform(stream_key(rng), indices))
     mantissa_bits, exponent = float_parts(count.view(np.int32))
     cosines, sines = box_muller(mantissa_bits.view(np.float32), exponent, fraction)
     normals = np.concatenate([cosines, sines])

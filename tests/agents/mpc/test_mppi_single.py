@@ -19,7 +19,14 @@ import pytest
 from skidnav.agents.mpc.config import MPPIConfig
 from skidnav.agents.mpc.costmap import terminal_value
 from skidnav.agents.mpc.rollouts import RolloutDraws
-from skidnav.agents.mpc.single import box_muller, float_parts, sin_cos, uniform_halves
+from skidnav.agents.mpc.single import (
+    box_muller,
+    counter_uniform,
+    float_parts,
+    sin_cos,
+    stream_key,
+    uniform_halves,
+)
 from skidnav.agents.mpc.single_rollouts import BLOCK, single_rollout_costs
 from skidnav.agents.mpc.training import train_mppi
 from tests.agents.mpc.support import SealedEnv, agent_for, nav_env
@@ -79,6 +86,34 @@ def test_the_normals_and_the_sine_are_close_to_the_exact_ones() -> None:
     exact = angles.astype(np.float64)
     assert np.abs(sine - np.sin(exact)).max() < 2e-7
     assert np.abs(cosine - np.cos(exact)).max() < 2e-7
+
+
+def splitmix64(state: int) -> int:
+    """SplitMix64's output mix of a 64-bit state, in Python's integers (Steele et al. 2014)."""
+    mask = (1 << 64) - 1
+    state = ((state ^ (state >> 30)) * 0xBF58476D1CE4E5B9) & mask
+    state = ((state ^ (state >> 27)) * 0x94D049BB133111EB) & mask
+    return state ^ (state >> 31)
+
+
+def test_the_counter_uniforms_are_splitmix64_and_look_uniform() -> None:
+    """Each uniform is the high 53 bits of SplitMix64's output at key + index · γ (checked in
+    Python's integers, with wrap-around); a stream of 10⁶ fills 1,000 bins as uniforms do, its
+    neighbours are uncorrelated, and streams of two keys drawn one after the other too."""
+    rng = np.random.default_rng(3)
+    key = stream_key(rng)
+    for index in (1, 2, 3, 1_000_003, 2**40 + 7):
+        state = (int(key) + index * 0x9E3779B97F4A7C15) & ((1 << 64) - 1)
+        wanted = (splitmix64(state) >> 11) * 2.0**-53
+        assert counter_uniform(key, np.uint64(index)) == wanted
+    indices = np.arange(1, 1_000_001, dtype=np.uint64)
+    first, second = counter_uniform(key, indices), counter_uniform(stream_key(rng), indices)
+    assert first.min() >= 0.0 and first.max() < 1.0
+    counts = np.bincount((first * 1000).astype(np.int64), minlength=1000)
+    chi_square = ((counts - 1000.0) ** 2 / 1000.0).sum()  # 999 degrees of freedom
+    assert 880.0 < chi_square < 1120.0  # mean ± 2.7 standard deviations (√1998 ≈ 44.7)
+    for a, b in ((first[:-1], first[1:]), (first, second)):
+        assert abs(np.corrcoef(a, b)[0, 1]) < 0.004  # 4 standard errors of 10⁻³
 
 
 def kernel_terminal_values(agent: Any, x: Any, y: Any, heading: Any, running: Any) -> Any:

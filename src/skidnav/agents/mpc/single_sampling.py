@@ -1,13 +1,16 @@
 """The random numbers of one MPPI batch of the fast path (``MPPIConfig.precision =
-"float32"``): standard normals by Box–Muller, two from each uniform of the planner's Generator
-(``Generator.random``, 53 bits), in single precision, and the sequences made of them.
+"float32"``): standard normals by Box–Muller, two from each counter-based uniform
+(:func:`~skidnav.agents.mpc.single.counter_uniform`, 53 bits) of a stream whose key the
+planner's Generator draws once per batch (``Generator.random``), in single precision, and the
+sequences made of them.
 
-The uniforms are drawn one by one (numba's Generator runs NumPy's on the same bit generator:
-the numbers of ``rng.random(n)``, and the Generator's state after them); the normals, the AR(1)
-smoothing and the clip then run over the samples in the innermost loop, which the compiler
-vectorises, with the formulas of :mod:`~skidnav.agents.mpc.single` — the same numbers compiled,
-interpreted (``NUMBA_DISABLE_JIT=1``) and in the benchmark's NumPy twin. About half the time of
-the double-precision batch's ziggurat (:mod:`~skidnav.agents.mpc.sampling`) for the same count.
+A uniform is a function of its index, so every loop runs over the samples in the innermost
+loop, which the compiler vectorises: the uniforms and their halves, the normals, the AR(1)
+smoothing and the clip, with the formulas of :mod:`~skidnav.agents.mpc.single` — the same
+numbers compiled, interpreted (``NUMBA_DISABLE_JIT=1``) and in the benchmark's NumPy twin. The
+Generator's own uniforms, one call each, took half the time of the batch's sampling
+(26,240 of them, 1.9–2.4 ns each, against 0.6 ns for the counter's); the batch takes about
+half the time of the double-precision batch's ziggurat (:mod:`~skidnav.agents.mpc.sampling`).
 
 Layout (all float32, the samples last, each step's contiguous): the normals ``normals``
 (2 · n_words,) — the cosines' half, then the sines' — hold the perturbations' (H, 2, K) first,
@@ -24,7 +27,14 @@ import numpy as np
 from skidnav._jit import vector_jit
 from skidnav.agents.mpc.dynamics import N_DRAWS
 from skidnav.agents.mpc.rollouts import RolloutDraws
-from skidnav.agents.mpc.single import box_muller, float_parts, sequence_step, uniform_halves
+from skidnav.agents.mpc.single import (
+    box_muller,
+    counter_uniform,
+    float_parts,
+    sequence_step,
+    stream_key,
+    uniform_halves,
+)
 
 
 def normal_count(samples: int, horizon: int, rollouts: int, sample_model: bool) -> int:
@@ -34,17 +44,14 @@ def normal_count(samples: int, horizon: int, rollouts: int, sample_model: bool) 
 
 
 @vector_jit
-def draw_normals(
-    rng: np.random.Generator, uniforms: np.ndarray, parts: np.ndarray, normals: np.ndarray
-) -> None:
-    """``normals`` float32 (2 n,) from n = ``uniforms.shape[0]`` uniforms of ``rng`` (float64
-    (n,), overwritten; ``parts`` float32 (3, n) scratch): the cosine normal of uniform w at w,
-    its sine normal at n + w."""
-    n = uniforms.shape[0]
-    for word in range(n):
-        uniforms[word] = rng.random()
-    for word in range(n):  # vectorised: float64 in, float32 out
-        parts[0, word], parts[2, word] = uniform_halves(uniforms[word])
+def draw_normals(key: np.uint64, parts: np.ndarray, normals: np.ndarray) -> None:
+    """``normals`` float32 (2 n,) from the first n uniforms of the stream ``key`` (``parts``
+    float32 (3, n) scratch): the cosine normal of uniform w at w, its sine normal at n + w.
+    (n is read from ``normals``: read from ``parts``, the compiler no longer vectorised the
+    Box–Muller loop, 5× slower.)"""
+    n = normals.shape[0] // 2
+    for word in range(n):  # vectorised: uint64 in, float32 out
+        parts[0, word], parts[2, word] = uniform_halves(counter_uniform(key, np.uint64(word + 1)))
     bits = parts[0].view(np.int32)
     for word in range(n):  # vectorised, int32: the count's mantissa and exponent
         bits[word], parts[1, word] = float_parts(bits[word])
@@ -92,8 +99,8 @@ class SingleBatch(NamedTuple):
     each batch (module doc).
 
     Attributes:
-        uniforms: float64 (n,) the Generator's uniforms. parts: float32 (3, n) their halves,
-            the first split into mantissa and exponent.
+        parts: float32 (3, n) the halves of the n uniforms, the first split into mantissa and
+            exponent.
         normals: float32 (2 n,) the standard normals.
         smoothed: float32 (2, K) the AR(1) perturbations of the last step made.
         controls: float32 (H, 2, K) the sequences clip(U + ε) [rad/s].
@@ -102,7 +109,6 @@ class SingleBatch(NamedTuple):
             sampled): ``model`` float32 (5, K · M), ``noise`` float32 (H, 3, K · M).
     """
 
-    uniforms: np.ndarray
     parts: np.ndarray
     normals: np.ndarray
     smoothed: np.ndarray
@@ -128,7 +134,7 @@ def single_batch(
         noise = np.zeros((horizon, 3, rollouts), np.float32)
     shape = (horizon, 2, samples)
     return SingleBatch(
-        np.zeros(words), np.zeros((3, words), np.float32), normals,
+        np.zeros((3, words), np.float32), normals,
         np.zeros((2, samples), np.float32), np.zeros(shape, np.float32),
         np.zeros(shape, np.float32), RolloutDraws(model, noise, noise_scale, per_sequence),
     )  # fmt: skip
@@ -138,8 +144,8 @@ def sample_single(
     rng: np.random.Generator, plan: np.ndarray, scales: tuple[float, float, float],
     batch: SingleBatch,
 ) -> None:  # fmt: skip
-    """One batch into ``batch``: :func:`draw_normals` from ``rng``, then
+    """One batch into ``batch``: :func:`draw_normals` of a new stream of ``rng``, then
     :func:`make_sequences` around the plan U float64 (H, 2) [rad/s] with ``scales``
     (σ [rad/s], β, Ω [rad/s])."""
-    draw_normals(rng, batch.uniforms, batch.parts, batch.normals)
+    draw_normals(stream_key(rng), batch.parts, batch.normals)
     make_sequences(batch.normals, plan, scales, batch.smoothed, batch.controls, batch.perturbation)
