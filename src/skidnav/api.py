@@ -42,9 +42,10 @@ from skidnav.agents.callbacks import EpisodeInfo as EpisodeInfo
 from skidnav.agents.callbacks import StopTraining as StopTraining
 from skidnav.agents.catalog import CatalogEntry, entry
 from skidnav.agents.catalog import agent_names as agent_names
+from skidnav.agents.greedy import Rollout, greedy_evaluation
 from skidnav.agents.interface import Agent
 from skidnav.agents.saved import SavedPath, load_saved_agent
-from skidnav.agents.training import Evaluation, Rollout, TrainingLog, greedy_evaluation
+from skidnav.agents.training import Evaluation, TrainingLog
 from skidnav.envs.registration import ENV_ID, creation_error
 from skidnav.errors import UserError, shown
 from skidnav.experiments.config import ExperimentConfig
@@ -278,7 +279,7 @@ def evaluate(
 ) -> list[Rollout]:
     """``rollouts`` greedy rollouts of ``agent`` on ``env`` without learning, each from a reset
     seed of ``seed`` (the seeds :func:`train` evaluates with) and cut at ``max_steps`` actions
-    (default: the env's limit); each a :class:`~skidnav.agents.training.Rollout` (length
+    (default: the env's limit); each a :class:`~skidnav.agents.greedy.Rollout` (length
     [actions] and cost, −1 and NaN where it did not reach the goal). UserError for an argument
     of the wrong type or beyond its limit, as :func:`train`."""
     _check_run("evaluate", agent, env)

@@ -7,9 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from skidnav.agents.greedy import greedy_rollout
 from skidnav.agents.tabular.config import DynaQConfig
 from skidnav.agents.tabular.registry import available_agents, load_agent, make_agent
-from skidnav.agents.training import greedy_rollout, train_agent
+from skidnav.agents.training import train_agent
 from skidnav.envs.mazes import dyna_maze
 from skidnav.errors import CorruptFileError, UserError
 

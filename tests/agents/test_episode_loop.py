@@ -11,14 +11,13 @@ import numpy as np
 import pytest
 
 from skidnav.agents.catalog import families
+from skidnav.agents.greedy import NOT_REACHED, Rollout
 from skidnav.agents.mpc.training import train_mppi
 from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.training import (
     NO_EVALUATION,
-    NOT_REACHED,
     Episode,
     Evaluation,
-    Rollout,
     TrainingLog,
     train_agent,
     train_episodes,

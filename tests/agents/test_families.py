@@ -11,8 +11,8 @@ import pytest
 
 import skidnav
 from skidnav.agents import catalog
+from skidnav.agents.greedy import start_rollout
 from skidnav.agents.saved import load_policy
-from skidnav.agents.training import start_rollout
 from skidnav.errors import CorruptFileError, UserError
 
 WHEEL_SPEED_AGENTS = {"ppo", "sac"}

@@ -12,10 +12,11 @@ import pytest
 
 import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents import kinematic_planning as kp
+from skidnav.agents.greedy import greedy_rollout
 from skidnav.agents.tabular.fast_training import train_agent_fast
 from skidnav.agents.tabular.model_based import ModelBasedAgent
 from skidnav.agents.tabular.registry import load_agent, make_agent
-from skidnav.agents.training import greedy_rollout, train_agent
+from skidnav.agents.training import train_agent
 from skidnav.agents.trajectory_keys import loop_erase
 from skidnav.envs.mazes import dyna_maze
 from skidnav.errors import CorruptFileError

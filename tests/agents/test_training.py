@@ -6,15 +6,9 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from skidnav.agents.greedy import greedy_path, greedy_rollout
 from skidnav.agents.tabular.registry import available_agents, make_agent
-from skidnav.agents.training import (
-    Evaluation,
-    TrainingLog,
-    greedy_path,
-    greedy_rollout,
-    train_agent,
-    train_for_steps,
-)
+from skidnav.agents.training import Evaluation, TrainingLog, train_agent, train_for_steps
 from skidnav.envs.mazes import blocking_maze, dyna_maze
 
 

@@ -16,9 +16,10 @@ pytest.importorskip("mujoco")
 from gymnasium.utils.env_checker import check_env
 
 import skidnav.envs  # noqa: F401  (registers the env)
+from skidnav.agents.greedy import greedy_rollout
 from skidnav.agents.tabular.fast_training import FusedEnv
 from skidnav.agents.tabular.registry import make_agent
-from skidnav.agents.training import greedy_rollout, train_agent
+from skidnav.agents.training import train_agent
 from skidnav.physics import backend
 from skidnav.physics.backend import PhysicsUnavailable
 from skidnav.robot.kinematics import body_velocities

@@ -1,7 +1,7 @@
 """What an agent answers, by family: the typed contract the catalog and the runner rely on.
 
 * :class:`Agent` — every agent: its registry ``name``, ``greedy_action(observation)`` (the
-  greedy evaluation, :func:`skidnav.agents.training.greedy_evaluation`) and ``save(path)``
+  greedy evaluation, :func:`skidnav.agents.greedy.greedy_evaluation`) and ``save(path)``
   (``.npz`` + ``.json``, never pickle);
 * :class:`StepLearningAgent` — the tabular, linear and model-predictive (``mppi-kinematic``)
   agents, which a loop drives one real step at a time: ``act``, ``observe``, ``end_episode``
@@ -29,7 +29,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, ClassVar, Protocol, Self, runtime_checkable
 
-from skidnav.agents.training import NO_EVALUATION, Evaluation, Greedy, Learner, TrainingLog
+from skidnav.agents.greedy import Greedy
+from skidnav.agents.training import NO_EVALUATION, Evaluation, Learner, TrainingLog
 
 
 @runtime_checkable
@@ -48,7 +49,7 @@ class StepLearningAgent(Learner, Agent, Protocol):
     """An agent a loop trains step by step (tabular and linear): ε-greedy ``act(state)``,
     ``observe(state, action, reward, next_state, terminated, truncated, info)`` after each real
     step, ``end_episode()`` after each episode, and the model-based updates made so far
-    (``planning_updates``). A state is what :func:`skidnav.agents.training.as_state` makes of
+    (``planning_updates``). A state is what :func:`skidnav.agents.greedy.as_state` makes of
     an observation."""
 
 

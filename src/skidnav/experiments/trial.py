@@ -36,10 +36,11 @@ import gymnasium
 import numpy as np
 
 from skidnav.agents.catalog import CatalogAgent, entry
+from skidnav.agents.greedy import greedy_path
 from skidnav.agents.interface import Agent
 from skidnav.agents.tabular.agent import TabularAgent
 from skidnav.agents.trained_world import trained_world
-from skidnav.agents.training import Evaluation, TrainingLog, greedy_path
+from skidnav.agents.training import Evaluation, TrainingLog
 from skidnav.envs.registration import (
     allowed_env_modules,
     registered_env_id,

@@ -8,9 +8,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from skidnav.agents.greedy import greedy_run
 from skidnav.agents.mpc.agent import MPPIKinematicAgent, make_mppi_agent
 from skidnav.agents.mpc.training import train_mppi
-from skidnav.agents.training import Evaluation, greedy_run
+from skidnav.agents.training import Evaluation
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import UserError
 from skidnav.world.discretization import Discretization

@@ -13,10 +13,11 @@ import pandas as pd
 import pytest
 
 from skidnav.agents.catalog import agent_names, entry
+from skidnav.agents.greedy import greedy_evaluation
 from skidnav.agents.interface import Agent, StepLearningAgent
 from skidnav.agents.mpc.agent import MPPIKinematicAgent
 from skidnav.agents.mpc.config import MPPIConfig
-from skidnav.agents.training import Evaluation, greedy_evaluation
+from skidnav.agents.training import Evaluation
 from skidnav.cli import main
 from skidnav.errors import UserError
 from skidnav.experiments.store import ResultStore

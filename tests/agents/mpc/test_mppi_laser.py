@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from skidnav.agents.greedy import greedy_run
 from skidnav.agents.mpc.laser import record_rays
 from skidnav.agents.mpc.training import train_mppi
-from skidnav.agents.training import greedy_run
 from skidnav.sim.lidar import lidar_ranges
 from skidnav.world.discretization import Discretization
 from tests.agents.mpc.support import WALL_BETWEEN, SealedEnv, agent_for, nav_env

@@ -95,7 +95,7 @@ class ClassicalAgent:
         self.navigator.reset()
 
     def start_greedy_rollout(self) -> None:
-        """Forget the previous rollout's map (:class:`~skidnav.agents.training.RolloutState`)."""
+        """Forget the previous rollout's map (:class:`~skidnav.agents.greedy.RolloutState`)."""
         self.greedy.reset()
 
     def policy(self) -> ClassicalNavigator:

@@ -158,7 +158,7 @@ class ClassicalNavigator:
         self.progress.reset()
 
     def start_greedy_rollout(self) -> None:
-        """A rollout starts: :meth:`reset` (:class:`~skidnav.agents.training.RolloutState`)."""
+        """A rollout starts: :meth:`reset` (:class:`~skidnav.agents.greedy.RolloutState`)."""
         self.reset()
 
     def wheel_speeds(self, observation: np.ndarray) -> tuple[float, float]:

@@ -39,13 +39,13 @@ import numpy as np
 from gymnasium.wrappers import RescaleObservation
 from gymnasium.wrappers.utils import rescale_box
 
+from skidnav.agents.greedy import Rollout
 from skidnav.agents.saving import new_save_paths, save_paths
 from skidnav.agents.training import (
     NO_EVALUATION,
     Episode,
     Evaluation,
     LogRows,
-    Rollout,
     TrainingLog,
     plain_evaluations,
 )

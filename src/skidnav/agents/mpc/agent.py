@@ -223,7 +223,7 @@ class MPPIKinematicAgent:
 
     def start_greedy_rollout(self) -> None:
         """A greedy rollout starts: the next :meth:`greedy_action` freezes the planner afresh
-        (:class:`~skidnav.agents.training.RolloutState`)."""
+        (:class:`~skidnav.agents.greedy.RolloutState`)."""
         self._greedy = None
 
     def observe(

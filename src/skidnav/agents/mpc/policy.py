@@ -80,5 +80,5 @@ class MPPIPolicy:
 
     def start_greedy_rollout(self) -> None:
         """A rollout (an episode) starts: :meth:`reset`
-        (:class:`~skidnav.agents.training.RolloutState`)."""
+        (:class:`~skidnav.agents.greedy.RolloutState`)."""
         self.reset()

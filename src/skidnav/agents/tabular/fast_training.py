@@ -26,6 +26,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from skidnav.agents.greedy import Rollout
 from skidnav.agents.learning import NO_LOG_ROWS, NO_POSE
 from skidnav.agents.tabular import env_steps, fused_loop
 from skidnav.agents.tabular.agent import TabularAgent
@@ -36,7 +37,6 @@ from skidnav.agents.training import (
     EpisodeFunction,
     Evaluation,
     EvaluationFunction,
-    Rollout,
     TrainingLog,
     train_agent,
     train_episodes,
@@ -181,7 +181,7 @@ def _evaluations(
 
 def _greedy(q: np.ndarray, fused: FusedEnv, max_steps: int, seed: int | None) -> Rollout:
     """One compiled greedy rollout from ``reset(seed=seed)``: its length and cost, or −1 and
-    NaN (:class:`~skidnav.agents.training.Rollout`)."""
+    NaN (:class:`~skidnav.agents.greedy.Rollout`)."""
     state = fused.reset(seed)
     kernel = fused.kernel_state()
     length, cost, state, taken = fused_loop.greedy_stretch(

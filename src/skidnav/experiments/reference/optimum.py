@@ -34,7 +34,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from skidnav.agents.training import greedy_path
+from skidnav.agents.greedy import greedy_path
 from skidnav.envs.wrappers import FineStates
 from skidnav.errors import CorruptFileError
 from skidnav.experiments.config import ExperimentConfig

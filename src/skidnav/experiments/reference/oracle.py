@@ -57,8 +57,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from skidnav.agents.greedy import greedy_run
 from skidnav.agents.tabular.fast_training import evaluate_q_fast
-from skidnav.agents.training import greedy_run
 from skidnav.envs.wrappers import fine_grid
 from skidnav.errors import CorruptFileError, UserError
 from skidnav.experiments.memory import check_oracle_memory

@@ -17,7 +17,7 @@ command sent, before the wheels stop at the goal.
 
 A policy that raises, or returns anything but two finite numbers, trips the safety monitor
 (``policy failed: …``): the robot stops and the run ends with exit code 3. A policy with a state
-of its own within an episode (:class:`~skidnav.agents.training.RolloutState`: the plan of
+of its own within an episode (:class:`~skidnav.agents.greedy.RolloutState`: the plan of
 ``mppi-kinematic``'s frozen planner) forgets it when an episode starts.
 """
 
@@ -31,7 +31,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from skidnav.agents.training import start_rollout
+from skidnav.agents.greedy import start_rollout
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.errors import first_line
 from skidnav.realtime.config import RealtimeConfig

@@ -32,7 +32,7 @@ import gymnasium
 import numpy as np
 
 from skidnav.agents.catalog import CatalogAgent, entry
-from skidnav.agents.training import Greedy, as_state, start_rollout
+from skidnav.agents.greedy import Greedy, as_state, start_rollout
 from skidnav.envs.registration import registered_env_id
 from skidnav.experiments.runs import RunSpec
 from skidnav.experiments.store import TrialResult

@@ -48,7 +48,7 @@ import gymnasium
 import numpy as np
 import pandas as pd
 
-from skidnav.agents.training import Greedy, as_state, start_rollout
+from skidnav.agents.greedy import Greedy, as_state, start_rollout
 from skidnav.agents.wheel_policy import WheelSpeedPolicy
 from skidnav.experiments.metrics import path_length
 from skidnav.statistics.intervals import Interval, bootstrap_interval
@@ -122,9 +122,9 @@ METRIC_UNITS = {
 
 class GreedyPolicy:
     """The greedy policy of an agent as a :data:`Policy`: its ``greedy_action`` in the
-    observation's state (:func:`~skidnav.agents.training.as_state`), an int for Discrete actions,
+    observation's state (:func:`~skidnav.agents.greedy.as_state`), an int for Discrete actions,
     float64 wheel speeds (2,) [rad/s] for Box ones. An agent whose greedy policy keeps a state
-    within a rollout (:class:`~skidnav.agents.training.RolloutState`, ``mppi-kinematic``'s
+    within a rollout (:class:`~skidnav.agents.greedy.RolloutState`, ``mppi-kinematic``'s
     frozen planner) forgets it when :func:`record_rollout` starts one."""
 
     def __init__(self, agent: Greedy) -> None:
@@ -135,7 +135,7 @@ class GreedyPolicy:
         return int(action) if np.ndim(action) == 0 else np.asarray(action, dtype=np.float64)
 
     def start_greedy_rollout(self) -> None:
-        """A rollout starts (:func:`~skidnav.agents.training.start_rollout` of the agent)."""
+        """A rollout starts (:func:`~skidnav.agents.greedy.start_rollout` of the agent)."""
         start_rollout(self.agent)
 
 
@@ -179,7 +179,7 @@ class WheelSpeeds:
         return np.asarray(self.policy.wheel_speeds(observation), dtype=np.float64)
 
     def start_greedy_rollout(self) -> None:
-        """A rollout starts (:func:`~skidnav.agents.training.start_rollout` of the policy)."""
+        """A rollout starts (:func:`~skidnav.agents.greedy.start_rollout` of the policy)."""
         start_rollout(self.policy)
 
 
@@ -205,7 +205,7 @@ def record_rollout(
     The episode ends when the env terminates or truncates, or after ``max_steps`` actions
     (default: the env's time limit, ``env.spec.max_episode_steps``; ValueError if it has none),
     which counts as truncated. Nothing is learned; the policy is called once per action, after
-    it forgot any state of its own (:func:`~skidnav.agents.training.start_rollout`).
+    it forgot any state of its own (:func:`~skidnav.agents.greedy.start_rollout`).
     """
     limit = _step_limit(env, max_steps)
     nav: Any = env.unwrapped  # a SkidSteerNavEnv, or any env with its wheel_commands and robot

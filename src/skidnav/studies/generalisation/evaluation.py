@@ -34,7 +34,8 @@ import numpy as np
 from gymnasium.wrappers import TimeLimit
 
 from skidnav.agents.catalog import entry
-from skidnav.agents.training import TrainingLog, greedy_rollout, rollout_summary
+from skidnav.agents.greedy import greedy_rollout, rollout_summary
+from skidnav.agents.training import TrainingLog
 from skidnav.envs.mapset import MapSetEnv, world_env
 from skidnav.seeding import GENERALISATION_ROLES, RUN_ROLES, child, child_sequences, seed_int
 from skidnav.sim.features import POSE_GOAL_NAMES

@@ -19,8 +19,9 @@ import numpy as np
 
 import skidnav.envs  # noqa: F401  (registers the env)
 from skidnav.agents.catalog import entry
+from skidnav.agents.greedy import greedy_evaluation, rollout_summary
 from skidnav.agents.tabular.fast_training import train_agent_fast
-from skidnav.agents.training import TrainingLog, greedy_evaluation, rollout_summary
+from skidnav.agents.training import TrainingLog
 from skidnav.seeding import seed_int
 
 ENV_ID = "skidnav/SkidSteerNav-v0"

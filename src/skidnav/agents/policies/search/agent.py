@@ -4,7 +4,7 @@
 generation: ``train_episodes(n)`` runs as many whole generations as ``n`` episodes need (each
 generation λ × E real episodes, one log row each), and after every episode the greedy policy —
 the distribution's mean, which changes only at a generation's end — is evaluated as every agent
-is (:func:`~skidnav.agents.training.greedy_evaluation`). The search rebuilds its world in its own
+is (:func:`~skidnav.agents.greedy.greedy_evaluation`). The search rebuilds its world in its own
 vector envs, so the env must be one ``gymnasium.make`` made from a map kind, a world seed and a
 slip preset (:func:`search_world`); its greedy action is the mean policy's wheel speeds.
 """
