@@ -2,7 +2,8 @@
 the maze and obstacle worlds"): per world, one agent (seed 0) trained for E episodes of at most
 200 actions of 1 s on the slippery floor, feature observations (pose, goal, 8 lidar ranges), a
 horizon of 4 actions (4 s, as in the continuity study); ``--period 0.1`` makes the actions 0.1 s
-long, ten times as many per episode and in the horizon (the same 200 s and 4 s); after every
+long, ten times as many per episode and in the horizon (the same 200 s and 4 s; ``--set
+horizon=N`` sets it in actions instead); after every
 episode its frozen planner
 is rolled out greedily on R evaluation seeds (``skidnav.train``). Prints one JSON line per world
 (success, episodes and seconds of driving to the first success, collisions per episode, greedy
@@ -70,7 +71,7 @@ def run(
         kind, seed=world, slip=slip, observation="features", action="continuous",
         control_period=period, max_episode_steps=max_steps,
     )  # fmt: skip
-    agent = skidnav.make_agent("mppi-kinematic", env, seed=0, horizon=horizon, **params)
+    agent = skidnav.make_agent("mppi-kinematic", env, seed=0, **{"horizon": horizon, **params})
     start = time.perf_counter()
     log = skidnav.train(agent, env, episodes, seed=0, max_steps=max_steps, rollouts=rollouts)
     wall_time = time.perf_counter() - start

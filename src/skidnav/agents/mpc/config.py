@@ -68,7 +68,10 @@ class MPPIConfig(KinematicModelFields):
     """K, wheel-speed sequences sampled per control step, in [2, 65,536]."""
     horizon: int = 40
     """H, control steps each sequence looks ahead, in [1, 10,000] (40 × 0.1 s = 4 s: a
-    quarter turn takes 2.5 s; measured against 20 and 60 in docs/agents/mppi-kinematic.md)."""
+    quarter turn takes 2.5 s; measured against 20 and 60 in docs/agents/mppi-kinematic.md). In
+    steps, not seconds: at 1-s actions 40 steps look 40 s ahead, nearly every perturbed sequence
+    meets a wall and the weights fall on one; set 10 there (docs/agents/mppi-kinematic.md,
+    "The horizon in seconds")."""
     temperature: float = 0.1
     """λ [s] of the sequence weights exp(−S T / λ) (Williams et al. 2017), > 0: S is a
     sequence's cost in control steps of T seconds, so λ is a cost in seconds of driving and the
