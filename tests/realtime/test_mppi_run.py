@@ -66,11 +66,13 @@ def test_the_frozen_planner_drives_the_sim_robot_to_the_goal_and_resumes(
         output = replay.wheel_speeds(np.array(transition["observation"]))
         assert list(output) == transition["output"] == transition["command"]  # within ±1.7
     # the control period held: an action every 0.1 s of robot time (the median; wall clock ×
-    # time scale), one robot period of the server's poses per action
+    # time scale), about one robot period of the server's poses per action (at 10 ms of wall
+    # clock a period, a busy machine's late actions let a few more poses in: a quarter more at
+    # most, where a pose per sub-step would be ten times as many)
     held = np.diff([transition["mono"] for transition in transitions]) * TIME_SCALE
     assert np.median(held) == pytest.approx(0.1, abs=0.02)
     poses = [e for e in read_events(out / "run.jsonl") if e["event"] == "pose"]
-    assert abs(len(poses) - len(transitions)) <= 5
+    assert len(transitions) - 5 <= len(poses) <= 1.25 * len(transitions) + 5
     assert main([*argv, "--resume", "--episodes", "2"]) == 0
     assert json.loads((out / "summary.json").read_text())["episodes"] == 2
 
