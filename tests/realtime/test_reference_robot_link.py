@@ -279,7 +279,10 @@ def test_skidnav_robot_run_drives_the_reference_robot(tmp_path: Path, driver: st
     commands = robot_err.count('"event": "cmd"')
     assert 3 <= commands <= [e["event"] for e in events].count("cmd")
     poses = [(e["x"], e["y"], e["heading"]) for e in events if e["event"] == "pose"]
-    assert poses[0] == (0.3, 0.25, 0.0) and poses[-1] != poses[0]  # the robot's, and it moved
+    # the robot's start (its own pose source, not the simulator's), and it moved; on a busy
+    # machine the first pose logged may come a few periods late, already turned a little
+    assert all(abs(a - b) <= 0.05 for a, b in zip(poses[0], (0.3, 0.25, 0.0), strict=True))
+    assert poses[-1] != poses[0]
 
 
 @pytest.mark.parametrize(
