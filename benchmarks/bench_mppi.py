@@ -109,17 +109,17 @@ def numpy_batch(
     draws, the numbers of :meth:`MPPIPlanner.sample` (the tests hold the two equal)."""
     config, limit = planner.config, planner.robot.wheel_speed
     rng = planner.rng if rng is None else rng
-    white = rng.standard_normal((config.samples, config.horizon, 2))
+    white = rng.standard_normal((config.samples, config.horizon_steps, 2))
     white *= config.noise_std
     beta = config.noise_correlation
     if beta > 0.0:
         innovation = math.sqrt(1.0 - beta * beta)
-        for t in range(1, config.horizon):
+        for t in range(1, config.horizon_steps):
             white[:, t] = beta * white[:, t - 1] + innovation * white[:, t]
     white[0] = 0.0
     controls = np.clip(planner.plan + white, -limit, limit)
     rollouts = config.samples * config.model_draws
-    shape = ((rollouts, 5), (rollouts, config.horizon, 3))
+    shape = ((rollouts, 5), (rollouts, config.horizon_steps, 3))
     if config.sample_uncertainty:
         model, noise = (rng.standard_normal(each) for each in shape)
         scale = 1.0 / math.sqrt(planner.robot.substeps)

@@ -67,7 +67,8 @@ def numpy_single_batch(
     and (H, 3, R))."""
     config, limit = planner.config, F32(planner.robot.wheel_speed)
     rng = planner.rng if rng is None else rng
-    samples, horizon, rollouts = config.samples, config.horizon, config.samples * config.model_draws
+    samples, horizon = config.samples, config.horizon_steps
+    rollouts = samples * config.model_draws
     words = (normal_count(samples, horizon, rollouts, config.sample_uncertainty) + 1) // 2
     indices = np.arange(1, words + 1, dtype=np.uint64)
     count, fraction = uniform_halves(counter_uniform(stream_key(rng), indices))

@@ -32,7 +32,7 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 
 from skidnav.agents.geometry import geometry_json
-from skidnav.agents.mpc.config import MPPIConfig
+from skidnav.agents.mpc.config import MPPIConfig, with_horizon
 from skidnav.agents.mpc.costmap import CostMap
 from skidnav.agents.mpc.dynamics import (
     SampledDynamics,
@@ -113,7 +113,8 @@ class MPPIKinematicAgent:
         lidar_range: float = 0.3,
         lidar_fov: float = FULL_TURN,
     ) -> None:
-        self.config = config or MPPIConfig()
+        self.config = with_horizon(config or MPPIConfig(), robot.action_duration)
+        """Its hyperparameters, the horizon in control steps of the robot's control period."""
         check_lidar(lidar_rays, lidar_range)
         LaserSpec(max(int(lidar_rays), 1), float(lidar_range), lidar_fov)  # checks the sector
         self.lidar_rays, self.lidar_range = int(lidar_rays), float(lidar_range)

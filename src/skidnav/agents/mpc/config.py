@@ -1,7 +1,9 @@
 """Hyperparameters of ``mppi-kinematic``: one frozen dataclass, validated on construction.
 
->>> MPPIConfig(samples=128).horizon
-40
+>>> MPPIConfig(samples=128).horizon is None  # derived from the control period
+True
+>>> with_horizon(MPPIConfig(), 1.0).horizon, with_horizon(MPPIConfig(), 0.1).horizon
+(10, 40)
 >>> MPPIConfig(temperature=0.0)
 Traceback (most recent call last):
 ...
@@ -24,6 +26,15 @@ MAX_SAMPLES = 65_536
 """Most sampled wheel-speed sequences K per control step."""
 MAX_HORIZON = 10_000
 """Longest horizon H [control steps]."""
+LOOKAHEAD_TIME = 10.0
+"""How far ahead [s] the default horizon looks, at most :data:`DEFAULT_MAX_HORIZON` control
+steps: 10 steps of 1-s actions, where 40 steps (40 s) made every perturbed sequence meet a wall
+and 10 let every maze run of the targets' grid learn (docs/agents/mppi-kinematic.md, "The horizon
+in seconds")."""
+DEFAULT_MAX_HORIZON = 40
+"""Most control steps of the default horizon: 40 × 0.1 s = 4 s at the 0.1-s period, the
+setting every 0.1-s table was measured at (against 20 and 60), and the cost of a control step
+grows with it."""
 MAX_ROLLOUT_STEPS = 10_000_000
 """Most K · M · H per control step: the pre-drawn normals take 7 · 8 bytes each (about 0.5 GB)."""
 MAX_MODEL_DRAWS = 64
@@ -66,12 +77,15 @@ class MPPIConfig(KinematicModelFields):
 
     samples: int = 256
     """K, wheel-speed sequences sampled per control step, in [2, 65,536]."""
-    horizon: int = 40
-    """H, control steps each sequence looks ahead, in [1, 10,000] (40 × 0.1 s = 4 s: a
-    quarter turn takes 2.5 s; measured against 20 and 60 in docs/agents/mppi-kinematic.md). In
-    steps, not seconds: at 1-s actions 40 steps look 40 s ahead, nearly every perturbed sequence
-    meets a wall and the weights fall on one; set 10 there (docs/agents/mppi-kinematic.md,
-    "The horizon in seconds")."""
+    horizon: int | None = None
+    """H, control steps each sequence looks ahead, in [1, 10,000]; None (the default): the
+    steps of :data:`LOOKAHEAD_TIME` = 10 s at the control period, at most
+    :data:`DEFAULT_MAX_HORIZON` = 40 (:func:`steps_ahead`): 40 steps of 0.1 s (4 s: a quarter
+    turn takes 2.5 s; measured against 20 and 60), 10 steps of 1 s. The agent sets it when it
+    learns its control period (:func:`with_horizon`). A count of steps alone does not carry
+    across periods: 40 steps of 1-s actions look 40 s ahead, nearly every perturbed sequence
+    meets a wall and the weights fall on one (docs/agents/mppi-kinematic.md, "The horizon in
+    seconds")."""
     temperature: float = 0.1
     """λ [s] of the sequence weights exp(−S T / λ) (Williams et al. 2017), > 0: S is a
     sequence's cost in control steps of T seconds, so λ is a cost in seconds of driving and the
@@ -170,15 +184,7 @@ class MPPIConfig(KinematicModelFields):
     (docs/agents/mppi-kinematic.md, "Speed")."""
 
     def __post_init__(self) -> None:
-        check_integer("samples", self.samples, 2, MAX_SAMPLES)
-        check_integer("horizon", self.horizon, 1, MAX_HORIZON)
-        check_integer("model_draws", self.model_draws, 1, MAX_MODEL_DRAWS)
-        rollout_steps = self.samples * self.horizon * self.model_draws
-        if rollout_steps > MAX_ROLLOUT_STEPS:
-            raise ValueError(
-                f"expected samples × horizon × model_draws at most {MAX_ROLLOUT_STEPS:,}, got "
-                f"{rollout_steps:,}"
-            )
+        self._check_sizes()
         for name, allowed in CHOICES.items():
             if getattr(self, name) not in allowed:
                 raise ValueError(f"expected {name} in {allowed}, got {shown(getattr(self, name))}")
@@ -222,9 +228,31 @@ class MPPIConfig(KinematicModelFields):
             )
         self.kinematic_config()  # validates the kinematic model's fields
 
+    def _check_sizes(self) -> None:
+        """K, H and M each in range, and K · H · M at most :data:`MAX_ROLLOUT_STEPS` (an unset
+        horizon counted at its most, :data:`DEFAULT_MAX_HORIZON`)."""
+        check_integer("samples", self.samples, 2, MAX_SAMPLES)
+        if self.horizon is not None:
+            check_integer("horizon", self.horizon, 1, MAX_HORIZON)
+        check_integer("model_draws", self.model_draws, 1, MAX_MODEL_DRAWS)
+        steps = DEFAULT_MAX_HORIZON if self.horizon is None else self.horizon
+        rollout_steps = self.samples * steps * self.model_draws
+        if rollout_steps > MAX_ROLLOUT_STEPS:
+            raise ValueError(
+                f"expected samples × horizon × model_draws at most {MAX_ROLLOUT_STEPS:,}, got "
+                f"{rollout_steps:,}"
+            )
+
     def to_dict(self) -> dict[str, Any]:
         """Every field, JSON-able (read back by :meth:`from_mapping`)."""
         return dataclasses.asdict(self)
+
+    @property
+    def horizon_steps(self) -> int:
+        """H [control steps], once the horizon is set (:func:`with_horizon`)."""
+        if self.horizon is None:
+            raise ValueError("expected the horizon set for a control period (with_horizon)")
+        return self.horizon
 
     @classmethod
     def from_mapping(cls, values: Mapping[str, Any]) -> MPPIConfig:
@@ -232,3 +260,18 @@ class MPPIConfig(KinematicModelFields):
         ValueError in one line for an unknown key or a bad value."""
         check_keys(values, sorted(field.name for field in dataclasses.fields(cls)))
         return cls(**dict(values))
+
+
+def steps_ahead(
+    period: float, lookahead: float = LOOKAHEAD_TIME, most: int = DEFAULT_MAX_HORIZON
+) -> int:
+    """The control steps [1, ``most``] nearest to ``lookahead`` [s] at ``period`` [s] per step."""
+    return int(min(most, max(1, round(lookahead / period))))
+
+
+def with_horizon(config: MPPIConfig, period: float) -> MPPIConfig:
+    """``config`` with its horizon in control steps of ``period`` [s]: as given, or, unset,
+    :func:`steps_ahead` of the default look-ahead."""
+    if config.horizon is not None:
+        return config
+    return dataclasses.replace(config, horizon=steps_ahead(period))

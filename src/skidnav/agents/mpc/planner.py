@@ -66,7 +66,7 @@ class MPPIPlanner:
         rng: np.random.Generator,
     ) -> None:
         self.config, self.robot, self.grid, self.rng = config, robot, grid, rng
-        self.plan = np.zeros((config.horizon, 2))
+        self.plan = np.zeros((config.horizon_steps, 2))
         """float64 (H, 2): the wheel speeds (ω_L, ω_R) [rad/s] planned for the next H steps."""
         self.costs = np.zeros(config.samples)
         """float64 (K,): the last batch's sequence costs, control cost included."""
@@ -95,11 +95,11 @@ class MPPIPlanner:
         if self.single:
             return self.sample_single()
         if self._batch is None:  # allocated once, at the first plan
-            shape = (config.samples, config.horizon, 2)
+            shape = (config.samples, config.horizon_steps, 2)
             rollouts = config.samples * config.model_draws
             scale = 1.0 / math.sqrt(self.robot.substeps) if config.sample_uncertainty else 0.0
             draws = RolloutDraws(
-                np.zeros((rollouts, N_DRAWS)), np.zeros((rollouts, config.horizon, 3)), scale,
+                np.zeros((rollouts, N_DRAWS)), np.zeros((rollouts, config.horizon_steps, 3)), scale,
                 config.model_draws,
             )  # fmt: skip
             self._batch = np.zeros(shape), np.zeros(shape), draws
@@ -119,7 +119,7 @@ class MPPIPlanner:
         if self._single is None:
             scale = 1.0 / math.sqrt(self.robot.substeps) if config.sample_uncertainty else 0.0
             self._single = single_batch(
-                config.samples, config.horizon, config.model_draws, scale,
+                config.samples, config.horizon_steps, config.model_draws, scale,
                 config.sample_uncertainty,
             )  # fmt: skip
         scales = (config.noise_std, config.noise_correlation, self.robot.wheel_speed)

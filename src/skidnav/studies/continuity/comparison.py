@@ -45,6 +45,7 @@ import gymnasium
 import numpy as np
 
 from skidnav.agents.catalog import entry
+from skidnav.agents.mpc.config import MAX_HORIZON, steps_ahead
 from skidnav.agents.policies.goal_tracker import GoalTracker
 from skidnav.agents.training import Evaluation
 from skidnav.checks import check_integer
@@ -70,8 +71,10 @@ WHEEL_LEARNERS = ("cmaes", "ppo", "sac")
 MODEL_LEARNER = "mppi-kinematic"
 """The model-predictive wheel-speed learner (docs/agents/mppi-kinematic.md)."""
 MPPI_LOOKAHEAD = 4.0
-"""How far ``mppi-kinematic`` plans ahead [s]: its horizon is this over the control period
-(40 actions of 0.1 s, the setting it was measured at; 4 of 1 s)."""
+"""How far ``mppi-kinematic`` plans ahead in this study [s]: its horizon is this over the control
+period (40 actions of 0.1 s, the setting it was measured at; 4 of 1 s). The study's own
+setting, kept as its tables were measured; the agent's default looks 10 s ahead, at most 40
+steps (:data:`~skidnav.agents.mpc.config.LOOKAHEAD_TIME`)."""
 REFERENCE = "goal-tracker"
 """The reference controller: it learns nothing, so its runs are alike (one is enough)."""
 LEARNERS = (*DISCRETE_PARAMS, *WHEEL_LEARNERS, MODEL_LEARNER, REFERENCE)
@@ -263,7 +266,7 @@ def train_learner(config: ComparisonConfig, learner: str, seed: int) -> LearnerR
 def mppi_params(config: ComparisonConfig) -> dict[str, Any]:
     """``mppi-kinematic``'s settings in ``config``: its defaults, with the horizon that looks
     :data:`MPPI_LOOKAHEAD` seconds ahead at the control period (at least one action)."""
-    return {"horizon": max(1, round(MPPI_LOOKAHEAD / config.control_period))}
+    return {"horizon": steps_ahead(config.control_period, MPPI_LOOKAHEAD, MAX_HORIZON)}
 
 
 def _evaluation(config: ComparisonConfig, wheel_speeds: bool) -> Evaluation:
