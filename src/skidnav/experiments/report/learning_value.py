@@ -249,15 +249,23 @@ def _cell_frame(
     return pd.DataFrame.from_records(records).fillna("–")  # no paired difference of medians
 
 
-def _survival_cell(
+def arm_survival(
     rows: pd.DataFrame, label: str, metric: str, config: ExperimentConfig, *cell: str
-) -> str:
-    """An arm's Kaplan–Meier median of the driving time ``metric`` with its bootstrap interval
-    over its runs (:data:`SURVIVAL_METRICS`); the generator keyed by the ``cell``."""
+) -> Interval:
+    """An arm's Kaplan–Meier median of the driving time ``metric`` [s] with its bootstrap
+    interval over its runs (:data:`SURVIVAL_METRICS`: a run that never got there censored at its
+    ``driving_seconds``); the generator keyed by the ``cell`` (map, preset)."""
     runs = rows[rows["agent"] == label]
     reached = runs[metric].notna().to_numpy()
     times = np.where(reached, runs[metric], runs["driving_seconds"]).astype(np.float64)
     rng = stats_rng(config, *cell, label, metric, "model arm survival")
-    median = median_interval(times, reached, rng, n_resamples=config.bootstrap_samples,
-                             confidence=config.confidence)  # fmt: skip
+    return median_interval(times, reached, rng, n_resamples=config.bootstrap_samples,
+                           confidence=config.confidence)  # fmt: skip
+
+
+def _survival_cell(
+    rows: pd.DataFrame, label: str, metric: str, config: ExperimentConfig, *cell: str
+) -> str:
+    """:func:`arm_survival` as text."""
+    median = arm_survival(rows, label, metric, config, *cell)
     return interval_text(median.estimate, median.low, median.high)
