@@ -40,9 +40,13 @@ HEADER = (
 )
 
 
+MINUS = str.maketrans("-", "−")
+"""Numbers are printed with the minus sign, as the docs' tables are."""
+
+
 def number(value: float) -> str:
     """A value rounded for people (∞ for an infinite one)."""
-    return "∞" if np.isinf(value) else interval(value, float("nan"), float("nan"))
+    return "∞" if np.isinf(value) else interval(value, float("nan"), float("nan")).translate(MINUS)
 
 
 def difference(values: pd.DataFrame, metric: str) -> str:
@@ -52,7 +56,7 @@ def difference(values: pd.DataFrame, metric: str) -> str:
         return "–"
     found = row.iloc[0]
     text = interval(found["difference"], found["difference_low"], found["difference_high"])
-    text = text if text.startswith(("−", "-")) else f"+{text}"
+    text = text.translate(MINUS) if text.startswith("-") else f"+{text.translate(MINUS)}"
     clear = np.isfinite(found["difference_low"]) and not found["no_difference"]
     return f"**{text}**" if clear else text
 

@@ -60,8 +60,8 @@ def test_a_row_per_floor_with_the_paired_differences_and_the_censored_medians() 
     cells = [cell.strip() for cell in row.strip("|").split("|")]
     assert len(cells) == len(table.HEADER.splitlines()[1].strip("|").split("|"))
     assert cells[0] == "m · rough-physics"
-    assert cells[1].endswith("**-100 [-100, -100]**")  # paired by world: exactly −100 s
-    assert cells[2].endswith("**-20.0 [-20.0, -20.0]**")
+    assert cells[1].endswith("**−100 [−100, −100]**")  # paired by world: exactly −100 s
+    assert cells[2].endswith("**−20.0 [−20.0, −20.0]**")
     assert cells[3].startswith("10 / 3 of 10") and cells[3].endswith("/ ∞")  # 7 of 10 censored
     assert cells[4] == "1 / 2; 2 / ∞"
     assert cells[5].endswith("**+0.200 [0.200, 0.200]**")
