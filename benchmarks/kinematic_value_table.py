@@ -25,12 +25,14 @@ import pandas as pd
 from navigator_targets import final_greedy
 
 from skidnav.experiments.config import ExperimentConfig
-from skidnav.experiments.report.analysis import stats_rng
-from skidnav.experiments.report.learning_value import arm_survival, model_arms, value_of_learning
+from skidnav.experiments.report.learning_value import (
+    arm_survival,
+    model_arms,
+    signed,
+    value_of_learning,
+)
 from skidnav.experiments.store import EXPERIMENT_LAYOUT, ResultStore
-from skidnav.statistics.formatting import interval
-from skidnav.statistics.intervals import Interval
-from skidnav.statistics.survival import median_interval
+from skidnav.statistics.formatting import readable
 
 HEADER = (
     "| map · floor | driving over all episodes [s] | first success: KM median [s]; mean "
@@ -46,7 +48,7 @@ MINUS = str.maketrans("-", "−")
 
 def number(value: float) -> str:
     """A value rounded for people (∞ for an infinite one)."""
-    return "∞" if np.isinf(value) else interval(value, float("nan"), float("nan")).translate(MINUS)
+    return readable(value).translate(MINUS)
 
 
 def difference(values: pd.DataFrame, metric: str) -> str:
@@ -55,21 +57,9 @@ def difference(values: pd.DataFrame, metric: str) -> str:
     if row.empty:
         return "–"
     found = row.iloc[0]
-    text = interval(found["difference"], found["difference_low"], found["difference_high"])
-    text = text.translate(MINUS) if text.startswith("-") else f"+{text.translate(MINUS)}"
+    text = signed(found).translate(MINUS)
     clear = np.isfinite(found["difference_low"]) and not found["no_difference"]
     return f"**{text}**" if clear else text
-
-
-def episodes_median(
-    rows: pd.DataFrame, label: str, metric: str, config: ExperimentConfig, *cell: str
-) -> Interval:
-    """The Kaplan–Meier median of the episode count ``metric`` of an arm's runs, a run that
-    never got there censored at the run's last episode; the generator keyed by the ``cell``."""
-    runs = rows[rows["agent"] == label]
-    reached = runs[metric].notna().to_numpy()
-    times = np.where(reached, runs[metric], config.episodes).astype(np.float64)
-    return median_interval(times, reached, stats_rng(config, *cell, label, metric, "episodes"))
 
 
 def cell_row(
@@ -86,13 +76,15 @@ def cell_row(
     def mean(metric: str) -> str:
         return both(lambda label: number(arm[label][metric].mean()))
 
-    def survival(metric: str) -> str:
-        return both(lambda label: number(arm_survival(cell, label, metric, config, *key).estimate))
-
-    def episodes(metric: str) -> str:
+    def survival(metric: str, censor_at: float | None = None) -> str:
         return both(
-            lambda label: number(episodes_median(cell, label, metric, config, *key).estimate)
+            lambda label: number(
+                arm_survival(cell, label, metric, config, *key, censor_at=censor_at).estimate
+            )
         )
+
+    def episodes(metric: str) -> str:  # a run that never got there: censored at its last episode
+        return survival(metric, censor_at=float(config.episodes))
 
     reached = both(lambda label: str(int(arm[label]["seconds_to_success90"].notna().sum())))
     final = both(lambda label: f"{100 * arm[label]['final_greedy'].mean():.0f} %")

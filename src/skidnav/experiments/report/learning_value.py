@@ -168,7 +168,7 @@ def sentences(rows: pd.DataFrame) -> list[str]:
         elif row["no_difference"]:
             same.append(name)
         else:
-            differs.append(f"{name} {_signed(row)}")
+            differs.append(f"{name} {signed(row)}")
     said = []
     if same:
         said.append("Learned − prior: no difference measured in " + "; ".join(same) + ".")
@@ -180,7 +180,7 @@ def sentences(rows: pd.DataFrame) -> list[str]:
     return said
 
 
-def _signed(row: pd.Series) -> str:
+def signed(row: pd.Series) -> str:
     """A difference as "+1.2 [+0.3, +2.0]"."""
     text = interval_text(row["difference"], row["difference_low"], row["difference_high"])
     return text if text.startswith(("−", "-")) else f"+{text}"
@@ -250,14 +250,21 @@ def _cell_frame(
 
 
 def arm_survival(
-    rows: pd.DataFrame, label: str, metric: str, config: ExperimentConfig, *cell: str
+    rows: pd.DataFrame,
+    label: str,
+    metric: str,
+    config: ExperimentConfig,
+    *cell: str,
+    censor_at: float | None = None,
 ) -> Interval:
-    """An arm's Kaplan–Meier median of the driving time ``metric`` [s] with its bootstrap
-    interval over its runs (:data:`SURVIVAL_METRICS`: a run that never got there censored at its
-    ``driving_seconds``); the generator keyed by the ``cell`` (map, preset)."""
+    """An arm's Kaplan–Meier median of the time ``metric`` with its bootstrap interval over its
+    runs (:data:`SURVIVAL_METRICS`): a run that never got there censored at ``censor_at``, or,
+    by default, at its whole ``driving_seconds``; the generator keyed by the ``cell`` (map,
+    preset)."""
     runs = rows[rows["agent"] == label]
     reached = runs[metric].notna().to_numpy()
-    times = np.where(reached, runs[metric], runs["driving_seconds"]).astype(np.float64)
+    horizon = runs["driving_seconds"] if censor_at is None else censor_at
+    times = np.where(reached, runs[metric], horizon).astype(np.float64)
     rng = stats_rng(config, *cell, label, metric, "model arm survival")
     return median_interval(times, reached, rng, n_resamples=config.bootstrap_samples,
                            confidence=config.confidence)  # fmt: skip
