@@ -4,6 +4,7 @@ few seeds, and the same line from ``skidnav run`` as in the report."""
 from __future__ import annotations
 
 import dataclasses
+import math
 import re
 import shutil
 import subprocess
@@ -17,6 +18,8 @@ from skidnav.experiments.report.analysis import compare_to_baseline
 from skidnav.experiments.report.verdict import verdict_text
 from tests.experiments.exp_support import cli_command, cli_env
 from tests.experiments.test_analysis import CONFIG, _summaries
+from tests.experiments.test_driving_time import CONFIG as VALUE_CONFIG
+from tests.experiments.test_driving_time import _summaries as value_summaries
 
 
 def _verdict(summaries: pd.DataFrame) -> str:
@@ -140,3 +143,32 @@ def test_run_prints_the_verdict_of_the_report(
     from skidnav.experiments.report.verdict import experiment_verdict
 
     assert lines[1] == experiment_verdict(out)
+
+
+def test_a_kinematic_model_comparison_leads_with_the_value_of_learning() -> None:
+    arms = tuple(agent for agent in VALUE_CONFIG.agents if agent.name == "dyna-full")
+    config = dataclasses.replace(VALUE_CONFIG, agents=arms, baseline=arms[0].label)
+    summaries = value_summaries()
+    summaries["driving_seconds"] = 1000.0
+    prior = summaries["agent"] == "dyna-full[kinematic_model=prior]"
+    summaries.loc[prior & (summaries["seed"] < 7), "seconds_to_success90"] = math.nan
+    line = verdict_text(pd.DataFrame(), summaries, config)  # no convergence to compare
+    match = re.fullmatch(
+        r"Verdict: value of learning the kinematic model of dyna-full, learned − prior \(paired "
+        r"by world, m · thesis\): driving to sustained ≥ 90 % greedy success, Kaplan–Meier "
+        r"median (\d+) s against ∞ \(12 of 12 and 5 of 12 runs got there\); success rate "
+        r"\S+ \S+ \S+ \(not significant: 95% interval, 12 worlds\); learned − prior clear of 0 "
+        r"in (\d), no difference measured in (\d), of 7 comparisons \(metric × cell\)\.",
+        line,
+    )
+    assert match is not None, line
+    # The first success comes 30 s sooner in every world: one clear difference at least.
+    assert 100 <= int(match[1]) <= 200 and int(match[2]) >= 1
+    assert int(match[2]) + int(match[3]) == 7  # the driving over all episodes too
+    # With another agent beside the arms the experiment is about that agent again.
+    comparisons = pd.DataFrame([{
+        "map": "m", "preset": "thesis", "agent": arms[0].label, "speedup": 2.0,
+        "speedup_low": 1.5, "speedup_high": 3.0, "speedup_bound": "",
+    }])  # fmt: skip
+    mixed = verdict_text(comparisons, summaries, VALUE_CONFIG)
+    assert mixed.startswith(f"Verdict: {arms[0].label} converges 2.0× faster than q"), mixed

@@ -14,6 +14,14 @@ of 1 they are on (:func:`ratio_text`). Then how many of the comparisons were sig
 faster (interval above 1) or slower (below 1). Over fewer than
 :data:`~skidnav.statistics.formatting.MIN_INTERVAL_SEEDS` seeds the interval is replaced by a
 caveat and nothing is called significant.
+
+An experiment that only compares kinematic models (every agent an arm of
+:func:`~skidnav.experiments.report.learning_value.model_arms`: learned, held at the prior, true)
+is about the value of learning, not about converging to the oracle's band, which a planner over
+continuous wheel speeds may never do: its verdict (:func:`learning_verdict`) gives, in the first
+cell, each arm's Kaplan–Meier median driving time to sustained ≥ 90 % greedy success with the
+runs that got there, and the paired difference in success rate with its interval; then in how
+many of the report's paired differences (metric × cell) the interval is clear of 0.
 """
 
 from __future__ import annotations
@@ -22,12 +30,21 @@ import html
 import math
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.report.analysis import compare_to_baseline, speedup_of
+from skidnav.experiments.report.learning_value import (
+    COMPARISONS,
+    arm_survival,
+    model_arms,
+    signed,
+    value_of_learning,
+)
 from skidnav.experiments.store import ResultStore
 from skidnav.statistics.formatting import MIN_INTERVAL_SEEDS, plural, readable, seeds_caveat
+from skidnav.statistics.intervals import Interval
 from skidnav.statistics.survival import SpeedupInterval
 
 PREFIX = "Verdict: "
@@ -134,6 +151,8 @@ def verdict_text(
     """The verdict line (module doc) of an experiment's comparisons with the baseline
     (:func:`compare_to_baseline` of ``summaries``), starting "Verdict: "."""
     base = config.baseline
+    if _compares_models_only(config):
+        return learning_verdict(summaries, config)
     if comparisons.empty:
         return f"{PREFIX}one agent only ({base}): no speed-up to report."
     agent = headline_agent(config)
@@ -159,6 +178,72 @@ def verdict_text(
     return (
         f"{line}; significantly faster in {faster}, slower in {slower}, of {compared} "
         "(agent × cell)."
+    )
+
+
+def _compares_models_only(config: ExperimentConfig) -> bool:
+    """Whether every agent of ``config`` is an arm of a kinematic-model comparison."""
+    arms = {label for group in model_arms(config) for label in group.labels.values()}
+    return bool(arms) and all(agent.label in arms for agent in config.agents)
+
+
+def _median_words(median: Interval) -> str:
+    """A Kaplan–Meier median in seconds: "20 s", or "∞" when more than half never got there."""
+    text = readable(median.estimate)
+    return text if math.isinf(median.estimate) else f"{text} s"
+
+
+def learning_verdict(summaries: pd.DataFrame, config: ExperimentConfig) -> str:
+    """The verdict line of a kinematic-model comparison (module doc), starting "Verdict: "."""
+    values = value_of_learning(summaries, config)
+    if values.empty:
+        return f"{PREFIX}no cell has two kinematic models to compare."
+    arms = model_arms(config)[0]
+    first, second = next(pair for pair in COMPARISONS if set(pair) <= set(arms.labels))
+    comparison = f"{first} − {second}"
+    mine = values[(values["agent"] == arms.name) & (values["comparison"] == comparison)]
+    map_label, preset = mine.iloc[0]["map"], mine.iloc[0]["preset"]
+    cell = summaries[(summaries["map"] == map_label) & (summaries["preset"] == preset)]
+    said = [
+        f"{PREFIX}value of learning the kinematic model of {arms.name}, {comparison} (paired by "
+        f"world, "
+        f"{map_label} · {preset})"
+    ]
+    if {"seconds_to_success90", "driving_seconds"} <= set(cell.columns) and bool(
+        cell["driving_seconds"].notna().all()
+    ):
+        medians, reached = [], []
+        for model in (first, second):
+            rows = cell[cell["agent"] == arms.labels[model]]
+            median = arm_survival(
+                cell, arms.labels[model], "seconds_to_success90", config, map_label, preset
+            )
+            medians.append(_median_words(median))
+            reached.append(f"{int(rows['seconds_to_success90'].notna().sum())} of {len(rows)}")
+        said.append(
+            f"driving to sustained ≥ 90 % greedy success, Kaplan–Meier median {medians[0]} "
+            f"against {medians[1]} ({reached[0]} and {reached[1]} runs got there)"
+        )
+    rate = mine[mine["metric"] == "success_rate"]
+    if not rate.empty:
+        row = rate.iloc[0]
+        pairs = int(row["pairs"])
+        if pairs < MIN_INTERVAL_SEEDS or not math.isfinite(row["difference_low"]):
+            backing = seeds_caveat(pairs)
+        else:
+            words = "not significant" if row["no_difference"] else "significant"
+            backing = f"{words}: {config.confidence:.0%} interval, {plural(pairs, 'world')}"
+        said.append(f"success rate {signed(row)} ({backing})")
+    compared = values[values["comparison"] == comparison]
+    measured = compared[np.isfinite(compared["difference_low"].to_numpy(np.float64))]
+    clear = int((~measured["no_difference"].astype(bool)).sum())
+    counts = f"clear of 0 in {clear}, no difference measured in {len(measured) - clear}"
+    if len(compared) > len(measured):
+        counts += f", too few worlds to compare in {len(compared) - len(measured)}"
+    head, *rest = said
+    return (
+        head + (": " + "; ".join(rest) if rest else "") + f"; {comparison} {counts}, of "
+        f"{plural(len(compared), 'comparison')} (metric × cell)."
     )
 
 
