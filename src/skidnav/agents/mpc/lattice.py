@@ -26,9 +26,10 @@ gets the largest finite value plus ``blocked_cost``, so every value is finite.
 
 The terminal value of a pose is V interpolated between the states around it
 (:func:`~skidnav.agents.mpc.costmap.interpolated_state_value`; 0 in the goal cell). The
-predictions are recomputed when the model's fit changes (all of them) or a cell becomes or stops
-being lethal (those of the cells within one action's reach of it); the values whenever a wall
-probability changes.
+predictions, and with them the reverse graph the search walks (the edges into each state), are
+recomputed when the model's fit changes (all of them) or a cell becomes or stops being lethal
+(those of the cells within one action's reach of it); the values whenever a wall probability
+changes.
 """
 
 from __future__ import annotations
@@ -61,6 +62,13 @@ class Lattice(NamedTuple):
             :mod:`skidnav.models.kinematic_prediction`.
         action_steps: float64 (4 D,) each action's duration [control steps].
         value: float64 (n_states,) V [control steps].
+        reverse_start: int64 (n_states + 1,) the reverse graph of ``next_state``, kept with it
+            (:func:`reverse_graph`): the edges into state t are ``reverse_start[t]`` …
+            ``reverse_start[t + 1]`` − 1 of the three arrays below.
+        reverse_source: int64 (n_states · 4 D,) each edge's source state s.
+        reverse_action: int8 (n_states · 4 D,) each edge's action a.
+        reverse_flags: int8 (n_states · 4 D,) :data:`EDGE_COLLIDES` if its outcome is a
+            predicted collision, plus :data:`EDGE_CROSSES` if s lies in another cell than t.
     """
 
     velocities: np.ndarray
@@ -68,16 +76,29 @@ class Lattice(NamedTuple):
     outcome: np.ndarray
     action_steps: np.ndarray
     value: np.ndarray
+    reverse_start: np.ndarray
+    reverse_source: np.ndarray
+    reverse_action: np.ndarray
+    reverse_flags: np.ndarray
+
+
+EDGE_COLLIDES = 1
+"""Flag of a reverse edge whose action is predicted to collide (it costs C more)."""
+EDGE_CROSSES = 2
+"""Flag of a reverse edge that enters another cell (it costs C · p of that cell more)."""
 
 
 def empty_lattice(n_states: int, n_regions: int, action_steps: np.ndarray) -> Lattice:
     """A lattice of ``n_states`` states whose actions last ``action_steps`` (4 D,) control
     steps, nothing predicted yet."""
     n_actions = action_steps.shape[0]
+    n_edges = n_states * n_actions
     return Lattice(
         np.zeros((n_regions, N_ACTIONS, 3)), np.zeros((n_states, n_actions), dtype=np.int32),
         np.zeros((n_states, n_actions), dtype=np.int8), np.asarray(action_steps, np.float64),
-        np.zeros(n_states),
+        np.zeros(n_states), np.zeros(n_states + 1, dtype=np.int64),
+        np.zeros(n_edges, dtype=np.int64), np.zeros(n_edges, dtype=np.int8),
+        np.zeros(n_edges, dtype=np.int8),
     )  # fmt: skip
 
 
@@ -101,6 +122,7 @@ def refresh_table(
             lattice.velocities, walls, goals, robot, grid, cells, N_ACTIONS * duration,
             lattice.next_state, lattice.outcome,
         )  # fmt: skip
+    reverse_graph(lattice, grid.n_headings)
 
 
 @jit
@@ -162,25 +184,33 @@ def cells_near(changed: np.ndarray, radius: int) -> np.ndarray:
 
 
 @jit
-def predecessors(next_state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The reverse graph of ``next_state`` (n_states, n_actions): ``start`` int64
-    (n_states + 1,) and ``keys`` int64 (n_states · n_actions,), the pairs s · n_actions + a
-    leading to state t at ``keys[start[t]:start[t + 1]]``, in increasing order."""
+def reverse_graph(lattice: Lattice, n_headings: int) -> None:
+    """The reverse graph of ``lattice.next_state`` (n_states, n_actions) into its ``reverse_*``
+    arrays: the edges (s, a) into each state t in increasing order of s · n_actions + a, with
+    their flags (:class:`Lattice`; ``n_headings`` states per cell). Kept with the predictions,
+    so that :func:`state_values`, run whenever a wall probability changes, reads each state's
+    edges in one sequence instead of building them again."""
+    next_state, outcome = lattice.next_state, lattice.outcome
+    start = lattice.reverse_start
     n_states, n_actions = next_state.shape
-    start = np.zeros(n_states + 1, dtype=np.int64)
+    start.fill(0)
     for s in range(n_states):
         for a in range(n_actions):
             start[next_state[s, a] + 1] += 1
     for t in range(n_states):
         start[t + 1] += start[t]
     filled = start[:-1].copy()
-    keys = np.empty(n_states * n_actions, dtype=np.int64)
     for s in range(n_states):
         for a in range(n_actions):
             t = next_state[s, a]
-            keys[filled[t]] = s * n_actions + a
+            edge = filled[t]
             filled[t] += 1
-    return start, keys
+            lattice.reverse_source[edge] = s
+            lattice.reverse_action[edge] = a
+            flags = EDGE_COLLIDES if outcome[s, a] == PREDICT_COLLISION else 0
+            if s // n_headings != t // n_headings:
+                flags += EDGE_CROSSES
+            lattice.reverse_flags[edge] = flags
 
 
 @jit
@@ -195,9 +225,9 @@ def state_values(
 ) -> None:
     """Dijkstra from the goal cell's states over the lattice (module doc) into
     ``lattice.value``."""
-    next_state, outcome, value = lattice.next_state, lattice.outcome, lattice.value
-    n_actions, n_headings = next_state.shape[1], grid.n_headings
-    start, keys = predecessors(next_state)
+    value, n_headings = lattice.value, grid.n_headings
+    start, sources = lattice.reverse_start, lattice.reverse_source
+    actions, flags = lattice.reverse_action, lattice.reverse_flags
     value.fill(np.inf)
     settled = np.zeros(value.shape[0], dtype=np.bool_)
     queue = [(0.0, 0)]
@@ -216,11 +246,11 @@ def state_values(
             collision_cost * wall_probability[target_cell // grid.n_y, target_cell % grid.n_y]
         )
         for edge in range(start[target], start[target + 1]):
-            source, action = keys[edge] // n_actions, keys[edge] % n_actions
-            cost = lattice.action_steps[action]
-            if outcome[source, action] == PREDICT_COLLISION:
+            source = sources[edge]
+            cost = lattice.action_steps[actions[edge]]
+            if flags[edge] & EDGE_COLLIDES:
                 cost += collision_cost
-            if source // n_headings != target_cell:
+            if flags[edge] & EDGE_CROSSES:
                 cost += entering
             if distance + cost < value[source]:
                 value[source] = distance + cost

@@ -38,8 +38,8 @@ from skidnav.sim.lidar import FULL_TURN
 MAX_AGENT_JSON_BYTES = 2**20
 """Largest ``.json`` of a saved agent [bytes]."""
 MAX_STATES = 4_000_000
-"""Most discrete states a saved agent's discretization may have (its lattice holds 45 bytes
-per state and duration)."""
+"""Most discrete states a saved agent's discretization may have (its lattice holds about 85
+bytes per state and duration, its reverse graph included)."""
 
 
 READ_VERSIONS = (2, 3, SAVE_VERSION)
