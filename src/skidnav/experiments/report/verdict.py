@@ -205,9 +205,8 @@ def learning_verdict(summaries: pd.DataFrame, config: ExperimentConfig) -> str:
     map_label, preset = mine.iloc[0]["map"], mine.iloc[0]["preset"]
     cell = summaries[(summaries["map"] == map_label) & (summaries["preset"] == preset)]
     said = [
-        f"{PREFIX}value of learning the kinematic model of {arms.name}, {comparison} (paired by "
-        f"world, "
-        f"{map_label} · {preset})"
+        f"{PREFIX}value of learning the kinematic model of {arms.name}, {comparison} "
+        f"(paired by world, {map_label} · {preset})"
     ]
     if {"seconds_to_success90", "driving_seconds"} <= set(cell.columns) and bool(
         cell["driving_seconds"].notna().all()
@@ -234,16 +233,15 @@ def learning_verdict(summaries: pd.DataFrame, config: ExperimentConfig) -> str:
             words = "not significant" if row["no_difference"] else "significant"
             backing = f"{words}: {config.confidence:.0%} interval, {plural(pairs, 'world')}"
         said.append(f"success rate {signed(row)} ({backing})")
-    compared = values[values["comparison"] == comparison]
-    measured = compared[np.isfinite(compared["difference_low"].to_numpy(np.float64))]
+    measured = mine[np.isfinite(mine["difference_low"].to_numpy(np.float64))]
     clear = int((~measured["no_difference"].astype(bool)).sum())
     counts = f"clear of 0 in {clear}, no difference measured in {len(measured) - clear}"
-    if len(compared) > len(measured):
-        counts += f", too few worlds to compare in {len(compared) - len(measured)}"
+    if len(mine) > len(measured):
+        counts += f", too few worlds to compare in {len(mine) - len(measured)}"
     head, *rest = said
     return (
         head + (": " + "; ".join(rest) if rest else "") + f"; {comparison} {counts}, of "
-        f"{plural(len(compared), 'comparison')} (metric × cell)."
+        f"{plural(len(mine), 'comparison')} (metric × cell)."
     )
 
 
