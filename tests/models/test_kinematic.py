@@ -15,6 +15,7 @@ from skidnav.models.kinematic_prediction import (
     PREDICT_FREE,
     PREDICT_GOAL,
     collision_wall_cell,
+    predict_action,
 )
 from skidnav.robot.kinematics import body_velocities
 from skidnav.robot.params import RobotParams
@@ -152,6 +153,23 @@ def test_prediction_table_respects_known_walls_and_goals() -> None:
     wall_state = (12 * 25 + 3) * 20
     assert next_state[wall_state, 2] == wall_state
     assert outcome[wall_state, 2] == PREDICT_COLLISION
+
+
+def test_a_prediction_with_corners_does_not_squeeze_between_two_walls() -> None:
+    """A sub-step through the point where walls (12, 13) and (13, 12) meet, from cell (12, 12)
+    into (13, 13): the simulator's rule lets it pass, the rule against corner cutting stops it
+    before the corner."""
+    model = KinematicModel(RobotParams(), GRID)
+    walls = np.zeros((25, 25), dtype=bool)
+    walls[12, 13] = walls[13, 12] = True
+    goals = np.zeros_like(walls)
+    corner_x, corner_y = 13 * 0.62 / 24, 13 * 0.505 / 24
+    start = (corner_x - 0.001, corner_y - 0.001, math.atan2(1.0, 1.0))
+    arguments = (model.velocities, walls, goals, model.robot.kernel_constants(), GRID.grid_shape())
+    x, y, _, code = predict_action(*start, 0, *arguments, False)
+    assert code == PREDICT_FREE and GRID.cell(x, y) == (14, 14)  # on through (13, 13)
+    x, y, _, code = predict_action(*start, 0, *arguments, True)
+    assert code == PREDICT_COLLISION and (x, y) == start[:2]
 
 
 def test_turn_prediction_rotates_about_36_degrees_and_slides() -> None:

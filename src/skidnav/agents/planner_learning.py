@@ -48,7 +48,7 @@ def _refresh_cell(
             if not planner.walls[i, j]:
                 x, y, end_heading, code = predict_action(
                     x0, y0, heading, action, planner.velocities, planner.walls, planner.goals,
-                    robot, grid,
+                    robot, grid, False,
                 )  # fmt: skip
                 next_state = state_of(x, y, end_heading, grid)
             planner.pred_next[state, action] = next_state

@@ -303,7 +303,7 @@ class KinematicModel:
         walls_, goals_ = self._masks(walls, goals)
         x, y, heading, outcome = predict_action(
             float(pose[0]), float(pose[1]), float(pose[2]), int(action), self.velocities,
-            walls_, goals_, self.robot.kernel_constants(), self.grid.grid_shape(),
+            walls_, goals_, self.robot.kernel_constants(), self.grid.grid_shape(), False,
         )  # fmt: skip
         return (float(x), float(y), float(heading)), int(outcome)
 

@@ -23,7 +23,7 @@ from skidnav._jit import jit
 from skidnav.robot.kinematics import commanded_wheel_speeds
 from skidnav.robot.params import KinematicConstants
 from skidnav.sim.navigation import integrate
-from skidnav.world.discretization import GridShape, cell_of, region_of, state_of
+from skidnav.world.discretization import GridShape, cell_of, cuts_corner, region_of, state_of
 
 PREDICT_FREE = 0
 """Outcome code: the predicted action ends without touching a known wall or goal."""
@@ -71,6 +71,7 @@ def predict_action(
     goals: np.ndarray,
     robot: KinematicConstants,
     grid: GridShape,
+    corners: bool,
 ) -> tuple[float, float, float, int]:
     """Integrate the predicted body velocities over one action from a pose.
 
@@ -81,6 +82,9 @@ def predict_action(
         walls, goals: (n_x, n_y) bool, the wall and goal cells known to the agent.
         robot: sub-step length, count, arena size and integration scheme.
         grid: the discretization.
+        corners: a sub-step that enters a cell diagonally past the corner of a wall cell
+            collides too (:func:`~skidnav.world.discretization.cuts_corner`); False: only a
+            sub-step into a wall cell does, the simulator's rule.
 
     Returns:
         (x, y, heading, outcome) with outcome :data:`PREDICT_FREE`, :data:`PREDICT_COLLISION`
@@ -98,6 +102,10 @@ def predict_action(
         i, j = cell_of(nx, ny, grid)
         if walls[i, j]:
             return x, y, nh, PREDICT_COLLISION
+        if corners:
+            from_i, from_j = cell_of(x, y, grid)
+            if cuts_corner(walls, from_i, from_j, i, j):
+                return x, y, nh, PREDICT_COLLISION
         x, y, heading = nx, ny, nh
     i, j = cell_of(x, y, grid)
     if goals[i, j]:
@@ -140,7 +148,7 @@ def prediction_table(
                         outcome[state, action] = PREDICT_COLLISION
                         continue
                     x, y, heading, code = predict_action(
-                        x0, y0, heading0, action, velocities, walls, goals, robot, grid
+                        x0, y0, heading0, action, velocities, walls, goals, robot, grid, False
                     )
                     next_state[state, action] = state_of(x, y, heading, grid)
                     outcome[state, action] = code

@@ -97,6 +97,27 @@ def test_the_lattice_values_meet_their_bellman_equation() -> None:
     )
 
 
+def test_the_lattice_does_not_squeeze_between_walls_meeting_at_a_corner() -> None:
+    """Walls on the diagonal cells (i, i − 2), from the bottom border to the top-right corner,
+    part the start's side from the goal's, joined only where two walls meet at a corner: no
+    state of the start's side reaches the goal through the lattice (each gets the unreached
+    value, the largest reached one plus ``blocked_cost``)."""
+    agent = agent_for(nav_env())
+    grid = agent.kernel_grid
+    for i in range(2, grid.n_x):
+        agent.evidence.hits[i, i - 2] = 3
+    agent.evidence.reweigh(agent.dynamics.mean)
+    value = agent.evidence.lattice.value
+    cells = np.arange(grid.n_x * grid.n_y)
+    i, j = cells // grid.n_y, cells % grid.n_y
+    start_side = np.repeat(j > i - 2, grid.n_headings)
+    goal_side = np.repeat(j < i - 2, grid.n_headings)
+    unreached = value.max()  # the largest reached value plus blocked_cost = 1000
+    assert agent.goal[1] < agent.goal[0] - 2 and value[goal_side].min() == 0.0
+    assert (value[goal_side] < unreached).mean() > 0.9
+    assert (value[start_side] == unreached).all()
+
+
 def test_a_local_refresh_equals_a_full_one() -> None:
     agent = agent_for(nav_env())
     evidence = agent.evidence

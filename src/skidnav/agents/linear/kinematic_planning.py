@@ -174,7 +174,7 @@ def kinematic_planning(
         if walls[i, j] or goals[i, j]:
             continue
         nx, ny, nh, outcome = predict_action(
-            x, y, heading, action, velocities, walls, goals, robot, grid
+            x, y, heading, action, velocities, walls, goals, robot, grid, False
         )
         reward = means[reward_row(state_of(nx, ny, nh, grid), outcome, n_regions, grid)]
         observe_pose(observer, x, y, heading, scratch, tiles)

@@ -11,7 +11,11 @@ heading-bin centre, the learned model predicts the pose after each of the four a
 backward, turn left, turn right at ± Ω), each held for each of the ``lattice_durations``
 (:func:`~skidnav.models.kinematic_prediction.prediction_table`: the same prediction as
 ``dyna-kinematic``'s table, the lethal cells as its walls — the blocked ones, dilated by a
-footprint's inscribed radius, :mod:`skidnav.agents.mpc.costmap` —, the goal cell as its goal), and
+footprint's inscribed radius, :mod:`skidnav.agents.mpc.costmap` —, the goal cell as its goal, and
+one rule more: a sub-step entering a cell diagonally past the corner of a lethal cell collides,
+the rule of the cells' routes, :func:`~skidnav.world.discretization.cuts_corner`; without it a
+prediction squeezed through the point where two walls meet, into a cell behind them that no ray
+had reached, and the robot pushed against that corner: docs/agents/mppi-kinematic.md), and
 Dijkstra's algorithm from the goal's states over these transitions gives V(s), the fewest control
 steps to the goal through the graph. An action costs its control steps, a predicted collision C
 more, and entering another cell C · p of its wall probability, as in the rollouts. Two durations
@@ -159,14 +163,14 @@ def robust_predictions(
                         continue
                     x, y, turned, code = predict_action(
                         (i + 0.5) * width, (j + 0.5) * height, heading, action, velocities,
-                        walls, goals, robot, grid,
+                        walls, goals, robot, grid, True,
                     )  # fmt: skip
                     for corner in range(4 if code != PREDICT_COLLISION else 0):
                         dx = (0.25 if corner % 2 == 0 else -0.25) * width
                         dy = (0.25 if corner < 2 else -0.25) * height
                         if predict_action(
                             (i + 0.5) * width + dx, (j + 0.5) * height + dy, heading, action,
-                            velocities, walls, goals, robot, grid,
+                            velocities, walls, goals, robot, grid, True,
                         )[3] == PREDICT_COLLISION:  # fmt: skip
                             code = PREDICT_COLLISION
                             break
