@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from skidnav.world.discretization import Discretization, cuts_corner
+from skidnav.world.discretization import Discretization, squeezes_between_walls
 
 DISC = Discretization()
 
@@ -57,10 +57,12 @@ def test_every_cell_centre_lies_in_its_cell_and_in_the_arena(levels):
     assert disc.cell_centre(disc.n_x - 1, disc.n_y - 1) == (disc.arena_width, disc.arena_height)
 
 
-def test_a_diagonal_move_cuts_a_corner_when_a_cell_beside_it_is_a_wall():
+def test_a_diagonal_move_squeezes_between_walls_only_when_both_cells_beside_it_are_walls():
     walls = np.zeros((4, 4), dtype=bool)
-    assert not cuts_corner(walls, 1, 1, 2, 2)
-    walls[1, 2] = True  # beside the move (1, 1) → (2, 2)
-    assert cuts_corner(walls, 1, 1, 2, 2) and cuts_corner(walls, 2, 2, 1, 1)
-    assert not cuts_corner(walls, 1, 1, 2, 1) and not cuts_corner(walls, 1, 1, 1, 0)
-    assert not cuts_corner(walls, 2, 1, 3, 0)  # neither (2, 0) nor (3, 1) is a wall
+    assert not squeezes_between_walls(walls, 1, 1, 2, 2)
+    walls[1, 2] = True  # beside the move (1, 1) → (2, 2): a corner, with room beside it
+    assert not squeezes_between_walls(walls, 1, 1, 2, 2)
+    walls[2, 1] = True  # and the other: two walls meeting at the corner the move goes through
+    assert squeezes_between_walls(walls, 1, 1, 2, 2) and squeezes_between_walls(walls, 2, 2, 1, 1)
+    assert not squeezes_between_walls(walls, 1, 1, 2, 1)  # into a wall: not a squeeze
+    assert not squeezes_between_walls(walls, 2, 2, 3, 3)

@@ -23,7 +23,13 @@ from skidnav._jit import jit
 from skidnav.robot.kinematics import commanded_wheel_speeds
 from skidnav.robot.params import KinematicConstants
 from skidnav.sim.navigation import integrate
-from skidnav.world.discretization import GridShape, cell_of, cuts_corner, region_of, state_of
+from skidnav.world.discretization import (
+    GridShape,
+    cell_of,
+    region_of,
+    squeezes_between_walls,
+    state_of,
+)
 
 PREDICT_FREE = 0
 """Outcome code: the predicted action ends without touching a known wall or goal."""
@@ -82,9 +88,9 @@ def predict_action(
         walls, goals: (n_x, n_y) bool, the wall and goal cells known to the agent.
         robot: sub-step length, count, arena size and integration scheme.
         grid: the discretization.
-        corners: a sub-step that enters a cell diagonally past the corner of a wall cell
-            collides too (:func:`~skidnav.world.discretization.cuts_corner`); False: only a
-            sub-step into a wall cell does, the simulator's rule.
+        corners: a sub-step that enters a cell diagonally between two walls meeting at a
+            corner collides too (:func:`~skidnav.world.discretization.squeezes_between_walls`);
+            False: only a sub-step into a wall cell does, the simulator's rule.
 
     Returns:
         (x, y, heading, outcome) with outcome :data:`PREDICT_FREE`, :data:`PREDICT_COLLISION`
@@ -104,7 +110,7 @@ def predict_action(
             return x, y, nh, PREDICT_COLLISION
         if corners:
             from_i, from_j = cell_of(x, y, grid)
-            if cuts_corner(walls, from_i, from_j, i, j):
+            if squeezes_between_walls(walls, from_i, from_j, i, j):
                 return x, y, nh, PREDICT_COLLISION
         x, y, heading = nx, ny, nh
     i, j = cell_of(x, y, grid)

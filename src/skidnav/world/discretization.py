@@ -63,15 +63,16 @@ def cell_of(x: float, y: float, grid: GridShape) -> tuple[int, int]:
 
 
 @jit
-def cuts_corner(walls: np.ndarray, from_i: int, from_j: int, to_i: int, to_j: int) -> bool:
+def squeezes_between_walls(
+    walls: np.ndarray, from_i: int, from_j: int, to_i: int, to_j: int
+) -> bool:
     """Whether a move from cell (``from_i``, ``from_j``) into cell (``to_i``, ``to_j``) changes
-    both indices past a corner of a wall: one of the two cells beside the move, (``from_i``,
-    ``to_j``) or (``to_i``, ``from_j``), is set in ``walls`` bool (n_x, n_y). A planner over the
-    cells allows no such move, since no robot of any width fits between a wall and the corner
-    of the next cell diagonally (the 8-connected grid's rule against corner cutting)."""
+    both indices between two walls meeting at a corner: both cells beside the move, (``from_i``,
+    ``to_j``) and (``to_i``, ``from_j``), are set in ``walls`` bool (n_x, n_y). Only a point
+    passes such a gap, of no width."""
     if from_i == to_i or from_j == to_j:
         return False
-    return bool(walls[from_i, to_j] or walls[to_i, from_j])
+    return bool(walls[from_i, to_j] and walls[to_i, from_j])
 
 
 @jit

@@ -58,7 +58,7 @@ import numpy as np
 
 from skidnav._jit import inline_jit, jit
 from skidnav.robot.kinematics import wrap_angle
-from skidnav.world.discretization import GridShape, cell_of, cuts_corner, state_of
+from skidnav.world.discretization import GridShape, cell_of, state_of
 
 
 class CostMap(NamedTuple):
@@ -220,8 +220,8 @@ def route_costs(cost_map: CostMap, costs: MapCosts, grid: GridShape) -> None:
                 ni, nj = i + di, j + dj
                 if (di == 0 and dj == 0) or not (0 <= ni < n_x and 0 <= nj < n_y):
                     continue
-                if cuts_corner(cost_map.lethal, ni, nj, i, j):
-                    continue
+                if di != 0 and dj != 0 and (cost_map.lethal[ni, j] or cost_map.lethal[i, nj]):
+                    continue  # no corner cutting past a lethal cell
                 length = math.sqrt((di * width) ** 2 + (dj * height) ** 2) / costs.step_length
                 candidate = distance + length + entering
                 if candidate < cost_map.cost_to_go[ni, nj]:
