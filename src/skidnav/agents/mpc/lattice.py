@@ -13,10 +13,9 @@ backward, turn left, turn right at ± Ω), each held for each of the ``lattice_d
 ``dyna-kinematic``'s table, the lethal cells as its walls — the blocked ones, dilated by a
 footprint's inscribed radius, :mod:`skidnav.agents.mpc.costmap` —, the goal cell as its goal, and
 one rule more: a sub-step entering a cell diagonally between two lethal cells that meet at a
-corner collides, :func:`~skidnav.world.discretization.squeezes_between_walls`; the simulator's
-rule, which checks the cell a sub-step ends in, lets a point through that gap of no width, and a
-prediction through it reached a cell behind the walls that no ray had, and the robot pushed
-against the corner: docs/agents/mppi-kinematic.md, "A squeeze between two walls, traced"), and
+corner collides, :func:`~skidnav.world.discretization.squeezes_between_walls`, a gap of no width
+that the simulator's rule, checking only the cell a sub-step ends in, lets a point through;
+docs/agents/mppi-kinematic.md, "A squeeze between two walls, traced"), and
 Dijkstra's algorithm from the goal's states over these transitions gives V(s), the fewest control
 steps to the goal through the graph. An action costs its control steps, a predicted collision C
 more, and entering another cell C · p of its wall probability, as in the rollouts. Two durations
