@@ -97,6 +97,7 @@ def predict_action(
         (position of the last free sub-step, heading of the colliding one) or
         :data:`PREDICT_GOAL`.
     """
+    i, j = cell_of(x, y, grid)
     for _ in range(robot.substeps):
         region = region_of(x, y, grid)
         twist = (
@@ -105,15 +106,13 @@ def predict_action(
             velocities[region, action, 2],
         )
         nx, ny, nh = integrate(robot, x, y, heading, twist)
-        i, j = cell_of(nx, ny, grid)
-        if walls[i, j]:
+        next_i, next_j = cell_of(nx, ny, grid)
+        if walls[next_i, next_j] or (
+            corners and squeezes_between_walls(walls, i, j, next_i, next_j)
+        ):
             return x, y, nh, PREDICT_COLLISION
-        if corners:
-            from_i, from_j = cell_of(x, y, grid)
-            if squeezes_between_walls(walls, from_i, from_j, i, j):
-                return x, y, nh, PREDICT_COLLISION
         x, y, heading = nx, ny, nh
-    i, j = cell_of(x, y, grid)
+        i, j = next_i, next_j
     if goals[i, j]:
         return x, y, heading, PREDICT_GOAL
     return x, y, heading, PREDICT_FREE
