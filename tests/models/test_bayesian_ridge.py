@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from sklearn.linear_model import BayesianRidge
 
@@ -152,13 +152,19 @@ def test_random_data_match_scikit_learn(
     residual_scale=st.floats(-17.0, -1.0),
     noisy=st.booleans(),
 )
+@example(seed=52194, n=2, actions=1, collinear=False, residual_scale=-4.6640625, noisy=True)
 def test_a_region_driven_with_one_or_two_actions_matches_scikit_learn(
     seed: int, n: int, actions: int, collinear: bool, residual_scale: float, noisy: bool
 ) -> None:
     """The kinematic regressions' degenerate case: a slip region the robot crossed with one
     action, or two collinear ones (forward and back), so XᵀX is singular, and a residual as
     small as rounding noise. scikit-learn (SVD) is well-defined there; the unguarded Cholesky
-    factor met a zero pivot (ZeroDivisionError) or a negative one (NaN)."""
+    factor met a zero pivot (ZeroDivisionError) or a negative one (NaN).
+
+    α to 10⁻³: with XᵀX singular, XᵀX + (λ/α) I has a condition number up to ~10¹² (the
+    guard's bound), so the rounding of its Cholesky factor moves γ and the squared error, and
+    with them α, by up to ~10¹² × 2.2·10⁻¹⁶ ≈ 2·10⁻⁴ (scikit-learn works from an SVD of X
+    instead). The example differs by 1.4·10⁻⁵ after the 2 iterations both make."""
     rng = np.random.default_rng(seed)
     chosen = [0, 1] if collinear and actions == 2 else rng.choice(4, actions, replace=False)
     inputs = WHEEL_SPEEDS[rng.choice(chosen, size=n)]
@@ -169,7 +175,7 @@ def test_a_region_driven_with_one_or_two_actions_matches_scikit_learn(
     _assert_finite(fit)
     scale = float(np.max(np.abs(target))) + 1e-300
     np.testing.assert_allclose(inputs @ fit.coef, inputs @ reference.coef_, atol=1e-5 * scale)
-    assert fit.noise_precision == pytest.approx(reference.alpha_, rel=1e-5)
+    assert fit.noise_precision == pytest.approx(reference.alpha_, rel=1e-3)
 
 
 def _assert_finite(fit: RidgePosterior) -> None:
