@@ -11,7 +11,8 @@ the AR(1) smoothing and clip as NumPy expressions, and the rollouts vectorised o
 sequences (:func:`numpy_rollout_costs`, loop over the horizon and sub-steps), from the same
 plan and Generator state: its costs are checked against the kernel's and its action against
 the compiled step's. Also timed: what a change of the learned map costs (the lattice's local
-refresh and its values), and a refit's full refresh.
+refresh and its values), a refit's full refresh, and the lattice's values over the drive,
+repaired where wall probabilities changed against searched again at every update.
 
 ``--grid`` times instead MPPI-Generic's grid (K = 128 … 16,384, H = 100; Vlahov et al. 2024)
 and prints it as the Markdown table of docs/speed.md.
@@ -34,6 +35,7 @@ import numpy as np
 import skidnav  # noqa: F401  (registers the env)
 from skidnav.agents.mpc.agent import MPPIKinematicAgent
 from skidnav.agents.mpc.config import MPPIConfig
+from skidnav.agents.mpc.evidence import MapEvidence
 from skidnav.agents.mpc.planner import MPPIPlanner
 from skidnav.agents.mpc.rollouts import RolloutDraws, rollout_costs
 from skidnav.agents.training import run_episode
@@ -58,10 +60,10 @@ def median_seconds(call: Callable[[], Any], repeats: int = REPEATS) -> float:
 
 
 def driven_agent(
-    samples: int, horizon: int, **options: Any
+    samples: int, horizon: int, actions: int = 150, **options: Any
 ) -> tuple[MPPIKinematicAgent, np.ndarray]:
-    """An agent (config ``options`` besides K and H) that drove 150 actions on world 3's
-    obstacles arena over its default observation (the features), and its pose."""
+    """An agent (config ``options`` besides K and H) that drove ``actions`` actions on world
+    3's obstacles arena over its default observation (the features), and its pose."""
     env = gymnasium.make(
         "skidnav/SkidSteerNav-v0", map_kind="obstacles", world_seed=3, slip="slippery",
         action="continuous", observation="features", control_period=CONTROL_PERIOD,
@@ -69,7 +71,7 @@ def driven_agent(
     config = MPPIConfig(samples=samples, horizon=horizon, **options)
     agent = MPPIKinematicAgent.from_env(env, config, np.random.default_rng(0))
     observation, _ = env.reset(seed=0)
-    run_episode(agent, env, observation, 150)
+    run_episode(agent, env, observation, actions)
     return agent, np.asarray(env.unwrapped.pose, dtype=np.float64)
 
 
@@ -291,7 +293,7 @@ def profile(agent: MPPIKinematicAgent, pose: np.ndarray) -> dict[str, float]:
 
 def map_change_seconds(agent: MPPIKinematicAgent) -> dict[str, float]:
     """What a change of the learned map and a refit cost: a new blocked cell (local refresh of
-    the lattice and its values), a wall probability change (values only), a refit (full)."""
+    the lattice and a search of its values), a refit (full)."""
     evidence, mean = agent.evidence, agent.dynamics.mean
 
     def new_wall() -> None:
@@ -302,13 +304,40 @@ def map_change_seconds(agent: MPPIKinematicAgent) -> dict[str, float]:
 
     return {
         "new blocked cell (local lattice refresh + values), x2": median_seconds(new_wall, 5),
-        "values only (a wall probability changed)": median_seconds(
-            lambda: evidence.reweigh(mean), 5
-        ),
         "refit: full lattice refresh + values": median_seconds(
             lambda: evidence.reweigh(mean, model_changed=True), 3
         ),
     }
+
+
+def value_update_rates(quick: bool) -> tuple[float, float]:
+    """Updates of the lattice's values per second over :func:`driven_agent`'s drive (K = 256,
+    H = 40; 150 actions of 0.1 s, quick 60), those after wall probabilities changed alone (not
+    the lattice, whose change is searched either way): repaired around the cells that changed
+    (the default), and searched again, on the same drive (the values are equal bit for bit, so
+    the drives are too)."""
+    spent = {False: 0.0, True: 0.0}
+    calls = {False: 0, True: 0}
+    update_values = MapEvidence.update_values
+    driven_agent(256, 40, 20)  # compiled (or read from numba's cache) before it is timed
+    for search in (False, True):
+
+        def timed(evidence: MapEvidence, refreshed: bool, search: bool = search) -> int:
+            if refreshed:  # a new lattice or new costs: searched either way
+                return update_values(evidence, refreshed)
+            start = time.perf_counter()
+            work = update_values(evidence, search)
+            spent[search] += time.perf_counter() - start
+            calls[search] += 1
+            return work
+
+        MapEvidence.update_values = timed  # type: ignore[method-assign]
+        try:
+            driven_agent(256, 40, 60 if quick else 150)
+        finally:
+            MapEvidence.update_values = update_values  # type: ignore[method-assign]
+    assert calls[False] == calls[True], calls
+    return calls[False] / spent[False], calls[True] / spent[True]
 
 
 def rollout_rates(quick: bool) -> tuple[float, float]:
@@ -375,6 +404,12 @@ def report(agent: MPPIKinematicAgent, pose: np.ndarray, samples: int, horizon: i
             print(f"  profile, {name}: {seconds * 1e3:.3f} ms ({seconds / step:.0%} of a step)")
         for name, seconds in map_change_seconds(agent).items():
             print(f"  map change, {name}: {seconds * 1e3:.1f} ms")
+        repaired, searched = value_update_rates(False)
+        print(
+            f"  map change, the values after a wall probability changed, over the drive: "
+            f"repaired {1e3 / repaired:.2f} ms, searched again {1e3 / searched:.2f} ms: "
+            f"{repaired / searched:.0f}x"
+        )
 
 
 class PlannerPath(NamedTuple):

@@ -10,7 +10,7 @@ import pytest
 
 from skidnav.agents.mpc.agent import MPPIKinematicAgent
 from skidnav.agents.mpc.costmap import interpolated_state_value
-from skidnav.agents.mpc.lattice import refresh_table, state_values
+from skidnav.agents.mpc.lattice import goal_distances, refresh_table, state_values
 from skidnav.agents.mpc.rollouts import RolloutDraws, rollout_costs
 from skidnav.models.kinematic_prediction import PREDICT_COLLISION
 from tests.agents.mpc.support import agent_for, nav_env
@@ -138,6 +138,48 @@ def test_a_local_refresh_equals_a_full_one() -> None:
         agent.kernel_grid,
     )  # fmt: skip
     assert np.array_equal(values, evidence.lattice.value)
+
+
+def test_a_repair_after_wall_probabilities_change_equals_a_search_bit_for_bit() -> None:
+    """The values repaired around the cells whose wall probability changed (rising, falling, to
+    0 and to near 1, one cell or many, the goal's among them) are a whole search's, bit for bit;
+    the repair of one cell's change touches a small part of the lattice, and a wide change is
+    searched again."""
+    agent = agent_for(nav_env())
+    evidence, grid = agent.evidence, agent.kernel_grid
+    evidence.hits[6, 3:8] = 3  # the wall: lethal cells, so some states do not reach the goal
+    evidence.reweigh(agent.dynamics.mean)
+    probability = evidence.cost_map.wall_probability
+    rng = np.random.default_rng(0)
+    searched = np.zeros_like(evidence.distance)
+    works: list[int] = []
+    for round_ in range(60):
+        count = 1 if round_ % 3 else int(rng.integers(2, 40))
+        cells = rng.integers(0, [grid.n_x, grid.n_y], size=(count, 2))
+        lethal = evidence.cost_map.lethal[cells[:, 0], cells[:, 1]]
+        cells = cells[~lethal]  # a lethal cell's change refreshes the lattice: not a repair
+        levels = rng.choice([0.0, 0.3, 0.6, 0.95, rng.uniform()], size=len(cells))
+        if round_ == 7:
+            cells, levels = np.array([agent.goal]), np.array([0.5])
+        probability[cells[:, 0], cells[:, 1]] = levels
+        work = evidence.update_values(refreshed=False)
+        goal_distances(
+            evidence.lattice, probability, *agent.goal, evidence.costs.collision_cost, grid,
+            searched,
+        )  # fmt: skip
+        assert np.array_equal(evidence.distance, searched)
+        assert np.array_equal(evidence.supported, searched)
+        works.append(work if count == 1 else -work)
+    assert np.isinf(searched).any() and np.isfinite(searched).mean() > 0.5
+    values = evidence.lattice.value.copy()
+    state_values(
+        evidence.lattice, probability, *agent.goal, evidence.costs.collision_cost,
+        evidence.costs.blocked_cost, grid,
+    )  # fmt: skip
+    assert np.array_equal(values, evidence.lattice.value)
+    single = [work for work in works if work >= 0]
+    assert np.median(single) < 0.1 * searched.size and max(single) > 0
+    assert -searched.size in works  # a change too wide to repair: searched again
 
 
 def test_the_interpolated_value_is_the_state_value_at_a_state_centre() -> None:

@@ -23,11 +23,14 @@ from skidnav.agents.mpc.costmap import CostMap, MapCosts, empty_cost_map, weigh_
 from skidnav.agents.mpc.dynamics import SampledDynamics, sampled_twist
 from skidnav.agents.mpc.laser import record_scan
 from skidnav.agents.mpc.lattice import (
+    REPAIR_BUDGET,
+    capped_values,
     cells_near,
     empty_lattice,
+    goal_distances,
     lattice_reach,
     refresh_table,
-    state_values,
+    repair_distances,
 )
 from skidnav.models.kinematic_prediction import collision_wall_cell
 from skidnav.robot.kinematics import N_ACTIONS
@@ -120,6 +123,14 @@ class MapEvidence:
         steps = [lattice.substeps / robot.substeps for lattice in lattice_robots]
         action_steps = np.repeat(np.array(steps, dtype=np.float64), N_ACTIONS)
         self.lattice = empty_lattice(n_states if lattice_robots else 1, n_regions, action_steps)
+        self.distance = np.zeros_like(self.lattice.value)
+        """float64 (n_states,): each state's distance to the goal through the lattice, ∞ where
+        it does not reach (:func:`~skidnav.agents.mpc.lattice.goal_distances`)."""
+        self.supported = np.zeros_like(self.lattice.value)
+        """float64 (n_states,): each state's best successor's distance plus the action's cost,
+        kept for the repair (:func:`~skidnav.agents.mpc.lattice.repair_distances`)."""
+        self.valued_probability = np.zeros((grid.n_x, grid.n_y))
+        """float64 (n_x, n_y): the wall probabilities :attr:`distance` was computed with."""
         self.cost_map: CostMap = empty_cost_map(grid.n_x, grid.n_y, self.lattice.value)
         self.reweighs = 0
         """Times the cost map was recomputed."""
@@ -157,10 +168,34 @@ class MapEvidence:
                 self.grid, cells,
             )  # fmt: skip
             self.table_refreshes += 1
-        state_values(
-            self.lattice, self.cost_map.wall_probability, self.costs.goal_i, self.costs.goal_j,
-            self.costs.collision_cost, self.costs.blocked_cost, self.grid,
-        )  # fmt: skip
+        self.update_values(refreshed=model_changed or bool(changed.any()))
+
+    def update_values(self, refreshed: bool) -> int:
+        """The lattice's values from the wall probabilities: a search over the whole lattice
+        after its predictions were ``refreshed`` (or the costs changed with a refit), else a
+        repair around the cells whose wall probability changed, the same values bit for bit
+        (:func:`~skidnav.agents.mpc.lattice.repair_distances`; a whole search too where the
+        repair would set more than :data:`~skidnav.agents.mpc.lattice.REPAIR_BUDGET` of the
+        states). Returns the states whose distance was set (all of them after a search)."""
+        costs, probability = self.costs, self.cost_map.wall_probability
+        n_states = self.distance.shape[0]
+        work = -1
+        if not refreshed:
+            work = repair_distances(
+                self.lattice, self.valued_probability, probability, costs.goal_i, costs.goal_j,
+                costs.collision_cost, self.grid, self.distance, self.supported,
+                int(REPAIR_BUDGET * n_states),
+            )  # fmt: skip
+        if work < 0:
+            goal_distances(
+                self.lattice, probability, costs.goal_i, costs.goal_j, costs.collision_cost,
+                self.grid, self.distance,
+            )  # fmt: skip
+            self.supported[:] = self.distance
+            work = n_states
+        self.valued_probability[:] = probability
+        capped_values(self.distance, costs.blocked_cost, self.lattice.value)
+        return work
 
     def record_step(
         self,

@@ -33,7 +33,8 @@ The terminal value of a pose is V interpolated between the states around it
 predictions, and with them the reverse graph the search walks (the edges into each state), are
 recomputed when the model's fit changes (all of them) or a cell becomes or stops being lethal
 (those of the cells within one action's reach of it); the values whenever a wall probability
-changes.
+changes: searched again after the predictions changed, else repaired around the cells whose
+probability changed (:func:`repair_distances`, the same values bit for bit).
 """
 
 from __future__ import annotations
@@ -86,6 +87,12 @@ class Lattice(NamedTuple):
     reverse_flags: np.ndarray
 
 
+REPAIR_BUDGET = 0.125
+"""The share of the lattice's states a repair of the values may set before it gives way to a
+whole search (:func:`repair_distances`): per state it set, a repair costs several times what a
+search does (a state whose distance rises is set twice, and the states before it search their
+edges again), so a change that moves the values of much of the lattice is cheaper searched.
+Measured on a maze at the 0.1-s period (docs/agents/mppi-kinematic.md, "The values' repair")."""
 EDGE_COLLIDES = 1
 """Flag of a reverse edge whose action is predicted to collide (it costs C more)."""
 EDGE_CROSSES = 2
@@ -211,10 +218,7 @@ def reverse_graph(lattice: Lattice, n_headings: int) -> None:
             filled[t] += 1
             lattice.reverse_source[edge] = s
             lattice.reverse_action[edge] = a
-            flags = EDGE_COLLIDES if outcome[s, a] == PREDICT_COLLISION else 0
-            if s // n_headings != t // n_headings:
-                flags += EDGE_CROSSES
-            lattice.reverse_flags[edge] = flags
+            lattice.reverse_flags[edge] = _edge_flags(outcome[s, a], s, t, n_headings)
 
 
 @jit
@@ -229,36 +233,265 @@ def state_values(
 ) -> None:
     """Dijkstra from the goal cell's states over the lattice (module doc) into
     ``lattice.value``."""
-    value, n_headings = lattice.value, grid.n_headings
+    goal_distances(lattice, wall_probability, goal_i, goal_j, collision_cost, grid, lattice.value)
+    _cap_unreached(lattice.value, blocked_cost)
+
+
+@jit
+def goal_distances(
+    lattice: Lattice,
+    wall_probability: np.ndarray,
+    goal_i: int,
+    goal_j: int,
+    collision_cost: float,
+    grid: GridShape,
+    distance: np.ndarray,
+) -> None:
+    """Dijkstra from the goal cell's states over the lattice into ``distance`` float64
+    (n_states,): each state's fewest control steps to the goal (module doc), ∞ where the graph
+    does not reach it."""
+    n_headings = grid.n_headings
     start, sources = lattice.reverse_start, lattice.reverse_source
-    actions, flags = lattice.reverse_action, lattice.reverse_flags
-    value.fill(np.inf)
-    settled = np.zeros(value.shape[0], dtype=np.bool_)
+    distance.fill(np.inf)
+    settled = np.zeros(distance.shape[0], dtype=np.bool_)
     queue = [(0.0, 0)]
     queue.pop()
     for heading in range(n_headings):
         goal_state = (goal_i * grid.n_y + goal_j) * n_headings + heading
-        value[goal_state] = 0.0
+        distance[goal_state] = 0.0
         heapq.heappush(queue, (0.0, goal_state))
     while len(queue) > 0:
-        distance, target = heapq.heappop(queue)
+        reached, target = heapq.heappop(queue)
         if settled[target]:
             continue
         settled[target] = True
-        target_cell = target // n_headings
-        entering = (
-            collision_cost * wall_probability[target_cell // grid.n_y, target_cell % grid.n_y]
-        )
+        entering = _entering(target, wall_probability, collision_cost, grid)
         for edge in range(start[target], start[target + 1]):
             source = sources[edge]
-            cost = lattice.action_steps[actions[edge]]
-            if flags[edge] & EDGE_COLLIDES:
-                cost += collision_cost
-            if flags[edge] & EDGE_CROSSES:
-                cost += entering
-            if distance + cost < value[source]:
-                value[source] = distance + cost
-                heapq.heappush(queue, (distance + cost, source))
+            cost = _edge_cost(lattice, edge, collision_cost, entering)
+            if reached + cost < distance[source]:
+                distance[source] = reached + cost
+                heapq.heappush(queue, (reached + cost, source))
+
+
+@jit
+def _entering(
+    state: int, wall_probability: np.ndarray, collision_cost: float, grid: GridShape
+) -> float:
+    """C · p of the cell of ``state``: the cost of entering it from another cell."""
+    cell = state // grid.n_headings
+    return collision_cost * float(wall_probability[cell // grid.n_y, cell % grid.n_y])
+
+
+@jit
+def _edge_cost(lattice: Lattice, edge: int, collision_cost: float, entering: float) -> float:
+    """The cost of the reverse ``edge`` (module doc): :func:`_action_cost` of its action and
+    flags."""
+    action = lattice.reverse_action[edge]
+    return _action_cost(
+        lattice.action_steps[action], lattice.reverse_flags[edge], collision_cost, entering
+    )
+
+
+@jit
+def _action_cost(steps: float, flags: int, collision_cost: float, entering: float) -> float:
+    """An action's cost (module doc): its ``steps`` [control steps], plus C if ``flags`` say
+    it is predicted to collide, plus ``entering`` (:func:`_entering` of its next state) if it
+    enters another cell; summed in this order wherever an action is costed."""
+    cost = steps
+    if flags & EDGE_COLLIDES:
+        cost += collision_cost
+    if flags & EDGE_CROSSES:
+        cost += entering
+    return cost
+
+
+@jit
+def _edge_flags(code: int, source: int, target: int, n_headings: int) -> int:
+    """The flags of the action from state ``source`` to ``target`` with outcome ``code``:
+    :data:`EDGE_COLLIDES` if a predicted collision, plus :data:`EDGE_CROSSES` if the two
+    states lie in different cells."""
+    flags = EDGE_COLLIDES if code == PREDICT_COLLISION else 0
+    if source // n_headings != target // n_headings:
+        flags += EDGE_CROSSES
+    return flags
+
+
+@jit
+def _best_successor(
+    lattice: Lattice,
+    state: int,
+    wall_probability: np.ndarray,
+    collision_cost: float,
+    grid: GridShape,
+    distance: np.ndarray,
+) -> float:
+    """min over the actions of ``state`` of (the distance of its next state + the action's
+    cost), each sum rounded as :func:`goal_distances` rounds it (∞ if none reaches)."""
+    best = np.inf
+    for action in range(lattice.next_state.shape[1]):
+        target = lattice.next_state[state, action]
+        if not distance[target] < np.inf:
+            continue
+        flags = _edge_flags(lattice.outcome[state, action], state, target, grid.n_headings)
+        entering = _entering(target, wall_probability, collision_cost, grid)
+        cost = _action_cost(lattice.action_steps[action], flags, collision_cost, entering)
+        best = min(best, distance[target] + cost)
+    return best
+
+
+@jit
+def repair_distances(
+    lattice: Lattice,
+    before: np.ndarray,
+    after: np.ndarray,
+    goal_i: int,
+    goal_j: int,
+    collision_cost: float,
+    grid: GridShape,
+    distance: np.ndarray,
+    supported: np.ndarray,
+    budget: int,
+) -> int:
+    """:func:`goal_distances` again after the wall probabilities changed from ``before`` to
+    ``after`` (float64 (n_x, n_y)), the graph unchanged, repairing only the states the change
+    reaches: Lifelong Planning A* without a heuristic (Koenig, Likhachev & Furcy 2004,
+    "Lifelong Planning A*"; the dynamic shortest paths of Ramalingam & Reps 1996).
+    ``distance`` (n_states,) holds the distances before the change, ``supported`` (n_states,)
+    each state's :func:`_best_successor` over them (0 in the goal cell): equal to ``distance``
+    after a search, and again after the repair. A change of one edge's term updates its
+    source's ``supported`` in O(1) when the term falls, and by :func:`_best_successor` only when
+    the term that was the least rises.
+
+    The result is :func:`goal_distances`'s bit for bit: with every edge's cost positive, the
+    distances d(s) = min over the edges of the rounded d(next) + cost (0 in the goal cell, ∞
+    where the graph does not reach) have one solution in floating point, and both algorithms
+    end at it (tested on random changes). Returns the states whose distance was set (the
+    repair's work), or −1 once more than ``budget`` were: the repair then stops, ``distance``
+    and ``supported`` half repaired, for a whole search to replace (:data:`REPAIR_BUDGET`)."""
+    goal_cell = goal_i * grid.n_y + goal_j
+    queue = [(0.0, 0)]
+    queue.pop()
+    _changed_cells(
+        lattice, before, after, goal_cell, collision_cost, grid, distance, supported, queue
+    )
+    work = 0
+    while len(queue) > 0:
+        key, state = heapq.heappop(queue)
+        if supported[state] == distance[state] or key != min(supported[state], distance[state]):
+            continue  # consistent, or an entry superseded by a later push
+        work += 1
+        if work > budget:
+            return -1
+        reached = distance[state]
+        if supported[state] < reached:
+            distance[state] = supported[state]
+        else:
+            distance[state] = np.inf
+            if supported[state] < np.inf:
+                heapq.heappush(queue, (supported[state], state))
+        entering = _entering(state, after, collision_cost, grid)
+        _terms_into(
+            lattice, state, reached, distance[state], entering, entering, goal_cell, after,
+            collision_cost, grid, distance, supported, queue,
+        )  # fmt: skip
+    return work
+
+
+@jit
+def _changed_cells(
+    lattice: Lattice,
+    before: np.ndarray,
+    after: np.ndarray,
+    goal_cell: int,
+    collision_cost: float,
+    grid: GridShape,
+    distance: np.ndarray,
+    supported: np.ndarray,
+    queue: list[tuple[float, int]],
+) -> None:
+    """The start of :func:`repair_distances`: the edges into each cell whose wall probability
+    went from ``before`` to ``after`` change their terms (:func:`_terms_into`)."""
+    n_headings = grid.n_headings
+    for i in range(grid.n_x):
+        for j in range(grid.n_y):
+            if before[i, j] == after[i, j]:
+                continue
+            cell = i * grid.n_y + j
+            was, now = collision_cost * before[i, j], collision_cost * after[i, j]
+            for target in range(cell * n_headings, (cell + 1) * n_headings):
+                if distance[target] < np.inf:
+                    reached = distance[target]
+                    _terms_into(
+                        lattice, target, reached, reached, was, now, goal_cell, after,
+                        collision_cost, grid, distance, supported, queue,
+                    )  # fmt: skip
+
+
+@jit
+def _terms_into(
+    lattice: Lattice,
+    target: int,
+    reached_was: float,
+    reached_now: float,
+    entering_was: float,
+    entering_now: float,
+    goal_cell: int,
+    wall_probability: np.ndarray,
+    collision_cost: float,
+    grid: GridShape,
+    distance: np.ndarray,
+    supported: np.ndarray,
+    queue: list[tuple[float, int]],
+) -> None:
+    """The terms of the edges into ``target`` changed: its distance from ``reached_was`` to
+    ``reached_now``, the cost of entering its cell from ``entering_was`` to ``entering_now``;
+    :func:`_retermed` for each edge's source outside the goal cell."""
+    for edge in range(lattice.reverse_start[target], lattice.reverse_start[target + 1]):
+        source = lattice.reverse_source[edge]
+        if source // grid.n_headings == goal_cell:
+            continue
+        old = reached_was + _edge_cost(lattice, edge, collision_cost, entering_was)
+        new = reached_now + _edge_cost(lattice, edge, collision_cost, entering_now)
+        _retermed(
+            lattice, source, old, new, wall_probability, collision_cost, grid, distance,
+            supported, queue,
+        )  # fmt: skip
+
+
+@jit
+def _retermed(
+    lattice: Lattice,
+    state: int,
+    old: float,
+    new: float,
+    wall_probability: np.ndarray,
+    collision_cost: float,
+    grid: GridShape,
+    distance: np.ndarray,
+    supported: np.ndarray,
+    queue: list[tuple[float, int]],
+) -> None:
+    """One term of ``state``'s :func:`_best_successor` went from ``old`` to ``new``: keep
+    ``supported[state]`` the least term (lower it, or search its edges again if the least rose)
+    and queue ``state`` if it now differs from its distance."""
+    if new < supported[state]:
+        supported[state] = new
+    elif new > old and old == supported[state]:
+        supported[state] = _best_successor(
+            lattice, state, wall_probability, collision_cost, grid, distance
+        )
+    else:
+        return
+    if supported[state] != distance[state]:
+        heapq.heappush(queue, (min(supported[state], distance[state]), state))
+
+
+@jit
+def capped_values(distance: np.ndarray, blocked_cost: float, value: np.ndarray) -> None:
+    """``distance`` (n_states,) into ``value`` (n_states,), the states that do not reach the
+    goal at the largest finite distance plus ``blocked_cost`` (module doc)."""
+    value[:] = distance
     _cap_unreached(value, blocked_cost)
 
 
