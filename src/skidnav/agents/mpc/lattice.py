@@ -87,12 +87,14 @@ class Lattice(NamedTuple):
     reverse_flags: np.ndarray
 
 
-REPAIR_BUDGET = 0.125
+REPAIR_BUDGET = 0.25
 """The share of the lattice's states a repair of the values may set before it gives way to a
-whole search (:func:`repair_distances`): per state it set, a repair costs several times what a
-search does (a state whose distance rises is set twice, and the states before it search their
-edges again), so a change that moves the values of much of the lattice is cheaper searched.
-Measured on a maze at the 0.1-s period (docs/agents/mppi-kinematic.md, "The values' repair")."""
+whole search (:func:`repair_distances`): per state it sets, a repair costs about four times
+what a search does (a state whose distance rises is set twice, and the states before it search
+their edges again; measured 1.1 µs against 0.28 µs in a maze run at 1-s actions), so a change
+that moves the values of more than a quarter of the lattice is cheaper searched, and a repair
+that stops there costs at most about twice a search (docs/agents/mppi-kinematic.md, "The
+values' repair")."""
 EDGE_COLLIDES = 1
 """Flag of a reverse edge whose action is predicted to collide (it costs C more)."""
 EDGE_CROSSES = 2
