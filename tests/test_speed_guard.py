@@ -8,17 +8,13 @@ does not."""
 from __future__ import annotations
 
 import importlib
-import sys
-from pathlib import Path
 
 import pytest
 
 from skidnav._jit import jit_disabled
+from tests.speed_support import ATTEMPTS
 
-BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
-sys.path.insert(0, str(BENCHMARKS))  # the benchmark scripts import one another by name
 key_figures = importlib.import_module("key_figures")
-ATTEMPTS = 3
 
 
 @pytest.mark.skipif(jit_disabled(), reason="nothing is compiled with NUMBA_DISABLE_JIT=1")

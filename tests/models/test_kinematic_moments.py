@@ -4,7 +4,6 @@ the window) and its incremental refits (the same fit as the rebuild from the win
 from __future__ import annotations
 
 import itertools
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +17,7 @@ from skidnav.models.kinematic_moments import stratum_of
 from skidnav.robot.kinematics import apply_slip, body_velocities
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
+from tests.speed_support import assert_ratio_above
 
 ROBOT, GRID = RobotParams(), Discretization()
 REGION, ETA = 24, 0.3  # the slippery preset's ordinary floor: up to 0.3 rad/s lost per wheel
@@ -149,21 +149,13 @@ def test_a_perfect_prior_gives_an_exact_fit_without_spread() -> None:
     np.testing.assert_array_equal(model.coefficients[REGION], model.coefficients[0])
 
 
-BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
 FLOOR = 2.0  # measured 4.7× on the 2-core machine with other work running
 
 
 @pytest.mark.skipif(jit_disabled(), reason="nothing is compiled with NUMBA_DISABLE_JIT=1")
 def test_an_incremental_refit_stays_faster_than_the_rebuild() -> None:
-    """A ratio against the rebuild measured in the same process (make bench's entry), never an
-    absolute time; measured up to 3 times so that a moment of load passes."""
-    sys.path.insert(0, str(BENCHMARKS))
+    """A ratio against the rebuild measured in the same process (make bench's entry,
+    tests/speed_support.py)."""
     from bench_kinematic_refit import refit_rates
 
-    measured = []
-    for _ in range(3):
-        incremental, full = refit_rates(True)
-        measured.append(incremental / full)
-        if incremental / full >= FLOOR:
-            return
-    pytest.fail(f"incremental refit only {measured} × the rebuild's rate, floor {FLOOR}")
+    assert_ratio_above(lambda: refit_rates(True), FLOOR, "incremental refit against the rebuild")

@@ -4,29 +4,20 @@ the values around the changed cells stays much faster than searching the whole l
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import pytest
 
 from skidnav._jit import jit_disabled
+from tests.speed_support import assert_ratio_above
 
-BENCHMARKS = Path(__file__).resolve().parents[3] / "benchmarks"
 FLOOR = 10.0  # measured 95–130× on the quick drive (39× on make bench's) on the 2-core machine
 """The guard fails below this ratio of repaired to searched updates per second."""
 
 
 @pytest.mark.skipif(jit_disabled(), reason="nothing is compiled with NUMBA_DISABLE_JIT=1")
 def test_a_repair_of_the_values_stays_faster_than_a_search() -> None:
-    """A ratio against the search measured in the same process, never an absolute time;
-    measured up to 3 times so that a moment of load passes."""
-    sys.path.insert(0, str(BENCHMARKS))
+    """A ratio against the search measured in the same process (tests/speed_support.py)."""
     from bench_mppi import value_update_rates
 
-    measured = []
-    for _ in range(3):
-        repaired, searched = value_update_rates(True)
-        measured.append(repaired / searched)
-        if repaired / searched >= FLOOR:
-            return
-    pytest.fail(f"the values' repair only {measured} × a search's rate, floor {FLOOR}")
+    assert_ratio_above(
+        lambda: value_update_rates(True), FLOOR, "the values' repair against a search"
+    )
