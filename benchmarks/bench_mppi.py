@@ -297,10 +297,12 @@ def map_change_seconds(agent: MPPIKinematicAgent) -> dict[str, float]:
     evidence, mean = agent.evidence, agent.dynamics.mean
 
     def new_wall() -> None:
-        evidence.hits[12, 15] += 5  # a cell beside the route: blocked, then cleared
+        refreshes = evidence.table_refreshes
+        evidence.hits[12, 14] += 5  # a cell beside the route, no ray across it: blocked, cleared
         evidence.reweigh(mean)
-        evidence.hits[12, 15] -= 5
+        evidence.hits[12, 14] -= 5
         evidence.reweigh(mean)
+        assert evidence.table_refreshes == refreshes + 2  # became, then stopped being, lethal
 
     return {
         "new blocked cell (local lattice refresh + values), x2": median_seconds(new_wall, 5),
