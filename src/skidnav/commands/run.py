@@ -47,6 +47,14 @@ def add_parser(subparsers: Any) -> None:
     )
     add_backend_arguments(parser, default=None)
     add_env_module_argument(parser)
+    parser.add_argument(
+        "--runs",
+        default=None,
+        metavar="SELECTION",
+        help="run only these runs of the grid, by index (the NNNNNN of run-NNNNNN): N, A:B "
+        "(A to B-1) and A: or :B, comma-separated, e.g. 0:60,120:180; each run keeps its "
+        "streams, so parts run into one --out give the whole grid's results",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
     parser.add_argument("--report", action="store_true", help="write report.html when done")
     parser.add_argument(
@@ -96,9 +104,13 @@ def add_env_module_argument(parser: argparse.ArgumentParser) -> None:
 
 
 def outcome_line(outcome: RunOutcome) -> str:
-    """What a run of a config did, in one line: runs, where, how many now and before, time."""
+    """What a run of a config did, in one line: runs (of the grid's, when a part was asked
+    for), where, how many now and before, time."""
+    runs = plural(outcome.n_runs, "run")
+    if outcome.n_runs < outcome.grid_runs:
+        runs = f"{outcome.n_runs} of the grid's {outcome.grid_runs} runs"
     return (
-        f"{plural(outcome.n_runs, 'run')} in {outcome.out_dir} ({outcome.executed} run now, "
+        f"{runs} in {outcome.out_dir} ({outcome.executed} run now, "
         f"{outcome.skipped} already done) in {outcome.wall_time:.1f} s"
     )
 
@@ -129,11 +141,15 @@ def terminate_as_interrupt() -> Iterator[None]:
 
 
 def run_with_arguments(
-    loaded: LoadedConfig, args: argparse.Namespace, on_run: TensorBoardLog | None = None
+    loaded: LoadedConfig,
+    args: argparse.Namespace,
+    on_run: TensorBoardLog | None = None,
+    only: str | None = None,
 ) -> RunOutcome:
     """Run a loaded config as the command-line ``args`` ask (``--out``, default
     ``runs/<name>``, checked first; ``--backend``, ``--jobs``, ``--scheduler``,
-    ``--no-progress``), SIGTERM stopping it as Ctrl-C does; prints what was run."""
+    ``--no-progress``), SIGTERM stopping it as Ctrl-C does; prints what was run. ``only``: a
+    part of the grid (``--runs``, :func:`~skidnav.experiments.runs.select_runs`)."""
     out = check_output_dir(args.out if args.out is not None else Path("runs") / loaded.grid.name)
     with terminate_as_interrupt():
         outcome = run_loaded(
@@ -144,6 +160,7 @@ def run_with_arguments(
             scheduler=args.scheduler,
             progress=not args.no_progress,
             on_run=on_run,
+            only=only,
         )
     print(outcome_line(outcome))
     return outcome
@@ -156,7 +173,7 @@ def run_command(args: argparse.Namespace) -> int:
     allow_env_modules(args.env_module)
     log = tensorboard_log(args.tensorboard)
     loaded = load_grid(args.config)
-    outcome = run_with_arguments(loaded, args, on_run=log)
+    outcome = run_with_arguments(loaded, args, on_run=log, only=args.runs)
     if log is not None:
         print(f"TensorBoard logs: {log.root} (tensorboard --logdir {log.root})")
     if args.report:

@@ -61,7 +61,7 @@ from skidnav.experiments.dask_backend import dask_client, distributed_module
 from skidnav.experiments.failures import RunFailure, attempt, failed_runs_message
 from skidnav.experiments.lock import directory_lock
 from skidnav.experiments.provenance import CODE_KEYS, code_version, package_versions
-from skidnav.experiments.runs import Grid, RunSpec, expand_runs
+from skidnav.experiments.runs import Grid, RunSpec, expand_runs, select_runs
 from skidnav.experiments.sessions import mixed_code_message, other_code, update_sessions
 from skidnav.experiments.store import EXPERIMENT_LAYOUT, ResultStore, RunLayout, TrialResult
 from skidnav.experiments.workers import init_worker
@@ -85,6 +85,8 @@ class RunOutcome(NamedTuple):
     skipped: int
     executed: int
     wall_time: float
+    grid_runs: int
+    """Runs of the whole grid (``n_runs`` of them were asked for)."""
 
 
 Outcome = TrialResult | RunFailure
@@ -241,8 +243,9 @@ def run_experiment(
     progress: bool = False,
     layout: RunLayout = EXPERIMENT_LAYOUT,
     on_run: RunObserver | None = None,
+    only: str | None = None,
 ) -> RunOutcome:
-    """Run (or resume) every run of ``config`` into ``out_dir``.
+    """Run (or resume) every run of ``config`` into ``out_dir``, or those ``only`` names.
 
     Args:
         config: the experiment (or another grid, with its ``trial`` and ``layout``).
@@ -262,6 +265,9 @@ def run_experiment(
         on_run: called in this process with every finished run of the grid: those already in
             ``out_dir`` (a resume) first, then each new one once it is written (e.g. the
             TensorBoard log, :mod:`skidnav.experiments.tensorboard_log`).
+        only: run only these runs of the grid (:func:`~skidnav.experiments.runs.select_runs`:
+            ``"0:60,120:180"``), with the streams they have in the whole grid; the other runs
+            can be run into the same ``out_dir`` later, or are missing from its results.
 
     Raises:
         UserError: bad backend options, or ``out_dir`` holds other results or is in use.
@@ -276,16 +282,18 @@ def run_experiment(
     if trial is None:
         trial = _default_trial(config, config_path)
     started = time.time()
-    runs = expand_runs(config)
+    grid = expand_runs(config)
+    runs = grid if only is None else select_runs(grid, only)
     ResultStore(out_dir, layout).check(config)
     with contextlib.ExitStack() as locked:
         with contextlib.ExitStack() as stack:
             client = None
-            if backend == "dask" and len(ResultStore(out_dir, layout).finished()) < len(runs):
+            unfinished = {spec.run_id for spec in runs} - ResultStore(out_dir, layout).finished()
+            if backend == "dask" and unfinished:
                 client = stack.enter_context(dask_client(jobs, scheduler))
             locked.enter_context(directory_lock(out_dir))  # held until the metadata is written
             store = ResultStore.open(out_dir, config, source_text, layout)
-            session = _session(started, backend, jobs, scheduler)
+            session = _session(started, backend, jobs, scheduler, only)
             records = _resume_records(store, session)
             pending = [spec for spec in runs if spec.run_id not in records]
             if on_run is not None:
@@ -293,19 +301,23 @@ def run_experiment(
                     on_run(finished)
             execution = (trial, backend, jobs, client)
             try:
+                done = len(runs) - len(pending)
                 failures = _run_pending(
-                    store, config, pending, records, session, execution, progress, on_run
+                    store, config, pending, records, done, session, execution, progress, on_run
                 )
             except KeyboardInterrupt:
-                raise Interrupted(len(records), len(runs), str(store.root)) from None
+                written = sum(spec.run_id in records for spec in runs)
+                raise Interrupted(written, len(runs), str(store.root)) from None
         if failures:
             raise RunsFailedError(failed_runs_message(failures, len(runs), store.root))
         store.consolidate()
         wall_time = time.time() - started
         session.update(wall_time_s=wall_time, completed=True)
         sessions = update_sessions(_previous_sessions(store.metadata()), records, session)
-        store.write_metadata(_metadata(store, config, runs, session, sessions))
-    return RunOutcome(store.root, len(runs), len(runs) - len(pending), len(pending), wall_time)
+        store.write_metadata(_metadata(store, config, grid, session, sessions))
+    return RunOutcome(
+        store.root, len(runs), len(runs) - len(pending), len(pending), wall_time, len(grid)
+    )
 
 
 def _default_trial(config: Grid, config_path: Path | str | None) -> TrialFunction:
@@ -325,19 +337,21 @@ def _run_pending(
     config: Grid,
     pending: list[RunSpec[Any]],
     records: dict[str, dict[str, Any]],
+    done: int,
     session: dict[str, Any],
     execution: tuple[TrialFunction, str, int, Any],
     progress: bool,
     on_run: RunObserver | None = None,
 ) -> list[RunFailure]:
     """Run ``pending`` on ``execution`` (trial, backend, jobs, Dask client), writing each result
-    as it arrives (then handing it to ``on_run``) and noting its code record in ``records``;
-    returns the runs that failed (each logged as it failed)."""
-    total = len(pending) + len(records)
-    logger.info("%d runs, %d already done, %d to run", total, len(records), len(pending))
+    as it arrives (then handing it to ``on_run``) and noting its code record in ``records``
+    (which holds every finished run of the directory, ``done`` of them among the runs asked
+    for); returns the runs that failed (each logged as it failed)."""
+    total = len(pending) + done
+    logger.info("%d runs, %d already done, %d to run", total, done, len(pending))
     stamp = {key: session[key] for key in CODE_KEYS} | {"session": session["started"]}
     failures: list[RunFailure] = []
-    with _progress(config, total, len(records), progress) as bar:
+    with _progress(config, total, done, progress) as bar:
         for outcome in execute(pending, *execution):
             if isinstance(outcome, RunFailure):
                 logger.error("%s", outcome.message)
@@ -363,14 +377,18 @@ def _progress(config: Grid, total: int, done: int, show: bool) -> tqdm[Any]:
     )
 
 
-def _session(started: float, backend: str, jobs: int, scheduler: str | None) -> dict[str, Any]:
-    """This session's entry of ``metadata.json`` (completed at the end of the run)."""
+def _session(
+    started: float, backend: str, jobs: int, scheduler: str | None, only: str | None
+) -> dict[str, Any]:
+    """This session's entry of ``metadata.json`` (completed at the end of the run); ``runs``
+    is its selection of the grid's runs (``--runs``), None for all of them."""
     return {
         "started": datetime.fromtimestamp(started, UTC).isoformat(),
         **code_version(),
         "backend": backend,
         "jobs": jobs,
         "scheduler": scheduler,
+        "runs": only,
         "completed": False,
     }
 

@@ -21,9 +21,11 @@ own.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Generic, Protocol, TypeVar
 
+from skidnav.errors import UserError
 from skidnav.experiments.config import AgentSpec, MapSpec
 from skidnav.seeding import ROOT_ROLES, SeedKey, child_sequences
 
@@ -132,3 +134,48 @@ def expand_runs(config: GridT) -> list[RunSpec[GridT]]:
                     )
                     index += 1
     return runs
+
+
+def select_runs(runs: Sequence[RunSpec[GridT]], selection: str) -> list[RunSpec[GridT]]:
+    """The runs of ``runs`` (a whole grid, in index order) that ``selection`` names: indices ``N``
+    and half-open ranges ``A:B`` (``A`` to ``B`` − 1, either end may be left out), separated by
+    commas, e.g. ``"0:60,120:180"`` or ``"7"``. A run keeps its index, and with it its streams,
+    so a grid run in parts (on several machines, or one arm first) gives the runs of a whole run.
+
+    >>> from skidnav.experiments.config import AgentSpec, MapSpec, ExperimentConfig
+    >>> cfg = ExperimentConfig("x", (AgentSpec("q-learning", "Q"),), (MapSpec("free", "free"),),
+    ...                        seeds=6, root_seed=7)
+    >>> [r.index for r in select_runs(expand_runs(cfg), "4:,1")]
+    [1, 4, 5]
+
+    Raises:
+        UserError: a part that is not an index or a non-empty range of the grid's indices.
+    """
+    chosen: set[int] = set()
+    for part in selection.split(","):
+        chosen.update(_selected_indices(part.strip(), len(runs), selection))
+    return [spec for spec in runs if spec.index in chosen]
+
+
+def _selected_indices(part: str, n_runs: int, selection: str) -> range:
+    """The indices of one part of a selection (``N``, ``A:B``, ``A:``, ``:B``)."""
+    ends = part.split(":")
+    try:
+        if len(ends) == 1:
+            first = int(ends[0])
+            bounds = (first, first + 1)
+        elif len(ends) == 2:
+            bounds = (int(ends[0]) if ends[0] else 0, int(ends[1]) if ends[1] else n_runs)
+        else:
+            raise ValueError(part)
+    except ValueError:
+        raise UserError(
+            f"--runs {selection!r}: {part!r} is not a run index N or a range A:B"
+        ) from None
+    start, stop = bounds
+    if start < 0 or stop > n_runs or start >= stop:
+        raise UserError(
+            f"--runs {selection!r}: {part!r} is not a non-empty range of the grid's run "
+            f"indices 0 to {n_runs - 1}"
+        )
+    return range(start, stop)

@@ -98,12 +98,14 @@ def run_loaded(
     progress: bool = False,
     trial: TrialFunction | None = None,
     on_run: RunObserver | None = None,
+    only: str | None = None,
 ) -> RunOutcome:
     """Run (or resume) every run of ``loaded`` into ``out`` on the runner
     (:func:`~skidnav.experiments.runner.run_experiment`), with the study's run function
     (:meth:`~skidnav.studies.kind.Study.trial`) unless ``trial`` is given (the same function with
     other progress callbacks: ``skidnav robot study``); ``on_run`` is told of every finished run
-    (the TensorBoard log).
+    (the TensorBoard log); ``only`` runs a part of the grid
+    (:func:`~skidnav.experiments.runs.select_runs`).
 
     Raises:
         UserError: bad backend options, ``out`` holds other results or is in use.
@@ -124,4 +126,5 @@ def run_loaded(
         progress=progress,
         layout=loaded.layout,
         on_run=on_run,
+        only=only,
     )
