@@ -35,8 +35,9 @@ def add_parser(subparsers: Any) -> None:
         "run",
         help=HELP["run"],
         description="Run every run of an experiment config, or of a study config (its top-level "
-        "'kind' names the study). Started again on the same --out directory it skips the runs "
-        "already finished; a second run on a directory in use is refused.",
+        "'kind' names the study), or the part of its grid that --runs names. Started again on "
+        "the same --out directory it skips the runs already finished; a second run on a "
+        "directory in use is refused.",
     )
     parser.add_argument("config", type=path_argument, help="experiment or study config (TOML)")
     parser.add_argument(
