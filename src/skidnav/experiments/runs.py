@@ -140,7 +140,8 @@ def select_runs(runs: Sequence[RunSpec[GridT]], selection: str) -> list[RunSpec[
     """The runs of ``runs`` (a whole grid, in index order) that ``selection`` names: indices ``N``
     and half-open ranges ``A:B`` (``A`` to ``B`` − 1, either end may be left out), separated by
     commas, e.g. ``"0:60,120:180"`` or ``"7"``. A run keeps its index, and with it its streams,
-    so a grid run in parts (on several machines, or one arm first) gives the runs of a whole run.
+    so a grid run in parts into one directory (one arm first, the rest later) gives the runs of
+    a whole run.
 
     >>> from skidnav.experiments.config import AgentSpec, MapSpec, ExperimentConfig
     >>> cfg = ExperimentConfig("x", (AgentSpec("q-learning", "Q"),), (MapSpec("free", "free"),),
