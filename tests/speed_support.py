@@ -1,18 +1,14 @@
-"""The speed guards' shared pieces: the benchmark scripts made importable, and the check of a
-ratio of two rates measured in the same process against a floor, measured again up to
-:data:`ATTEMPTS` times in all so that a moment of load passes and a slowdown does not. A ratio,
-never an absolute time: a loaded machine slows both sides alike."""
+"""The speed guards' shared check: a ratio of two rates measured in the same process against a
+floor, measured again up to :data:`ATTEMPTS` times in all so that a moment of load passes and a
+slowdown does not. A ratio, never an absolute time: a loaded machine slows both sides alike.
+The benchmark scripts come from :mod:`tests.benchmark_scripts`."""
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
-from pathlib import Path
 
 import pytest
 
-BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
-sys.path.insert(0, str(BENCHMARKS))  # the benchmark scripts import one another by name
 ATTEMPTS = 3
 
 

@@ -4,19 +4,15 @@ medians, bold only where the interval excludes 0."""
 
 from __future__ import annotations
 
-import importlib
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec, freeze_params
+from tests.benchmark_scripts import benchmark
 
-BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
-sys.path.insert(0, str(BENCHMARKS))  # the benchmark scripts import one another by name
-table = importlib.import_module("kinematic_value_table")
+table = benchmark("kinematic_value_table")
 
 
 def _arm(model: str) -> AgentSpec:

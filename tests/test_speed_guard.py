@@ -7,14 +7,13 @@ does not."""
 
 from __future__ import annotations
 
-import importlib
-
 import pytest
 
 from skidnav._jit import jit_disabled
+from tests.benchmark_scripts import benchmark
 from tests.speed_support import ATTEMPTS
 
-key_figures = importlib.import_module("key_figures")
+key_figures = benchmark("key_figures")
 
 
 @pytest.mark.skipif(jit_disabled(), reason="nothing is compiled with NUMBA_DISABLE_JIT=1")

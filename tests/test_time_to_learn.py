@@ -3,19 +3,15 @@ tables, and how the speed table shows it."""
 
 from __future__ import annotations
 
-import importlib
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from skidnav.experiments.configfile import load_config
+from tests.benchmark_scripts import benchmark
 
-BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
-sys.path.insert(0, str(BENCHMARKS))  # the benchmark scripts import one another by name
-time_to_learn = importlib.import_module("time_to_learn")
+time_to_learn = benchmark("time_to_learn")
 
 
 def _tables() -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -53,7 +49,7 @@ def test_interval_text() -> None:
 
 
 def test_speed_table_shows_an_unmeasured_end_as_infinite() -> None:
-    speed_table = importlib.import_module("speed_table")
+    speed_table = benchmark("speed_table")
     figures = {}
     for agent in time_to_learn.agent_labels():
         for name, value in (("seconds", 0.5), ("seconds_low", 0.25), ("seconds_high", math.nan),

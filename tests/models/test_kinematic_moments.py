@@ -17,6 +17,7 @@ from skidnav.models.kinematic_moments import stratum_of
 from skidnav.robot.kinematics import apply_slip, body_velocities
 from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
+from tests.benchmark_scripts import benchmark
 from tests.speed_support import assert_ratio_above
 
 ROBOT, GRID = RobotParams(), Discretization()
@@ -156,6 +157,5 @@ FLOOR = 2.0  # measured 4.7× on the 2-core machine with other work running
 def test_an_incremental_refit_stays_faster_than_the_rebuild() -> None:
     """A ratio against the rebuild measured in the same process (make bench's entry,
     tests/speed_support.py)."""
-    from bench_kinematic_refit import refit_rates
-
+    refit_rates = benchmark("bench_kinematic_refit").refit_rates
     assert_ratio_above(lambda: refit_rates(True), FLOOR, "incremental refit against the rebuild")

@@ -6,9 +6,6 @@ the rollouts, advanced side by side in blocks, cost each rollout as it costs alo
 from __future__ import annotations
 
 import copy
-import importlib
-import sys
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -16,10 +13,9 @@ import pytest
 
 from skidnav.agents.mpc.rollouts import BLOCK, RolloutDraws, rollout_costs
 from tests.agents.mpc.support import agent_for, nav_env
+from tests.benchmark_scripts import benchmark
 
-BENCHMARKS = Path(__file__).resolve().parents[3] / "benchmarks"
-sys.path.insert(0, str(BENCHMARKS))  # the benchmark scripts import one another by name
-bench_mppi = importlib.import_module("bench_mppi")  # its NumPy twin: the sampling as NumPy does it
+bench_mppi = benchmark("bench_mppi")  # its NumPy twin: the sampling as NumPy does it
 
 
 @pytest.mark.parametrize(

@@ -7,10 +7,7 @@ drives to a goal behind a wall."""
 from __future__ import annotations
 
 import copy
-import importlib
 import math
-import sys
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -31,10 +28,9 @@ from skidnav.agents.mpc.single_rollouts import BLOCK, single_rollout_costs
 from skidnav.agents.mpc.training import train_mppi
 from tests.agents.mpc.support import SealedEnv, agent_for, nav_env
 from tests.agents.mpc.test_mppi_footprint import NARROW, POINT, ROBOT, WIDE, agent_on
+from tests.benchmark_scripts import benchmark
 
-BENCHMARKS = Path(__file__).resolve().parents[3] / "benchmarks"
-sys.path.insert(0, str(BENCHMARKS))  # the benchmark scripts import one another by name
-twin = importlib.import_module("bench_mppi_single")  # the fast path as NumPy arrays
+twin = benchmark("bench_mppi_single")  # the fast path as NumPy arrays
 
 FAST = {"precision": "float32"}
 
