@@ -10,6 +10,9 @@ each arm's Kaplan–Meier median over all its runs, a run that never got there c
 whole driving time, or at the run's last episode for the episode counts (∞: more than half never
 did); the mean difference of the first success is over the worlds where both arms got there.
 Final greedy success: the mean over worlds of the last evaluation's share of starts at the goal.
+On a grid run in parts (``skidnav run --runs``) every cell of a row is over the worlds both arms
+ran, named in the row ("k of N worlds") when fewer than the grid's; an arm with no runs in a
+row reads "no runs", with only the other arm's cells filled in.
 
     python benchmarks/kinematic_value_table.py runs/kinematic-value-seconds-mppi
 """
@@ -27,6 +30,7 @@ from navigator_targets import final_greedy
 from skidnav.experiments.config import ExperimentConfig
 from skidnav.experiments.report.learning_value import (
     arm_survival,
+    common_worlds,
     model_arms,
     signed,
     value_of_learning,
@@ -52,9 +56,10 @@ def number(value: float) -> str:
 
 
 def difference(values: pd.DataFrame, metric: str) -> str:
-    """learned − prior of ``metric`` with its interval, bold where it excludes 0."""
+    """learned − prior of ``metric`` with its interval, bold where it excludes 0 ("–" with no
+    world run by both arms)."""
     row = values[values["metric"] == metric]
-    if row.empty:
+    if row.empty or row.iloc[0]["pairs"] == 0:
         return "–"
     found = row.iloc[0]
     text = signed(found).translate(MINUS)
@@ -68,10 +73,17 @@ def cell_row(
     """The Markdown row of one map and floor: ``cell`` its runs, ``values`` its learned − prior
     differences, ``labels`` the learned and prior arms' agent labels."""
     key = (str(cell["map"].iloc[0]), str(cell["preset"].iloc[0]))
+    ran = [label for label in labels if (cell["agent"] == label).any()]
+    if len(ran) == len(labels):
+        cell = common_worlds(cell, *labels)
     arm = {label: cell[cell["agent"] == label] for label in labels}
+    worlds = len(arm[ran[0]])
+    title = f"{key[0]} · {key[1]}"
+    if worlds < config.seeds:
+        title += f" ({worlds} of {config.seeds} worlds)"
 
     def both(text: Callable[[str], str]) -> str:
-        return " / ".join(text(label) for label in labels)
+        return " / ".join(text(label) if label in ran else "no runs" for label in labels)
 
     def mean(metric: str) -> str:
         return both(lambda label: number(arm[label][metric].mean()))
@@ -89,10 +101,10 @@ def cell_row(
     reached = both(lambda label: str(int(arm[label]["seconds_to_success90"].notna().sum())))
     final = both(lambda label: f"{100 * arm[label]['final_greedy'].mean():.0f} %")
     cells = [
-        f"{key[0]} · {key[1]}",
+        title,
         f"{mean('driving_seconds')}: {difference(values, 'driving_seconds')}",
         f"{survival('seconds_to_first_success')}; {difference(values, 'seconds_to_first_success')}",
-        f"{reached} of {len(arm[labels[0]])}; {survival('seconds_to_success90')}",
+        f"{reached} of {worlds}; {survival('seconds_to_success90')}",
         f"{episodes('episodes_to_first_success')}; {episodes('episodes_to_success90')}",
         f"{mean('success_rate')}: {difference(values, 'success_rate')}",
         final,

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from skidnav.experiments.config import AgentSpec, ExperimentConfig, MapSpec, freeze_params
 from tests.benchmark_scripts import benchmark
@@ -68,3 +69,26 @@ def test_a_row_per_floor_with_the_paired_differences_and_the_censored_medians() 
 def test_a_config_without_both_arms_gives_no_row() -> None:
     lone = ExperimentConfig("x", (_arm("learned"),), CONFIG.maps, seeds=10)
     assert table.table_rows(_summaries(), lone) == []
+
+
+def test_a_grid_run_in_part_compares_the_worlds_both_arms_ran() -> None:
+    summaries = _summaries()
+    prior = summaries["agent"].str.contains("prior")
+    summaries.loc[~prior & (summaries["seed"] >= 5), "driving_seconds"] += 10_000.0
+    (row,) = table.table_rows(summaries[~prior | (summaries["seed"] < 5)], CONFIG)
+    cells = [cell.strip() for cell in row.strip("|").split("|")]
+    assert cells[0] == "m · rough-physics (5 of 10 worlds)"
+    learned, prior_mean = (float(x) for x in cells[1].split(":")[0].split(" / "))
+    assert learned - prior_mean == pytest.approx(-100, abs=1)  # not the unpaired 5 worlds more
+    assert cells[1].endswith("**−100 [−100, −100]**")
+    assert cells[3].startswith("5 / 3 of 5")
+
+
+def test_an_arm_with_no_runs_reads_no_runs() -> None:
+    summaries = _summaries()
+    (row,) = table.table_rows(summaries[~summaries["agent"].str.contains("prior")], CONFIG)
+    cells = [cell.strip() for cell in row.strip("|").split("|")]
+    assert cells[0] == "m · rough-physics"
+    assert cells[1].endswith(" / no runs: –")
+    assert cells[3].startswith("10 / no runs of 10")
+    assert cells[6] == "100 % / no runs"

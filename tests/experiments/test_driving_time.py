@@ -144,6 +144,22 @@ def test_value_of_learning_is_paired_by_world() -> None:
     assert row.loc[("learned − prior", "success_rate")]["no_difference"]
 
 
+def test_a_grid_run_in_part_is_paired_over_the_worlds_both_arms_ran() -> None:
+    summaries = _summaries()
+    prior = summaries["agent"] == "dyna-full[kinematic_model=prior]"
+    # The prior arm ran the first 6 worlds only, and the learned arm drives its last 6 worlds
+    # far longer: unpaired, the two arms' means would differ by far more than 30 s.
+    summaries.loc[~prior & (summaries["seed"] >= 6), "seconds_to_first_success"] += 1000.0
+    part = summaries[~prior | (summaries["seed"] < 6)]
+    row = value_of_learning(part, CONFIG).set_index(["comparison", "metric"])
+    first = row.loc[("learned − prior", "seconds_to_first_success")]
+    assert first["difference"] == pytest.approx(-30.0) and first["pairs"] == 6
+    assert row.loc[("true − learned", "seconds_to_first_success")]["pairs"] == 12
+    alone = value_of_learning(summaries[~prior], CONFIG).set_index(["comparison", "metric"])
+    nothing = alone.loc[("learned − prior", "seconds_to_first_success")]
+    assert nothing["pairs"] == 0 and math.isnan(nothing["difference_low"])
+
+
 def test_the_section_says_plainly_where_no_difference_was_measured() -> None:
     text = learning_value_section(_summaries(), CONFIG)
     assert "Value of learning the kinematic model" in text

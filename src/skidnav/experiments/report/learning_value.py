@@ -105,11 +105,22 @@ def _arm_name(name: str, labels: dict[str, str]) -> str:
     return f"{head}[{','.join(kept)}]" if kept else (head or name)
 
 
+def common_worlds(rows: pd.DataFrame, first: str, second: str) -> pd.DataFrame:
+    """The runs of the agents ``first`` and ``second`` among ``rows`` (summaries) in the worlds
+    (preset, seed) both ran: all of them on a finished grid, fewer on a grid run in parts
+    (``skidnav run --runs``), none when the two arms share no world."""
+    world = pd.MultiIndex.from_frame(rows[["preset", "seed"]])
+    shared = world[rows["agent"] == first].intersection(world[rows["agent"] == second])
+    return rows[rows["agent"].isin([first, second]) & world.isin(shared)]
+
+
 def value_of_learning(summaries: pd.DataFrame, config: ExperimentConfig) -> pd.DataFrame:
     """One row per (map, preset, arms, metric, comparison): map, preset, agent (the arms'
     name), metric, comparison ("learned − prior" or "true − learned"), difference,
     difference_low, difference_high, pairs (worlds compared), no_difference (the interval
-    contains 0). Comparisons whose arms were not both run are left out."""
+    contains 0). Each difference is over the worlds both arms ran (:func:`common_worlds`), so
+    paired by world on a grid run only in part too. Comparisons whose arms were not both run
+    are left out."""
     records = []
     metrics = [metric for metric in VALUE_METRICS if metric in summaries.columns]
     for map_label, preset, rows in cells(summaries):
@@ -118,9 +129,10 @@ def value_of_learning(summaries: pd.DataFrame, config: ExperimentConfig) -> pd.D
                 if first not in arms.labels or second not in arms.labels:
                     continue
                 a, b = arms.labels[first], arms.labels[second]
+                both = common_worlds(rows, a, b)
                 for metric in metrics:
                     keys = (map_label, preset, a, b, metric, "model value")
-                    interval, pairs, _ = paired_difference(rows, a, b, metric, config, *keys)
+                    interval, pairs, _ = paired_difference(both, a, b, metric, config, *keys)
                     records.append({
                         "map": map_label, "preset": preset, "agent": arms.name,
                         "metric": metric, "comparison": f"{first} − {second}",
