@@ -4,6 +4,7 @@ and a selection outside the grid is refused in one line."""
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 from pathlib import Path
 
@@ -61,6 +62,27 @@ def test_a_selection_resumes_only_its_own_runs(tmp_path: Path) -> None:
         "run-000004",
         "run-000005",
     ]
+
+
+def test_parts_run_in_two_directories_join_by_copying_their_run_files(
+    serial_results: Path, tmp_path: Path
+) -> None:
+    """Parts run apart (on two machines, say) join by copying one's run files into the
+    other's ``runs/``: the whole grid run there then runs nothing and gives the whole run's
+    results."""
+    config = parse_config(TINY_TOML)
+    here, there = tmp_path / "here", tmp_path / "there"
+    run_experiment(config, here, backend="serial", only=":5")
+    run_experiment(config, there, backend="serial", only="5:")
+    for path in (there / "runs").iterdir():
+        target = here / "runs" / path.name
+        if path.is_dir():
+            shutil.copytree(path, target)
+        else:
+            shutil.copy2(path, target)
+    whole = run_experiment(config, here, backend="serial")
+    assert (whole.n_runs, whole.skipped, whole.executed) == (8, 8, 0)
+    pd.testing.assert_frame_equal(comparable(here), comparable(serial_results))
 
 
 @pytest.mark.parametrize(
