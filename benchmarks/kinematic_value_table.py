@@ -126,6 +126,8 @@ def table_rows(summaries: pd.DataFrame, config: ExperimentConfig) -> list[str]:
             continue
         labels = (arms.labels["learned"], arms.labels["prior"])
         for (map_label, preset), cell in summaries.groupby(["map", "preset"], sort=False):
+            if not cell["agent"].isin(labels).any():
+                continue  # neither arm run here yet
             mine = values[
                 (values["map"] == map_label) & (values["preset"] == preset)
                 & (values["agent"] == arms.name)

@@ -92,3 +92,10 @@ def test_an_arm_with_no_runs_reads_no_runs() -> None:
     assert cells[1].endswith(" / no runs: –")
     assert cells[3].startswith("10 / no runs of 10")
     assert cells[6] == "100 % / no runs"
+
+
+def test_a_floor_that_neither_arm_has_run_yet_gives_no_row() -> None:
+    summaries = _summaries()
+    other = summaries.assign(agent="dyna-full", preset="slippery-physics")
+    rows = table.table_rows(pd.concat([summaries, other]), CONFIG)
+    assert [row.split("|")[1].strip() for row in rows] == ["m · rough-physics"]

@@ -119,8 +119,8 @@ def value_of_learning(summaries: pd.DataFrame, config: ExperimentConfig) -> pd.D
     name), metric, comparison ("learned − prior" or "true − learned"), difference,
     difference_low, difference_high, pairs (worlds compared), no_difference (the interval
     contains 0). Each difference is over the worlds both arms ran (:func:`common_worlds`), so
-    paired by world on a grid run only in part too. Comparisons whose arms were not both run
-    are left out."""
+    paired by world on a grid run only in part too (none compared, ``pairs`` 0, where one arm
+    has no run yet). Comparisons between arms the config does not both have are left out."""
     records = []
     metrics = [metric for metric in VALUE_METRICS if metric in summaries.columns]
     for map_label, preset, rows in cells(summaries):
