@@ -79,7 +79,7 @@ def test_a_grid_run_in_part_compares_the_worlds_both_arms_ran() -> None:
     cells = [cell.strip() for cell in row.strip("|").split("|")]
     assert cells[0] == "m · rough-physics (5 of 10 worlds)"
     learned, prior_mean = (float(x) for x in cells[1].split(":")[0].split(" / "))
-    assert learned - prior_mean == pytest.approx(-100, abs=1)  # not the unpaired 5 worlds more
+    assert learned - prior_mean == pytest.approx(-100, abs=1)  # learned worlds 5-9 left out
     assert cells[1].endswith("**−100 [−100, −100]**")
     assert cells[3].startswith("5 / 3 of 5")
 
