@@ -28,9 +28,9 @@ import pandas as pd
 from navigator_targets import final_greedy
 
 from skidnav.experiments.config import ExperimentConfig
+from skidnav.experiments.report.analysis import common_worlds
 from skidnav.experiments.report.learning_value import (
     arm_survival,
-    common_worlds,
     model_arms,
     signed,
     value_of_learning,

@@ -89,11 +89,24 @@ def cells(summaries: pd.DataFrame) -> Iterator[tuple[str, str, pd.DataFrame]]:
         yield str(map_label), str(preset), rows
 
 
+WORLD = ("preset", "seed")
+"""The summary columns that name the world a run met: every agent of a grid meets the same."""
+
+
 def _by_seed(rows: pd.DataFrame, agent: str, column: str) -> pd.Series:
     """``column`` of ``agent``'s rows indexed and sorted by (preset, seed): within one cell by
     seed, over rows of several presets by the world each run met."""
-    selected = rows[rows["agent"] == agent].set_index(["preset", "seed"])[column]
+    selected = rows[rows["agent"] == agent].set_index(list(WORLD))[column]
     return selected.sort_index().astype(np.float64)
+
+
+def common_worlds(rows: pd.DataFrame, first: str, second: str) -> pd.DataFrame:
+    """The runs of the agents ``first`` and ``second`` among ``rows`` (summaries) in the worlds
+    (preset, seed) both ran: all of them on a finished grid, fewer on a grid run in parts
+    (``skidnav run --runs``), none when the two arms share no world."""
+    world = pd.MultiIndex.from_frame(rows[list(WORLD)])
+    shared = world[rows["agent"] == first].intersection(world[rows["agent"] == second])
+    return rows[rows["agent"].isin([first, second]) & world.isin(shared)]
 
 
 def aggregate(

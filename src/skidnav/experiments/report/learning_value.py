@@ -29,7 +29,12 @@ import numpy as np
 import pandas as pd
 
 from skidnav.experiments.config import ExperimentConfig
-from skidnav.experiments.report.analysis import cells, paired_difference, stats_rng
+from skidnav.experiments.report.analysis import (
+    cells,
+    common_worlds,
+    paired_difference,
+    stats_rng,
+)
 from skidnav.experiments.report.page import interval_text, table
 from skidnav.statistics.formatting import plural
 from skidnav.statistics.intervals import Interval, bootstrap_interval, rowwise_mean
@@ -103,15 +108,6 @@ def _arm_name(name: str, labels: dict[str, str]) -> str:
     head, _, rest = label.partition("[")
     kept = [part for part in rest.rstrip("]").split(",") if part and "kinematic_model=" not in part]
     return f"{head}[{','.join(kept)}]" if kept else (head or name)
-
-
-def common_worlds(rows: pd.DataFrame, first: str, second: str) -> pd.DataFrame:
-    """The runs of the agents ``first`` and ``second`` among ``rows`` (summaries) in the worlds
-    (preset, seed) both ran: all of them on a finished grid, fewer on a grid run in parts
-    (``skidnav run --runs``), none when the two arms share no world."""
-    world = pd.MultiIndex.from_frame(rows[["preset", "seed"]])
-    shared = world[rows["agent"] == first].intersection(world[rows["agent"] == second])
-    return rows[rows["agent"].isin([first, second]) & world.isin(shared)]
 
 
 def value_of_learning(summaries: pd.DataFrame, config: ExperimentConfig) -> pd.DataFrame:
