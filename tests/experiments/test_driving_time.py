@@ -160,6 +160,21 @@ def test_a_grid_run_in_part_is_paired_over_the_worlds_both_arms_ran() -> None:
     assert nothing["pairs"] == 0 and math.isnan(nothing["difference_low"])
 
 
+def test_on_a_grid_run_in_part_the_arms_cells_cover_the_worlds_every_arm_ran() -> None:
+    summaries = _summaries()
+    prior = summaries["agent"] == "dyna-full[kinematic_model=prior]"
+    summaries.loc[~prior & (summaries["seed"] >= 6), "seconds_to_first_success"] += 1000.0
+    part = summaries[~prior | (summaries["seed"] < 6)]
+    text = learning_value_section(part, CONFIG)
+    assert "dyna-full · m · thesis (6 of 12 worlds, those every arm ran)" in text
+    row = text[text.index("driving to the first success [s]") :]
+    learned, prior_cell, true = (float(cell.split()[0]) for cell in row.split("<td>")[1:4])
+    # Over the six shared worlds each arm's mean is about 150 s; over all twelve the learned
+    # and true arms' would be about 620 s (the +1000 s of their last six worlds).
+    assert learned < 300.0 and true < 300.0 and learned == pytest.approx(prior_cell - 30.0)
+    assert "(12 of 12" not in learning_value_section(summaries, CONFIG)
+
+
 def test_the_section_says_plainly_where_no_difference_was_measured() -> None:
     text = learning_value_section(_summaries(), CONFIG)
     assert "Value of learning the kinematic model" in text

@@ -100,13 +100,16 @@ def _by_seed(rows: pd.DataFrame, agent: str, column: str) -> pd.Series:
     return selected.sort_index().astype(np.float64)
 
 
-def common_worlds(rows: pd.DataFrame, first: str, second: str) -> pd.DataFrame:
-    """The runs of the agents ``first`` and ``second`` among ``rows`` (summaries) in the worlds
-    (preset, seed) both ran: all of them on a finished grid, fewer on a grid run in parts
-    (``skidnav run --runs``), none when the two arms share no world."""
+def common_worlds(rows: pd.DataFrame, first: str, second: str, *more: str) -> pd.DataFrame:
+    """The runs of the agents ``first``, ``second`` (and ``more``) among ``rows`` (summaries)
+    in the worlds (preset, seed) every one of them ran: all of them on a finished grid, fewer on
+    a grid run in parts (``skidnav run --runs``), none when the arms share no world."""
+    agents = [first, second, *more]
     world = pd.MultiIndex.from_frame(rows[list(WORLD)])
-    shared = world[rows["agent"] == first].intersection(world[rows["agent"] == second])
-    return rows[rows["agent"].isin([first, second]) & world.isin(shared)]
+    shared = world[rows["agent"] == first]
+    for agent in agents[1:]:
+        shared = shared.intersection(world[rows["agent"] == agent])
+    return rows[rows["agent"].isin(agents) & world.isin(shared)]
 
 
 def aggregate(

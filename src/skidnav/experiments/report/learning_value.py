@@ -17,7 +17,9 @@ collisions per episode. A time is censored (NaN) in a run that never got there: 
 is over the runs that got there (their count shown), a difference over the worlds where both
 arms did. Wherever the interval of learned − prior contains 0, the text says so plainly: no
 difference measured. The driving times are also given as each arm's Kaplan–Meier median over
-all its runs (:data:`SURVIVAL_METRICS`), which counts the runs that never got there.
+all its runs (:data:`SURVIVAL_METRICS`), which counts the runs that never got there. On a grid
+run in parts (``skidnav run --runs``) the arms' cells cover the worlds every arm ran, and the
+heading says how many (:func:`~skidnav.experiments.report.analysis.common_worlds`).
 """
 
 from __future__ import annotations
@@ -213,12 +215,18 @@ def learning_value_section(summaries: pd.DataFrame, config: ExperimentConfig) ->
         "run that never got there is censored: left out of its arm's mean, and of the "
         "differences, which are over the worlds where both arms got there; the Kaplan–Meier "
         "medians count it, censored at its whole driving time (∞: more than half of the "
-        "runs never got there).</p>",
+        "runs never got there). On a grid run in parts, each arm's cells cover the worlds "
+        "every arm ran, and each difference the worlds both of its arms ran.</p>",
     ]
     for (map_label, preset, agent), rows in values.groupby(["map", "preset", "agent"], sort=False):
         arms = next(arms for arms in arms_list if arms.name == agent)
-        cell = summaries[(summaries["map"] == map_label) & (summaries["preset"] == preset)]
-        parts.append(f"<h3>{html.escape(f'{agent} · {map_label} · {preset}')}</h3>")
+        ran = summaries[(summaries["map"] == map_label) & (summaries["preset"] == preset)]
+        cell = common_worlds(ran, *arms.labels.values())
+        heading = f"{agent} · {map_label} · {preset}"
+        worlds = cell["seed"].nunique()
+        if worlds < config.seeds:  # a grid run in parts: the arms' cells cover the same worlds
+            heading += f" ({worlds} of {plural(config.seeds, 'world')}, those every arm ran)"
+        parts.append(f"<h3>{html.escape(heading)}</h3>")
         frame = _cell_frame(rows, cell, arms, config, (str(map_label), str(preset)))
         parts.append(table(frame, labels=1))
         parts.append("".join(f"<p>{html.escape(text)}</p>" for text in sentences(rows)))
