@@ -44,7 +44,12 @@ import numpy as np
 
 from skidnav.errors import CorruptFileError
 from skidnav.models.kinematic_config import KinematicModelConfig, window_slots
-from skidnav.models.kinematic_moments import RingMoments, feed_rows_stratified, newest_moments
+from skidnav.models.kinematic_moments import (
+    RingMoments,
+    count_in_stratum,
+    feed_rows_stratified,
+    newest_moments,
+)
 from skidnav.models.kinematic_prediction import (
     action_velocities,
     feed_rows,
@@ -64,6 +69,11 @@ from skidnav.robot.params import RobotParams
 from skidnav.world.discretization import Discretization
 
 logger = logging.getLogger(__name__)
+
+FAST_STRATA = 3
+"""A command is fast (:meth:`KinematicModel.fast_counts`) in the fastest of this many equal bins
+of the wheel speed: its faster wheel at ≥ 2/3 of the top speed, as the fastest ring of
+``speed_strata = 3`` keeps."""
 
 
 class KinematicModel:
@@ -157,6 +167,19 @@ class KinematicModel:
         if self.config.speed_strata == 1:
             return self.counts[:, None]
         return self.stratum_counts
+
+    def fast_counts(self) -> np.ndarray:
+        """Kept samples per region (its window, every ring) commanded fast — in the fastest of
+        :data:`FAST_STRATA` equal bins of the wheel speed
+        (:func:`~skidnav.models.kinematic_moments.stratum_of`) —, int64 (n_regions,): how much
+        of what the region's fit sees says anything about a full-speed command."""
+        counts = np.zeros(self.grid.n_regions, dtype=np.int64)
+        for region in np.flatnonzero(self.counts):
+            samples, _ = self._region_samples(int(region))
+            counts[region] = count_in_stratum(
+                np.ascontiguousarray(samples), self.robot.wheel_speed, FAST_STRATA, FAST_STRATA - 1
+            )
+        return counts
 
     @property
     def new_samples(self) -> int:

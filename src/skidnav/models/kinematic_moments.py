@@ -49,6 +49,17 @@ def stratum_of(omega_left: float, omega_right: float, wheel_speed: float, n_stra
 
 
 @jit
+def count_in_stratum(samples: np.ndarray, wheel_speed: float, n_strata: int, stratum: int) -> int:
+    """Rows of ``samples`` (n, ≥ 2; the commanded ω_L, ω_R [rad/s] first: a region's kept
+    samples) whose command falls in speed ``stratum`` of ``n_strata`` (:func:`stratum_of`)."""
+    count = 0
+    for row in range(samples.shape[0]):
+        if stratum_of(samples[row, 0], samples[row, 1], wheel_speed, n_strata) == stratum:
+            count += 1
+    return count
+
+
+@jit
 def feed_rows_stratified(
     data: np.ndarray,
     counts: np.ndarray,

@@ -135,7 +135,7 @@ class MPPIKinematicAgent:
             ]
         self.evidence = MapEvidence(
             self.costs, self.kernel_robot, self.kernel_grid, lattice_robots,
-            lattice_coefficients(self.model, self.dynamics.mean),
+            lattice_coefficients(self.model, self.dynamics.mean, self.config.lattice_guard),
         )  # fmt: skip
         self.planner = MPPIPlanner(self.config, self.kernel_robot, self.kernel_grid, self.rng)
         self.steps = 0
@@ -271,7 +271,9 @@ class MPPIKinematicAgent:
         cost map's scalars and the cost map with the lattice recomputed."""
         self.costs = map_costs(self.config, self.robot, self.goal, self.route_speeds())
         self.evidence.costs = self.costs
-        coefficients = lattice_coefficients(self.model, self.dynamics.mean)
+        coefficients = lattice_coefficients(
+            self.model, self.dynamics.mean, self.config.lattice_guard
+        )
         self.evidence.reweigh(coefficients, model_changed=True)
 
     def route_speeds(self) -> tuple[float, float]:
@@ -280,7 +282,9 @@ class MPPIKinematicAgent:
         (:func:`~skidnav.agents.mpc.dynamics.top_speeds` of its mean, where fast commands
         informed it, :func:`~skidnav.agents.mpc.dynamics.lattice_coefficients`)."""
         if self.config.route_speed == "learned" and self.model.refits > 0:
-            coefficients = lattice_coefficients(self.model, self.dynamics.mean)
+            coefficients = lattice_coefficients(
+                self.model, self.dynamics.mean, self.config.lattice_guard
+            )
             learned = top_speeds(coefficients, self.robot.wheel_speed)
             if learned is not None:
                 return learned

@@ -89,26 +89,37 @@ def fixed_dynamics(coefficients: np.ndarray) -> SampledDynamics:
     )  # fmt: skip
 
 
-def lattice_coefficients(model: KinematicModel, mean: np.ndarray) -> np.ndarray:
+def lattice_coefficients(
+    model: KinematicModel, mean: np.ndarray, guard: str = "rings"
+) -> np.ndarray:
     """The coefficients (n_regions, 8) the cost-to-go's lattice predicts its full-speed actions
-    with: the model's ``mean`` in a region whose fit has seen fast commands — its own fastest
-    speed ring (:meth:`~skidnav.models.kinematic.KinematicModel.ring_counts`) holds
-    ``min_samples`` samples, or, for a region still on the pooled fit, all regions' fastest rings
-    together do — and the prior (the datasheet's robot) elsewhere.
+    with: the model's ``mean`` in a region whose fit has seen fast commands, and the prior (the
+    datasheet's robot) elsewhere. How fast commands are counted is the ``guard``
+    (``MPPIConfig.lattice_guard``):
+
+    * "rings": the region's own fastest speed ring
+      (:meth:`~skidnav.models.kinematic.KinematicModel.ring_counts`) holds ``min_samples``
+      samples ever fed, or, for a region still on the pooled fit, all regions' fastest rings
+      together do; with one ring this cannot tell, and the model's ``mean`` is used everywhere;
+    * "window": the region's kept samples hold ``min_samples`` fast commands
+      (:meth:`~skidnav.models.kinematic.KinematicModel.fast_counts`), or, for a region still on
+      the pooled fit, all regions' kept samples together do, whatever the rings.
+
+    A model that is held (not learned) is the ``mean`` everywhere.
 
     Why: on a floor whose wheels lose speed below a threshold (the slippery floors' η), slow
     commands barely move the robot, and a linear fit on them alone predicts a full-speed action a
     fraction of its true length (measured on maze world 3: 10 mm/s against 35 mm/s forward,
-    0.07 rad/s against 0.58 rad/s turning, after one episode of mostly slow commands near walls).
-    A lattice of such actions never leaves its cells and heading bins, every state is unreached,
-    and the plan averages to standing still, which logs more slow samples. The datasheet is the
-    better guess at a speed never commanded; with one speed ring the fit cannot tell, and the
-    model's mean is used everywhere, as it is for a model that is held (not learned)."""
-    rings = model.ring_counts()
-    if rings.shape[1] == 1 or model.held:  # one ring, or a model held at the prior or the truth
+    0.07 rad/s against 0.58 rad/s turning, after one episode of mostly slow commands near walls;
+    on a held-out `slippery` maze, 2.4 mm/s against about 19 mm/s after a window of 82 % slow
+    commands). A lattice of such actions never leaves its cells and heading bins, every state
+    of the region is unreached, and the plan averages to standing still, which logs more slow
+    samples (docs/agents/mppi-kinematic.md, "A pocket the fit cannot leave"). The datasheet is
+    the better guess at a speed never commanded."""
+    if model.held or (guard == "rings" and model.config.speed_strata == 1):
         return mean.copy()
     needed = model.config.min_samples
-    fast = rings[:, -1]
+    fast = model.ring_counts()[:, -1] if guard == "rings" else model.fast_counts()
     own_fit = model.counts >= needed
     informed = np.where(own_fit, fast >= needed, fast.sum() >= needed)
     prior = nominal_coefficients(model.robot)
