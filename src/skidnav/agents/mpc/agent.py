@@ -135,7 +135,7 @@ class MPPIKinematicAgent:
             ]
         self.evidence = MapEvidence(
             self.costs, self.kernel_robot, self.kernel_grid, lattice_robots,
-            lattice_coefficients(self.model, self.dynamics.mean, self.config.lattice_guard),
+            self._lattice_coefficients(),
         )  # fmt: skip
         self.planner = MPPIPlanner(self.config, self.kernel_robot, self.kernel_grid, self.rng)
         self.steps = 0
@@ -271,10 +271,12 @@ class MPPIKinematicAgent:
         cost map's scalars and the cost map with the lattice recomputed."""
         self.costs = map_costs(self.config, self.robot, self.goal, self.route_speeds())
         self.evidence.costs = self.costs
-        coefficients = lattice_coefficients(
-            self.model, self.dynamics.mean, self.config.lattice_guard
-        )
-        self.evidence.reweigh(coefficients, model_changed=True)
+        self.evidence.reweigh(self._lattice_coefficients(), model_changed=True)
+
+    def _lattice_coefficients(self) -> np.ndarray:
+        """The lattice's coefficients (n_regions, 8) now: the model's mean, guarded as
+        ``lattice_guard`` asks (:func:`~skidnav.agents.mpc.dynamics.lattice_coefficients`)."""
+        return lattice_coefficients(self.model, self.dynamics.mean, self.config.lattice_guard)
 
     def route_speeds(self) -> tuple[float, float]:
         """The top forward speed [m/s] and turn rate [rad/s] of the cells' cost-to-go: the
@@ -282,10 +284,7 @@ class MPPIKinematicAgent:
         (:func:`~skidnav.agents.mpc.dynamics.top_speeds` of its mean, where fast commands
         informed it, :func:`~skidnav.agents.mpc.dynamics.lattice_coefficients`)."""
         if self.config.route_speed == "learned" and self.model.refits > 0:
-            coefficients = lattice_coefficients(
-                self.model, self.dynamics.mean, self.config.lattice_guard
-            )
-            learned = top_speeds(coefficients, self.robot.wheel_speed)
+            learned = top_speeds(self._lattice_coefficients(), self.robot.wheel_speed)
             if learned is not None:
                 return learned
         return nominal_speeds(self.robot)
