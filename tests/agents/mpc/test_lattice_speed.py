@@ -1,9 +1,9 @@
 """The cost-to-go's lattice trusts the learned model at full speed only where it has seen fast
 commands: a fit on slow commands alone on a floor with a dead zone would make every lattice
 action too short to leave its cell (:func:`skidnav.agents.mpc.dynamics.lattice_coefficients`).
-Fast commands are counted by the fastest speed ring (``lattice_guard = "rings"``, the default,
-which needs ``kinematic_speed_strata`` > 1) or among the kept samples of a region's window
-(``"window"``, with any number of rings)."""
+Fast commands are counted among the kept samples of a region's window (``lattice_guard =
+"window"``, the default, with any number of rings) or by the fastest speed ring (``"rings"``,
+which needs ``kinematic_speed_strata`` > 1)."""
 
 from __future__ import annotations
 
@@ -79,7 +79,7 @@ def test_one_ring_counted_by_rings_guards_nothing() -> None:
     rng = np.random.default_rng(0)
     model = model_after(drive(rng, 400, 0.5, REGION), strata=1)
     np.testing.assert_array_equal(
-        lattice_coefficients(model, model.coefficients), model.coefficients
+        lattice_coefficients(model, model.coefficients, "rings"), model.coefficients
     )
 
 

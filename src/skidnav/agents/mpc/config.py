@@ -143,13 +143,15 @@ class MPPIConfig(KinematicModelFields):
     """Durations [s] the four actions of the states' lattice are held for, each a whole number
     of the robot's sub-steps, 1 to 8 of them (a list is stored as a tuple); 1 s: the thesis's
     actions, 3.8 cm or 36.5° each."""
-    lattice_guard: str = "rings"
+    lattice_guard: str = "window"
     """Where the lattice of the states' cost-to-go predicts with the datasheet's robot instead of
     the learned fit (:func:`~skidnav.agents.mpc.dynamics.lattice_coefficients`): in a region
     whose fit has seen too few fast commands (fewer than ``kinematic_min_samples``), counted as
-    "rings", the fastest speed ring's samples ever fed (with one ring, the default, no region
-    is guarded), or as "window", the commands in the fastest third of the wheel speed among
-    the region's kept samples, whatever the rings. The rollouts keep the learned model."""
+    "window" (the default), the commands in the fastest third of the wheel speed among the
+    region's kept samples, whatever the rings, or as "rings", the fastest speed ring's samples
+    ever fed (with one ring, the default of ``kinematic_speed_strata``, no region is guarded:
+    the setting every measurement before 2026-12-08 used). The rollouts keep the learned
+    model."""
     route_speed: str = "nominal"
     """("cells" only) The top speeds the cells' cost-to-go turns metres and radians into
     control steps with: "nominal", the datasheet robot's r·Ω and r·Ω/c (a lower bound of the

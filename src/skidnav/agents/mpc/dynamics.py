@@ -89,9 +89,7 @@ def fixed_dynamics(coefficients: np.ndarray) -> SampledDynamics:
     )  # fmt: skip
 
 
-def lattice_coefficients(
-    model: KinematicModel, mean: np.ndarray, guard: str = "rings"
-) -> np.ndarray:
+def lattice_coefficients(model: KinematicModel, mean: np.ndarray, guard: str) -> np.ndarray:
     """The coefficients (n_regions, 8) the cost-to-go's lattice predicts its full-speed actions
     with: the model's ``mean`` in a region whose fit has seen fast commands, and the prior (the
     datasheet's robot) elsewhere. How fast commands are counted is the ``guard``
