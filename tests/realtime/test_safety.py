@@ -121,3 +121,27 @@ def test_first_trip_reason_is_kept(monitored) -> None:
 def test_limits_validate() -> None:
     with pytest.raises(ValueError, match="pose_timeout"):
         SafetyLimits(pose_timeout=0)
+
+
+@pytest.mark.timeout(30)
+def test_a_signal_handlers_request_takes_no_lock(monitored) -> None:
+    """A signal handler runs on the thread it interrupted, which may hold the lock of the
+    monitor's Event at that instant (entering or leaving ``Event.wait``, as the control loop
+    does every period): a request that took it would wait for itself forever. This one returns
+    at once, and the watchdog trips as soon as the lock is free."""
+    driver, monitor, _ = monitored
+    with monitor.tripped._cond:  # the lock Event.wait holds
+        monitor.request_trip("signal SIGINT")
+        assert not monitor.tripped.is_set()
+    wait_for(lambda: bool(driver.stops), 1.0, "the stop")
+    assert monitor.reason == "signal SIGINT"
+
+
+def test_a_request_made_while_tripped_trips_again_after_the_reset(monitored) -> None:
+    driver, monitor, _ = monitored
+    monitor.trip("link lost: test")
+    wait_for(monitor.stop_done.is_set, 1.0, "the first stop")
+    monitor.request_trip("signal SIGINT")
+    monitor.reset()
+    wait_for(lambda: len(driver.stops) == 2, 1.0, "the stop the request asked for")
+    assert monitor.reason == "signal SIGINT"

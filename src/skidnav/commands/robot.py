@@ -141,7 +141,7 @@ def _run_sim_server(args: argparse.Namespace) -> int:
             if signum == signal.SIGUSR1:
                 server.inject()
             else:
-                server.shutdown.set()
+                server.request_shutdown()
 
         for signum in (signal.SIGUSR1, signal.SIGTERM, signal.SIGINT):
             signal.signal(signum, on_signal)

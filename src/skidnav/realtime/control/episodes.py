@@ -133,9 +133,10 @@ class EpisodeLoop(PeriodicControl):
         return {}
 
     def interrupt(self, reason: str) -> None:
-        """Called from a signal handler: stop now and end the run."""
+        """Called from a signal handler: stop now and end the run (plain assignments only: the
+        watchdog makes the trip, :meth:`~.safety.SafetyMonitor.request_trip`)."""
         self.interrupted = True
-        self.monitor.trip(reason)
+        self.monitor.request_trip(reason)
 
     # --- scoring -------------------------------------------------------------------------
     def _score(

@@ -7,8 +7,14 @@ signal handler calls :meth:`SafetyMonitor.trip`). On a trip the watchdog, within
 (at most a quarter control period), lets any command in flight finish, then calls the driver's
 ``stop``, which re-sends it until the robot confirms or the link is declared dead (at most
 :data:`STOP_WAIT`); from the trip on no further command passes :meth:`SafetyMonitor.command` until
-:meth:`SafetyMonitor.reset`. :meth:`trip` takes no lock, so it is safe from a signal handler and
-from the driver's reader thread.
+:meth:`SafetyMonitor.reset`.
+
+A signal handler asks with :meth:`SafetyMonitor.request_trip`, which only assigns an attribute;
+the watchdog trips within one check interval. It must not call :meth:`trip`: setting a
+:class:`threading.Event` takes its condition's lock, which the interrupted main thread may be
+holding at that instant (entering or leaving ``Event.wait``, as the control loop does every
+period), and the handler, run by that same thread, would wait for it forever. Other threads
+(the driver's reader) call :meth:`trip`.
 """
 
 from __future__ import annotations
@@ -82,6 +88,8 @@ class SafetyMonitor:
         self.limits = limits
         self.record = record or (lambda event, fields: None)
         self.reason: str | None = None
+        self.requested: str | None = None
+        """A trip asked for by :meth:`request_trip`, not yet made by the watchdog."""
         self.tripped = threading.Event()
         self.stop_done = threading.Event()
         self.stop_confirmed = False
@@ -115,8 +123,16 @@ class SafetyMonitor:
         """Stop checking pose freshness (the robot is parked and the wheels are at zero)."""
         self._armed_since = None
 
+    def request_trip(self, reason: str) -> None:
+        """Ask for an emergency stop from a signal handler: no lock is taken (see module doc);
+        the watchdog trips with ``reason`` within one check interval, or, if the monitor is
+        tripped already, at the first check after :meth:`reset` (a request is never dropped)."""
+        if self.requested is None:
+            self.requested = reason
+
     def trip(self, reason: str) -> None:
-        """Request an emergency stop; the first reason is kept. Lock-free."""
+        """Request an emergency stop now; the first reason is kept. Not from a signal handler
+        (:meth:`request_trip`)."""
         if self.reason is None:
             self.reason = reason
         self.tripped.set()
@@ -157,7 +173,8 @@ class SafetyMonitor:
     def _watch(self) -> None:
         while self._running.is_set():
             if not self.tripped.wait(self.limits.check_interval):
-                reason = self.check()
+                reason, self.requested = self.requested, None
+                reason = reason if reason is not None else self.check()
                 if reason is not None:
                     self.trip(reason)
                 continue

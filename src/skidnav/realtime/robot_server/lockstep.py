@@ -159,8 +159,7 @@ class LockstepServer(SimServer):
         """Serve what is ready (commands run their periods as they are read), then the faults
         and the firmware's wall-clock safety; no period runs on its own."""
         self._handle_ready(selector.select(IDLE_WAKE), listener)
-        if self._fault_requested.is_set():
-            self._apply_fault()
+        self._apply_requested_fault()
         if self.firmware is not None:
             idle = self.firmware.watch(time.monotonic())
             if idle is not None:

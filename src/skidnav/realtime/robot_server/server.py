@@ -89,14 +89,24 @@ class SimServer:
         self._buffer = pr.LineBuffer()
         self._outbox = bytearray()
         self._logged_wheels = (0.0, 0.0)
-        self._fault_requested = threading.Event()
+        self._fault_requests = 0  # inject() counts up, the period catches up: no lock taken
+        self._fault_requests_seen = 0
+        self._shutdown_requested = False  # request_shutdown(), from a signal handler
         self._active_faults: set[str] = set()
         self._faults_injected = 0
         self._single = False  # serve_channel: the server ends with its one client
 
     def inject(self) -> None:
-        """Trigger the configured fault at the next period (safe from a signal handler)."""
-        self._fault_requested.set()
+        """Trigger the configured fault at the next period. Safe from a signal handler: it only
+        counts (setting a :class:`threading.Event` takes its condition's lock, which the
+        interrupted thread may hold at that instant, and the handler would wait for it
+        forever)."""
+        self._fault_requests += 1
+
+    def request_shutdown(self) -> None:
+        """End the serving loop at its next cycle; safe from a signal handler (an assignment,
+        as :meth:`inject`). Other threads may set :attr:`shutdown` instead."""
+        self._shutdown_requested = True
 
     @property
     def connected(self) -> bool:
@@ -237,8 +247,13 @@ class SimServer:
         return message
 
     # --- the period ----------------------------------------------------------------------
+    def _apply_requested_fault(self) -> None:
+        """Inject the configured fault if :meth:`inject` was called since the last one."""
+        if self._fault_requests != self._fault_requests_seen:
+            self._apply_fault()
+
     def _apply_fault(self) -> None:
-        self._fault_requested.clear()
+        self._fault_requests_seen = self._fault_requests
         if not self.options.faults:
             return
         fault = self.options.faults[self._faults_injected % len(self.options.faults)]
@@ -259,8 +274,7 @@ class SimServer:
         firmware's own safety, physics, pose report. A change of the wheel speeds the physics
         ran, and a period more than :data:`LATE_LOG` late (the server stalled), are logged
         with the pose before and after."""
-        if self._fault_requested.is_set():
-            self._apply_fault()
+        self._apply_requested_fault()
         if self.firmware is not None:
             idle = self.firmware.watch(time.monotonic())
             if idle is not None:
@@ -294,7 +308,7 @@ class SimServer:
             selector.register(self.watch_fd, selectors.EVENT_READ, "watch")
         next_tick = time.monotonic()
         try:
-            while not self.shutdown.is_set():
+            while not (self.shutdown.is_set() or self._shutdown_requested):
                 next_tick = self._cycle(selector, listener, next_tick)
         finally:
             if self.connected:
