@@ -3,8 +3,8 @@
 Trip conditions (docs/realtime.md, "Safety"): the pose goes stale (no new pose for ``pose_timeout``
 wall seconds while armed), the link drops or a malformed message arrives (the driver's fault
 callback), the robot leaves the arena (by more than ``arena_margin``), or SIGINT/SIGTERM (the loop's
-signal handler calls :meth:`SafetyMonitor.trip`). On a trip the watchdog, within one check interval
-(at most a quarter control period), lets any command in flight finish, then calls the driver's
+signal handler asks, :meth:`SafetyMonitor.request_trip`). On a trip the watchdog, within one check
+interval (at most a quarter control period), lets any command in flight finish, then calls the driver's
 ``stop``, which re-sends it until the robot confirms or the link is declared dead (at most
 :data:`STOP_WAIT`); from the trip on no further command passes :meth:`SafetyMonitor.command` until
 :meth:`SafetyMonitor.reset`.
@@ -126,7 +126,7 @@ class SafetyMonitor:
     def request_trip(self, reason: str) -> None:
         """Ask for an emergency stop from a signal handler: no lock is taken (see module doc);
         the watchdog trips with ``reason`` within one check interval, or, if the monitor is
-        tripped already, at the first check after :meth:`reset` (a request is never dropped)."""
+        tripped already, at its first check after :meth:`reset`."""
         if self.requested is None:
             self.requested = reason
 
@@ -173,8 +173,11 @@ class SafetyMonitor:
     def _watch(self) -> None:
         while self._running.is_set():
             if not self.tripped.wait(self.limits.check_interval):
-                reason, self.requested = self.requested, None
-                reason = reason if reason is not None else self.check()
+                reason = self.requested
+                if reason is not None:  # None is never written over a request not yet read
+                    self.requested = None
+                else:
+                    reason = self.check()
                 if reason is not None:
                     self.trip(reason)
                 continue
