@@ -4,10 +4,10 @@ Trip conditions (docs/realtime.md, "Safety"): the pose goes stale (no new pose f
 wall seconds while armed), the link drops or a malformed message arrives (the driver's fault
 callback), the robot leaves the arena (by more than ``arena_margin``), or SIGINT/SIGTERM (the loop's
 signal handler asks, :meth:`SafetyMonitor.request_trip`). On a trip the watchdog, within one check
-interval (at most a quarter control period), lets any command in flight finish, then calls the driver's
-``stop``, which re-sends it until the robot confirms or the link is declared dead (at most
-:data:`STOP_WAIT`); from the trip on no further command passes :meth:`SafetyMonitor.command` until
-:meth:`SafetyMonitor.reset`.
+interval (at most a quarter control period), lets any command in flight finish, then calls the
+driver's ``stop``, which re-sends it until the robot confirms or the link is declared dead (at
+most :data:`STOP_WAIT`); from the trip on no further command passes
+:meth:`SafetyMonitor.command` until :meth:`SafetyMonitor.reset`.
 
 A signal handler asks with :meth:`SafetyMonitor.request_trip`, which only assigns an attribute;
 the watchdog trips within one check interval. It must not call :meth:`trip`: setting a
