@@ -127,16 +127,16 @@ class MPPIKinematicAgent:
         self.kernel_grid = discretization.grid_shape()
         self.model = KinematicModel(robot, discretization, self.config.kinematic_config())
         self.dynamics = self._initial_dynamics(true_coefficients)
-        self.costs = map_costs(self.config, robot, self.goal, self.route_speeds())
+        lattice = self._lattice_coefficients()
+        self.costs = map_costs(self.config, robot, self.goal, self.route_speeds(lattice))
         lattice_robots = []
         if self.config.cost_to_go == "states":
             lattice_robots = [
                 lattice_robot(robot, duration) for duration in self.config.lattice_durations
             ]
         self.evidence = MapEvidence(
-            self.costs, self.kernel_robot, self.kernel_grid, lattice_robots,
-            self._lattice_coefficients(),
-        )  # fmt: skip
+            self.costs, self.kernel_robot, self.kernel_grid, lattice_robots, lattice
+        )
         self.planner = MPPIPlanner(self.config, self.kernel_robot, self.kernel_grid, self.rng)
         self.steps = 0
         """Real steps observed."""
@@ -269,22 +269,24 @@ class MPPIKinematicAgent:
     def refresh_costs(self) -> None:
         """After the model changed (a refit, a load): the route's speeds (``route_speed``), the
         cost map's scalars and the cost map with the lattice recomputed."""
-        self.costs = map_costs(self.config, self.robot, self.goal, self.route_speeds())
+        lattice = self._lattice_coefficients()
+        self.costs = map_costs(self.config, self.robot, self.goal, self.route_speeds(lattice))
         self.evidence.costs = self.costs
-        self.evidence.reweigh(self._lattice_coefficients(), model_changed=True)
+        self.evidence.reweigh(lattice, model_changed=True)
 
     def _lattice_coefficients(self) -> np.ndarray:
         """The lattice's coefficients (n_regions, 8) now: the model's mean, guarded as
         ``lattice_guard`` asks (:func:`~skidnav.agents.mpc.dynamics.lattice_coefficients`)."""
         return lattice_coefficients(self.model, self.dynamics.mean, self.config.lattice_guard)
 
-    def route_speeds(self) -> tuple[float, float]:
+    def route_speeds(self, lattice: np.ndarray) -> tuple[float, float]:
         """The top forward speed [m/s] and turn rate [rad/s] of the cells' cost-to-go: the
         nominal robot's, or with ``route_speed = "learned"`` after a refit the model's
-        (:func:`~skidnav.agents.mpc.dynamics.top_speeds` of its mean, where fast commands
-        informed it, :func:`~skidnav.agents.mpc.dynamics.lattice_coefficients`)."""
+        (:func:`~skidnav.agents.mpc.dynamics.top_speeds` of ``lattice``, the lattice's
+        coefficients (n_regions, 8): its mean where fast commands informed it,
+        :meth:`_lattice_coefficients`)."""
         if self.config.route_speed == "learned" and self.model.refits > 0:
-            learned = top_speeds(self._lattice_coefficients(), self.robot.wheel_speed)
+            learned = top_speeds(lattice, self.robot.wheel_speed)
             if learned is not None:
                 return learned
         return nominal_speeds(self.robot)
